@@ -1,0 +1,58 @@
+"""Material names used by maps, and their rendering colours.
+
+A map stores a small material table ``id -> name``; id 0 is always ``"air"`` (free space). The radio
+package resolves names to attenuation figures, so a map file never carries physics numbers, only names.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+
+from .errors import InvalidInput
+
+AIR = "air"
+DEFAULT_WALL_MATERIALS: tuple[str, ...] = ("concrete", "wood", "brick")
+DEFAULT_TABLE: tuple[str, ...] = (AIR, *DEFAULT_WALL_MATERIALS)
+
+_NAME_RE = re.compile(r"^[a-z][a-z0-9_\-]{0,31}$")
+
+#: RGB colours for rendering; unknown materials get a stable colour derived from their name.
+COLOURS: dict[str, tuple[int, int, int]] = {
+    AIR: (250, 250, 247),
+    "concrete": (110, 112, 118),
+    "wood": (160, 110, 60),
+    "brick": (178, 60, 45),
+    "glass": (120, 190, 220),
+    "drywall": (215, 205, 180),
+    "metal": (70, 90, 120),
+    "wall": (40, 40, 40),
+}
+
+
+def check_material_name(name: object, field: str = "material") -> str:
+    """Return ``name`` if it is a valid material name (lower-case identifier), else raise."""
+    if not isinstance(name, str) or not _NAME_RE.match(name):
+        raise InvalidInput(field, name, "a lower-case name of 1-32 letters, digits, '_' or '-', starting with a letter")
+    return name
+
+
+def colour_of(name: str) -> tuple[int, int, int]:
+    """Rendering colour of a material; stable across runs for names we do not know."""
+    if name in COLOURS:
+        return COLOURS[name]
+    digest = hashlib.sha256(name.encode()).digest()
+    return (60 + digest[0] % 150, 60 + digest[1] % 150, 60 + digest[2] % 150)
+
+
+def check_table(table: tuple[str, ...]) -> tuple[str, ...]:
+    """Validate a material table: id 0 is air, names unique and valid, at most 255 entries."""
+    if not table or table[0] != AIR:
+        raise InvalidInput("materials", table, f"a table whose entry 0 is {AIR!r}")
+    if len(table) > 255:
+        raise InvalidInput("materials", len(table), "at most 255 materials")
+    for i, name in enumerate(table):
+        check_material_name(name, f"materials[{i}]")
+    if len(set(table)) != len(table):
+        raise InvalidInput("materials", table, "unique names")
+    return tuple(table)

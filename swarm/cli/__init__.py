@@ -1,0 +1,70 @@
+"""The ``swarm`` command line.
+
+Built on click: nested subcommands, ``--help`` everywhere, typed options. :func:`main` is the single
+funnel for errors: a bad flag, value or input file prints one line ``swarm: error: ...`` naming the flag
+or field, the value and what is allowed, and exits with status 2, without a traceback.
+Subcommand modules import heavy dependencies inside their functions so ``swarm --help`` stays fast.
+"""
+
+from __future__ import annotations
+
+import sys
+
+import click
+
+from maps.errors import InvalidInput
+
+CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
+
+
+@click.group(context_settings=CONTEXT, no_args_is_help=True)
+@click.version_option(package_name="swarm-sim", prog_name="swarm")
+def cli() -> None:
+    """swarm: multi-robot exploration under realistic radio.
+
+    Generate maps, run exploration with Minotaur, TNF, Greed or xBOA over a material-aware radio, and run
+    whole campaigns of them.
+    """
+
+
+def _register() -> None:
+    from . import map_cmd  # noqa: F401  (commands register themselves on import)
+
+
+def _usage_message(exc: click.UsageError) -> str:
+    lines = exc.format_message().strip().splitlines()
+    msg = lines[0] if lines else "invalid usage"
+    ctx = exc.ctx
+    if isinstance(exc, click.BadParameter) or ctx is None:
+        return msg  # click already names the flag, the value and the allowed range or choices
+    if isinstance(ctx.command, click.Group) and msg.startswith("No such command"):
+        return f"{msg} (allowed: {', '.join(ctx.command.list_commands(ctx))})"
+    return f"{msg} (see '{ctx.command_path} --help')"
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``swarm`` console command; returns the exit status."""
+    _register()
+    try:
+        cli.main(args=argv, prog_name="swarm", standalone_mode=False)
+    except click.exceptions.NoArgsIsHelpError as exc:
+        click.echo(exc.ctx.get_help() if exc.ctx else exc.format_message())
+        return 0
+    except click.UsageError as exc:
+        click.echo(f"swarm: error: {_usage_message(exc)}", err=True)
+        return 2
+    except InvalidInput as exc:
+        click.echo(f"swarm: error: {exc}", err=True)
+        return 2
+    except click.exceptions.Exit as exc:
+        return exc.exit_code
+    except click.Abort:
+        click.echo("swarm: aborted", err=True)
+        return 130
+    except KeyboardInterrupt:
+        click.echo("swarm: interrupted", err=True)
+        return 130
+    except BrokenPipeError:
+        return 0
+    return 0
+

@@ -1,0 +1,116 @@
+"""``swarm map``: generate, show and import maps."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from . import cli
+from .options import parse_params
+
+
+@cli.group("map")
+def map_group() -> None:
+    """Generate, render and import ground-truth maps."""
+
+
+@map_group.command("generate")
+@click.option("--kind", type=click.Choice(["building", "cave"]), default="building", show_default=True)
+@click.option("--size", default="100", show_default=True, metavar="N|WxH",
+              help="Tiles (1 m) per side, >= 20; e.g. 100 or 120x80.")
+@click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=0, show_default=True)
+@click.option("--param", "params", multiple=True, metavar="KEY=VALUE",
+              help="Generator parameter (repeatable), e.g. --param fill_percent=45; see 'swarm map params'.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), help="Write the map (.npz).")
+@click.option("--png", type=click.Path(dir_okay=False, path_type=Path), help="Write a picture (.png).")
+@click.option("--scale", type=click.IntRange(1, 32), default=None, help="Pixels per 0.5 m cell in the picture.")
+def generate_cmd(kind: str, size: str, seed: int, params: tuple[str, ...], output: Path | None, png: Path | None,
+                 scale: int | None) -> None:
+    """Generate a cave or building map.
+
+    With neither -o nor --png, writes KIND-SIZE-sSEED.png in the current folder.
+    """
+    import time
+
+    from maps import generate
+    from maps.io import save_npz
+    from maps.render import save_png
+
+    from maps import parse_size
+    from maps.errors import InvalidInput
+
+    try:
+        parse_size(size)
+    except InvalidInput as exc:
+        raise InvalidInput("--size", size, exc.allowed) from None
+    t0 = time.perf_counter()
+    m = generate(kind, size, seed, parse_params(params))
+    elapsed = time.perf_counter() - t0
+    if output is None and png is None:
+        png = Path(f"{kind}-{size}-s{seed}.png")
+    click.echo(f"{m.summary()} (generated in {elapsed * 1000:.0f} ms)")
+    if output is not None:
+        click.echo(f"wrote {save_npz(m, output)}")
+    if png is not None:
+        click.echo(f"wrote {save_png(m, png, scale=scale, title=f'{kind} {size} seed {seed}')}")
+
+
+@map_group.command("params")
+@click.argument("kind", type=click.Choice(["building", "cave"]))
+def params_cmd(kind: str) -> None:
+    """List a generator's parameters with their defaults."""
+    import dataclasses
+
+    from maps import params_for
+
+    p = params_for(kind)
+    for f in dataclasses.fields(p):
+        click.echo(f"{f.name} = {getattr(p, f.name)!r}")
+
+
+@map_group.command("show")
+@click.argument("path", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), help="Write a picture (.png).")
+@click.option("--legend", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="Legend TOML when PATH is an image.")
+@click.option("--scale", type=click.IntRange(1, 32), default=None, help="Pixels per 0.5 m cell.")
+def show_cmd(path: Path, output: Path | None, legend: Path | None, scale: int | None) -> None:
+    """Describe a map file and optionally render it."""
+    from maps.io import load_map
+    from maps.render import save_png
+
+    m = load_map(path, legend=legend)
+    click.echo(m.summary())
+    if output is not None:
+        click.echo(f"wrote {save_png(m, output, scale=scale, title=path.name)}")
+
+
+@map_group.command("import")
+@click.argument("path", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--legend", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="Legend TOML mapping colours to materials (images); not needed for .pgm (MAES) and .csv (xBOA).")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              help="Write the map (.npz).")
+@click.option("--png", type=click.Path(dir_okay=False, path_type=Path), help="Also write a picture.")
+@click.option("--material", default=None, help="Wall material for .pgm/.csv walls (default concrete).")
+@click.option("--border", type=click.IntRange(0, 10), default=0, show_default=True,
+              help="Add a wall border this many tiles thick.")
+@click.option("--border-material", default="concrete", show_default=True)
+def import_cmd(path: Path, legend: Path | None, output: Path, png: Path | None, material: str | None, border: int,
+               border_material: str) -> None:
+    """Import a floor plan: an image with a legend, a MAES ASCII PGM or an xBOA 0/1 CSV."""
+    from maps.errors import InvalidInput
+    from maps.io import load_map, save_npz
+    from maps.render import save_png
+
+    options: dict[str, object] = {"border": border, "border_material": border_material}
+    if material is not None:
+        if legend is not None:
+            raise InvalidInput("--material", material, "only for .pgm and .csv files (images take materials from the legend)")
+        options["material"] = material
+    m = load_map(path, legend=legend, **options)
+    click.echo(m.summary())
+    click.echo(f"wrote {save_npz(m, output)}")
+    if png is not None:
+        click.echo(f"wrote {save_png(m, png, title=path.name)}")
