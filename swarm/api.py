@@ -1,0 +1,141 @@
+"""What an exploration algorithm implements and sees. Light: numpy only, never imports the runtime.
+
+An algorithm is a class with a ``name``, a frozen-dataclass ``Params`` and two methods (DESIGN.md section
+5)::
+
+    class MyExplorer:
+        name = "mine"
+        Params = MyParams                      # frozen dataclass; unknown parameters are an error
+        def reset(self, robot: RobotInfo, params: MyParams, rng: np.random.Generator) -> None: ...
+        def act(self, obs: Observation) -> Action: ...
+
+Register it under the ``swarm.algorithms`` entry-point group (``mine = "mypkg.explorer:MyExplorer"``) or
+pass ``"mypkg.explorer:MyExplorer"`` as the algorithm name. Grid helpers (frontiers, distance fields,
+nearest reachable unseen cell, path planning) live in :mod:`swarm.grid` so algorithms stay short.
+
+Conventions: world coordinates in metres from the map's lower-left corner, x right, y up, headings in
+radians counter-clockwise from +x. Knowledge maps are ``uint8[H, W]`` rasters of 0.5 m cells with
+``UNSEEN = 0 < FREE = 1 < SOLID = 2``, so merging two maps is ``numpy.maximum``; ``known[row, col]``
+covers ``x in [col*0.5, (col+1)*0.5)``, ``y in [row*0.5, (row+1)*0.5)``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, ClassVar, Mapping, NamedTuple, Protocol, runtime_checkable
+
+import numpy as np
+
+UNSEEN: int = 0
+FREE: int = 1
+SOLID: int = 2
+CELL_M: float = 0.5
+ROBOT_RADIUS_M: float = 0.3
+
+
+class Pose(NamedTuple):
+    """Position (m) and heading (rad, CCW from +x)."""
+
+    x: float
+    y: float
+    theta: float
+
+
+def cell_of(x: float, y: float) -> tuple[int, int]:
+    """(row, col) of the 0.5 m cell containing (x, y)."""
+    return int(math.floor(y / CELL_M)), int(math.floor(x / CELL_M))
+
+
+def cell_centre(row: int, col: int) -> tuple[float, float]:
+    """(x, y) of a cell's centre in metres."""
+    return (col + 0.5) * CELL_M, (row + 0.5) * CELL_M
+
+
+@dataclass(frozen=True)
+class Neighbour:
+    """Another robot this robot can sense this tick (within sensing range and line of sight)."""
+
+    id: int
+    distance: float
+    bearing: float          # relative to this robot's heading, radians
+    x: float                # absolute position estimate
+    y: float
+
+
+@dataclass(frozen=True)
+class NavStatus:
+    """What the runtime's navigator is doing for this robot."""
+
+    goal: tuple[float, float] | None = None
+    state: str = "idle"     # idle | moving | reached | unreachable | blocked
+    path_length: float = 0.0
+    ticks_since_progress: int = 0
+
+
+@dataclass(frozen=True)
+class RobotInfo:
+    """Static facts about one robot, given to ``Explorer.reset``."""
+
+    id: int
+    n_robots: int
+    map_shape: tuple[int, int]
+    radius: float = ROBOT_RADIUS_M
+    lidar_range: float = 7.0
+    max_speed: float = 1.0
+    max_turn_rate: float = 2.0
+    tick_seconds: float = 0.1
+    battery: float | None = None   # energy budget (algorithm-defined units), None = unlimited
+
+
+@dataclass(frozen=True)
+class Observation:
+    """Everything a robot knows at the start of its decision in tick ``tick``."""
+
+    tick: int
+    robot_id: int
+    pose: Pose
+    known: np.ndarray                       # uint8[H, W], read-only view of the robot's own map
+    inbox: tuple[Any, ...] = ()             # messages delivered this tick (sent by others at tick - 1)
+    neighbours: tuple[Neighbour, ...] = ()
+    collided: bool = False                  # touched a wall or robot since the last decision
+    nav: NavStatus = NavStatus()
+    distance_travelled: float = 0.0         # metres since the start
+    energy_used: float = 0.0                # moves + rotations, see swarm.world
+
+
+@dataclass(frozen=True)
+class Action:
+    """A decision. ``goal`` (x, y) in metres: the runtime plans and drives there on the robot's own map.
+    ``velocity`` (v m/s, omega rad/s): direct control, overrides navigation for this tick. Neither: keep
+    doing what it was doing (follow the current goal, if any). ``messages`` are broadcast this tick and
+    delivered next tick to every robot the radio reaches. ``debug`` is free-form (shown by the viewer)."""
+
+    goal: tuple[float, float] | None = None
+    velocity: tuple[float, float] | None = None
+    messages: tuple[Any, ...] = ()
+    debug: Mapping[str, Any] | None = None
+    clear_goal: bool = False
+
+
+@runtime_checkable
+class Explorer(Protocol):
+    """The algorithm interface; see the module docstring."""
+
+    name: ClassVar[str]
+    Params: ClassVar[type]
+
+    def reset(self, robot: RobotInfo, params: Any, rng: np.random.Generator) -> None: ...
+
+    def act(self, obs: Observation) -> Action: ...
+
+
+@dataclass(frozen=True)
+class NoParams:
+    """For algorithms without parameters."""
+
+
+__all__ = [
+    "Action", "CELL_M", "Explorer", "FREE", "NavStatus", "Neighbour", "NoParams", "Observation", "Pose",
+    "ROBOT_RADIUS_M", "RobotInfo", "SOLID", "UNSEEN", "cell_centre", "cell_of",
+]
