@@ -1,0 +1,155 @@
+"""The radio's parameter set: which link model, the radios, eq. 1 coefficients, walls, materials.
+
+Built from the ``[radio]`` table of a run's TOML with :func:`config_from_mapping` (unknown keys are an error
+naming the key). Defaults are the Minotaur paper's (seeds/002, section 4.1: 15 dBm, -82 dBm, 2.4 GHz,
+802.11ax) and 3GPP TR 38.901's indoor-office line-of-sight fit for eq. 1 (see :mod:`radio.pathloss`).
+
+```toml
+[radio]
+model = "multiwall"            # "multiwall" | "global" | "los" | "maes"
+frequency_ghz = 2.4
+tx_power_dbm = 15.0
+sensitivity_dbm = -82.0
+wall_mode = "crossing"         # or "per_metre"
+tx_power_overrides = { "3" = 10.0 }        # robot id -> dBm
+[radio.materials]
+glass = [2.26, 2.48, 3.04]                 # dB per crossing at 1.3 / 2.4 / 5.2 GHz
+plaster = { db = 4.0, thickness_m = 0.5 }  # same at every frequency; 8 dB/m in per_metre mode
+```
+"""
+
+from __future__ import annotations
+
+import json
+import types
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+
+from maps.errors import InvalidInput
+from maps.params import check_choice, check_float, from_mapping, to_mapping
+
+from .crossings import DEFAULT_GRAZE_TOLERANCE_M
+from .materials import Material, material_from_value
+
+MODELS: tuple[str, ...] = ("multiwall", "global", "los", "maes")
+WALL_MODES: tuple[str, ...] = ("crossing", "per_metre")
+MAX_FREQUENCY_GHZ = 100.0
+"""Upper end of the 3GPP TR 38.901 model (0.5-100 GHz); lower frequencies are allowed and clamp the table."""
+
+
+@dataclass(frozen=True)
+class RadioConfig:
+    """Radio parameters of a run; validated on construction.
+
+    - ``model``: ``multiwall`` (default: eq. 1 path loss + wall attenuation), ``global`` (always linked),
+      ``los`` (linked iff no wall is crossed, and within ``max_range_m`` if set), ``maes`` (MAES-compatible:
+      no distance term, attenuation per 0.25 m of wall path).
+    - ``alpha``, ``beta``, ``gamma``: eq. 1 coefficients (3GPP TR 38.901 InH-office LOS by default).
+    - ``wall_mode``: ``crossing`` charges each material's figure once per wall crossed; ``per_metre``
+      charges ``db / thickness_m`` per metre of wall path (``multiwall`` only).
+    - ``graze_tolerance_m``: wall runs / gaps at most this long along the segment are ignored / bridged
+      (see :mod:`radio.crossings`).
+    - ``materials``: extra or overriding materials, name -> entry (see :func:`radio.materials.material_from_value`).
+    - ``tx_power_overrides`` / ``sensitivity_overrides``: robot id -> dBm; ids beyond a run's robot count are
+      unused (one config serves campaigns with several robot counts).
+    """
+
+    model: str = "multiwall"
+    frequency_ghz: float = 2.4
+    tx_power_dbm: float = 15.0
+    sensitivity_dbm: float = -82.0
+    alpha: float = 1.73
+    beta: float = 32.4
+    gamma: float = 2.0
+    wall_mode: str = "crossing"
+    max_range_m: float | None = None
+    graze_tolerance_m: float = DEFAULT_GRAZE_TOLERANCE_M
+    materials: Mapping[str, Any] = field(default_factory=dict)
+    tx_power_overrides: Mapping[Any, float] = field(default_factory=dict)
+    sensitivity_overrides: Mapping[Any, float] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        check_choice("model", self.model, MODELS)
+        check_choice("wall_mode", self.wall_mode, WALL_MODES)
+        _set(self, "frequency_ghz", check_float("frequency_ghz", self.frequency_ghz, 0.0, MAX_FREQUENCY_GHZ,
+                                                lo_open=True))
+        _set(self, "tx_power_dbm", check_float("tx_power_dbm", self.tx_power_dbm))
+        _set(self, "sensitivity_dbm", check_float("sensitivity_dbm", self.sensitivity_dbm))
+        _set(self, "alpha", check_float("alpha", self.alpha, 0.0))
+        _set(self, "beta", check_float("beta", self.beta))
+        _set(self, "gamma", check_float("gamma", self.gamma, 0.0))
+        _set(self, "graze_tolerance_m", check_float("graze_tolerance_m", self.graze_tolerance_m, 0.0, 0.25))
+        if self.max_range_m is not None:
+            _set(self, "max_range_m", check_float("max_range_m", self.max_range_m, 0.0, lo_open=True))
+            if self.model != "los":
+                raise InvalidInput("max_range_m", self.max_range_m, "only with model = 'los' (unset it otherwise)")
+        if self.wall_mode != "crossing" and self.model != "multiwall":
+            raise InvalidInput("wall_mode", self.wall_mode, "'crossing' unless model = 'multiwall'")
+        _set(self, "materials", types.MappingProxyType(_check_materials(self.materials)))
+        _set(self, "tx_power_overrides", _check_overrides("tx_power_overrides", self.tx_power_overrides))
+        _set(self, "sensitivity_overrides", _check_overrides("sensitivity_overrides", self.sensitivity_overrides))
+
+    def __hash__(self) -> int:
+        return hash(json.dumps(self.to_mapping(), sort_keys=True))
+
+    def to_mapping(self) -> dict[str, Any]:
+        """Plain JSON-able form; ``config_from_mapping(c.to_mapping()) == c``."""
+        return to_mapping(self)
+
+    def material_table(self) -> dict[str, Material]:
+        """The config's materials as :class:`Material` objects (they override the built-in ones)."""
+        return {name: Material(name, tuple(e["freq_ghz"]), tuple(e["db"]), e["thickness_m"])
+                for name, e in self.materials.items()}
+
+    def tx_power_array(self, n_robots: int) -> np.ndarray:
+        """float64[n]: every robot's transmit power (dBm) with the overrides applied."""
+        return _per_robot(self.tx_power_dbm, self.tx_power_overrides, n_robots)
+
+    def sensitivity_array(self, n_robots: int) -> np.ndarray:
+        """float64[n]: every robot's receiver sensitivity (dBm) with the overrides applied."""
+        return _per_robot(self.sensitivity_dbm, self.sensitivity_overrides, n_robots)
+
+
+def config_from_mapping(data: Mapping[str, Any] | None, prefix: str = "") -> RadioConfig:
+    """A :class:`RadioConfig` from a TOML-like mapping (the ``[radio]`` table); unknown keys are errors."""
+    return from_mapping(RadioConfig, data, prefix)
+
+
+def _set(obj: object, name: str, value: Any) -> None:
+    object.__setattr__(obj, name, value)
+
+
+def _check_materials(value: Any) -> dict[str, dict[str, Any]]:
+    if not isinstance(value, Mapping):
+        raise InvalidInput("materials", value, "a table of material name = dB entries")
+    out = {}
+    for name in sorted(value, key=str):
+        material = material_from_value(name, value[name])
+        out[name] = {"freq_ghz": material.freq_ghz, "db": material.db, "thickness_m": material.thickness_m}
+    return out
+
+
+def _check_overrides(name: str, value: Any) -> types.MappingProxyType:
+    if not isinstance(value, Mapping):
+        raise InvalidInput(name, value, "a table of robot id = dBm")
+    out: dict[int, float] = {}
+    for key, dbm in value.items():
+        robot = key
+        if isinstance(key, str) and key.isdigit():
+            robot = int(key)
+        if not isinstance(robot, (int, np.integer)) or isinstance(robot, bool) or robot < 0:
+            raise InvalidInput(f"{name}.{key}", key, "a robot id: an integer >= 0")
+        if int(robot) in out:
+            raise InvalidInput(f"{name}.{key}", key, "each robot id once")
+        out[int(robot)] = check_float(f"{name}.{key}", dbm)
+    return types.MappingProxyType(dict(sorted(out.items())))
+
+
+def _per_robot(default: float, overrides: Mapping[int, float], n_robots: int) -> np.ndarray:
+    out = np.full(n_robots, default, dtype=np.float64)
+    for robot, dbm in overrides.items():
+        if robot < n_robots:
+            out[robot] = dbm
+    return out

@@ -1,0 +1,50 @@
+"""The per-tick fast path: all-pairs wall walk and eqs. 1-2 in one numba call.
+
+:meth:`radio.models.LinkModel.evaluate` runs once per tick for every robot pair, so its Python overhead
+matters as much as the walk: one dispatch here replaces a position check, the walk and the budget (each
+numba dispatch with many arguments costs microseconds). The pieces are the same kernels the one-pair and
+heatmap paths use (:func:`radio.crossings._radio_all_pairs`, :func:`radio.pathloss._radio_link_budget`),
+so every path gives the same numbers.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from .crossings import _radio_all_pairs
+from .pathloss import _radio_link_budget
+
+
+@njit(cache=True)
+def _radio_first_outside(xy, width, height):  # pragma: no cover
+    """Index of the first row that is not a finite point in [0, width) x [0, height), or -1."""
+    for i in range(xy.shape[0]):
+        x = xy[i, 0]
+        y = xy[i, 1]
+        if not (0.0 <= x < width and 0.0 <= y < height):  # NaN fails every comparison
+            return i
+    return -1
+
+
+CELL, WIDTH, HEIGHT, TOL, ALPHA, BETA, FREQ_TERM, MAX_RANGE = range(8)
+"""Slots of the ``params`` vector (scalars travel in one array: each numba argument costs dispatch time)."""
+DISTANCE, WALL_DB, PATH_LOSS, CHARGED, RSSI = range(5)
+"""Planes of the float64[5, R, R] output block."""
+
+
+@njit(cache=True)
+def _radio_evaluate(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, out, walls, counts,
+                    link):  # pragma: no cover
+    """Check the positions, then fill every output; returns the first bad row (nothing filled) or -1."""
+    bad = _radio_first_outside(xy, params[WIDTH], params[HEIGHT])
+    if bad >= 0:
+        return bad
+    _radio_all_pairs(blocks, params[CELL], xy, params[TOL], cross_db, metre_db, per_metre, out[DISTANCE], walls,
+                     out[WALL_DB], counts)
+    _radio_link_budget(code, out[DISTANCE], walls, out[WALL_DB], tx, sens, params[ALPHA], params[BETA],
+                       params[FREQ_TERM], params[MAX_RANGE], True, out[PATH_LOSS], out[CHARGED], out[RSSI], link)
+    for i in range(xy.shape[0]):
+        out[RSSI, i, i] = np.nan
+        link[i, i] = False
+    return -1

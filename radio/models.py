@@ -1,0 +1,343 @@
+"""Link models: positions -> distance, walls, RSSI and link matrices, behind one interface.
+
+Orientation: ``rssi[i, j]`` is the power (dBm) robot ``i`` receives from transmitter ``j``, and
+``link[i, j]`` is True iff a message sent by ``j`` reaches ``i`` (Minotaur paper eq. 2 with ``S_i`` the
+receiver's sensitivity and ``T_j`` the sender's power). The diagonal is ``link = False`` and ``rssi = NaN``
+(a robot does not receive its own messages; MAES section 6.1). Geometry (distance, walls) is symmetric; RSSI
+and links are symmetric for equal radios and can be asymmetric with per-robot overrides.
+
+- :class:`MultiWall` (default): ``rssi = Ptx_j - L(d, f) - sum(A_wall)`` (eqs. 1-2), walls charged per
+  crossing (or per metre with ``wall_mode = "per_metre"``).
+- :class:`MaesCompatible`: MAES's material model (reference/maes.md section 6.2): no distance term,
+  ``rssi = Ptx_j - sum(A_material * wall_length / 0.25 m)``. MAES charges per triangle of its mesh (4 per
+  tile crossed at right angles); per 0.25 m of wall path reproduces its right-angle numbers (section 6.5)
+  without its dependence on the crossing angle.
+- :class:`LineOfSight`: linked iff no wall is crossed (and ``d <= max_range_m`` if set); ``rssi`` is the
+  sender's power where linked and ``-inf`` where not (the model has no propagation physics).
+- :class:`Global`: always linked; ``rssi`` is the sender's power (MAES reports 15 dBm in open space).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import cached_property
+from typing import ClassVar, Sequence
+
+import networkx as nx
+import numpy as np
+
+from maps.errors import InvalidInput
+from maps.model import Map
+
+from .config import RadioConfig
+from .crossings import WallCrossing, WallRaster, _radio_price_runs
+from .evaluate import CHARGED, DISTANCE, PATH_LOSS, RSSI, _radio_evaluate, _radio_first_outside
+from .materials import resolve_table
+from .pathloss import GLOBAL, LOS, MAES, MULTIWALL, _radio_link_budget
+
+MAES_CELL_M = 0.25
+"""MAES charges a material once per mesh triangle; a tile crossed at right angles is 4 triangles (1 m / 4)."""
+
+Point = Sequence[float]
+
+
+@dataclass(eq=False)
+class LinkState:
+    """The radio picture for one set of robot positions (arrays are read-only; not a frozen dataclass only
+    because frozen construction costs microseconds on the per-tick path).
+
+    ``walls[i, j]``: wall crossings (maximal solid runs) between i and j; ``material_walls[i, j, m]``: how
+    many of them charged material ``materials[m]``. ``path_loss_db`` (eq. 1) and ``wall_db`` are what the
+    model charged (0 where it has no such term).
+    """
+
+    distance: np.ndarray
+    walls: np.ndarray
+    material_walls: np.ndarray
+    materials: tuple[str, ...]
+    path_loss_db: np.ndarray
+    wall_db: np.ndarray
+    rssi: np.ndarray
+    link: np.ndarray
+
+    @property
+    def n_robots(self) -> int:
+        return int(self.distance.shape[0])
+
+    def groups(self, connectivity: str = "strong") -> list[frozenset[int]]:
+        """Communication groups, sorted by their smallest member.
+
+        ``"strong"`` (default): robots that can each reach every other one over directed multi-hop links,
+        i.e. can exchange information both ways; with symmetric links this is the ordinary connected
+        components. ``"weak"``: connected when link direction is ignored.
+        """
+        if connectivity == "strong":
+            comps = self._strong
+        elif connectivity == "weak":
+            comps = nx.weakly_connected_components(self._graph)
+        else:
+            raise InvalidInput("connectivity", connectivity, "'strong' | 'weak'")
+        return sorted((frozenset(int(i) for i in c) for c in comps), key=min)
+
+    @cached_property
+    def _graph(self) -> nx.DiGraph:
+        graph = nx.DiGraph()
+        graph.add_nodes_from(range(self.n_robots))
+        receivers, senders = np.nonzero(self.link)
+        graph.add_edges_from(zip(senders.tolist(), receivers.tolist()))  # edge j -> i: j's message reaches i
+        return graph
+
+    @cached_property
+    def _strong(self) -> list[set[int]]:
+        return list(nx.strongly_connected_components(self._graph))
+
+    def all_connected(self) -> bool:
+        """Every robot can reach every other (one strong group); MAES's "all connected" statistic."""
+        return len(self.groups()) <= 1
+
+
+@dataclass(frozen=True)
+class LinkBudget:
+    """One link, transmitter ``p`` -> receiver ``q``, itemised as eqs. 1-2 (for the CLI and reports)."""
+
+    model: str
+    distance_m: float
+    walls: tuple[WallCrossing, ...]
+    path_loss_db: float
+    wall_db: float
+    tx_power_dbm: float
+    rssi_dbm: float
+    sensitivity_dbm: float
+    link: bool
+
+    @property
+    def margin_db(self) -> float:
+        """RSSI above sensitivity (negative: short by that much)."""
+        return self.rssi_dbm - self.sensitivity_dbm
+
+
+class LinkModel:
+    """Turns robot positions into a :class:`LinkState`; built once per run with :func:`build_link_model`.
+
+    Subclasses only name their model and how walls are priced; eqs. 1-2 for every model run in one numba
+    kernel (:func:`radio.pathloss._radio_link_budget`), shared by :meth:`evaluate`, :meth:`budget` and
+    :meth:`field`.
+    """
+
+    name: ClassVar[str] = ""
+    code: ClassVar[int] = -1
+    prices_walls: ClassVar[bool] = True
+    """False for models that only count walls (LOS, Global): :meth:`trace` then reports 0 dB per wall."""
+
+    def __init__(self, truth: Map, config: RadioConfig) -> None:
+        if type(self) is LinkModel:
+            raise TypeError("LinkModel is abstract; use build_link_model")
+        self.config = config
+        self.truth = truth
+        self.raster = WallRaster.from_map(truth)
+        table = resolve_table(truth.materials, config.material_table())
+        f = config.frequency_ghz
+        self.materials: tuple[str, ...] = truth.materials
+        self.cross_db = np.array([0.0] + [m.crossing_db(f) for m in table[1:]])
+        self.metre_db = self._metre_db(np.array([0.0] + [m.per_metre_db(f) for m in table[1:]]))
+        self.per_metre = self._per_metre()
+        self.tol = config.graze_tolerance_m
+        self._freq_term = 10.0 * config.gamma * math.log10(f)
+        self._max_range = math.inf if config.max_range_m is None else config.max_range_m
+        self._params = np.array([self.raster.cell_m, truth.width_m, truth.height_m, self.tol, config.alpha,
+                                 config.beta, self._freq_term, self._max_range])
+        self._radios: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._last_key: bytes | None = None
+        self._last_state: LinkState | None = None
+
+    # ------------------------------------------------------------------ model-specific pieces
+    def _metre_db(self, table_metre_db: np.ndarray) -> np.ndarray:
+        return table_metre_db
+
+    def _per_metre(self) -> bool:
+        return self.config.wall_mode == "per_metre"
+
+    def _budget(self, distance: np.ndarray, walls: np.ndarray, wall_db: np.ndarray, tx: np.ndarray,
+                sens: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """(path_loss_db, wall_db charged, rssi, link) for [receiver, transmitter] arrays."""
+        shape = distance.shape
+        path_loss = np.empty(shape)
+        charged = np.empty(shape)
+        rssi = np.empty(shape)
+        link = np.empty(shape, dtype=np.bool_)
+        c = self.config
+        _radio_link_budget(self.code, distance, walls, wall_db, tx, sens, c.alpha, c.beta, self._freq_term,
+                           self._max_range, False, path_loss, charged, rssi, link)
+        return path_loss, charged, rssi, link
+
+    def _radio_arrays(self, n_robots: int) -> tuple[np.ndarray, np.ndarray]:
+        if n_robots not in self._radios:
+            self._radios[n_robots] = (self.config.tx_power_array(n_robots),
+                                      self.config.sensitivity_array(n_robots))
+        return self._radios[n_robots]
+
+    # --------------------------------------------------------------------------- public API
+    def evaluate(self, positions: np.ndarray, *, tx_power_dbm: np.ndarray | None = None,
+                 sensitivity_dbm: np.ndarray | None = None) -> LinkState:
+        """The link state for robots at ``positions`` (float64[R, 2], x and y in metres).
+
+        ``tx_power_dbm`` / ``sensitivity_dbm`` (float64[R]) replace the config's per-robot values for this
+        call. Calling again with the same inputs returns the same (read-only) state without recomputing.
+        """
+        xy = np.ascontiguousarray(positions, dtype=np.float64)
+        if xy.ndim != 2 or xy.shape[1] != 2:
+            raise InvalidInput("positions", xy.shape, "an array of shape (R, 2): x, y in metres")
+        r = xy.shape[0]
+        tx, sens = self._radio_arrays(r)
+        if tx_power_dbm is not None:
+            tx = _per_robot_values("tx_power_dbm", tx_power_dbm, r)
+        if sensitivity_dbm is not None:
+            sens = _per_robot_values("sensitivity_dbm", sensitivity_dbm, r)
+        key = xy.tobytes() + tx.tobytes() + sens.tobytes()
+        if key == self._last_key and self._last_state is not None:
+            return self._last_state
+        out = np.empty((5, r, r))
+        walls = np.empty((r, r), dtype=np.int32)
+        counts = np.empty((r, r, len(self.materials)), dtype=np.int32)
+        link = np.empty((r, r), dtype=np.bool_)
+        bad = _radio_evaluate(self.raster.blocks, xy, self._params, self.cross_db, self.metre_db, self.per_metre,
+                              self.code, tx, sens, out, walls, counts, link)
+        if bad >= 0:
+            raise self._outside("positions", xy[bad])
+        for array in (out, walls, counts, link):
+            array.setflags(write=False)  # the planes of `out` below are views, read-only with it
+        state = LinkState(out[DISTANCE], walls, counts, self.materials, out[PATH_LOSS], out[CHARGED], out[RSSI], link)
+        self._last_key, self._last_state = key, state
+        return state
+
+    def trace(self, p: Point, q: Point) -> list[WallCrossing]:
+        """The walls crossed from ``p`` to ``q`` in order, each with its materials, lengths and dB charged."""
+        p = self._check_point(p, "p")
+        q = self._check_point(q, "q")
+        start, end, lengths = self.raster.trace(p, q, self.tol)
+        out = []
+        for k in range(start.shape[0]):
+            counts = np.zeros((1, 1, len(self.materials)), dtype=np.int32)
+            db = _radio_price_runs(1, lengths[k:k + 1], self.tol, self.cross_db, self.metre_db, self.per_metre,
+                                   counts, 0, 0)
+            mats = tuple((self.materials[m], float(lengths[k, m])) for m in range(1, len(self.materials))
+                         if lengths[k, m] > 0.0)
+            charged = tuple(self.materials[m] for m in np.nonzero(counts[0, 0])[0])
+            db = db if self.prices_walls else 0.0
+            out.append(WallCrossing(float(start[k]), float(end[k]), mats, charged, float(db)))
+        return out
+
+    def crossings(self, p: Point, q: Point) -> list[tuple[str, float]]:
+        """``(material, metres of wall path)`` for every material of every wall crossed from p to q."""
+        return [pair for wall in self.trace(p, q) for pair in wall.materials]
+
+    def budget(self, p: Point, q: Point, *, tx_power_dbm: float | None = None,
+               sensitivity_dbm: float | None = None) -> LinkBudget:
+        """The itemised link budget from transmitter ``p`` to receiver ``q``."""
+        tx = self.config.tx_power_dbm if tx_power_dbm is None else tx_power_dbm
+        sens = self.config.sensitivity_dbm if sensitivity_dbm is None else sensitivity_dbm
+        rssi, link, path_loss, charged, distance = self._one_to_many(p, np.asarray([q], dtype=np.float64), "q",
+                                                                     tx, sens)
+        return LinkBudget(self.name, float(distance[0]), tuple(self.trace(p, q)), float(path_loss[0]),
+                          float(charged[0]), float(tx), float(rssi[0]), float(sens), bool(link[0]))
+
+    def field(self, p: Point, targets: np.ndarray, *, tx_power_dbm: float | None = None,
+              sensitivity_dbm: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(rssi, link) at every target (float64[N, 2]) for one transmitter at ``p`` (heatmaps)."""
+        tx = self.config.tx_power_dbm if tx_power_dbm is None else tx_power_dbm
+        sens = self.config.sensitivity_dbm if sensitivity_dbm is None else sensitivity_dbm
+        rssi, link, _, _, _ = self._one_to_many(p, targets, "targets", tx, sens)
+        return rssi, link
+
+    def _one_to_many(self, p: Point, targets: np.ndarray, name: str, tx: float,
+                     sens: float) -> tuple[np.ndarray, ...]:
+        tx = _finite("tx_power_dbm", tx)
+        sens = _finite("sensitivity_dbm", sens)
+        targets = self._check_positions(targets, name)
+        distance, walls, wall_db = self.raster.one_to_many(self._check_point(p, "p"), targets, self.tol,
+                                                           self.cross_db, self.metre_db, self.per_metre)
+        n = targets.shape[0]
+        path_loss, charged, rssi, link = self._budget(distance.reshape(n, 1), walls.reshape(n, 1),
+                                                      wall_db.reshape(n, 1), np.full(1, tx), np.full(n, sens))
+        return rssi[:, 0], link[:, 0], path_loss[:, 0], charged[:, 0], distance
+
+    # ---------------------------------------------------------------------------- checks
+    def _check_positions(self, positions: object, name: str) -> np.ndarray:
+        xy = np.ascontiguousarray(positions, dtype=np.float64)
+        if xy.ndim != 2 or xy.shape[1] != 2:
+            raise InvalidInput(name, xy.shape, "an array of shape (R, 2): x, y in metres")
+        bad = _radio_first_outside(xy, self.truth.width_m, self.truth.height_m)
+        if bad >= 0:
+            raise self._outside(name, xy[bad])
+        return xy
+
+    def _outside(self, name: str, point: np.ndarray) -> InvalidInput:
+        return InvalidInput(name, point.tolist(), f"finite points inside the map: 0 <= x < {self.truth.width_m:g}, "
+                                                  f"0 <= y < {self.truth.height_m:g}")
+
+    def _check_point(self, p: Point, name: str) -> tuple[float, float]:
+        xy = self._check_positions(np.asarray(p, dtype=np.float64).reshape(1, -1), name)
+        return float(xy[0, 0]), float(xy[0, 1])
+
+
+def _finite(name: str, value: object) -> float:
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise InvalidInput(name, value, "a finite number of dBm") from None
+    if not math.isfinite(v):
+        raise InvalidInput(name, value, "a finite number of dBm")
+    return v
+
+
+def _per_robot_values(name: str, values: object, n_robots: int) -> np.ndarray:
+    out = np.ascontiguousarray(values, dtype=np.float64)
+    if out.shape != (n_robots,) or not np.isfinite(out).all():
+        raise InvalidInput(name, values, f"{n_robots} finite dBm values, one per robot")
+    return out
+
+
+class MultiWall(LinkModel):
+    """Eq. 1 path loss plus each crossed wall's material attenuation (eq. 2): the default model."""
+
+    name = "multiwall"
+    code = MULTIWALL
+
+
+class MaesCompatible(LinkModel):
+    """MAES's material model: no distance term, each material charged per 0.25 m of wall path."""
+
+    name = "maes"
+    code = MAES
+
+    def _metre_db(self, table_metre_db: np.ndarray) -> np.ndarray:
+        return self.cross_db / MAES_CELL_M
+
+    def _per_metre(self) -> bool:
+        return True
+
+
+class LineOfSight(LinkModel):
+    """Linked iff no wall is crossed (and, optionally, the distance is at most ``max_range_m``)."""
+
+    name = "los"
+    code = LOS
+    prices_walls = False
+
+
+class Global(LinkModel):
+    """Every message reaches every other robot."""
+
+    name = "global"
+    code = GLOBAL
+    prices_walls = False
+
+
+MODEL_CLASSES: dict[str, type[LinkModel]] = {c.name: c for c in (MultiWall, MaesCompatible, LineOfSight, Global)}
+
+
+def build_link_model(truth: Map, config: RadioConfig | None = None) -> LinkModel:
+    """The link model ``config.model`` for the map ``truth`` (resolves materials: unknown ones are errors)."""
+    config = config or RadioConfig()
+    return MODEL_CLASSES[config.model](truth, config)
