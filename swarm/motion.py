@@ -1,0 +1,293 @@
+"""Low-level motion: the drive limits of a robot (:class:`MotionParams`) and a waypoint follower that turns
+a path into per-tick ``(v, omega)`` commands for :class:`swarm.world.World`.
+
+The follower is a pure function of the pose it is given and the path it holds, so it behaves the same
+whether the pose comes from ground truth or from an estimate. It knows the drive limits, so it brakes
+early enough for the world's acceleration limit to stop the robot where it should stop, and it never
+asks for more than the world will deliver. All arithmetic is plain ``math`` on floats: the follower runs
+once per robot per tick, where a numpy call (~1 us each) would cost more than the whole computation.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from maps.errors import InvalidInput
+from maps.params import check_float, check_int
+
+TICK_S: float = 0.1
+"""One logic tick of simulated time (DESIGN.md section 3)."""
+MAX_SUBSTEP_MOVE_M: float = 0.05
+"""The most a robot may travel in one physics sub-step: a tenth of the thinnest wall (one 0.5 m cell).
+Contacts are discrete, so a robot can overlap a wall by up to one sub-step's travel before the contact
+pushes it back; keeping that far below the wall thickness is what makes tunnelling impossible."""
+
+
+@dataclass(frozen=True)
+class MotionParams:
+    """Drive limits of one differential-drive robot and the physics sub-stepping of the world.
+
+    Defaults describe a real indoor robot of the 0.6 m diameter class rather than MAES's robot:
+
+    - ``max_speed = 1.0`` m/s: between the TurtleBot 2 / Kobuki (0.7 m/s spec; its velocity smoother
+      defaults to 0.8 m/s) and the Pioneer 3-DX (1.2 m/s), well below the outdoor Clearpath Jackal
+      (2.0 m/s, ``jackal_control/config/control.yaml``). Indoors, with lidar SLAM on board, 1 m/s is a
+      brisk but honest top speed.
+    - ``max_turn_rate = 2.0`` rad/s (115 deg/s): turning in place at 2 rad/s needs 0.5 m/s at the wheels
+      of a ~0.5 m track, half the driving top speed; Kobuki is specified at 180 deg/s, the Pioneer at
+      300 deg/s, but scan matching smears above ~2 rad/s. It is also ``swarm.api.RobotInfo``'s default.
+    - ``max_accel = 1.0`` m/s^2: Kobuki's smoother default (``accel_lim_v: 1.0``, "maximum is actually
+      2.0, but we push it down to be smooth"); Jackal's controller allows 20 m/s^2, which a loaded
+      robot on a smooth floor cannot transmit without wheel slip.
+    - ``max_turn_accel = 4.0`` rad/s^2: the same 1 m/s^2 at the wheels of a ~0.5 m track
+      (alpha = a / (track / 2)).
+    - ``substeps = 5``: physics at 50 Hz moves a robot at most 2 cm per sub-step (see
+      :data:`MAX_SUBSTEP_MOVE_M`). Free motion is integrated exactly whatever the sub-step (see
+      :mod:`swarm.world`), so sub-steps only refine contacts; each costs ~6 us per tick for 16 robots.
+
+    MAES robots are much faster (about 3 tiles/s and 4 rad/s, reached within ~0.1 s); use
+    :meth:`maes` for parity campaigns.
+    """
+
+    max_speed: float = 1.0
+    max_turn_rate: float = 2.0
+    max_accel: float = 1.0
+    max_turn_accel: float = 4.0
+    radius: float = 0.3
+    substeps: int = 5
+
+    def __post_init__(self) -> None:
+        check_float("max_speed", self.max_speed, 0.0, 10.0, lo_open=True)
+        check_float("max_turn_rate", self.max_turn_rate, 0.0, 20.0, lo_open=True)
+        check_float("max_accel", self.max_accel, 0.0, 1000.0, lo_open=True)
+        check_float("max_turn_accel", self.max_turn_accel, 0.0, 1000.0, lo_open=True)
+        check_float("radius", self.radius, 0.05, 1.0)
+        check_int("substeps", self.substeps, 1, 1000)
+        needed = math.ceil(self.max_speed * TICK_S / MAX_SUBSTEP_MOVE_M - 1e-9)
+        if self.substeps < needed:
+            raise InvalidInput("substeps", self.substeps,
+                               f"an integer >= {needed} (at max_speed {self.max_speed:g} m/s a physics "
+                               f"sub-step may move at most {MAX_SUBSTEP_MOVE_M:g} m)")
+
+    @property
+    def substep_s(self) -> float:
+        """Physics time step in seconds."""
+        return TICK_S / self.substeps
+
+    @classmethod
+    def maes(cls) -> "MotionParams":
+        """MAES-like drive for parity campaigns (reference/maes.md section 4.1): terminal speeds of
+        3.0 tiles/s and 4.0 rad/s, and MAES's *initial* accelerations (force/mass = 60 m/s^2 with linear
+        drag 20, i.e. 3.0 * 20; 4.0 * 30 = 120 rad/s^2 with angular drag 30). MAES approaches its
+        terminal speed exponentially (63 % after ~55 ms); here the ramp is linear and done in 50 ms,
+        so MAES robots cover a few centimetres less per start. Eight sub-steps (12.5 ms, close to MAES's
+        10 ms physics step) keep a sub-step's travel at 3.75 cm; free motion is an exact arc whatever
+        the sub-step, so more would only refine contacts, at ~6 us per sub-step."""
+        return cls(max_speed=3.0, max_turn_rate=4.0, max_accel=60.0, max_turn_accel=120.0,
+                   radius=0.3, substeps=8)
+
+
+MOTION_PRESETS: dict[str, MotionParams] = {"default": MotionParams(), "maes": MotionParams.maes()}
+"""Named drive parameter sets."""
+
+
+@dataclass(frozen=True)
+class FollowParams:
+    """Tuning of :class:`Follower`. The defaults work for both :class:`MotionParams` presets.
+
+    - ``rotate_above``: heading error (rad) above which the robot stops and turns in place; below it,
+      it drives at ``cos(error)`` of its speed while correcting. 0.7 rad (40 deg) lets the robot take
+      the 45-degree bends of grid paths without stopping.
+    - ``switch_radius``: a waypoint counts as passed within this distance (m); the last one never does.
+    - ``arrive_radius``: the path is done when the robot is this close (m) to the last waypoint. The
+      residual speed then (``gain * arrive_radius``) stops within a few mm, inside the 0.05 m promise.
+    - ``reverse_radius``: within this distance of the last waypoint the robot backs up instead of
+      turning around when it has overshot.
+    - ``heading_tolerance``: :meth:`Follower.turn_to` is satisfied within this error (rad).
+    - ``gain``: proportional gain (1/s) of the final approach, linear and angular.
+    """
+
+    rotate_above: float = 0.7
+    switch_radius: float = 0.2
+    arrive_radius: float = 0.02
+    reverse_radius: float = 0.15
+    heading_tolerance: float = 0.002
+    gain: float = 4.0
+
+    def __post_init__(self) -> None:
+        check_float("rotate_above", self.rotate_above, 0.05, math.pi / 2)
+        check_float("switch_radius", self.switch_radius, 0.01, 2.0)
+        check_float("arrive_radius", self.arrive_radius, 0.001, 0.05)
+        check_float("reverse_radius", self.reverse_radius, 0.0, 1.0)
+        check_float("heading_tolerance", self.heading_tolerance, 1e-5, 0.1)
+        check_float("gain", self.gain, 0.1, 1.0 / TICK_S)
+
+
+def wrap_angle(angle: float) -> float:
+    """``angle`` mapped into (-pi, pi]."""
+    return math.pi - (math.pi - angle) % (2.0 * math.pi)
+
+
+class Follower:
+    """Follows a polyline of waypoints: rotate in place when the heading error is large, otherwise drive
+    with heading correction; brake for sharp bends and for the last waypoint so that it ends within
+    ``arrive_radius`` of it.
+
+    Speeds are planned with half the drive's acceleration (``sqrt(2 * a/2 * d)``) so the world's
+    acceleration limit can always honour them, and switch to a proportional law (``gain * d``) near the
+    end so the robot converges without overshoot despite commands changing only once per tick.
+    """
+
+    def __init__(self, params: MotionParams, follow: FollowParams | None = None) -> None:
+        self.params = params
+        self.follow = follow if follow is not None else FollowParams()
+        self._points: list[tuple[float, float]] = []
+        self._corner_speed: list[float] = []     # speed allowed when passing waypoint i (last: 0)
+        self._suffix: list[float] = []           # path length from waypoint i to the end
+        self._index = 0
+        self._done = True
+        self._remaining = 0.0
+
+    # ------------------------------------------------------------------------------------------ path ----
+    def set_path(self, waypoints: Any) -> None:
+        """Follow ``waypoints`` (``float[M, 2]`` in metres, M >= 1) from the first one on."""
+        try:
+            pts = np.asarray(waypoints, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InvalidInput("waypoints", waypoints, "an array of shape (M, 2), M >= 1") from None
+        if pts.ndim != 2 or pts.shape[0] < 1 or pts.shape[1] != 2:
+            raise InvalidInput("waypoints", getattr(pts, "shape", waypoints), "an array of shape (M, 2), M >= 1")
+        if not np.isfinite(pts).all():
+            raise InvalidInput("waypoints", "non-finite values", "finite coordinates in metres")
+        self._points = [(float(x), float(y)) for x, y in pts]
+        m = len(self._points)
+        seg = [math.dist(self._points[i], self._points[i + 1]) for i in range(m - 1)]
+        self._suffix = [0.0] * m
+        for i in range(m - 2, -1, -1):
+            self._suffix[i] = self._suffix[i + 1] + seg[i]
+        self._corner_speed = [self._bend_speed(i) for i in range(m)]
+        self._index = 0
+        self._done = False
+        self._remaining = self._suffix[0]
+
+    def clear(self) -> None:
+        """Forget the path; :meth:`command` returns (0, 0) until the next :meth:`set_path`."""
+        self._points = []
+        self._done = True
+        self._remaining = 0.0
+
+    @property
+    def done(self) -> bool:
+        """True when there is no path or the last waypoint has been reached."""
+        return self._done
+
+    @property
+    def remaining_m(self) -> float:
+        """Path length still to drive, measured from the pose of the last :meth:`command` (before the
+        first command: from the first waypoint)."""
+        return 0.0 if self._done else self._remaining
+
+    @property
+    def index(self) -> int:
+        """Index of the waypoint the robot is heading for."""
+        return self._index
+
+    @property
+    def waypoints(self) -> tuple[tuple[float, float], ...]:
+        return tuple(self._points)
+
+    # --------------------------------------------------------------------------------------- control ----
+    def command(self, pose: Sequence[float]) -> tuple[float, float]:
+        """The ``(v, omega)`` command for this tick from ``pose`` = (x, y, theta)."""
+        if self._done:
+            return 0.0, 0.0
+        x, y, theta = float(pose[0]), float(pose[1]), float(pose[2])
+        fp = self.follow
+        last = len(self._points) - 1
+        while self._index < last and math.dist((x, y), self._points[self._index]) < fp.switch_radius:
+            self._index += 1
+        tx, ty = self._points[self._index]
+        d = math.hypot(tx - x, ty - y)
+        self._remaining = d + self._suffix[self._index]
+        if self._index == last and d <= fp.arrive_radius:
+            self._done = True
+            self._remaining = 0.0
+            return 0.0, 0.0
+        err = wrap_angle(math.atan2(ty - y, tx - x) - theta)
+        speed = self._speed_limit(x, y, d)
+        direction = 1.0
+        if self._index == last and d < fp.reverse_radius and abs(err) > math.pi / 2:
+            direction = -1.0                      # small overshoot: back up rather than turn around
+            err = wrap_angle(err - math.pi)
+        omega = self._turn_rate(err)
+        if abs(err) > fp.rotate_above:
+            return 0.0, omega
+        return direction * speed * math.cos(err), omega
+
+    def turn_to(self, pose: Sequence[float], heading: float) -> tuple[float, float]:
+        """A pure rotation toward ``heading`` (rad); (0, 0) once within ``heading_tolerance``."""
+        err = wrap_angle(float(heading) - float(pose[2]))
+        if abs(err) <= self.follow.heading_tolerance:
+            return 0.0, 0.0
+        return 0.0, self._turn_rate(err)
+
+    # ----------------------------------------------------------------------------------- internals ----
+    def _turn_rate(self, err: float) -> float:
+        """Angular rate that brakes at half the angular acceleration and lands on the target: the
+        proportional term takes over near zero, with a floor of ``min(0.05 rad/s, err/tick)`` so the last
+        fraction of a degree does not take seconds (and small enough that stopping from it turns less than
+        the tolerance)."""
+        p = self.params
+        mag = abs(err)
+        rate = min(p.max_turn_rate, math.sqrt(p.max_turn_accel * mag), self.follow.gain * mag)
+        rate = min(max(rate, min(0.05, mag / TICK_S)), p.max_turn_rate)
+        return math.copysign(rate, err)
+
+    def _speed_limit(self, x: float, y: float, d: float) -> float:
+        """Highest speed from which the robot can still slow to every upcoming bend's speed (and stop at
+        the end) at half its acceleration, looking ahead as far as braking from top speed takes."""
+        p = self.params
+        brake = 0.5 * p.max_accel
+        horizon = p.max_speed * p.max_speed / (2.0 * brake)
+        last = len(self._points) - 1
+        limit = p.max_speed
+        dist = d
+        i = self._index
+        while True:
+            vc = self._corner_speed[i] if i != self._index else self._bend_speed(i, (x, y))
+            if i == last:
+                limit = min(limit, math.sqrt(2.0 * brake * dist),
+                            max(self.follow.gain * dist, min(0.05, dist / TICK_S)))
+                break
+            limit = min(limit, math.sqrt(vc * vc + 2.0 * brake * dist))
+            if dist > horizon:
+                break
+            dist += self._suffix[i] - self._suffix[i + 1]
+            i += 1
+        return limit
+
+    def _bend_speed(self, i: int, came_from: tuple[float, float] | None = None) -> float:
+        """Speed allowed when passing waypoint ``i``: ``max_speed * cos(bend)``, zero for the last
+        waypoint and for bends the robot must take by turning in place."""
+        pts = self._points
+        if i == len(pts) - 1:
+            return 0.0
+        prev = came_from if came_from is not None else (pts[i - 1] if i > 0 else None)
+        if prev is None:
+            return self.params.max_speed
+        ax, ay = pts[i][0] - prev[0], pts[i][1] - prev[1]
+        bx, by = pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1]
+        if (ax == 0.0 and ay == 0.0) or (bx == 0.0 and by == 0.0):
+            return self.params.max_speed
+        bend = abs(wrap_angle(math.atan2(by, bx) - math.atan2(ay, ax)))
+        if bend > self.follow.rotate_above:
+            return 0.0
+        return self.params.max_speed * math.cos(bend)
+
+
+__all__ = ["FollowParams", "Follower", "MAX_SUBSTEP_MOVE_M", "MOTION_PRESETS", "MotionParams", "TICK_S",
+           "wrap_angle"]

@@ -1,0 +1,206 @@
+"""swarm.motion: the waypoint follower drives the world's robots where they should go (MAES's motion tests:
+moves of 1-10 m within 0.1 m, rotations within 1 degree) and follows paths without touching walls."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from maps import Map
+from maps.errors import InvalidInput
+from swarm.motion import MOTION_PRESETS, FollowParams, Follower, MotionParams, wrap_angle
+from swarm.world import World, disc_hits_solid
+
+PRESETS = [pytest.param(MOTION_PRESETS["default"], id="default"), pytest.param(MOTION_PRESETS["maes"], id="maes")]
+SETTLE_TICKS = 10
+
+
+def open_room(width_cells: int = 60, height_cells: int = 60) -> Map:
+    solid = np.ones((height_cells, width_cells), dtype=bool)
+    solid[1:-1, 1:-1] = False
+    return Map(solid=solid, material=solid.astype(np.uint8), materials=("air", "concrete"))
+
+
+def follow(world: World, follower: Follower, max_ticks: int = 2000) -> int:
+    """Drive robot 0 until the follower is done, then let it settle with zero commands."""
+    ticks = 0
+    while not follower.done:
+        assert ticks < max_ticks, "follower never finished"
+        v, w = follower.command(world.poses[0])
+        world.step([[v, w]])
+        ticks += 1
+    for _ in range(SETTLE_TICKS):
+        world.step([[0.0, 0.0]])
+    return ticks
+
+
+def angle_error(a: float, b: float) -> float:
+    return abs(wrap_angle(a - b))
+
+
+# ------------------------------------------------------------------------------ the MAES motion tests ----
+@pytest.mark.parametrize("params", PRESETS)
+@pytest.mark.parametrize("heading", [0.0, 2.3, -1.9])
+@pytest.mark.parametrize("distance", [1.0, 2.0, 5.0, 10.0])
+def test_straight_move_ends_within_a_tenth_of_a_metre(params: MotionParams, heading: float,
+                                                      distance: float) -> None:
+    start = np.array([15.0, 15.0])
+    target = start + distance * np.array([math.cos(heading), math.sin(heading)])
+    world = World(open_room(), [[*start, heading]], params)
+    follower = Follower(params)
+    follower.set_path([target])
+    follow(world, follower)
+    x, y, theta = world.poses[0]
+    assert math.hypot(x - target[0], y - target[1]) <= 0.05        # the follower's promise (MAES: 0.1)
+    assert angle_error(theta, heading) < math.radians(1.0)          # it drove straight
+    assert world.distance[0] == pytest.approx(distance, abs=0.05)
+    assert not world.collided[0]
+
+
+@pytest.mark.parametrize("params", PRESETS)
+@pytest.mark.parametrize("degrees", [1, -1, 2, 5, 10, 20, -20, 90, 180, -180])
+def test_rotation_ends_within_one_degree(params: MotionParams, degrees: int) -> None:
+    start_heading = 0.4
+    target = start_heading + math.radians(degrees)
+    world = World(open_room(20, 20), [[5.0, 5.0, start_heading]], params)
+    follower = Follower(params)
+    for _ in range(200):
+        v, w = follower.turn_to(world.poses[0], target)
+        assert v == 0.0
+        if w == 0.0:
+            break
+        world.step([[v, w]])
+    else:
+        pytest.fail("turn_to never finished")
+    for _ in range(SETTLE_TICKS):
+        world.step([[0.0, 0.0]])
+    assert angle_error(world.poses[0, 2], target) < math.radians(1.0)
+    assert world.poses[0, 0] == 5.0 and world.poses[0, 1] == 5.0      # turned in place
+
+
+# ---------------------------------------------------------------------------------------- paths ----
+def l_corridor() -> Map:
+    """A 1.5 m wide corridor: east along y = 2.75, then north along x = 14.25."""
+    solid = np.ones((40, 40), dtype=bool)
+    solid[4:7, 2:30] = False
+    solid[4:30, 27:30] = False
+    return Map(solid=solid, material=solid.astype(np.uint8), materials=("air", "concrete"))
+
+
+@pytest.mark.parametrize("params", PRESETS)
+def test_follows_a_corridor_around_a_corner_without_touching_walls(params: MotionParams) -> None:
+    truth = l_corridor()
+    path = [[3.0, 2.75], [6.0, 2.75], [10.0, 2.75], [14.25, 2.75], [14.25, 8.0], [14.25, 14.0]]
+    world = World(truth, [[1.75, 2.75, 0.0]], params)
+    follower = Follower(params)
+    follower.set_path(path)
+    remaining = [follower.remaining_m]
+    while not follower.done:
+        assert world.ticks < 1000
+        v, w = follower.command(world.poses[0])
+        assert abs(v) <= params.max_speed and abs(w) <= params.max_turn_rate
+        remaining.append(follower.remaining_m)
+        world.step([[v, w]])
+        x, y, _ = world.poses[0]
+        assert not world.collided[0]
+        assert not disc_hits_solid(truth.solid, x, y, params.radius)
+    assert remaining[0] == pytest.approx(11.25 + 11.25)
+    assert remaining[-1] == 0.0 and follower.remaining_m == 0.0
+    assert all(b <= a + 1e-9 for a, b in zip(remaining[1:], remaining[2:]))   # never moves away
+    assert math.hypot(*(world.poses[0, :2] - path[-1])) <= 0.05
+    # it does not crawl: the ideal time at top speed plus a few seconds for ramps and the corner
+    assert world.ticks < (22.5 / params.max_speed) * 10 + 60
+
+
+def test_waypoint_behind_the_robot_turns_it_around() -> None:
+    params = MotionParams()
+    world = World(open_room(), [[10.0, 10.0, 0.0]], params)
+    follower = Follower(params)
+    follower.set_path([[7.0, 10.0], [7.0, 13.0]])
+    v, w = follower.command(world.poses[0])
+    assert v == 0.0 and w > 0.0                                     # turns in place first
+    follow(world, follower)
+    assert math.hypot(world.poses[0, 0] - 7.0, world.poses[0, 1] - 13.0) <= 0.05
+
+
+def test_small_overshoot_is_corrected_by_backing_up() -> None:
+    params = MotionParams()
+    follower = Follower(params)
+    follower.set_path([[5.0, 5.0]])
+    v, w = follower.command((5.1, 5.0, 0.0))                        # 10 cm past, facing away
+    assert v < 0.0
+    world = World(open_room(20, 20), [[5.1, 5.0, 0.0]], params)
+    follow(world, follower)
+    assert math.hypot(world.poses[0, 0] - 5.0, world.poses[0, 1] - 5.0) <= 0.05
+    assert angle_error(world.poses[0, 2], 0.0) < 0.01              # it did not turn around
+
+
+def test_waypoints_switch_when_close() -> None:
+    follower = Follower(MotionParams())
+    follower.set_path([[1.0, 0.0], [2.0, 0.0], [2.0, 1.0]])
+    follower.command((0.0, 0.0, 0.0))
+    assert follower.index == 0
+    follower.command((0.85, 0.0, 0.0))
+    assert follower.index == 1
+    assert follower.remaining_m == pytest.approx(1.15 + 1.0)
+    follower.command((1.9, 0.1, math.pi / 2))
+    assert follower.index == 2 and not follower.done
+    assert follower.remaining_m == pytest.approx(math.hypot(0.1, 0.9))
+
+
+def test_brakes_before_a_sharp_bend_but_not_before_a_gentle_one() -> None:
+    params = MotionParams()
+    sharp, gentle = Follower(params), Follower(params)
+    sharp.set_path([[0.0, 0.0], [2.0, 0.0], [2.0, 2.0]])            # 90 degrees
+    gentle.set_path([[0.0, 0.0], [2.0, 0.0], [4.0, 0.2]])           # ~6 degrees
+    pose = (1.7, 0.0, 0.0)
+    sharp.command((0.1, 0.0, 0.0))
+    gentle.command((0.1, 0.0, 0.0))
+    v_sharp, _ = sharp.command(pose)
+    v_gentle, _ = gentle.command(pose)
+    assert v_sharp < 0.6 < v_gentle
+
+
+def test_idle_follower_and_clear() -> None:
+    follower = Follower(MotionParams())
+    assert follower.done and follower.remaining_m == 0.0
+    assert follower.command((1.0, 2.0, 0.3)) == (0.0, 0.0)
+    follower.set_path(np.array([[3.0, 4.0], [3.0, 6.0]]))
+    assert not follower.done and follower.remaining_m == pytest.approx(2.0)
+    follower.clear()
+    assert follower.done and follower.command((1.0, 2.0, 0.3)) == (0.0, 0.0)
+
+
+def test_turn_to_is_done_within_tolerance() -> None:
+    follower = Follower(MotionParams())
+    assert follower.turn_to((0.0, 0.0, 1.0), 1.0 + 0.001) == (0.0, 0.0)
+    v, w = follower.turn_to((0.0, 0.0, 1.0), 1.0 - 0.5)
+    assert v == 0.0 and w < 0.0
+    _, w = follower.turn_to((0.0, 0.0, 3.0), -3.0)                  # the short way round, across pi
+    assert w > 0.0
+
+
+@pytest.mark.parametrize("waypoints", [[], [1.0, 2.0], [[1.0, 2.0, 3.0]], [[1.0, float("nan")]], "ab"])
+def test_bad_paths_are_refused(waypoints: object) -> None:
+    with pytest.raises(InvalidInput) as err:
+        Follower(MotionParams()).set_path(waypoints)
+    assert err.value.field == "waypoints"
+
+
+@pytest.mark.parametrize("field,value", [("rotate_above", 0.0), ("switch_radius", -1.0), ("arrive_radius", 0.2),
+                                         ("gain", 100.0), ("heading_tolerance", float("nan"))])
+def test_bad_follow_params_name_the_field(field: str, value: float) -> None:
+    with pytest.raises(InvalidInput) as err:
+        FollowParams(**{field: value})
+    assert err.value.field == field
+
+
+def test_wrap_angle() -> None:
+    assert wrap_angle(math.pi) == math.pi
+    assert wrap_angle(-math.pi) == math.pi
+    assert wrap_angle(3 * math.pi / 2) == pytest.approx(-math.pi / 2)
+    for a in np.linspace(-20, 20, 401):
+        w = wrap_angle(float(a))
+        assert -math.pi < w <= math.pi and math.isclose(math.cos(w), math.cos(a), abs_tol=1e-12)
