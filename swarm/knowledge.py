@@ -1,0 +1,236 @@
+"""Knowledge maps (what each robot believes) and the ground-truth exploration/coverage tracker.
+
+A knowledge map is a ``uint8[H, W]`` raster of 0.5 m cells with ``UNSEEN = 0 < FREE = 1 < SOLID = 2``
+(:mod:`swarm.api`), so combining two maps is an elementwise maximum and SOLID is sticky, as in MAES's
+SLAM map (reference/maes.md section 5.3). The runtime keeps one map per robot as ``uint8[R, H, W]``.
+
+The optional log-odds mode (noisy lidar, xBOA paper section 4.1, Eqs. 5-8) keeps a ``float32`` log-odds
+value per robot and cell (:class:`LogOddsGrid`); the sensor writes the derived ternary state into the
+knowledge map, so algorithms and map merging see the same ``uint8`` rasters in both modes.
+
+:class:`ExplorationTracker` is the referee: it knows the truth and measures how much of the free space
+the swarm has seen (``explored``) and driven over (``coverage``, MAES section 5.2). It is incremental:
+the sensor kernel reports the number of newly seen free cells, so reading the metrics is O(1) per tick.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from maps import Map
+from maps.errors import InvalidInput
+
+from .api import CELL_M, FREE, SOLID, UNSEEN
+
+__all__ = [
+    "FREE", "SOLID", "UNSEEN", "ExplorationTracker", "LogOddsGrid", "active_flags", "classify_logodds",
+    "count_cells", "count_known", "empty_knowledge", "merge",
+]
+
+
+# --------------------------------------------------------------------------------------- ternary maps
+def empty_knowledge(shape: tuple[int, int], n_robots: int | None = None) -> np.ndarray:
+    """An all-UNSEEN map ``uint8[H, W]``, or a stack ``uint8[n_robots, H, W]`` (C-contiguous, as the
+    sensor kernel wants it)."""
+    full = tuple(shape) if n_robots is None else (n_robots, *shape)
+    return np.zeros(full, dtype=np.uint8)
+
+
+def _check_map(name: str, array: np.ndarray, *, writable: bool = False) -> None:
+    if not isinstance(array, np.ndarray) or array.dtype != np.uint8 or array.ndim != 2:
+        raise InvalidInput(name, getattr(array, "shape", type(array).__name__), "a uint8[H, W] knowledge map")
+    if writable and not array.flags.writeable:
+        raise InvalidInput(name, "a read-only array", "a writable uint8[H, W] knowledge map")
+
+
+@njit(cache=True)
+def _merge_max_kernel(into: np.ndarray, other: np.ndarray) -> int:
+    changed = 0
+    rows, cols = into.shape
+    for r in range(rows):
+        for c in range(cols):
+            v = other[r, c]
+            if v > into[r, c]:
+                into[r, c] = v
+                changed += 1
+    return changed
+
+
+def merge(into: np.ndarray, other: np.ndarray) -> int:
+    """Merge ``other`` into ``into`` in place (elementwise maximum) and return how many cells changed.
+
+    Maximum is the right merge because the states are ordered by certainty of the ternary sensor:
+    anything beats UNSEEN and SOLID beats FREE (a wall seen by anyone stays a wall, MAES semantics).
+    The count lets the caller tell whether a received map taught the robot anything.
+    """
+    _check_map("into", into, writable=True)
+    _check_map("other", other)
+    if other.shape != into.shape:
+        raise InvalidInput("other", other.shape, f"the same shape as into {into.shape}")
+    if not into.flags.c_contiguous:
+        raise InvalidInput("into", "a non-contiguous view", "a C-contiguous uint8[H, W] array")
+    return int(_merge_max_kernel(into, np.ascontiguousarray(other)))
+
+
+def count_known(known: np.ndarray) -> int:
+    """Cells that are not UNSEEN (FREE or SOLID), over the whole array (one map or a stack)."""
+    return int(np.count_nonzero(known))
+
+
+def count_cells(known: np.ndarray, state: int) -> int:
+    """Cells in exactly ``state`` (UNSEEN, FREE or SOLID)."""
+    if state not in (UNSEEN, FREE, SOLID):
+        raise InvalidInput("state", state, f"{UNSEEN} (UNSEEN) | {FREE} (FREE) | {SOLID} (SOLID)")
+    return int(np.count_nonzero(known == state))
+
+
+# ------------------------------------------------------------------------------------- log-odds maps
+def classify_logodds(values: np.ndarray, occupied_above: float = 0.0, free_below: float = 0.0) -> np.ndarray:
+    """Ternary state of log-odds values, xBOA paper Eq. 8: SOLID if ``L > occupied_above``, FREE if
+    ``L < free_below``, UNSEEN otherwise (the paper uses 0 for both: log-odds 0 is the prior p = 0.5).
+
+    Thresholds are compared in float32, exactly as the sensor kernel does, so both agree on every cell.
+    """
+    v = np.asarray(values, dtype=np.float32)
+    out = np.full(v.shape, UNSEEN, dtype=np.uint8)
+    out[v < np.float32(free_below)] = FREE
+    out[v > np.float32(occupied_above)] = SOLID
+    return out
+
+
+class LogOddsGrid:
+    """Per-robot occupancy log-odds ``float32[R, H, W]`` (xBOA paper Eq. 7), all 0 (p = 0.5) at start.
+
+    The lidar adds the inverse-sensor-model increments (see :class:`swarm.sensing.LidarParams`) and
+    writes the classified state into the robot's knowledge map; this object only stores the numbers and
+    knows how to classify them, so an algorithm or a viewer can inspect the belief behind a map.
+    """
+
+    def __init__(self, n_robots: int, shape: tuple[int, int], occupied_above: float = 0.0,
+                 free_below: float = 0.0) -> None:
+        if free_below > occupied_above:
+            raise InvalidInput("free_below", free_below, f"a value <= occupied_above ({occupied_above:g})")
+        self.values = np.zeros((n_robots, *shape), dtype=np.float32)
+        self.occupied_above = float(occupied_above)
+        self.free_below = float(free_below)
+
+    @property
+    def n_robots(self) -> int:
+        return int(self.values.shape[0])
+
+    def classify(self, robot: int | None = None) -> np.ndarray:
+        """Ternary map of one robot (``uint8[H, W]``) or of all (``uint8[R, H, W]``)."""
+        values = self.values if robot is None else self.values[robot]
+        return classify_logodds(values, self.occupied_above, self.free_below)
+
+
+# ----------------------------------------------------------------------------- ground-truth tracker
+def active_flags(n_robots: int, active: np.ndarray | None) -> np.ndarray:
+    """``active`` as a C-contiguous ``bool[n_robots]`` (None = every robot active)."""
+    if active is None:
+        return np.ones(n_robots, dtype=np.bool_)
+    act = np.ascontiguousarray(active, dtype=np.bool_)
+    if act.shape != (n_robots,):
+        raise InvalidInput("active", act.shape, f"a bool array of shape ({n_robots},), one flag per robot")
+    return act
+
+
+@njit(cache=True)
+def _cover_blocks_kernel(free: np.ndarray, positions: np.ndarray, active: np.ndarray, cell: float,
+                         covered: np.ndarray) -> int:
+    """Mark the free cells of the 3x3 block around each active robot's cell; return the number newly
+    covered, or ``-(r + 1)`` (nothing written) if robot r is outside the map."""
+    rows, cols = covered.shape
+    n = positions.shape[0]
+    for r in range(n):
+        if active[r]:
+            x = positions[r, 0]
+            y = positions[r, 1]
+            if not (x >= 0.0 and x < cols * cell and y >= 0.0 and y < rows * cell):
+                return -(r + 1)
+    new = 0
+    for r in range(n):
+        if not active[r]:
+            continue
+        row = int(np.floor(positions[r, 1] / cell))
+        col = int(np.floor(positions[r, 0] / cell))
+        for rr in range(max(row - 1, 0), min(row + 2, rows)):
+            for cc in range(max(col - 1, 0), min(col + 2, cols)):
+                if free[rr, cc] and not covered[rr, cc]:
+                    covered[rr, cc] = True
+                    new += 1
+    return new
+
+
+class ExplorationTracker:
+    """Ground-truth exploration and coverage of one run.
+
+    - ``seen[r, c]``: some robot's lidar observed the cell (free or solid, see :mod:`swarm.sensing` for
+      the exact rule). It is written by the lidar kernel, which also reports how many *free* cells it saw
+      for the first time, so ``explored = seen free cells / free cells`` costs O(1) per tick. MAES counts
+      explored triangles; on our raster the cell is the unit.
+    - ``covered[r, c]``: a free cell in the 3x3 block of 0.5 m cells around a robot's cell at some tick
+      (MAES section 5.2; a cell is coverable iff it is free). ``coverage = covered / free cells``.
+    """
+
+    def __init__(self, truth: Map) -> None:
+        self.truth = truth
+        self.shape: tuple[int, int] = truth.shape
+        self.free_cells: int = truth.free_cells
+        self._free = np.ascontiguousarray(truth.free, dtype=np.bool_).copy()  # writable: one numba type
+        self._seen = np.zeros(self.shape, dtype=np.bool_)
+        self._covered = np.zeros(self.shape, dtype=np.bool_)
+        self.seen_free_cells: int = 0
+        self.covered_cells: int = 0
+
+    # The lidar kernel writes into this raster directly and reports its count through ``add_seen``.
+    @property
+    def seen_buffer(self) -> np.ndarray:
+        """The writable ``seen`` raster, for the sensor kernel only."""
+        return self._seen
+
+    def add_seen(self, newly_seen_free: int) -> None:
+        """Account for free cells the sensor saw for the first time (it has already set them in
+        ``seen_buffer``)."""
+        self.seen_free_cells += int(newly_seen_free)
+
+    @property
+    def seen(self) -> np.ndarray:
+        """Read-only ``bool[H, W]``: cells observed by any robot so far."""
+        view = self._seen.view()
+        view.setflags(write=False)
+        return view
+
+    @property
+    def covered(self) -> np.ndarray:
+        """Read-only ``bool[H, W]``: free cells covered by any robot so far."""
+        view = self._covered.view()
+        view.setflags(write=False)
+        return view
+
+    @property
+    def explored(self) -> float:
+        """Fraction of the free cells seen by any robot, in [0, 1]."""
+        return self.seen_free_cells / self.free_cells
+
+    @property
+    def coverage(self) -> float:
+        """Fraction of the free (coverable) cells covered by any robot, in [0, 1]."""
+        return self.covered_cells / self.free_cells
+
+    def update_coverage(self, positions: np.ndarray, active: np.ndarray | None = None) -> int:
+        """Cover the 3x3 block around each robot's cell (``positions``: ``float64[R, 2]`` x, y in metres);
+        returns the number of newly covered cells. Inactive robots (``active[r]`` False) cover nothing."""
+        pos = np.ascontiguousarray(positions, dtype=np.float64)
+        if pos.ndim != 2 or pos.shape[1] != 2:
+            raise InvalidInput("positions", pos.shape, "an array of shape (R, 2): x, y in metres")
+        act = active_flags(pos.shape[0], active)
+        new = int(_cover_blocks_kernel(self._free, pos, act, CELL_M, self._covered))
+        if new < 0:
+            r = -new - 1
+            raise InvalidInput(f"positions[{r}]", tuple(float(v) for v in pos[r]),
+                               f"a point inside the map (0 <= x < {self.truth.width_m:g}, "
+                               f"0 <= y < {self.truth.height_m:g} m)")
+        self.covered_cells += new
+        return new

@@ -1,0 +1,142 @@
+"""Knowledge maps (merge, counts, log-odds classification) and the ground-truth coverage tracker."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from maps import InvalidInput, Map
+from swarm.api import FREE, SOLID, UNSEEN
+from swarm.knowledge import (
+    ExplorationTracker, LogOddsGrid, active_flags, classify_logodds, count_cells, count_known, empty_knowledge,
+    merge,
+)
+
+
+def make_map(solid: np.ndarray) -> Map:
+    return Map(solid=solid, material=solid.astype(np.uint8), materials=("air", "concrete"))
+
+
+def room(rows: int, cols: int) -> np.ndarray:
+    solid = np.ones((rows, cols), dtype=bool)
+    solid[1:-1, 1:-1] = False
+    return solid
+
+
+# --------------------------------------------------------------------------------------- ternary maps
+def test_merge_is_an_in_place_maximum_and_counts_what_changed() -> None:
+    rng = np.random.default_rng(0)
+    a = rng.integers(0, 3, (30, 40), dtype=np.uint8)
+    b = rng.integers(0, 3, (30, 40), dtype=np.uint8)
+    expected = np.maximum(a, b)
+    changed = int((b > a).sum())
+    before = b.copy()
+    assert merge(a, b) == changed > 0
+    assert np.array_equal(a, expected) and np.array_equal(b, before)
+    assert merge(a, b) == 0
+
+
+def test_merge_keeps_solid_over_free_and_accepts_read_only_maps() -> None:
+    mine = np.array([[SOLID, FREE, UNSEEN]], dtype=np.uint8)
+    theirs = np.array([[FREE, SOLID, FREE]], dtype=np.uint8)
+    theirs.setflags(write=False)
+    merge(mine, theirs)
+    assert mine.tolist() == [[SOLID, SOLID, FREE]]
+
+
+def test_merge_refuses_mismatched_maps() -> None:
+    a = empty_knowledge((4, 5))
+    for other, field in ((empty_knowledge((5, 4)), "other"), (np.zeros((4, 5), np.int64), "other"),
+                         (empty_knowledge((4, 5), 2), "other")):
+        with pytest.raises(InvalidInput) as err:
+            merge(a, other)
+        assert err.value.field == field
+    ro = empty_knowledge((4, 5))
+    ro.setflags(write=False)
+    with pytest.raises(InvalidInput) as err:
+        merge(ro, a)
+    assert err.value.field == "into"
+
+
+def test_empty_knowledge_and_counts() -> None:
+    stack = empty_knowledge((3, 4), 2)
+    assert stack.shape == (2, 3, 4) and stack.dtype == np.uint8 and stack.flags.c_contiguous
+    stack[0, 0, :2] = FREE
+    stack[1, 2, 3] = SOLID
+    assert count_known(stack) == 3 and count_known(stack[0]) == 2
+    assert count_cells(stack, FREE) == 2 and count_cells(stack, SOLID) == 1 and count_cells(stack, UNSEEN) == 21
+    with pytest.raises(InvalidInput):
+        count_cells(stack, 3)
+
+
+# ------------------------------------------------------------------------------------------ log-odds
+def test_classification_follows_eq8_with_thresholds() -> None:
+    values = np.array([-1.0, -0.1, 0.0, 0.1, 2.0], dtype=np.float32)
+    assert classify_logodds(values).tolist() == [FREE, FREE, UNSEEN, SOLID, SOLID]
+    assert classify_logodds(values, occupied_above=1.0, free_below=-0.5).tolist() == [FREE, UNSEEN, UNSEEN,
+                                                                                     UNSEEN, SOLID]
+
+
+def test_logodds_grid_starts_at_the_prior_and_classifies_per_robot() -> None:
+    grid = LogOddsGrid(2, (3, 3))
+    assert grid.values.dtype == np.float32 and not grid.values.any() and grid.n_robots == 2
+    grid.values[1, 0, 0] = 0.85
+    grid.values[1, 2, 2] = -0.4
+    assert grid.classify(0).tolist() == [[UNSEEN] * 3] * 3
+    assert grid.classify(1)[0, 0] == SOLID and grid.classify(1)[2, 2] == FREE
+    assert grid.classify().shape == (2, 3, 3)
+    with pytest.raises(InvalidInput):
+        LogOddsGrid(1, (3, 3), occupied_above=-1.0, free_below=0.0)
+
+
+# ----------------------------------------------------------------------------------------- coverage
+def test_coverage_marks_the_free_part_of_the_3x3_block_around_each_robot() -> None:
+    solid = room(10, 10)
+    solid[4, 5] = True
+    truth = make_map(solid)
+    tracker = ExplorationTracker(truth)
+    assert tracker.coverage == 0.0 and tracker.explored == 0.0
+    new = tracker.update_coverage(np.array([[2.4, 2.1]]))       # cell (4, 4): block rows 3..5, cols 3..5
+    expected = np.zeros(truth.shape, dtype=bool)
+    expected[3:6, 3:6] = True
+    expected[4, 5] = False
+    assert new == 8 and np.array_equal(tracker.covered, expected)
+    assert tracker.coverage == 8 / truth.free_cells
+    assert tracker.update_coverage(np.array([[2.4, 2.1], [2.3, 2.2]])) == 0   # nothing twice
+
+
+def test_coverage_next_to_the_outer_wall_covers_only_free_cells() -> None:
+    truth = make_map(room(8, 8))
+    tracker = ExplorationTracker(truth)
+    assert tracker.update_coverage(np.array([[0.6, 0.6]])) == 4     # cell (1, 1): only 2 x 2 of the block free
+    assert not tracker.covered[truth.solid].any()
+
+
+def test_inactive_robots_cover_nothing_and_bad_positions_are_refused() -> None:
+    truth = make_map(room(10, 10))
+    tracker = ExplorationTracker(truth)
+    positions = np.array([[1.2, 1.2], [3.7, 3.7]])
+    assert tracker.update_coverage(positions, active=np.array([False, True])) == 9
+    assert not tracker.covered[2, 2]
+    for bad in ([[1.0, 1.0], [5.0, 1.0]], [[1.0, 1.0], [np.nan, 1.0]], [[1.0, 1.0], [1.0, -0.01]]):
+        with pytest.raises(InvalidInput) as err:
+            tracker.update_coverage(np.array(bad))
+        assert err.value.field == "positions[1]"
+    assert tracker.covered_cells == 9
+    with pytest.raises(InvalidInput):
+        tracker.update_coverage(np.zeros((2, 3)))
+    with pytest.raises(InvalidInput):
+        tracker.update_coverage(positions, active=np.ones(3, bool))
+
+
+def test_tracker_arrays_are_read_only_views() -> None:
+    tracker = ExplorationTracker(make_map(room(6, 6)))
+    with pytest.raises(ValueError):
+        tracker.covered[2, 2] = True
+    with pytest.raises(ValueError):
+        tracker.seen[2, 2] = True
+
+
+def test_active_flags() -> None:
+    assert active_flags(3, None).tolist() == [True, True, True]
+    assert active_flags(2, [1, 0]).tolist() == [True, False]
