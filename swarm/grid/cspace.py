@@ -1,0 +1,142 @@
+"""Where a robot may be: passable cells, the configuration space, snapping a cell into it.
+
+Clearance rule (documented choice). Let ``need = radius_m + margin_m``. A passable cell is in the
+configuration space when **its whole square** is at least ``need`` from the square of every non-passable
+cell, except that a non-passable cell touching it only diagonally is allowed while ``need <= 0.354 m``
+(the distance from a cell centre to a diagonal neighbour's square). Cells outside the map count as
+non-passable: the robot may not leave the map. Distances are to the obstacle square's **nearest point**,
+never its centre: with 0.5 m cells a centre-to-centre rule would let a 0.3 m robot sit 0.25 m from a
+wall face.
+
+This implies the rule "the cell centre is at least ``need`` from every non-passable cell" and is what
+makes the guarantee hold **along straight segments**, not only at cell centres: if every cell a segment
+between two cell centres touches (its supercover, corners included, see :mod:`swarm.grid.path`) is in
+the configuration space, every point of the segment is at least ``need`` from every wall. Proof: a point
+``p`` of the segment lies in some configuration-space cell ``c``; a blocked cell ``b`` is at least ``need``
+from all of ``c``'s square, hence from ``p``, unless ``b`` is diagonal to ``c``. In that case the two
+neighbours of ``c`` flanking ``b`` are 4-adjacent to ``b`` (0.25 m < need, excluded), so the segment
+touches neither; it can only cross ``c`` between c's other two sides or end at c's centre, i.e. stay in
+the half of ``c`` away from ``b``, at least 0.5 / sqrt(2) = 0.354 m >= need from ``b``'s square.
+``tests/swarm/test_grid.py`` checks the guarantee exactly on random maps for several radii.
+
+For the default 0.3 m robot with 0.05 m margin the rule removes the passable cells 4-adjacent to a
+blocked cell and keeps the ones that touch one only diagonally; along any valid segment the robot's
+centre stays >= 0.354 m from every wall (>= 5 cm of slack). A corridor must be at least 3 cells (1.5 m)
+wide to plan through: a 1 m (2-cell) gap has no cell centre 0.35 m from both walls. For ``need`` above
+0.5 m the square rule is conservative (it asks for more room than the centres strictly need).
+"""
+
+from __future__ import annotations
+
+import math
+from functools import lru_cache
+
+import numpy as np
+
+from ..api import CELL_M, FREE, ROBOT_RADIUS_M, SOLID
+from ._validate import check_cell, check_count, check_known, check_length, check_space
+
+DEFAULT_MARGIN_M: float = 0.05
+"""Extra clearance on top of the robot radius, for tracking error and sensor noise."""
+
+
+def passable(known: np.ndarray, unseen_traversable: bool = False) -> np.ndarray:
+    """Cells the robot may enter: FREE, plus UNSEEN when planning optimistically."""
+    k = check_known(known)
+    return k != SOLID if unseen_traversable else k == FREE
+
+
+def _point_square_distance(dr: int, dc: int) -> float:
+    """Distance (m) from a cell's centre to the nearest point of the cell (dr, dc) away."""
+    return CELL_M * math.hypot(max(abs(dr) - 0.5, 0.0), max(abs(dc) - 0.5, 0.0))
+
+
+def _square_square_distance(dr: int, dc: int) -> float:
+    """Distance (m) between the squares of two cells (dr, dc) apart."""
+    return CELL_M * math.hypot(max(abs(dr) - 1, 0), max(abs(dc) - 1, 0))
+
+
+@lru_cache(maxsize=64)
+def inflation_offsets(radius_m: float, margin_m: float) -> tuple[tuple[int, int], ...]:
+    """Offsets (dr, dc) such that a blocked cell at (row + dr, col + dc) removes (row, col) from the space.
+
+    The rule of the module docstring: the two squares are nearer than ``radius + margin``; the diagonal
+    neighbours are exempt while a cell centre is at least ``radius + margin`` from their square.
+    """
+    need = radius_m + margin_m
+    if need <= 0.0:
+        return ()
+    reach = int(math.ceil(need / CELL_M)) + 1
+    out = []
+    for dr in range(-reach, reach + 1):
+        for dc in range(-reach, reach + 1):
+            if (abs(dr), abs(dc)) == (1, 1) and _point_square_distance(dr, dc) >= need:
+                continue
+            if _square_square_distance(dr, dc) < need:
+                out.append((dr, dc))
+    return tuple(out)
+
+
+def configuration_space(known: np.ndarray, radius_m: float = ROBOT_RADIUS_M, margin_m: float = DEFAULT_MARGIN_M,
+                        unseen_traversable: bool = False) -> np.ndarray:
+    """Cells where the robot's centre may be (see the module docstring for the clearance rule).
+
+    Computed as a dilation of the blocked cells by the offsets of :func:`inflation_offsets`, decomposed
+    into one horizontal run per width and one vertical shift per row offset, so the cost is O(radius) whole-
+    array operations rather than O(radius^2).
+    """
+    radius = check_length(radius_m, "radius_m")
+    margin = check_length(margin_m, "margin_m")
+    assert radius is not None and margin is not None
+    free = passable(known, unseen_traversable)
+    offsets = inflation_offsets(radius, margin)
+    if not offsets:
+        return free
+    half_width: dict[int, int] = {}  # each row of the offsets is a centred run [-j, j] (distance grows with |dc|)
+    for dr, dc in offsets:
+        half_width[dr] = max(half_width.get(dr, 0), abs(dc))
+    k = max(max(abs(dr) for dr in half_width), max(half_width.values()))
+    h, w = free.shape
+    blocked = np.ones((h + 2 * k, w + 2 * k), dtype=bool)
+    blocked[k:k + h, k:k + w] = ~free
+    runs = [blocked[:, k:k + w]]  # runs[j]: blocked dilated horizontally by [-j, j]
+    for j in range(1, max(half_width.values()) + 1):
+        runs.append(runs[-1] | blocked[:, k - j:k - j + w] | blocked[:, k + j:k + j + w])
+    inflated = np.zeros((h, w), dtype=bool)
+    for dr, j in half_width.items():
+        inflated |= runs[j][k + dr:k + dr + h]
+    return free & ~inflated
+
+
+def nearest_in(space: np.ndarray, cell: tuple[int, int], max_radius_cells: int | None = None
+               ) -> tuple[int, int] | None:
+    """The True cell of ``space`` whose centre is nearest (Euclidean) to ``cell``; ``cell`` itself if True.
+
+    For snapping a start or goal that lies in inflated space. Ties go to the lowest row, then the lowest
+    column. ``max_radius_cells`` bounds the distance (in cells, inclusive); None searches the whole grid.
+    The search looks in growing square windows, so a nearby cell costs a few microseconds; a window of
+    half-size ``s`` is conclusive once its best cell is within ``s`` (anything outside is farther).
+    """
+    sp = check_space(space)
+    r, c = check_cell(cell, sp.shape, "cell")
+    limit = check_count(max_radius_cells, "max_radius_cells", 0, allow_none=True)
+    if sp[r, c]:
+        return r, c
+    h, w = sp.shape
+    full = max(h, w)
+    cap = full if limit is None else min(limit, full)
+    size = 2
+    while True:
+        s = min(size, cap)
+        r0, r1, c0, c1 = max(r - s, 0), min(r + s + 1, h), max(c - s, 0), min(c + s + 1, w)
+        rows, cols = np.nonzero(sp[r0:r1, c0:c1])
+        if rows.size:
+            d2 = (rows + r0 - r) ** 2 + (cols + c0 - c) ** 2
+            i = int(np.argmin(d2))  # first minimum = lowest row, then lowest column
+            if d2[i] <= s * s or s >= full:
+                if limit is not None and d2[i] > limit * limit:
+                    return None
+                return int(rows[i] + r0), int(cols[i] + c0)
+        if s >= cap:
+            return None
+        size *= 2

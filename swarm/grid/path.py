@@ -1,0 +1,70 @@
+"""Turning a grid path into waypoints: line-of-sight shortcutting and path length.
+
+A segment between two cell centres is accepted only when its supercover (every cell the segment touches,
+including all four cells around a corner it passes exactly through) lies in the configuration space.
+With the clearance rule of :mod:`swarm.grid.cspace` that keeps the robot's disc off every wall along the
+whole segment, not only at its ends.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from maps.errors import InvalidInput
+
+from ..api import CELL_M
+from ._kernels import grid_segment_clear, grid_shortcut
+from ._validate import check_cell, check_space
+
+
+def _check_path(path: Any, shape: tuple[int, int]) -> np.ndarray:
+    arr = np.asarray(path)
+    if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] == 0 or not (
+            np.issubdtype(arr.dtype, np.integer) and arr.dtype != np.bool_):
+        raise InvalidInput("path", f"array {arr.dtype}{list(arr.shape)}", "a non-empty int[N, 2] array of (row, col)")
+    arr = np.ascontiguousarray(arr, dtype=np.int64)
+    if (arr < 0).any() or (arr[:, 0] >= shape[0]).any() or (arr[:, 1] >= shape[1]).any():
+        raise InvalidInput("path", arr.tolist(), f"cells with 0 <= row < {shape[0]} and 0 <= col < {shape[1]}")
+    if arr.shape[0] > 1 and np.abs(np.diff(arr, axis=0)).max() > 1:
+        raise InvalidInput("path", arr.tolist(), "consecutive cells 8-adjacent (a path from swarm.grid.plan)")
+    return arr
+
+
+def cells_to_metres(cells: np.ndarray) -> np.ndarray:
+    """Cell centres (x, y) in metres for int[N, 2] (row, col) cells: float64[N, 2]."""
+    cells = np.asarray(cells)
+    return np.column_stack(((cells[:, 1] + 0.5) * CELL_M, (cells[:, 0] + 0.5) * CELL_M)).astype(np.float64)
+
+
+def segment_clear(space: np.ndarray, a: tuple[int, int], b: tuple[int, int]) -> bool:
+    """True when the straight segment between the centres of cells ``a`` and ``b`` stays in ``space``."""
+    sp = check_space(space)
+    (r0, c0), (r1, c1) = check_cell(a, sp.shape, "a"), check_cell(b, sp.shape, "b")
+    return bool(grid_segment_clear(sp, r0, c0, r1, c1))
+
+
+def simplify(space: np.ndarray, path: np.ndarray) -> np.ndarray:
+    """Waypoints (x, y) in metres, float64[M, 2]: ``path``'s start, corners it cannot see past, and goal.
+
+    Greedy line-of-sight shortcutting: from each kept cell, the farthest path cell reachable by a clear
+    straight segment before the first blocked one. Each kept segment replaces a stretch of the path
+    between the same two cells, so the result is never longer (up to float rounding) and, if every step of
+    ``path`` is in ``space`` (as :func:`swarm.grid.plan` returns), every segment of the result is clear.
+    """
+    sp = check_space(space)
+    cells = _check_path(path, sp.shape)
+    keep = grid_shortcut(sp, cells)
+    return cells_to_metres(cells[keep])
+
+
+def path_length_m(waypoints: np.ndarray) -> float:
+    """Total length (m) of the polyline through ``waypoints`` (float[M, 2] metres); 0 for one point."""
+    arr = np.asarray(waypoints, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise InvalidInput("waypoints", f"array {arr.dtype}{list(arr.shape)}", "a float[M, 2] array of (x, y) metres")
+    if arr.shape[0] < 2:
+        return 0.0
+    step = np.diff(arr, axis=0)
+    return float(np.hypot(step[:, 0], step[:, 1]).sum())

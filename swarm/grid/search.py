@@ -1,0 +1,129 @@
+"""Shortest paths on a configuration space: point-to-point plans, distance fields, nearest target.
+
+All three are one exact search (:func:`swarm.grid._kernels.grid_bucket_search`): 8-connected, octile
+costs (1 cell orthogonally, sqrt(2) diagonally, 0.5 m per cell), and no corner cutting: a diagonal step
+needs both orthogonal neighbours in the space, since the robot's disc would otherwise clip the corner.
+
+Everything happens inside ``space``: a start, goal or source outside it is not searched from (snap it
+first with :func:`swarm.grid.nearest_in`). Cells are (row, col); distances are metres.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+import numpy as np
+
+from ..api import CELL_M
+from ._kernels import grid_bucket_search, grid_descend_path, grid_field_metres
+from ._validate import check_cell, check_cells, check_length, check_same_shape, check_space
+
+_NO_TARGETS = np.zeros(0, dtype=np.uint8)
+
+
+class _Workspace(threading.local):
+    """Per-thread scratch arrays for the search, reused across calls.
+
+    A 300 x 300 search needs ~2 MB of scratch. Allocating it per call lets the C allocator hand it back to
+    the OS and fault it in again (with transparent huge pages that cost up to 5 ms a call, measured); one
+    buffer per thread, grown when a larger grid comes, keeps every call at the cost of the search itself.
+    """
+
+    def __init__(self) -> None:
+        self.dist = np.empty(0, dtype=np.float64)
+        self.ring = np.empty(0, dtype=np.int32)
+
+    def get(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        if self.dist.shape[0] < n:
+            self.dist = np.empty(n, dtype=np.float64)
+            self.ring = np.empty(3 * n, dtype=np.int32)
+        return self.dist[:n], self.ring
+
+
+_WORK = _Workspace()
+
+
+def _padded(space: np.ndarray) -> tuple[np.ndarray, int]:
+    """``space`` as a flat uint8 array with a one-cell blocked border, and the padded row length."""
+    h, w = space.shape
+    out = np.zeros((h + 2, w + 2), dtype=np.uint8)
+    out[1:-1, 1:-1] = space
+    return out.ravel(), w + 2
+
+
+def _flat(cells: np.ndarray, wp: int) -> np.ndarray:
+    return (cells[:, 0] + 1) * wp + (cells[:, 1] + 1)
+
+
+def plan(space: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> np.ndarray | None:
+    """Shortest 8-connected path from ``start`` to ``goal`` through ``space``: int64[N, 2] (row, col).
+
+    The path includes both ends (N = 1 when they coincide). None when the goal is unreachable or either
+    end is outside the space. The search stops as soon as the goal's distance is final, so short plans
+    are cheap. Among equal-length paths the one walked back from the goal keeping its direction as long
+    as possible is returned (:func:`swarm.grid._kernels.grid_descend_path`): deterministic, and straight
+    runs simplify into few waypoints.
+    """
+    sp = check_space(space)
+    s = check_cell(start, sp.shape, "start")
+    g = check_cell(goal, sp.shape, "goal")
+    if not (sp[s] and sp[g]):
+        return None
+    free, wp = _padded(sp)
+    dist, ring = _WORK.get(free.shape[0])
+    seed = _flat(np.array([s]), wp)
+    gi = int(_flat(np.array([g]), wp)[0])
+    best, _ = grid_bucket_search(free, wp, seed, gi, _NO_TARGETS, np.inf, dist, ring)
+    if best < 0:
+        return None
+    path = grid_descend_path(free, wp, dist, best)
+    if (int(path[0, 0]), int(path[0, 1])) != s:  # the descent always ends at the seed on a settled field
+        raise RuntimeError(f"swarm.grid.plan: path read-back stopped at {path[0].tolist()}, not at {s}")
+    return path
+
+
+def distance_field(space: np.ndarray, sources: Any, max_dist_m: float | None = None) -> np.ndarray:
+    """Geodesic distance (m) from the nearest source to every cell of ``space``: float32[H, W].
+
+    ``sources`` is one (row, col) or an int[K, 2] array; sources outside ``space`` are ignored. Cells not
+    reached (outside the space, cut off, or farther than ``max_dist_m``) are ``inf``. Bounding the distance
+    bounds the work, which is what a local coordination penalty wants.
+    """
+    sp = check_space(space)
+    cells = check_cells(sources, sp.shape, "sources")
+    limit = check_length(max_dist_m, "max_dist_m", allow_none=True)
+    cells = cells[sp[cells[:, 0], cells[:, 1]]]
+    out = np.empty(sp.shape, dtype=np.float32)
+    if cells.shape[0] == 0:
+        out.fill(np.inf)
+        return out
+    free, wp = _padded(sp)
+    dist, ring = _WORK.get(free.shape[0])
+    max_cells = np.inf if limit is None else limit / CELL_M
+    grid_bucket_search(free, wp, _flat(cells, wp), -1, _NO_TARGETS, max_cells, dist, ring)
+    grid_field_metres(dist, wp, max_cells, out)
+    return out
+
+
+def nearest_reachable(space: np.ndarray, start: tuple[int, int], targets: np.ndarray
+                      ) -> tuple[tuple[int, int], float] | None:
+    """The ``targets`` cell with the shortest path from ``start`` through ``space``, and that length (m).
+
+    Only targets inside the space can be reached. Ties (equal length within 1e-9 cells) go to the lowest
+    row, then the lowest column. None when no target is reachable or ``start`` is outside the space. The
+    search stops at the first distance bucket holding a target, so a near target is found quickly.
+    """
+    sp = check_space(space)
+    s = check_cell(start, sp.shape, "start")
+    tg = check_space(targets, "targets")
+    check_same_shape(tg, sp.shape, "targets")
+    if not sp[s]:
+        return None
+    free, wp = _padded(sp)
+    tflat, _ = _padded(tg & sp)
+    dist, ring = _WORK.get(free.shape[0])
+    best, best_d = grid_bucket_search(free, wp, _flat(np.array([s]), wp), -1, tflat, np.inf, dist, ring)
+    if best < 0:
+        return None
+    return (int(best // wp - 1), int(best % wp - 1)), float(best_d * CELL_M)

@@ -1,0 +1,99 @@
+"""The Greed target: the nearest place, by path length, from which an unseen cell can be looked at.
+
+MAES's Greed (reference/maes.md section 7.4) drives to the nearest free cell next to an unseen one. On a
+planning grid with the robot's radius that cell is usually **not** in the configuration space: a frontier
+cell has an unseen 4-neighbour, which is not passable when planning pessimistically, so the frontier cell
+lies in inflated space.
+
+Choice made here: the target is a configuration-space cell from which a frontier cell is at most
+``view_reach_cells`` steps away through known-FREE cells, 4-connected (also when planning optimistically:
+the robot should look at the unknown from ground it has seen). Such a view cell is where the robot's
+centre can actually go, and the 4-connected chain of free cells between it and the frontier means the
+sensor sees the unseen cell past the frontier. The default reach is the inflation depth plus one cell
+(2 cells = 1 m for a 0.3 m robot), far below the lidar range, so the robot still drives right up to the
+unknown as MAES does. Callers that check "is my target still next to the unknown" should look within
+``view_reach_cells + 1`` cells of the target, not only its 8 neighbours.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..api import CELL_M, FREE, ROBOT_RADIUS_M
+from ._validate import check_cell, check_count, check_known, check_length, check_same_shape, check_space
+from .cspace import DEFAULT_MARGIN_M, configuration_space, nearest_in
+from .frontiers import frontier_mask
+from .search import nearest_reachable
+
+
+def geodesic_dilate(seeds: np.ndarray, within: np.ndarray, steps: int) -> np.ndarray:
+    """Cells reachable from ``seeds`` in at most ``steps`` 4-connected moves through ``within`` cells."""
+    grown = seeds & within
+    for _ in range(steps):
+        nxt = grown.copy()
+        nxt[1:] |= grown[:-1]
+        nxt[:-1] |= grown[1:]
+        nxt[:, 1:] |= grown[:, :-1]
+        nxt[:, :-1] |= grown[:, 1:]
+        nxt &= within
+        if np.array_equal(nxt, grown):
+            break
+        grown = nxt
+    return grown
+
+
+def default_view_reach_cells(radius_m: float, margin_m: float) -> int:
+    """Inflation depth in cells plus one: the usual gap between a frontier and the nearest drivable cell."""
+    return int(math.ceil((radius_m + margin_m) / CELL_M)) + 1
+
+
+def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m: float = ROBOT_RADIUS_M,
+                             unseen_traversable: bool = False, exclude: np.ndarray | None = None, *,
+                             margin_m: float = DEFAULT_MARGIN_M, view_reach_cells: int | None = None,
+                             snap_radius_cells: int | None = None) -> tuple[tuple[int, int], float] | None:
+    """The configuration-space cell nearest ``start`` by path length from which a frontier is in view.
+
+    Returns (cell, distance_m) or None when no frontier is reachable (exploration is over, or the rest is
+    cut off). ``exclude`` (bool[H, W]) removes cells both as targets and as frontiers, for deadlock
+    handling: pass the current target to give up that spot, or a disc around it to give up that frontier.
+
+    ``start`` is the robot's cell; when it lies in inflated space (a robot pushed against a wall) it snaps
+    to the nearest configuration-space cell within ``snap_radius_cells`` (default: view reach + 1), and
+    the straight snapping distance is added to the returned distance.
+    """
+    k = check_known(known)
+    s = check_cell(start, k.shape, "start")
+    radius = check_length(radius_m, "radius_m")
+    margin = check_length(margin_m, "margin_m")
+    assert radius is not None and margin is not None
+    reach = check_count(view_reach_cells, "view_reach_cells", 0, allow_none=True)
+    if reach is None:
+        reach = default_view_reach_cells(radius, margin)
+    snap = check_count(snap_radius_cells, "snap_radius_cells", 0, allow_none=True)
+    if snap is None:
+        snap = reach + 1
+    frontier = frontier_mask(k)
+    space = configuration_space(k, radius, margin, unseen_traversable)
+    if exclude is not None:
+        ex = check_space(exclude, "exclude")
+        check_same_shape(ex, k.shape, "exclude")
+        frontier &= ~ex
+        space_targets = ~ex
+    else:
+        space_targets = np.ones(k.shape, dtype=bool)
+    if not frontier.any():
+        return None
+    view = geodesic_dilate(frontier, k == FREE, reach) & space & space_targets
+    if not view.any():
+        return None
+    snapped = nearest_in(space, s, snap)
+    if snapped is None:
+        return None
+    found = nearest_reachable(space, snapped, view)
+    if found is None:
+        return None
+    cell, dist = found
+    offset = CELL_M * math.hypot(snapped[0] - s[0], snapped[1] - s[1])
+    return (int(cell[0]), int(cell[1])), dist + offset
