@@ -1,0 +1,71 @@
+"""Nearest-frontier exploration (Yamauchi, "A frontier-based approach for autonomous exploration", 1997).
+
+The simplest useful explorer and the runtime's reference algorithm: head for the free cell next to
+unseen space that is nearest by path length on the robot's own map; no messages (robots share nothing
+unless the run's map-sharing service is on). Targets the navigator reports unreachable or blocked are
+excluded for ``exclude_ticks``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from maps.params import check_int
+from swarm import grid
+from swarm.api import UNSEEN, Action, Observation, RobotInfo, cell_centre, cell_of
+
+
+TARGET_REACH_CELLS = 3
+
+
+@dataclass(frozen=True)
+class FrontierParams:
+    recheck_ticks: int = 20     # re-choose the target at least this often (the map may offer a nearer one)
+    exclude_ticks: int = 300    # how long a target the robot failed to reach stays excluded
+
+    def __post_init__(self) -> None:
+        check_int("recheck_ticks", self.recheck_ticks, 1, 100_000)
+        check_int("exclude_ticks", self.exclude_ticks, 0, 1_000_000)
+
+
+class FrontierExplorer:
+    name = "frontier"
+    Params = FrontierParams
+
+    def reset(self, robot: RobotInfo, params: FrontierParams, rng: np.random.Generator) -> None:
+        self.robot = robot
+        self.params = params
+        self.target: tuple[int, int] | None = None
+        self.chosen_at = -1
+        self.excluded: dict[tuple[int, int], int] = {}
+
+    def act(self, obs: Observation) -> Action:
+        if obs.nav.state in ("unreachable", "blocked") and self.target is not None:
+            self.excluded[self.target] = obs.tick + self.params.exclude_ticks
+            self.target = None
+        if (self.target is None or obs.nav.state == "reached" or not self._still_frontier(obs.known)
+                or obs.tick - self.chosen_at >= self.params.recheck_ticks):
+            self._choose(obs)
+        if self.target is None:
+            return Action(velocity=(0.0, 0.0), clear_goal=True)
+        return Action(goal=cell_centre(*self.target))
+
+    def _still_frontier(self, known: np.ndarray) -> bool:
+        """Unseen space still within reach of the target (targets sit up to 3 cells from it, see
+        :func:`swarm.grid.nearest_reachable_unseen`)."""
+        r, c = self.target  # type: ignore[misc]
+        k = TARGET_REACH_CELLS
+        return bool((known[max(r - k, 0):r + k + 1, max(c - k, 0):c + k + 1] == UNSEEN).any())
+
+    def _choose(self, obs: Observation) -> None:
+        self.excluded = {cell: until for cell, until in self.excluded.items() if until > obs.tick}
+        exclude = None
+        if self.excluded:
+            exclude = np.zeros(obs.known.shape, dtype=bool)
+            cells = np.array(list(self.excluded))
+            exclude[cells[:, 0], cells[:, 1]] = True
+        found = grid.nearest_reachable_unseen(obs.known, cell_of(obs.pose.x, obs.pose.y), exclude=exclude)
+        self.target = None if found is None else tuple(int(v) for v in found[0])
+        self.chosen_at = obs.tick

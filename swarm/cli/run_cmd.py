@@ -1,0 +1,138 @@
+"""``swarm run`` (one simulation) and ``swarm algorithms`` (what can run)."""
+
+from __future__ import annotations
+
+import tomllib
+from pathlib import Path
+from typing import Any
+
+import click
+
+from maps.errors import InvalidInput
+
+from . import cli
+from .options import parse_params
+
+
+def load_spec_file(path: Path) -> dict[str, Any]:
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise InvalidInput("--spec", str(path), f"a readable TOML file ({exc.strerror})") from None
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+        raise InvalidInput("--spec", str(path), f"valid TOML ({str(exc).splitlines()[0]})") from None
+
+
+def _merge(base: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
+    out = dict(base)
+    for k, v in overrides.items():
+        if isinstance(v, dict) and isinstance(out.get(k), dict):
+            out[k] = _merge(out[k], v)
+        else:
+            out[k] = v
+    return out
+
+
+def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tuple[str, ...],
+                       algorithm_params: tuple[str, ...], map_params: tuple[str, ...]) -> dict[str, Any]:
+    """The run spec as a mapping: the ``--spec`` file, then flags that were given, then ``--set``."""
+    data: dict[str, Any] = load_spec_file(spec_file) if spec_file else {}
+    over: dict[str, Any] = {}
+    if flags["map"] is not None:
+        value = flags["map"]
+        if value in ("building", "cave"):
+            over["map"] = {"kind": value}
+        else:
+            over["map"] = {"kind": "file", "path": value, "size": 50}
+    for flag, (section, key) in {"size": ("map", "size"), "map_seed": ("map", "seed"),
+                                 "robots": ("robots", "count"), "spawn": ("robots", "spawn"),
+                                 "algorithm": ("algorithm", "name"), "max_ticks": ("stop", "max_ticks"),
+                                 "explored": ("stop", "explored")}.items():
+        if flags[flag] is not None:
+            over.setdefault(section, {})[key] = flags[flag]
+    if flags["seed"] is not None:
+        over["seed"] = flags["seed"]
+    if flags["transport"] is not None:
+        over["transport"] = flags["transport"]
+    if algorithm_params:
+        over.setdefault("algorithm", {})["params"] = parse_params(algorithm_params)
+    if map_params:
+        over.setdefault("map", {})["params"] = parse_params(map_params, "--map-param")
+    data = _merge(data, over)
+    if sets:
+        data = _merge(data, parse_params(sets, "--set"))
+    return data
+
+
+@cli.command("run")
+@click.option("--spec", "spec_file", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+              help="A run spec TOML; flags below override it.")
+@click.option("--map", "map_", default=None, metavar="building|cave|FILE",
+              help="Generated map kind, or a map file (.npz, .pgm, .csv). [default: building]")
+@click.option("--size", default=None, metavar="N|WxH", help="Map size in tiles (1 m). [default: 50]")
+@click.option("--map-seed", type=click.IntRange(0, 2**63 - 1), default=None, help="Map seed (default: from --seed).")
+@click.option("--map-param", "map_params", multiple=True, metavar="KEY=VALUE", help="Generator parameter.")
+@click.option("--robots", type=click.IntRange(1, 1000), default=None, help="Number of robots. [default: 4]")
+@click.option("--spawn", type=click.Choice(["together", "random"]), default=None, help="[default: together]")
+@click.option("--algorithm", default=None, help="Algorithm name (see 'swarm algorithms') or module:Class.")
+@click.option("--param", "algorithm_params", multiple=True, metavar="KEY=VALUE", help="Algorithm parameter.")
+@click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=None, help="Master seed. [default: 0]")
+@click.option("--max-ticks", type=click.IntRange(1), default=None, help="Tick limit. [default: 36000]")
+@click.option("--explored", type=click.FloatRange(0, 1, min_open=True), default=None,
+              help="Stop at this explored fraction. [default: 0.99]")
+@click.option("--transport", type=click.Choice(["inprocess", "zenoh"]), default=None)
+@click.option("--set", "sets", multiple=True, metavar="SECTION.KEY=VALUE",
+              help="Any spec value, e.g. --set lidar.range_m=10 --set motion.max_speed=3.")
+@click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), help="Write the result JSON.")
+@click.option("--gif", type=click.Path(dir_okay=False, path_type=Path), help="Write an animation.")
+@click.option("--print-spec", is_flag=True, help="Print the fully-resolved spec (TOML-ready JSON) and exit.")
+def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed: int | None,
+            map_params: tuple[str, ...], robots: int | None, spawn: str | None, algorithm: str | None,
+            algorithm_params: tuple[str, ...], seed: int | None, max_ticks: int | None, explored: float | None,
+            transport: str | None, sets: tuple[str, ...], json_out: Path | None, gif: Path | None,
+            print_spec: bool) -> None:
+    """Run one exploration and print a one-line summary.
+
+    With no arguments: 4 robots with the frontier explorer on a 50 x 50 building, seed 0.
+    """
+    import json
+
+    from ..simulation import Simulation
+    from ..spec import RunSpec
+
+    flags = {"map": map_, "size": size, "map_seed": map_seed, "robots": robots, "spawn": spawn,
+             "algorithm": algorithm, "seed": seed, "max_ticks": max_ticks, "explored": explored,
+             "transport": transport}
+    spec = RunSpec.from_mapping(build_spec_mapping(spec_file, flags, sets, algorithm_params, map_params))
+    if print_spec:
+        click.echo(json.dumps(spec.canonical(), indent=1, sort_keys=True))
+        return
+    sim = Simulation(spec)
+    recorder = None
+    if gif is not None:
+        from ..animation import GifRecorder
+
+        recorder = GifRecorder(sim.truth)
+        sim.observers = (recorder,)
+    result = sim.run()
+    click.echo(result.one_line())
+    if json_out is not None:
+        click.echo(f"wrote {result.write_json(json_out)}")
+    if recorder is not None:
+        click.echo(f"wrote {recorder.save(gif)}")
+
+
+@cli.command("algorithms")
+def algorithms_cmd() -> None:
+    """List the installed exploration algorithms and their parameters."""
+    from .. import registry
+
+    for name, target in registry.available().items():
+        click.echo(f"{name}  ({target})")
+        try:
+            rows = registry.describe(name)
+        except InvalidInput as exc:
+            click.echo(f"    cannot load: {exc}")
+            continue
+        for param, default, typ in rows:
+            click.echo(f"    {param} = {default!r}  [{typ}]")

@@ -1,0 +1,142 @@
+"""Drive a robot to its algorithm's goal on the robot's own knowledge map.
+
+A :class:`Navigator` plans once per goal on the robot's configuration space (its knowledge map with the
+robot radius plus a margin of clearance, :func:`swarm.grid.configuration_space`), shortcuts the grid path
+into straight segments, and hands them to the waypoint follower. Each tick it checks, cheaply, whether a
+cell in the path's corridor has turned SOLID (replan) and whether the robot is making progress (replan
+after ``stuck_ticks`` without progress; report ``blocked`` after ``max_replans``). A goal that no path
+reaches is reported ``unreachable``. What to do then is the algorithm's decision.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import grid
+from .api import CELL_M, SOLID, NavStatus, Pose, cell_of
+from .motion import Follower
+from .spec import NavigationSpec
+from .world import MotionParams
+
+SNAP_RADIUS_CELLS = 4
+"""A start or goal inside inflated space snaps to the nearest drivable cell within 2 m."""
+PROGRESS_M = 0.05
+
+
+class Navigator:
+    def __init__(self, spec: NavigationSpec, motion: MotionParams) -> None:
+        self.spec = spec
+        self.motion = motion
+        self.follower = Follower(motion)
+        self.goal: tuple[float, float] | None = None
+        self.state = "idle"
+        self.path_length = 0.0
+        self.corridor: tuple[np.ndarray, np.ndarray] | None = None
+        self.best_remaining = math.inf
+        self.ticks_since_progress = 0
+        self.replans = 0
+        self.plans = 0
+
+    # ------------------------------------------------------------------------------------ control ----
+    def set_goal(self, goal: tuple[float, float] | None) -> None:
+        """A new goal (or None to stop). The same goal again changes nothing."""
+        if goal is not None:
+            goal = (float(goal[0]), float(goal[1]))
+        if goal == self.goal:
+            return
+        self.goal = goal
+        self.replans = 0
+        self.corridor = None
+        self.state = "idle" if goal is None else "planning"
+
+    def command(self, pose: Pose, known: np.ndarray) -> tuple[float, float]:
+        """The (v, omega) command for this tick."""
+        if self.goal is None or self.state in ("reached", "unreachable", "blocked", "idle"):
+            return 0.0, 0.0
+        if self.state == "planning" or self._corridor_blocked(known):
+            self._plan(pose, known)
+            if self.state != "moving":
+                return 0.0, 0.0
+        v, omega = self.follower.command(pose)
+        if self.follower.done:
+            self.state = "reached"
+            return 0.0, 0.0
+        self._track_progress(pose, known)
+        if self.state != "moving":
+            return 0.0, 0.0
+        return v, omega
+
+    def status(self) -> NavStatus:
+        return NavStatus(goal=self.goal, state=self.state, path_length=self.path_length,
+                         ticks_since_progress=self.ticks_since_progress)
+
+    # ----------------------------------------------------------------------------------- planning ----
+    def _plan(self, pose: Pose, known: np.ndarray) -> None:
+        assert self.goal is not None
+        self.plans += 1
+        space = grid.configuration_space(known, radius_m=self.motion.radius, margin_m=self.spec.margin_m,
+                                         unseen_traversable=self.spec.unseen == "traversable")
+        start = grid.nearest_in(space, _clip(cell_of(pose.x, pose.y), known.shape), SNAP_RADIUS_CELLS)
+        goal = grid.nearest_in(space, _clip(cell_of(*self.goal), known.shape), SNAP_RADIUS_CELLS)
+        path = None if start is None or goal is None else grid.plan(space, start, goal)
+        if path is None:
+            self.state = "unreachable"
+            self.corridor = None
+            return
+        waypoints = grid.simplify(space, path)
+        if _inside(self.goal, known.shape) and space[cell_of(*self.goal)]:
+            waypoints[-1] = self.goal  # end exactly on the goal when the robot fits there
+        self.follower.set_path(waypoints)
+        self.path_length = grid.path_length_m(waypoints)
+        self.corridor = _corridor(np.vstack([[pose.x, pose.y], waypoints]), known)
+        self.best_remaining = math.inf
+        self.ticks_since_progress = 0
+        self.state = "moving"
+
+    def _corridor_blocked(self, known: np.ndarray) -> bool:
+        return self.corridor is not None and bool((known[self.corridor] >= SOLID).any())
+
+    def _track_progress(self, pose: Pose, known: np.ndarray) -> None:
+        remaining = self.follower.remaining_m
+        if remaining < self.best_remaining - PROGRESS_M:
+            self.best_remaining = remaining
+            self.ticks_since_progress = 0
+            return
+        self.ticks_since_progress += 1
+        if self.ticks_since_progress >= self.spec.stuck_ticks:
+            if self.replans >= self.spec.max_replans:
+                self.state = "blocked"
+                return
+            self.replans += 1
+            self._plan(pose, known)
+
+
+def _clip(cell: tuple[int, int], shape: tuple[int, int]) -> tuple[int, int]:
+    return min(max(cell[0], 0), shape[0] - 1), min(max(cell[1], 0), shape[1] - 1)
+
+
+def _inside(point: tuple[float, float], shape: tuple[int, int]) -> bool:
+    return 0 <= point[0] < shape[1] * CELL_M and 0 <= point[1] < shape[0] * CELL_M
+
+
+def _corridor(polyline: np.ndarray, known: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Cells the robot's disc sweeps along the polyline (sampled every 0.2 m, each sample's cell and its 4
+    neighbours, the footprint :func:`swarm.grid.configuration_space` keeps clear) that are not SOLID now:
+    if one of them turns SOLID, the path must change."""
+    shape = known.shape
+    points = [polyline[:1]]
+    for a, b in zip(polyline[:-1], polyline[1:]):
+        n = max(1, int(np.ceil(np.hypot(*(b - a)) / 0.2)))
+        points.append(a + (b - a) * (np.arange(1, n + 1)[:, None] / n))
+    cells = np.floor(np.vstack(points)[:, ::-1] / CELL_M).astype(np.int64)
+    cells = (cells[:, None, :] + _CROSS[None, :, :]).reshape(-1, 2)
+    cells[:, 0] = np.clip(cells[:, 0], 0, shape[0] - 1)
+    cells[:, 1] = np.clip(cells[:, 1], 0, shape[1] - 1)
+    flat = np.unique(cells[:, 0] * shape[1] + cells[:, 1])
+    flat = flat[known.reshape(-1)[flat] < SOLID]
+    return np.divmod(flat, shape[1])
+
+
+_CROSS = np.array([(0, 0), (-1, 0), (1, 0), (0, -1), (0, 1)])

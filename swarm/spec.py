@@ -1,0 +1,272 @@
+"""The run spec: everything that determines a run, validated up front, canonical, hashable.
+
+A spec is built from a plain mapping (TOML, JSON, CLI flags) with :meth:`RunSpec.from_mapping`; every
+section is checked by the dataclass that owns it, so a bad value fails before anything runs, with one
+line naming the key. :meth:`RunSpec.canonical` is the fully-resolved dict (defaults filled in, keys
+sorted) and :attr:`RunSpec.key` its SHA-256 prefix: the identity of a run in campaigns and results.
+
+Seeds: ``seed`` is the master seed. ``map.seed`` and ``robots.spawn_seed`` default to values derived from
+it, but campaigns set them explicitly from (campaign seed, map kind, size, replicate) so every algorithm
+and comm model meets the same worlds. Every other stream (sensor noise, packet loss, each robot's
+algorithm) is spawned from ``SeedSequence(seed)``; see :func:`seed_streams`.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from dataclasses import dataclass, field, fields
+from typing import Any, Mapping
+
+import numpy as np
+
+from maps.errors import InvalidInput
+from maps.params import check_choice, check_float, check_int, from_mapping, to_mapping
+
+SPAWN_MODES = ("together", "random")
+TRANSPORTS = ("inprocess", "zenoh")
+MAP_KINDS = ("building", "cave", "file")
+SPEC_VERSION = 1
+
+
+@dataclass(frozen=True)
+class MapSpec:
+    """Which world: a generated ``building``/``cave`` of ``size`` tiles, or a ``file`` at ``path``."""
+
+    kind: str = "building"
+    size: Any = 50
+    seed: int | None = None
+    params: Mapping[str, Any] = field(default_factory=dict)
+    path: str | None = None
+
+    def __post_init__(self) -> None:
+        check_choice("map.kind", self.kind, MAP_KINDS)
+        if self.kind == "file":
+            if not isinstance(self.path, str) or not self.path:
+                raise InvalidInput("map.path", self.path, "a map file path when map.kind = 'file'")
+        else:
+            from maps import parse_size, params_for
+
+            if self.path is not None:
+                raise InvalidInput("map.path", self.path, "only with map.kind = 'file'")
+            w, h = parse_size(self.size)
+            object.__setattr__(self, "size", w if w == h else [w, h])
+            object.__setattr__(self, "params", to_mapping(params_for(self.kind, self.params)))
+        if self.seed is not None:
+            check_int("map.seed", self.seed, 0, 2**63 - 1)
+        if not isinstance(self.params, Mapping):
+            raise InvalidInput("map.params", self.params, "a table of generator parameters")
+        object.__setattr__(self, "params", dict(self.params))
+
+
+@dataclass(frozen=True)
+class RobotsSpec:
+    """How many robots and where they start (``together``: packed near one random point, ``random``:
+    spread uniformly over the reachable space)."""
+
+    count: int = 4
+    spawn: str = "together"
+    spawn_seed: int | None = None
+
+    def __post_init__(self) -> None:
+        check_int("robots.count", self.count, 1, 1000)
+        check_choice("robots.spawn", self.spawn, SPAWN_MODES)
+        if self.spawn_seed is not None:
+            check_int("robots.spawn_seed", self.spawn_seed, 0, 2**63 - 1)
+
+
+@dataclass(frozen=True)
+class AlgorithmSpec:
+    """An algorithm by registered name (``swarm algorithms``) or ``"package.module:Class"``."""
+
+    name: str = "frontier"
+    params: Mapping[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        from .registry import resolve_params
+
+        object.__setattr__(self, "params", resolve_params(self.name, self.params))
+
+
+@dataclass(frozen=True)
+class NavigationSpec:
+    """How the runtime drives a robot to its algorithm's goal.
+
+    ``unseen``: plan through unseen cells (``traversable``, optimistic) or not (``blocked``, the default,
+    as MAES's pessimistic planner). ``margin_m``: clearance kept beyond the robot radius.
+    ``stuck_ticks``: no progress for this long triggers a replan; after ``max_replans`` failed replans
+    the goal is reported ``blocked`` to the algorithm."""
+
+    unseen: str = "blocked"
+    margin_m: float = 0.05
+    stuck_ticks: int = 30
+    max_replans: int = 3
+
+    def __post_init__(self) -> None:
+        check_choice("navigation.unseen", self.unseen, ("blocked", "traversable"))
+        check_float("navigation.margin_m", self.margin_m, 0.0, 1.0)
+        check_int("navigation.stuck_ticks", self.stuck_ticks, 1, 10_000)
+        check_int("navigation.max_replans", self.max_replans, 0, 100)
+
+
+@dataclass(frozen=True)
+class StopSpec:
+    """When a run ends: ``explored`` fraction reached, ``max_ticks`` elapsed, or every robot idle (no
+    goal, no motion) for ``stall_ticks`` in a row."""
+
+    explored: float = 0.99
+    max_ticks: int = 36_000
+    stall_ticks: int = 600
+
+    def __post_init__(self) -> None:
+        check_float("stop.explored", self.explored, 0.0, 1.0, lo_open=True)
+        check_int("stop.max_ticks", self.max_ticks, 1, 10_000_000)
+        check_int("stop.stall_ticks", self.stall_ticks, 1, 10_000_000)
+
+
+def _section(cls: type, name: str, value: Any) -> Any:
+    if isinstance(value, cls):
+        return value
+    if value is None:
+        value = {}
+    if not isinstance(value, Mapping):
+        raise InvalidInput(name, value, f"a table of {name} settings")
+    return from_mapping(cls, value, prefix=f"{name}.")
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One run. Sections owned by other modules (``lidar``, ``motion``, ``radio``, ``comm``) are stored as
+    validated, fully-resolved plain dicts so the spec stays a pure value."""
+
+    seed: int = 0
+    map: MapSpec = field(default_factory=MapSpec)
+    robots: RobotsSpec = field(default_factory=RobotsSpec)
+    algorithm: AlgorithmSpec = field(default_factory=AlgorithmSpec)
+    lidar: Mapping[str, Any] = field(default_factory=dict)
+    motion: Mapping[str, Any] = field(default_factory=dict)
+    navigation: NavigationSpec = field(default_factory=NavigationSpec)
+    radio: Mapping[str, Any] = field(default_factory=dict)
+    comm: Mapping[str, Any] = field(default_factory=dict)
+    transport: str = "inprocess"
+    stop: StopSpec = field(default_factory=StopSpec)
+    record_every: int = 10
+
+    def __post_init__(self) -> None:
+        check_int("seed", self.seed, 0, 2**63 - 1)
+        object.__setattr__(self, "map", _section(MapSpec, "map", self.map))
+        object.__setattr__(self, "robots", _section(RobotsSpec, "robots", self.robots))
+        object.__setattr__(self, "algorithm", _section(AlgorithmSpec, "algorithm", self.algorithm))
+        object.__setattr__(self, "navigation", _section(NavigationSpec, "navigation", self.navigation))
+        object.__setattr__(self, "stop", _section(StopSpec, "stop", self.stop))
+        for name, resolver in _EXTERNAL_SECTIONS.items():
+            value = getattr(self, name)
+            if not isinstance(value, Mapping):
+                raise InvalidInput(name, value, f"a table of {name} settings")
+            object.__setattr__(self, name, resolver(dict(value)))
+        check_choice("transport", self.transport, TRANSPORTS)
+        check_int("record_every", self.record_every, 1, 100_000)
+
+    # ------------------------------------------------------------------------------ construction ----
+    @classmethod
+    def from_mapping(cls, data: Mapping[str, Any]) -> "RunSpec":
+        """Build from a nested mapping (e.g. parsed TOML); unknown keys are errors naming the key."""
+        if isinstance(data, RunSpec):
+            return data
+        if not isinstance(data, Mapping):
+            raise InvalidInput("spec", data, "a table of run settings")
+        data = dict(data)
+        data.pop("version", None)
+        return from_mapping(cls, data)
+
+    def replace(self, **changes: Any) -> "RunSpec":
+        """A copy with some sections replaced (sections may be mappings)."""
+        current = {f.name: getattr(self, f.name) for f in fields(self)}
+        current.update(changes)
+        return RunSpec(**current)
+
+    # -------------------------------------------------------------------------------- identity ----
+    def canonical(self) -> dict[str, Any]:
+        """The fully-resolved spec as a JSON-able dict with sorted keys."""
+        out: dict[str, Any] = {"version": SPEC_VERSION}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            out[f.name] = to_mapping(value) if hasattr(value, "__dataclass_fields__") else _plain(value)
+        return json.loads(json.dumps(out, sort_keys=True))
+
+    def to_json(self) -> str:
+        return json.dumps(self.canonical(), sort_keys=True, separators=(",", ":"))
+
+    @property
+    def key(self) -> str:
+        """16 hex digits of SHA-256 over the canonical JSON: stable across processes and dict order."""
+        return hashlib.sha256(self.to_json().encode()).hexdigest()[:16]
+
+
+def _plain(v: Any) -> Any:
+    if isinstance(v, Mapping):
+        return {str(k): _plain(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_plain(x) for x in v]
+    if isinstance(v, np.generic):
+        return v.item()
+    return v
+
+
+def _resolve_lidar(d: dict[str, Any]) -> dict[str, Any]:
+    from .sensing import LidarParams
+
+    return to_mapping(from_mapping(LidarParams, d, prefix="lidar."))
+
+
+def _resolve_motion(d: dict[str, Any]) -> dict[str, Any]:
+    from .world import MotionParams
+
+    return to_mapping(from_mapping(MotionParams, d, prefix="motion."))
+
+
+def _resolve_radio(d: dict[str, Any]) -> dict[str, Any]:
+    from radio import RadioConfig, config_from_mapping
+
+    config = config_from_mapping(d) if d else RadioConfig()
+    return _plain(to_mapping(config))
+
+
+def _resolve_comm(d: dict[str, Any]) -> dict[str, Any]:
+    return _plain(d)  # the transport issue gives this section its dataclass
+
+
+_EXTERNAL_SECTIONS = {"lidar": _resolve_lidar, "motion": _resolve_motion, "radio": _resolve_radio,
+                      "comm": _resolve_comm}
+
+
+# ---------------------------------------------------------------------------------------- seeds ----
+@dataclass(frozen=True)
+class SeedStreams:
+    """Independent random streams of one run, all derived from the spec."""
+
+    map_seed: int
+    spawn: np.random.Generator
+    sensor: np.random.Generator
+    radio: np.random.Generator
+    robots: tuple[np.random.Generator, ...]
+
+
+def derive_seed(*parts: int | str) -> int:
+    """A 63-bit seed from a tuple of ints/strings, stable across processes and Python versions."""
+    words = [int.from_bytes(hashlib.sha256(p.encode()).digest()[:4], "little") if isinstance(p, str) else int(p)
+             for p in parts]
+    return int(np.random.SeedSequence(words).generate_state(2, np.uint32).view(np.uint64)[0] >> np.uint64(1))
+
+
+def seed_streams(spec: RunSpec) -> SeedStreams:
+    """Map seed and generators for spawning, sensor noise, radio loss and each robot's algorithm."""
+    root = np.random.SeedSequence(spec.seed)
+    spawn_ss, sensor_ss, radio_ss, robots_ss = root.spawn(4)
+    map_seed = spec.map.seed if spec.map.seed is not None else derive_seed(spec.seed, "map")
+    spawn_seed = spec.robots.spawn_seed if spec.robots.spawn_seed is not None else None
+    spawn_rng = (np.random.default_rng(np.random.SeedSequence(spawn_seed)) if spawn_seed is not None
+                 else np.random.default_rng(spawn_ss))
+    robots = tuple(np.random.default_rng(s) for s in robots_ss.spawn(spec.robots.count))
+    return SeedStreams(map_seed=map_seed, spawn=spawn_rng, sensor=np.random.default_rng(sensor_ss),
+                       radio=np.random.default_rng(radio_ss), robots=robots)
