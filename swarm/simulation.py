@@ -25,8 +25,11 @@ import numpy as np
 from maps import Map, generate
 from maps.params import from_mapping
 
+from radio import build_link_model, config_from_mapping
+
 from . import registry
-from .api import Action, NavStatus, Observation, Pose, RobotInfo
+from .api import Action, NavStatus, Neighbour, Observation, Pose, RobotInfo
+from .comm import CommSpec, Envelope, MapSharing, Medium
 from .metrics import Metrics
 from .navigation import Navigator
 from .result import RunResult
@@ -80,6 +83,12 @@ class Simulation:
         self.agents = [registry.create(self.spec.algorithm.name) for _ in range(n)]
         for i, agent in enumerate(self.agents):
             agent.reset(self._robot_info(i), params, self.streams.robots[i])
+        self.links = build_link_model(self.truth, config_from_mapping(self.spec.radio))
+        self.comm = from_mapping(CommSpec, self.spec.comm)
+        self.medium = Medium(n, self.comm, self.streams.radio)
+        self.sharing = MapSharing(n, self.truth.shape, self.comm)
+        self.inboxes: list[list[Any]] = [[] for _ in range(n)]
+        self.neighbour_range = self.comm.neighbour_range_m or self.lidar_params.range_m
         self.observers = observers
         self.metrics = Metrics(self.spec.record_every)
         self.events: list[dict[str, Any]] = []
@@ -115,6 +124,8 @@ class Simulation:
             was_colliding = collided
             self.lidar.scan(poses, self.known, self.streams.sensor, tracker=self.tracker)
             self.tracker.update_coverage(poses[:, :2])
+            links = self.links.evaluate(poses[:, :2])
+            inboxes = self._receive()
             explored = self.tracker.explored
             self.metrics.check_thresholds(tick, explored)
             if explored >= spec.stop.explored:
@@ -124,11 +135,11 @@ class Simulation:
             elif stalled_for >= spec.stop.stall_ticks:
                 stop_reason = "stalled"
             if stop_reason or self.metrics.due(tick):
-                self.metrics.record(tick, explored=explored, coverage=self.tracker.coverage,
-                                    distance_m=float(self.world.distance.sum()), collisions=collisions)
+                self._record(tick, explored, collisions, links)
             if stop_reason:
                 break
-            actions = self._act(tick, poses, collided)
+            actions = self._act(tick, poses, collided, inboxes, links)
+            self._send(tick, poses, actions, links)
             moving = False
             pose_rows = poses.tolist()
             for i, action in enumerate(actions):
@@ -151,17 +162,68 @@ class Simulation:
         wall = time.perf_counter() - t0
         return self._result(tick, stop_reason, collisions, wall)
 
-    def _act(self, tick: int, poses: np.ndarray, collided: np.ndarray) -> list[Action]:
+    def _receive(self) -> list[tuple[Any, ...]]:
+        """This tick's inboxes (sent last tick); map-sharing messages are merged into the receiver's map."""
+        inboxes, self.inboxes = self.inboxes, [[] for _ in range(self.spec.robots.count)]
+        for i, inbox in enumerate(inboxes):
+            for msg in inbox:
+                self.sharing.receive(i, msg, self.known[i])
+        return [tuple(inbox) for inbox in inboxes]
+
+    def _neighbours(self, poses: np.ndarray, links: Any) -> list[tuple[Neighbour, ...]]:
+        """Robots within ``neighbour_range`` and in line of sight (no wall crossed), per robot."""
+        n = len(poses)
+        if n == 1:
+            return [()]
+        near = (links.distance <= self.neighbour_range) & (links.walls == 0)
+        np.fill_diagonal(near, False)
+        out: list[tuple[Neighbour, ...]] = []
+        for i in range(n):
+            row = []
+            for j in np.flatnonzero(near[i]).tolist():
+                dx, dy = poses[j, 0] - poses[i, 0], poses[j, 1] - poses[i, 1]
+                bearing = float(np.arctan2(dy, dx) - poses[i, 2])
+                bearing = (bearing + np.pi) % (2 * np.pi) - np.pi
+                row.append(Neighbour(id=j, distance=float(links.distance[i, j]), bearing=bearing,
+                                     x=float(poses[j, 0]), y=float(poses[j, 1])))
+            out.append(tuple(row))
+        return out
+
+    def _act(self, tick: int, poses: np.ndarray, collided: np.ndarray, inboxes: list[tuple[Any, ...]],
+             links: Any) -> list[Action]:
         actions = []
         distance = self.world.distance.tolist()
         energy = (self.world.distance + self.world.rotation).tolist()
         pose_rows = poses.tolist()
+        neighbours = self._neighbours(poses, links)
         for i, agent in enumerate(self.agents):
             obs = Observation(tick=tick, robot_id=i, pose=Pose(*pose_rows[i]), known=self._views[i],
-                              collided=bool(collided[i]), nav=self.navigators[i].status(),
-                              distance_travelled=distance[i], energy_used=energy[i])
+                              inbox=inboxes[i], neighbours=neighbours[i], collided=bool(collided[i]),
+                              nav=self.navigators[i].status(), distance_travelled=distance[i],
+                              energy_used=energy[i])
             actions.append(_check_action(agent.act(obs), i))
         return actions
+
+    def _send(self, tick: int, poses: np.ndarray, actions: list[Action], links: Any) -> None:
+        """Collect this tick's broadcasts (map sharing + algorithms) and deliver them for next tick."""
+        service = self.sharing.outgoing(tick, self.known, poses)
+        outboxes: list[list[Envelope]] = []
+        for i, action in enumerate(actions):
+            outboxes.append([self.medium.envelope(i, m) for m in (*service[i], *action.messages)])
+        if any(outboxes):
+            self.inboxes = self.medium.deliver(tick, outboxes, links.link)
+
+    def _record(self, tick: int, explored: float, collisions: int, links: Any) -> None:
+        stats = self.medium.stats
+        groups = links.groups() if self.spec.robots.count > 1 else [frozenset({0})]
+        self.metrics.record(tick, explored=explored, coverage=self.tracker.coverage,
+                            distance_m=float(self.world.distance.sum()), collisions=collisions,
+                            msgs_sent=stats.sent, bytes_sent=stats.bytes_sent, msgs_delivered=stats.delivered,
+                            bytes_delivered=stats.bytes_delivered,
+                            msgs_dropped=stats.dropped_link + stats.dropped_loss + stats.dropped_bandwidth,
+                            comm_groups=len(groups),
+                            biggest_group=max(len(g) for g in groups) / self.spec.robots.count,
+                            all_connected=len(groups) == 1)
 
     def _result(self, tick: int, stop_reason: str, collisions: int, wall: float) -> RunResult:
         summary = {
@@ -173,6 +235,7 @@ class Simulation:
             "distance_m": [float(d) for d in self.world.distance],
             "collisions": collisions,
             "plans": [nav.plans for nav in self.navigators],
+            "messages": self.medium.stats.as_dict(),
             "final_poses": [[float(v) for v in p] for p in self.world.poses],
             "map_seed": int(self.streams.map_seed) if self.spec.map.kind != "file" else None,
             "wall_time_s": wall,

@@ -233,7 +233,9 @@ def _resolve_radio(d: dict[str, Any]) -> dict[str, Any]:
 
 
 def _resolve_comm(d: dict[str, Any]) -> dict[str, Any]:
-    return _plain(d)  # the transport issue gives this section its dataclass
+    from .comm import CommSpec
+
+    return to_mapping(from_mapping(CommSpec, d, prefix="comm."))
 
 
 _EXTERNAL_SECTIONS = {"lidar": _resolve_lidar, "motion": _resolve_motion, "radio": _resolve_radio,

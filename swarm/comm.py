@@ -1,0 +1,201 @@
+"""Communication as the runtime sees it: the radio medium, the map-sharing service, and their metrics.
+
+**Medium.** Messages a robot broadcasts during tick t are encoded (their size is a metric), judged by the
+radio's link matrix computed from positions at send time, optionally thinned by seeded packet loss and a
+per-link byte budget, and appear in each receiver's inbox at tick t+1, ordered by (sender, sequence). A
+robot never receives its own broadcast. (MAES judges links at receive time; we use send time, as a real
+radio does, DESIGN.md section 4.)
+
+**Map sharing** is a runtime service configured per run (``comm.map_sharing``), so every algorithm shares
+maps the same way and comparisons are fair: every ``share_every`` ticks each robot broadcasts a
+:class:`~swarm.messages.MapUpdate` with the cells changed since its previous update (``delta``) or its
+whole map (``full``). Receivers merge updates into their own map (elementwise max) before they act. A
+receiver that notices a gap in a sender's sequence numbers asks for its full map
+(:class:`~swarm.messages.MapRequest`); the sender broadcasts it next tick, so deltas converge to what full
+maps would give even over lossy links.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+
+from maps.params import check_choice, check_float, check_int
+
+from .messages import MapRequest, MapUpdate, MessageError, decode, encode, map_update
+
+SHARING_MODES = ("delta", "full", "off")
+
+
+@dataclass(frozen=True)
+class CommSpec:
+    """The ``[comm]`` section of a run spec.
+
+    ``map_sharing``: ``delta`` (default), ``full`` or ``off``; ``share_every`` ticks (MAES heartbeats every
+    10). ``loss``: probability that a message is lost on each link (seeded, independent per message and
+    receiver). ``bandwidth``: bytes per tick each link carries (0 = unlimited); what exceeds it is dropped
+    in send order. ``neighbour_range_m``: robots within this range and in line of sight appear in
+    ``Observation.neighbours`` (0 = the lidar range).
+    """
+
+    map_sharing: str = "delta"
+    share_every: int = 10
+    loss: float = 0.0
+    bandwidth: int = 0
+    neighbour_range_m: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_choice("comm.map_sharing", self.map_sharing, SHARING_MODES)
+        check_int("comm.share_every", self.share_every, 1, 1_000_000)
+        check_float("comm.loss", self.loss, 0.0, 1.0)
+        check_int("comm.bandwidth", self.bandwidth, 0)
+        check_float("comm.neighbour_range_m", self.neighbour_range_m, 0.0)
+
+
+@dataclass
+class Envelope:
+    """One encoded message in flight."""
+
+    sender: int
+    seq: int
+    data: bytes
+    message: Any
+
+
+@dataclass
+class CommStats:
+    sent: int = 0
+    bytes_sent: int = 0
+    delivered: int = 0
+    bytes_delivered: int = 0
+    dropped_link: int = 0
+    dropped_loss: int = 0
+    dropped_bandwidth: int = 0
+    malformed: int = 0
+    map_bytes_sent: int = 0
+    last_contact: list[int] = field(default_factory=list)
+
+    def as_dict(self) -> dict[str, Any]:
+        return {"sent": self.sent, "bytes_sent": self.bytes_sent, "delivered": self.delivered,
+                "bytes_delivered": self.bytes_delivered, "dropped_link": self.dropped_link,
+                "dropped_loss": self.dropped_loss, "dropped_bandwidth": self.dropped_bandwidth,
+                "malformed": self.malformed, "map_bytes_sent": self.map_bytes_sent,
+                "last_contact": list(self.last_contact)}
+
+
+class Medium:
+    """Carries envelopes from outboxes at tick t to inboxes at tick t+1 through the link matrix."""
+
+    def __init__(self, n: int, spec: CommSpec, rng: np.random.Generator) -> None:
+        self.n = n
+        self.spec = spec
+        self.rng = rng
+        self.stats = CommStats(last_contact=[-1] * n)
+        self._seq = [0] * n
+
+    def envelope(self, sender: int, msg: Any) -> Envelope:
+        """Encode a message from ``sender`` (its ``sender`` field must be the robot's id)."""
+        if getattr(msg, "sender", None) != sender:
+            raise MessageError(f"robot {sender} sent a message claiming sender={getattr(msg, 'sender', None)!r}")
+        data = encode(msg)
+        self._seq[sender] += 1
+        return Envelope(sender, self._seq[sender], data, msg)
+
+    def deliver(self, tick: int, outboxes: Sequence[Sequence[Envelope]], link: np.ndarray) -> list[list[Any]]:
+        """Inboxes for tick+1. ``link[i, j]``: a message from j reaches i (judged at send time)."""
+        n = self.n
+        inboxes: list[list[Any]] = [[] for _ in range(n)]
+        budget = np.full((n, n), self.spec.bandwidth, dtype=np.int64) if self.spec.bandwidth else None
+        for j in range(n):
+            for env in outboxes[j]:
+                size = len(env.data)
+                self.stats.sent += 1
+                self.stats.bytes_sent += size
+                if isinstance(env.message, MapUpdate):
+                    self.stats.map_bytes_sent += size
+                receivers = np.flatnonzero(link[:, j])
+                self.stats.dropped_link += (n - 1) - len(receivers)
+                if self.spec.loss > 0.0 and len(receivers):
+                    keep = self.rng.random(len(receivers)) >= self.spec.loss
+                    self.stats.dropped_loss += int((~keep).sum())
+                    receivers = receivers[keep]
+                for i in receivers.tolist():
+                    if i == j:
+                        continue
+                    if budget is not None:
+                        if budget[i, j] < size:
+                            self.stats.dropped_bandwidth += 1
+                            continue
+                        budget[i, j] -= size
+                    inboxes[i].append(env.message)
+                    self.stats.delivered += 1
+                    self.stats.bytes_delivered += size
+                    self.stats.last_contact[i] = tick + 1
+        return inboxes
+
+
+class MapSharing:
+    """The map-sharing service: builds each robot's MapUpdates and merges the ones it receives."""
+
+    def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec) -> None:
+        self.n = n
+        self.spec = spec
+        self.enabled = spec.map_sharing != "off" and n > 1
+        self.last_shared = np.zeros((n, *shape), dtype=np.uint8) if spec.map_sharing == "delta" else None
+        self.seq = [0] * n
+        self.seen_seq = np.zeros((n, n), dtype=np.int64)     # [receiver, sender] last seq merged
+        self.full_requested = [False] * n
+        self.requests: list[list[int]] = [[] for _ in range(n)]  # targets each robot will ask next tick
+
+    def outgoing(self, tick: int, known: np.ndarray, poses: np.ndarray) -> list[list[Any]]:
+        """Service messages each robot broadcasts this tick (updates due, full maps asked for, requests)."""
+        out: list[list[Any]] = [[] for _ in range(self.n)]
+        if not self.enabled:
+            return out
+        due = tick % self.spec.share_every == 0
+        for i in range(self.n):
+            for target in self.requests[i]:
+                out[i].append(MapRequest(sender=i, target=target))
+            self.requests[i] = []
+            full = self.spec.map_sharing == "full" or self.full_requested[i]
+            if not (due or self.full_requested[i]):
+                continue
+            self.full_requested[i] = False
+            if full:
+                changed = None
+            else:
+                assert self.last_shared is not None
+                changed = np.flatnonzero(known[i] != self.last_shared[i])
+                if not len(changed):
+                    continue
+            if self.last_shared is not None:
+                self.last_shared[i] = known[i]
+            self.seq[i] += 1
+            out[i].append(map_update(i, self.seq[i], tick, known[i], tuple(poses[i]), changed))
+        return out
+
+    def receive(self, receiver: int, msg: Any, known: np.ndarray) -> bool:
+        """Handle a service message; returns True if it was one (MapUpdate or MapRequest)."""
+        if isinstance(msg, MapUpdate):
+            msg.merge_into(known)
+            last = self.seen_seq[receiver, msg.sender]
+            if not msg.full and msg.seq != last + 1 and self.spec.map_sharing == "delta":
+                if msg.sender not in self.requests[receiver]:
+                    self.requests[receiver].append(msg.sender)
+            self.seen_seq[receiver, msg.sender] = max(last, msg.seq) if not msg.full else msg.seq
+            return True
+        if isinstance(msg, MapRequest):
+            if msg.target == receiver:
+                self.full_requested[receiver] = True
+            return True
+        return False
+
+
+def decode_or_none(data: bytes) -> Any:
+    """Decode a message from an untrusted source; None if malformed."""
+    try:
+        return decode(data)
+    except MessageError:
+        return None

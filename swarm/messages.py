@@ -1,0 +1,250 @@
+"""Typed, versioned messages and their compact wire format (msgpack).
+
+Every message is a frozen dataclass registered under a type name with :func:`message`. On the wire a
+message is the msgpack array ``[type, version, sender, field values in declaration order]``; numpy
+arrays travel as ``[dtype, shape, bytes]``. Size on the wire is a metric, so encoding is compact:
+field names are not sent, map updates are delta-encoded and zlib-compressed.
+
+Built-ins: :class:`MapUpdate` (cells changed since the sender's last update, or the full map, with the
+sender's pose), :class:`MapRequest` (ask a robot for its full map after a gap in its sequence numbers)
+and :class:`Heartbeat`. Algorithms declare their own::
+
+    @message("tnf.destination")
+    @dataclass(frozen=True)
+    class Destination:
+        sender: int
+        x: float
+        y: float
+
+Decoding never trusts its input: anything malformed raises :class:`MessageError` (the runtime drops the
+message and counts it).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import zlib
+from typing import Any, Callable, TypeVar
+
+import msgpack
+import numpy as np
+
+T = TypeVar("T")
+
+MAX_MESSAGE_BYTES = 4 * 1024 * 1024
+_REGISTRY: dict[str, type] = {}
+_NAMES: dict[type, str] = {}
+
+
+class MessageError(ValueError):
+    """A message that cannot be decoded or is not a registered message type."""
+
+
+def message(type_name: str, version: int = 1) -> Callable[[type[T]], type[T]]:
+    """Class decorator: register a frozen dataclass as a message type. The first field must be ``sender``."""
+
+    def register(cls: type[T]) -> type[T]:
+        if not dataclasses.is_dataclass(cls):
+            raise TypeError(f"{cls.__name__}: messages must be dataclasses")
+        names = [f.name for f in dataclasses.fields(cls)]
+        if not names or names[0] != "sender":
+            raise TypeError(f"{cls.__name__}: the first field of a message must be 'sender'")
+        existing = _REGISTRY.get(type_name)
+        if existing is not None and existing.__qualname__ != cls.__qualname__:
+            raise TypeError(f"message type {type_name!r} is already registered by {existing.__qualname__}")
+        cls.message_type = type_name  # type: ignore[attr-defined]
+        cls.message_version = version  # type: ignore[attr-defined]
+        _REGISTRY[type_name] = cls
+        _NAMES[cls] = type_name
+        return cls
+
+    return register
+
+
+def registered() -> dict[str, type]:
+    return dict(_REGISTRY)
+
+
+# ------------------------------------------------------------------------------------ encoding ----
+def _default(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return msgpack.ExtType(1, msgpack.packb([obj.dtype.str, list(obj.shape), obj.tobytes()]))
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, tuple):
+        return list(obj)
+    raise TypeError(f"cannot encode {type(obj).__name__}")
+
+
+def _ext_hook(code: int, data: bytes) -> Any:
+    if code != 1:
+        raise MessageError(f"unknown extension type {code}")
+    dtype, shape, raw = msgpack.unpackb(data, raw=False)
+    arr = np.frombuffer(raw, dtype=np.dtype(dtype))
+    return arr.reshape(shape).copy()
+
+
+def encode(msg: Any) -> bytes:
+    """The wire bytes of a registered message."""
+    cls = type(msg)
+    name = _NAMES.get(cls)
+    if name is None:
+        raise MessageError(f"{cls.__name__} is not a registered message type (use @message)")
+    values = [getattr(msg, f.name) for f in dataclasses.fields(msg)]
+    return msgpack.packb([name, cls.message_version, *values], default=_default, use_bin_type=True)
+
+
+def decode(data: bytes) -> Any:
+    """A message from wire bytes; raises :class:`MessageError` for anything malformed."""
+    if not isinstance(data, (bytes, bytearray, memoryview)) or len(data) > MAX_MESSAGE_BYTES:
+        raise MessageError("not bytes, or larger than MAX_MESSAGE_BYTES")
+    try:
+        items = msgpack.unpackb(data, raw=False, ext_hook=_ext_hook, strict_map_key=False,
+                                max_bin_len=MAX_MESSAGE_BYTES, max_str_len=1 << 20)
+    except MessageError:
+        raise
+    except Exception as exc:  # msgpack raises several unrelated types for corrupt input
+        raise MessageError(f"undecodable: {type(exc).__name__}") from None
+    if not isinstance(items, list) or len(items) < 3 or not isinstance(items[0], str):
+        raise MessageError("not a [type, version, sender, ...] array")
+    cls = _REGISTRY.get(items[0])
+    if cls is None:
+        raise MessageError(f"unknown message type {items[0]!r}")
+    if items[1] != cls.message_version:  # type: ignore[attr-defined]
+        raise MessageError(f"{items[0]} version {items[1]!r}, expected {cls.message_version}")  # type: ignore[attr-defined]
+    fields = dataclasses.fields(cls)
+    if len(items) - 2 != len(fields):
+        raise MessageError(f"{items[0]} needs {len(fields)} fields, got {len(items) - 2}")
+    values = [_restore(v, f.type) for v, f in zip(items[2:], fields)]
+    if not isinstance(values[0], int) or isinstance(values[0], bool):
+        raise MessageError(f"{items[0]}: sender must be an integer")
+    try:
+        msg = cls(*values)
+    except Exception as exc:
+        raise MessageError(f"{items[0]}: {type(exc).__name__}: {exc}") from None
+    check = getattr(msg, "validate", None)
+    if check is not None:
+        check()
+    return msg
+
+
+def _restore(value: Any, annotation: Any) -> Any:
+    """Lists come back for tuples; turn them back so decoded messages equal the originals."""
+    if isinstance(value, list) and "tuple" in str(annotation):
+        return tuple(_restore(v, "tuple" if "tuple[tuple" in str(annotation) else "") for v in value)
+    return value
+
+
+# ------------------------------------------------------------------------------------ built-ins ----
+@message("swarm.map_update", version=1)
+@dataclasses.dataclass(frozen=True, eq=False)
+class MapUpdate:
+    """Knowledge-map cells from ``sender``: the cells changed since its previous update (``full=False``) or
+    its whole map (``full=True``). ``seq`` numbers a sender's updates so receivers can detect gaps.
+
+    ``payload`` is zlib-compressed: for a full map, the map's cells packed 4 per byte (2 bits each); for a
+    delta, the gaps between successive changed flat indices (uint32) followed by the packed values.
+    """
+
+    sender: int
+    seq: int
+    tick: int
+    full: bool
+    shape: tuple[int, int]
+    count: int
+    payload: bytes
+    pose: tuple[float, float, float]
+
+    def validate(self) -> None:
+        if (not isinstance(self.shape, tuple) or len(self.shape) != 2
+                or not all(isinstance(v, int) and 0 < v <= 100_000 for v in self.shape)):
+            raise MessageError("map_update: bad shape")
+        if not isinstance(self.payload, bytes) or not isinstance(self.count, int) or self.count < 0:
+            raise MessageError("map_update: bad payload")
+        if self.count > self.shape[0] * self.shape[1]:
+            raise MessageError("map_update: more cells than the map has")
+
+    def cells(self) -> tuple[np.ndarray, np.ndarray]:
+        """(flat indices, values) carried by this update; raises MessageError if corrupt."""
+        h, w = self.shape
+        try:
+            raw = zlib.decompress(self.payload, bufsize=max(64, 5 * self.count + 16))
+        except zlib.error:
+            raise MessageError("map_update: corrupt payload") from None
+        if self.full:
+            values = _unpack2(np.frombuffer(raw, dtype=np.uint8), h * w)
+            if values is None:
+                raise MessageError("map_update: wrong payload length")
+            idx = np.flatnonzero(values)
+            return idx, values[idx]
+        n = self.count
+        if len(raw) != 4 * n + (n + 3) // 4:
+            raise MessageError("map_update: wrong payload length")
+        gaps = np.frombuffer(raw[: 4 * n], dtype="<u4").astype(np.int64)
+        idx = np.cumsum(gaps)
+        values = _unpack2(np.frombuffer(raw[4 * n:], dtype=np.uint8), n)
+        if n and (idx[-1] >= h * w or values is None or (values > 2).any()):
+            raise MessageError("map_update: cells outside the map")
+        return idx, values if values is not None else np.zeros(0, np.uint8)
+
+    def merge_into(self, known: np.ndarray) -> None:
+        """Elementwise max of the carried cells into ``known`` (a map of the same shape)."""
+        if known.shape != self.shape:
+            raise MessageError(f"map_update: shape {self.shape} does not match the receiver's {known.shape}")
+        idx, values = self.cells()
+        np.maximum.at(known.reshape(-1), idx, values)  # .at: correct even if a sender repeats an index
+
+
+def _pack2(values: np.ndarray) -> bytes:
+    padded = np.zeros((len(values) + 3) // 4 * 4, dtype=np.uint8)
+    padded[: len(values)] = values
+    q = padded.reshape(-1, 4)
+    return (q[:, 0] | (q[:, 1] << 2) | (q[:, 2] << 4) | (q[:, 3] << 6)).astype(np.uint8).tobytes()
+
+
+def _unpack2(packed: np.ndarray, n: int) -> np.ndarray | None:
+    if len(packed) != (n + 3) // 4:
+        return None
+    out = np.empty((len(packed), 4), dtype=np.uint8)
+    for k in range(4):
+        out[:, k] = (packed >> (2 * k)) & 3
+    return out.reshape(-1)[:n]
+
+
+def map_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
+               changed: np.ndarray | None) -> MapUpdate:
+    """Build a MapUpdate: ``changed`` = flat indices changed since the last update, or None for the full map."""
+    if changed is None:
+        payload = zlib.compress(_pack2(known.reshape(-1)), 6)
+        count = int(np.count_nonzero(known))
+        full = True
+    else:
+        changed = np.sort(np.asarray(changed, dtype=np.int64))
+        gaps = np.diff(changed, prepend=0).astype("<u4")
+        values = known.reshape(-1)[changed]
+        payload = zlib.compress(gaps.tobytes() + _pack2(values), 6)
+        count = int(len(changed))
+        full = False
+    return MapUpdate(sender=sender, seq=seq, tick=tick, full=full, shape=(int(known.shape[0]), int(known.shape[1])),
+                     count=count, payload=payload, pose=tuple(float(v) for v in pose))
+
+
+@message("swarm.map_request", version=1)
+@dataclasses.dataclass(frozen=True)
+class MapRequest:
+    """Ask ``target`` for its full map (sent after missing one of its updates)."""
+
+    sender: int
+    target: int
+
+
+@message("swarm.heartbeat", version=1)
+@dataclasses.dataclass(frozen=True)
+class Heartbeat:
+    """A robot's pose at ``tick``."""
+
+    sender: int
+    tick: int
+    x: float
+    y: float
+    theta: float
