@@ -45,7 +45,10 @@ def load(name: str) -> type:
         if not matches:
             names = ", ".join(available()) or "(none installed)"
             raise InvalidInput("algorithm.name", name, f"one of {names}, or 'package.module:Class'")
-        obj = matches[0].load()
+        try:
+            obj = matches[0].load()
+        except (ImportError, AttributeError) as exc:
+            raise InvalidInput("algorithm.name", name, f"an installed algorithm ({matches[0].value}: {exc})") from None
     for method in ("reset", "act"):
         if not callable(getattr(obj, method, None)):
             raise InvalidInput("algorithm.name", name, f"a class with reset() and act() (missing {method})")
