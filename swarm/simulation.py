@@ -64,7 +64,10 @@ class Simulation:
     """One run. Construct from a :class:`RunSpec` or a mapping; :meth:`run` once."""
 
     def __init__(self, spec: RunSpec | Mapping[str, Any], truth: Map | None = None,
-                 observers: tuple[Callable[[TickView], None], ...] = ()) -> None:
+                 observers: tuple[Callable[[TickView], None], ...] = (),
+                 start_poses: np.ndarray | None = None) -> None:
+        """``truth`` replaces the spec's map and ``start_poses`` (float64[R, 3]) its spawn: for hand-made
+        test fixtures; a run's identity (``spec.key``) does not cover them."""
         t0 = time.perf_counter()
         self.spec = RunSpec.from_mapping(spec) if not isinstance(spec, RunSpec) else spec
         self.streams = seed_streams(self.spec)
@@ -72,7 +75,8 @@ class Simulation:
         n = self.spec.robots.count
         self.motion = from_mapping(MotionParams, self.spec.motion)
         self.lidar_params = from_mapping(LidarParams, self.spec.lidar)
-        self.start_poses = spawn(self.truth, self.spec.robots.spawn, n, self.streams.spawn)
+        self.start_poses = (np.array(start_poses, dtype=np.float64) if start_poses is not None
+                            else spawn(self.truth, self.spec.robots.spawn, n, self.streams.spawn))
         self.world = World(self.truth, self.start_poses, self.motion)
         self.lidar = Lidar(self.truth, self.lidar_params)
         self.tracker = ExplorationTracker(self.truth)
