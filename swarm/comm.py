@@ -103,10 +103,10 @@ class Medium:
         self._seq[sender] += 1
         return Envelope(sender, self._seq[sender], data, msg)
 
-    def deliver(self, tick: int, outboxes: Sequence[Sequence[Envelope]], link: np.ndarray) -> list[list[Any]]:
+    def deliver(self, tick: int, outboxes: Sequence[Sequence[Envelope]], link: np.ndarray) -> list[list[Envelope]]:
         """Inboxes for tick+1. ``link[i, j]``: a message from j reaches i (judged at send time)."""
         n = self.n
-        inboxes: list[list[Any]] = [[] for _ in range(n)]
+        inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         budget = np.full((n, n), self.spec.bandwidth, dtype=np.int64) if self.spec.bandwidth else None
         for j in range(n):
             for env in outboxes[j]:
@@ -129,7 +129,7 @@ class Medium:
                             self.stats.dropped_bandwidth += 1
                             continue
                         budget[i, j] -= size
-                    inboxes[i].append(env.message)
+                    inboxes[i].append(env)
                     self.stats.delivered += 1
                     self.stats.bytes_delivered += size
                     self.stats.last_contact[i] = tick + 1
@@ -176,21 +176,20 @@ class MapSharing:
             out[i].append(map_update(i, self.seq[i], tick, known[i], tuple(poses[i]), changed))
         return out
 
-    def receive(self, receiver: int, msg: Any, known: np.ndarray) -> bool:
-        """Handle a service message; returns True if it was one (MapUpdate or MapRequest)."""
+    def receive(self, receiver: int, msg: Any, known: np.ndarray) -> np.ndarray | None:
+        """Handle a service message: merge a MapUpdate (returns the flat indices it carried) or note a
+        MapRequest addressed to ``receiver``; anything else is left to the algorithm (returns None)."""
         if isinstance(msg, MapUpdate):
-            msg.merge_into(known)
+            idx = msg.merge_into(known)
             last = self.seen_seq[receiver, msg.sender]
             if not msg.full and msg.seq != last + 1 and self.spec.map_sharing == "delta":
                 if msg.sender not in self.requests[receiver]:
                     self.requests[receiver].append(msg.sender)
             self.seen_seq[receiver, msg.sender] = max(last, msg.seq) if not msg.full else msg.seq
-            return True
-        if isinstance(msg, MapRequest):
-            if msg.target == receiver:
-                self.full_requested[receiver] = True
-            return True
-        return False
+            return idx
+        if isinstance(msg, MapRequest) and msg.target == receiver:
+            self.full_requested[receiver] = True
+        return None
 
 
 def decode_or_none(data: bytes) -> Any:

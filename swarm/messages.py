@@ -80,8 +80,9 @@ def _ext_hook(code: int, data: bytes) -> Any:
     if code != 1:
         raise MessageError(f"unknown extension type {code}")
     dtype, shape, raw = msgpack.unpackb(data, raw=False)
-    arr = np.frombuffer(raw, dtype=np.dtype(dtype))
-    return arr.reshape(shape).copy()
+    arr = np.frombuffer(raw, dtype=np.dtype(dtype)).reshape(shape).copy()
+    arr.flags.writeable = False  # one decoded message may be shared by several receivers
+    return arr
 
 
 def encode(msg: Any) -> bytes:
@@ -187,12 +188,14 @@ class MapUpdate:
             raise MessageError("map_update: cells outside the map")
         return idx, values if values is not None else np.zeros(0, np.uint8)
 
-    def merge_into(self, known: np.ndarray) -> None:
-        """Elementwise max of the carried cells into ``known`` (a map of the same shape)."""
+    def merge_into(self, known: np.ndarray) -> np.ndarray:
+        """Elementwise max of the carried cells into ``known`` (a map of the same shape); returns their
+        flat indices."""
         if known.shape != self.shape:
             raise MessageError(f"map_update: shape {self.shape} does not match the receiver's {known.shape}")
         idx, values = self.cells()
         np.maximum.at(known.reshape(-1), idx, values)  # .at: correct even if a sender repeats an index
+        return idx
 
 
 def _pack2(values: np.ndarray) -> bytes:

@@ -4,13 +4,15 @@ One logic tick (0.1 s, DESIGN.md section 4):
 
 1. ``world.step``: pymunk moves the robots under last tick's commands (sub-stepped), reports collisions;
 2. ``lidar.scan``: every robot's lidar writes what it sees into its own knowledge map; truth tracker;
-3. inboxes: messages sent last tick, filtered by the radio (the transport issue fills this in);
-4. ``act``: each algorithm sees its observation and returns an action (goal or velocity, messages);
-5. navigation turns goals into (v, omega) commands on each robot's own map;
-6. metrics: explored/coverage thresholds every tick, a time-series row every ``record_every`` ticks.
+3. the radio picture for this tick's positions (distances, walls, RSSI, links, groups);
+4. inboxes: messages sent last tick arrive; map updates are merged into the receiver's map;
+5. the transport hands each live robot its observation and gets its action (goal or velocity, messages);
+6. this tick's broadcasts are judged by this tick's links and queued for next tick;
+7. navigation turns goals into (v, omega) commands on each robot's own map;
+8. metrics: explored thresholds every tick, a time-series row every ``record_every`` ticks.
 
 Everything random comes from :func:`swarm.spec.seed_streams`; nothing reads the clock except the
-``*_time_s`` fields, so the same spec gives the same result bit for bit.
+``*_time_s`` fields, so the same spec gives the same result bit for bit, whatever the transport.
 """
 
 from __future__ import annotations
@@ -18,24 +20,24 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
-from maps import Map, generate
+from maps import CELL_M, Map, generate
 from maps.params import from_mapping
-
 from radio import build_link_model, config_from_mapping
 
-from . import registry
-from .api import Action, NavStatus, Neighbour, Observation, Pose, RobotInfo
+from .api import Action, Neighbour, Observation, Pose, RobotInfo
 from .comm import CommSpec, Envelope, MapSharing, Medium
 from .metrics import Metrics
 from .navigation import Navigator
 from .result import RunResult
 from .sensing import ExplorationTracker, Lidar, LidarParams
 from .spawn import spawn
-from .spec import RunSpec, seed_streams
+from .spec import ROBOT_STREAM, RunSpec, seed_streams
+from .transport import AgentHost, TickInput, make_host
+from .transport.wire import ResetPacket
 from .world import MotionParams, World
 
 
@@ -49,23 +51,35 @@ def build_map(spec: RunSpec, map_seed: int) -> Map:
                     map_seed, spec.map.params)
 
 
+@dataclass(frozen=True)
+class TransportOptions:
+    """How to reach agents in other processes (not part of the spec: they never change a result)."""
+
+    listen: tuple[str, ...] = ()
+    remote: tuple[int, ...] = ()
+    timeout_s: float = 10.0
+    run_id: str | None = None
+
+
 @dataclass
 class TickView:
-    """What per-tick observers (GIF renderer, recorder) get after each tick's sensing."""
+    """What per-tick observers (GIF renderer, recorder) get after each tick's decisions."""
 
     tick: int
     poses: np.ndarray
     known: np.ndarray
     tracker: ExplorationTracker
-    actions: list[Action] = field(default_factory=list)
+    actions: list[Action | None] = field(default_factory=list)
+    links: Any = None
+    sent: list[list[Envelope]] = field(default_factory=list)
 
 
 class Simulation:
     """One run. Construct from a :class:`RunSpec` or a mapping; :meth:`run` once."""
 
     def __init__(self, spec: RunSpec | Mapping[str, Any], truth: Map | None = None,
-                 observers: tuple[Callable[[TickView], None], ...] = (),
-                 start_poses: np.ndarray | None = None) -> None:
+                 observers: Sequence[Callable[[TickView], None]] = (), start_poses: np.ndarray | None = None,
+                 transport: TransportOptions | None = None) -> None:
         """``truth`` replaces the spec's map and ``start_poses`` (float64[R, 3]) its spawn: for hand-made
         test fixtures; a run's identity (``spec.key``) does not cover them."""
         t0 = time.perf_counter()
@@ -83,19 +97,18 @@ class Simulation:
         self.known = np.zeros((n, *self.truth.shape), dtype=np.uint8)
         self._views = [self._read_only(i) for i in range(n)]
         self.navigators = [Navigator(self.spec.navigation, self.motion) for _ in range(n)]
-        params = registry.build_params(self.spec.algorithm.name, self.spec.algorithm.params)
-        self.agents = [registry.create(self.spec.algorithm.name) for _ in range(n)]
-        for i, agent in enumerate(self.agents):
-            agent.reset(self._robot_info(i), params, self.streams.robots[i])
         self.links = build_link_model(self.truth, config_from_mapping(self.spec.radio))
         self.comm = from_mapping(CommSpec, self.spec.comm)
         self.medium = Medium(n, self.comm, self.streams.radio)
         self.sharing = MapSharing(n, self.truth.shape, self.comm)
-        self.inboxes: list[list[Any]] = [[] for _ in range(n)]
+        self.inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         self.neighbour_range = self.comm.neighbour_range_m or self.lidar_params.range_m
-        self.observers = observers
+        self.transport = transport or TransportOptions()
+        self.observers = tuple(observers)
         self.metrics = Metrics(self.spec.record_every)
         self.events: list[dict[str, Any]] = []
+        self.failed = np.zeros(n, dtype=bool)
+        self._mirror: np.ndarray | None = None
         self.setup_time_s = time.perf_counter() - t0
 
     def _read_only(self, i: int) -> np.ndarray:
@@ -103,13 +116,32 @@ class Simulation:
         view.flags.writeable = False
         return view
 
-    def _robot_info(self, i: int) -> RobotInfo:
+    def robot_info(self, i: int) -> RobotInfo:
         return RobotInfo(id=i, n_robots=self.spec.robots.count, map_shape=self.truth.shape,
                          radius=self.motion.radius, lidar_range=self.lidar_params.range_m,
                          max_speed=self.motion.max_speed, max_turn_rate=self.motion.max_turn_rate)
 
+    def resets(self) -> list[ResetPacket]:
+        """What each agent starts from; its generator is ``SeedSequence(seed, spawn_key=(3, i))``, the same
+        stream :func:`swarm.spec.seed_streams` gives, whichever side of a transport builds it."""
+        return [ResetPacket(robot=self.robot_info(i), algorithm=self.spec.algorithm.name,
+                            params=dict(self.spec.algorithm.params), seed_entropy=self.spec.seed,
+                            seed_spawn_key=(ROBOT_STREAM, i)) for i in range(self.spec.robots.count)]
+
     # ------------------------------------------------------------------------------------------ run ----
     def run(self) -> RunResult:
+        opts = self.transport
+        host = make_host(self.spec.transport, self.spec.key, listen=opts.listen, remote=opts.remote,
+                         timeout_s=opts.timeout_s, run_id=opts.run_id)
+        try:
+            host.start(self.resets())
+            if host.needs_delta:
+                self._mirror = np.zeros_like(self.known)
+            return self._loop(host)
+        finally:
+            host.close()
+
+    def _loop(self, host: AgentHost) -> RunResult:
         t0 = time.perf_counter()
         spec = self.spec
         n = spec.robots.count
@@ -126,10 +158,10 @@ class Simulation:
             collided = self.world.collided.copy()
             collisions += int((collided & ~was_colliding).sum())
             was_colliding = collided
-            self.lidar.scan(poses, self.known, self.streams.sensor, tracker=self.tracker)
-            self.tracker.update_coverage(poses[:, :2])
+            self.lidar.scan(poses, self.known, self.streams.sensor, active=~self.failed, tracker=self.tracker)
+            self.tracker.update_coverage(poses[:, :2], active=~self.failed)
             links = self.links.evaluate(poses[:, :2])
-            inboxes = self._receive()
+            inboxes, merged = self._receive()
             explored = self.tracker.explored
             self.metrics.check_thresholds(tick, explored)
             if explored >= spec.stop.explored:
@@ -138,42 +170,71 @@ class Simulation:
                 stop_reason = "max_ticks"
             elif stalled_for >= spec.stop.stall_ticks:
                 stop_reason = "stalled"
+            elif self.failed.all():
+                stop_reason = "all_failed"
             if stop_reason or self.metrics.due(tick):
                 self._record(tick, explored, collisions, links)
             if stop_reason:
                 break
-            actions = self._act(tick, poses, collided, inboxes, links)
-            self._send(tick, poses, actions, links)
+            inputs = self._inputs(tick, poses, collided, inboxes, merged, links, host.needs_delta)
+            actions = host.act(tick, inputs)
+            self._note_failures(tick, host)
+            sent = self._send(tick, poses, actions, links)
             moving = False
             pose_rows = poses.tolist()
             for i, action in enumerate(actions):
                 nav = self.navigators[i]
+                if action is None:
+                    commands[i] = (0.0, 0.0)
+                    continue
                 if action.clear_goal:
                     nav.set_goal(None)
                 if action.goal is not None:
                     nav.set_goal(action.goal)
-                pose = Pose(*pose_rows[i])
                 if action.velocity is not None:
                     v, w = action.velocity
                 else:
-                    v, w = nav.command(pose, self.known[i])
+                    v, w = nav.command(Pose(*pose_rows[i]), self.known[i])
                 commands[i] = (v, w)
                 moving = moving or v != 0.0 or w != 0.0 or nav.state in ("moving", "planning")
             stalled_for = 0 if moving else stalled_for + 1
             for observer in self.observers:
-                observer(TickView(tick, poses, self.known, self.tracker, actions))
+                observer(TickView(tick, poses, self.known, self.tracker, actions, links, sent))
             tick += 1
-        wall = time.perf_counter() - t0
-        return self._result(tick, stop_reason, collisions, wall)
+        return self._result(tick, stop_reason, collisions, time.perf_counter() - t0, host)
 
-    def _receive(self) -> list[tuple[Any, ...]]:
-        """This tick's inboxes (sent last tick); map-sharing messages are merged into the receiver's map."""
+    # ---------------------------------------------------------------------------------- messaging ----
+    def _receive(self) -> tuple[list[list[Envelope]], list[list[np.ndarray]]]:
+        """This tick's inboxes (sent last tick); map updates are merged into the receiver's map."""
         inboxes, self.inboxes = self.inboxes, [[] for _ in range(self.spec.robots.count)]
+        merged: list[list[np.ndarray]] = [[] for _ in inboxes]
         for i, inbox in enumerate(inboxes):
-            for msg in inbox:
-                self.sharing.receive(i, msg, self.known[i])
-        return [tuple(inbox) for inbox in inboxes]
+            if self.failed[i]:
+                continue
+            for env in inbox:
+                idx = self.sharing.receive(i, env.message, self.known[i])
+                if idx is not None:
+                    merged[i].append(idx)
+        return inboxes, merged
 
+    def _send(self, tick: int, poses: np.ndarray, actions: list[Action | None], links: Any) -> list[list[Envelope]]:
+        """Collect this tick's broadcasts (map sharing + algorithms) and deliver them for next tick."""
+        service = self.sharing.outgoing(tick, self.known, poses)
+        outboxes: list[list[Envelope]] = []
+        for i, action in enumerate(actions):
+            if self.failed[i]:
+                outboxes.append([])
+                continue
+            extra = action.messages if action is not None else ()
+            outboxes.append([self.medium.envelope(i, m) for m in (*service[i], *extra)])
+        if any(outboxes):
+            link = links.link
+            if self.failed.any():
+                link = link & ~self.failed[:, None]
+            self.inboxes = self.medium.deliver(tick, outboxes, link)
+        return outboxes
+
+    # ------------------------------------------------------------------------------- observations ----
     def _neighbours(self, poses: np.ndarray, links: Any) -> list[tuple[Neighbour, ...]]:
         """Robots within ``neighbour_range`` and in line of sight (no wall crossed), per robot."""
         n = len(poses)
@@ -186,50 +247,74 @@ class Simulation:
             row = []
             for j in np.flatnonzero(near[i]).tolist():
                 dx, dy = poses[j, 0] - poses[i, 0], poses[j, 1] - poses[i, 1]
-                bearing = float(np.arctan2(dy, dx) - poses[i, 2])
-                bearing = (bearing + np.pi) % (2 * np.pi) - np.pi
+                bearing = float((np.arctan2(dy, dx) - poses[i, 2] + np.pi) % (2 * np.pi) - np.pi)
                 row.append(Neighbour(id=j, distance=float(links.distance[i, j]), bearing=bearing,
                                      x=float(poses[j, 0]), y=float(poses[j, 1])))
             out.append(tuple(row))
         return out
 
-    def _act(self, tick: int, poses: np.ndarray, collided: np.ndarray, inboxes: list[tuple[Any, ...]],
-             links: Any) -> list[Action]:
-        actions = []
+    def _inputs(self, tick: int, poses: np.ndarray, collided: np.ndarray, inboxes: list[list[Envelope]],
+                merged: list[list[np.ndarray]], links: Any, needs_delta: bool) -> list[TickInput | None]:
         distance = self.world.distance.tolist()
         energy = (self.world.distance + self.world.rotation).tolist()
         pose_rows = poses.tolist()
         neighbours = self._neighbours(poses, links)
-        for i, agent in enumerate(self.agents):
+        inputs: list[TickInput | None] = []
+        for i in range(len(pose_rows)):
+            if self.failed[i]:
+                inputs.append(None)
+                continue
             obs = Observation(tick=tick, robot_id=i, pose=Pose(*pose_rows[i]), known=self._views[i],
-                              inbox=inboxes[i], neighbours=neighbours[i], collided=bool(collided[i]),
-                              nav=self.navigators[i].status(), distance_travelled=distance[i],
-                              energy_used=energy[i])
-            actions.append(_check_action(agent.act(obs), i))
-        return actions
+                              inbox=tuple(env.message for env in inboxes[i]), neighbours=neighbours[i],
+                              collided=bool(collided[i]), nav=self.navigators[i].status(),
+                              distance_travelled=distance[i], energy_used=energy[i])
+            if needs_delta:
+                inputs.append(TickInput(obs, self._changed_cells(i, pose_rows[i], merged[i]),
+                                        tuple(env.data for env in inboxes[i])))
+            else:
+                inputs.append(TickInput(obs))
+        return inputs
 
-    def _send(self, tick: int, poses: np.ndarray, actions: list[Action], links: Any) -> None:
-        """Collect this tick's broadcasts (map sharing + algorithms) and deliver them for next tick."""
-        service = self.sharing.outgoing(tick, self.known, poses)
-        outboxes: list[list[Envelope]] = []
-        for i, action in enumerate(actions):
-            outboxes.append([self.medium.envelope(i, m) for m in (*service[i], *action.messages)])
-        if any(outboxes):
-            self.inboxes = self.medium.deliver(tick, outboxes, links.link)
+    def _changed_cells(self, i: int, pose: list[float], merged: list[np.ndarray]) -> np.ndarray:
+        """Flat indices of robot i's knowledge cells changed since its last observation: the lidar only
+        writes within range of the robot, merges report their cells, so only those places are compared."""
+        assert self._mirror is not None
+        known, mirror = self.known[i], self._mirror[i]
+        h, w = known.shape
+        reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2
+        r, c = int(pose[1] / CELL_M), int(pose[0] / CELL_M)
+        r0, r1, c0, c1 = max(r - reach, 0), min(r + reach + 1, h), max(c - reach, 0), min(c + reach + 1, w)
+        rr, cc = np.nonzero(known[r0:r1, c0:c1] != mirror[r0:r1, c0:c1])
+        idx = (rr + r0) * w + (cc + c0)
+        if merged:
+            flat_k, flat_m = known.reshape(-1), mirror.reshape(-1)
+            extra = np.concatenate(merged)
+            idx = np.union1d(idx, extra[flat_k[extra] != flat_m[extra]])
+        mirror.reshape(-1)[idx] = known.reshape(-1)[idx]
+        return idx
 
+    def _note_failures(self, tick: int, host: AgentHost) -> None:
+        for i, (at, reason) in sorted(host.stats.failures.items()):
+            if not self.failed[i]:
+                self.failed[i] = True
+                self.world.disable(i)
+                self.navigators[i].set_goal(None)
+                self.events.append({"tick": at, "robot": i, "event": "agent_failed", "reason": reason})
+
+    # ------------------------------------------------------------------------------------ results ----
     def _record(self, tick: int, explored: float, collisions: int, links: Any) -> None:
         stats = self.medium.stats
-        groups = links.groups() if self.spec.robots.count > 1 else [frozenset({0})]
+        n = self.spec.robots.count
+        groups = links.groups() if n > 1 else [frozenset({0})]
         self.metrics.record(tick, explored=explored, coverage=self.tracker.coverage,
                             distance_m=float(self.world.distance.sum()), collisions=collisions,
                             msgs_sent=stats.sent, bytes_sent=stats.bytes_sent, msgs_delivered=stats.delivered,
                             bytes_delivered=stats.bytes_delivered,
                             msgs_dropped=stats.dropped_link + stats.dropped_loss + stats.dropped_bandwidth,
-                            comm_groups=len(groups),
-                            biggest_group=max(len(g) for g in groups) / self.spec.robots.count,
+                            comm_groups=len(groups), biggest_group=max(len(g) for g in groups) / n,
                             all_connected=len(groups) == 1)
 
-    def _result(self, tick: int, stop_reason: str, collisions: int, wall: float) -> RunResult:
+    def _result(self, tick: int, stop_reason: str, collisions: int, wall: float, host: AgentHost) -> RunResult:
         summary = {
             "ticks": tick,
             "stop_reason": stop_reason,
@@ -239,7 +324,8 @@ class Simulation:
             "distance_m": [float(d) for d in self.world.distance],
             "collisions": collisions,
             "plans": [nav.plans for nav in self.navigators],
-            "messages": self.medium.stats.as_dict(),
+            "messages": {**self.medium.stats.as_dict(), "malformed_from_agents": host.stats.malformed},
+            "failed_robots": [int(i) for i in np.flatnonzero(self.failed)],
             "final_poses": [[float(v) for v in p] for p in self.world.poses],
             "map_seed": int(self.streams.map_seed) if self.spec.map.kind != "file" else None,
             "wall_time_s": wall,
@@ -249,15 +335,9 @@ class Simulation:
                          timeseries=self.metrics.series, events=self.events)
 
 
-def _check_action(action: Any, robot: int) -> Action:
-    if not isinstance(action, Action):
-        raise TypeError(f"robot {robot}: act() returned {type(action).__name__}, expected swarm.api.Action")
-    return action
-
-
 def run(spec: RunSpec | Mapping[str, Any]) -> RunResult:
     """Convenience: ``Simulation(spec).run()``."""
     return Simulation(spec).run()
 
 
-__all__ = ["NavStatus", "Simulation", "TickView", "build_map", "run"]
+__all__ = ["Simulation", "TickView", "TransportOptions", "build_map", "run"]

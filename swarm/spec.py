@@ -261,10 +261,14 @@ def derive_seed(*parts: int | str) -> int:
     return int(np.random.SeedSequence(words).generate_state(2, np.uint32).view(np.uint64)[0] >> np.uint64(1))
 
 
+ROBOT_STREAM = 3
+"""Robot i's algorithm stream is ``SeedSequence(seed, spawn_key=(ROBOT_STREAM, i))``."""
+
+
 def seed_streams(spec: RunSpec) -> SeedStreams:
     """Map seed and generators for spawning, sensor noise, radio loss and each robot's algorithm."""
     root = np.random.SeedSequence(spec.seed)
-    spawn_ss, sensor_ss, radio_ss, robots_ss = root.spawn(4)
+    spawn_ss, sensor_ss, radio_ss, robots_ss = root.spawn(ROBOT_STREAM + 1)
     map_seed = spec.map.seed if spec.map.seed is not None else derive_seed(spec.seed, "map")
     spawn_seed = spec.robots.spawn_seed if spec.robots.spawn_seed is not None else None
     spawn_rng = (np.random.default_rng(np.random.SeedSequence(spawn_seed)) if spawn_seed is not None

@@ -83,13 +83,21 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
 @click.option("--transport", type=click.Choice(["inprocess", "zenoh"]), default=None)
 @click.option("--set", "sets", multiple=True, metavar="SECTION.KEY=VALUE",
               help="Any spec value, e.g. --set lidar.range_m=10 --set motion.max_speed=3.")
+@click.option("--listen", multiple=True, metavar="ENDPOINT",
+              help="zenoh endpoint remote agents connect to, e.g. tcp/127.0.0.1:7447 (needs --transport zenoh).")
+@click.option("--remote", multiple=True, type=click.IntRange(0), metavar="ID",
+              help="Robot ids whose agents run in other processes ('swarm agent'); repeatable.")
+@click.option("--agent-timeout", type=click.FloatRange(0, min_open=True), default=10.0, show_default=True,
+              help="Seconds to wait for a remote agent's action before its robot is marked failed.")
+@click.option("--run-id", default=None, help="Name of the run on the wire (default: the spec key + a nonce).")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), help="Write the result JSON.")
 @click.option("--gif", type=click.Path(dir_okay=False, path_type=Path), help="Write an animation.")
 @click.option("--print-spec", is_flag=True, help="Print the fully-resolved spec (TOML-ready JSON) and exit.")
 def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed: int | None,
             map_params: tuple[str, ...], robots: int | None, spawn: str | None, algorithm: str | None,
             algorithm_params: tuple[str, ...], seed: int | None, max_ticks: int | None, explored: float | None,
-            transport: str | None, sets: tuple[str, ...], json_out: Path | None, gif: Path | None,
+            transport: str | None, sets: tuple[str, ...], listen: tuple[str, ...], remote: tuple[int, ...],
+            agent_timeout: float, run_id: str | None, json_out: Path | None, gif: Path | None,
             print_spec: bool) -> None:
     """Run one exploration and print a one-line summary.
 
@@ -107,7 +115,8 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
     if print_spec:
         click.echo(json.dumps(spec.canonical(), indent=1, sort_keys=True))
         return
-    sim = Simulation(spec)
+    options = _transport_options(spec, listen, remote, agent_timeout, run_id)
+    sim = Simulation(spec, transport=options)
     recorder = None
     if gif is not None:
         from ..animation import GifRecorder
@@ -120,6 +129,47 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
         click.echo(f"wrote {result.write_json(json_out)}")
     if recorder is not None:
         click.echo(f"wrote {recorder.save(gif)}")
+
+
+def _transport_options(spec, listen: tuple[str, ...], remote: tuple[int, ...], timeout: float,
+                       run_id: str | None):
+    from ..simulation import TransportOptions
+    from ..transport.zenoh_host import new_run_id
+
+    if (listen or remote) and spec.transport != "zenoh":
+        raise InvalidInput("--remote" if remote else "--listen", list(remote or listen),
+                           "remote agents only with --transport zenoh")
+    for r in remote:
+        if r >= spec.robots.count:
+            raise InvalidInput("--remote", r, f"a robot id below --robots ({spec.robots.count})")
+    if remote and not listen:
+        raise InvalidInput("--listen", None, "an endpoint remote agents can connect to, e.g. tcp/127.0.0.1:7447")
+    if remote:
+        run_id = run_id or new_run_id(spec.key)
+        for r in remote:
+            click.echo(f"waiting for: swarm agent --connect {listen[0]} --run {run_id} --robot {r}", err=True)
+    return TransportOptions(listen=listen, remote=remote, timeout_s=timeout, run_id=run_id)
+
+
+@cli.command("agent")
+@click.option("--connect", required=True, metavar="ENDPOINT", help="The runtime's --listen endpoint.")
+@click.option("--run", "run_id", required=True, help="The run id the runtime printed.")
+@click.option("--robot", type=click.IntRange(0), required=True, help="Which robot this agent drives.")
+@click.option("--algorithm", default=None, help="Algorithm to run (default: the run spec's).")
+@click.option("--timeout", type=click.FloatRange(0, min_open=True), default=60.0, show_default=True,
+              help="Give up after this many seconds without hearing from the runtime.")
+def agent_cmd(connect: str, run_id: str, robot: int, algorithm: str | None, timeout: float) -> None:
+    """Run one robot's algorithm in this process against 'swarm run --transport zenoh --listen ... --remote ID'."""
+    from ..transport.remote import run_agent
+
+    if algorithm is not None:
+        from .. import registry
+
+        registry.load(algorithm)
+    code = run_agent(connect, run_id, robot, algorithm=algorithm, timeout_s=timeout,
+                     log=lambda text: click.echo(text, err=True))
+    if code:
+        raise click.exceptions.Exit(code)
 
 
 @cli.command("algorithms")

@@ -1,0 +1,25 @@
+"""Transports between the runtime and the agents: in-process calls or zenoh sessions (see base.py)."""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from .base import AgentHost, HostStats, TickInput
+from .inprocess import InProcessHost
+
+TRANSPORTS = ("inprocess", "zenoh")
+
+
+def make_host(kind: str, run_key: str, listen: Sequence[str] = (), remote: Sequence[int] = (),
+              timeout_s: float = 10.0, run_id: str | None = None) -> AgentHost:
+    """The transport named in the run spec; ``listen``/``remote`` serve agents in other processes."""
+    if kind == "inprocess":
+        if remote:
+            raise ValueError("remote agents need transport = 'zenoh'")
+        return InProcessHost()
+    from .zenoh_host import ZenohHost, new_run_id
+
+    return ZenohHost(run_id or new_run_id(run_key), listen=listen, remote=remote, timeout_s=timeout_s)
+
+
+__all__ = ["AgentHost", "HostStats", "InProcessHost", "TRANSPORTS", "TickInput", "make_host"]

@@ -1,0 +1,68 @@
+"""``swarm agent``: run one robot's algorithm in this process against a simulation elsewhere.
+
+The agent connects to the runtime's ``listen`` endpoint, subscribes to its robot's keys, announces itself
+with a liveliness token, takes the ``reset`` packet (algorithm, parameters, seed) and then answers every
+observation with an action until the runtime publishes ``end``.
+"""
+
+from __future__ import annotations
+
+import queue
+import time
+from typing import Callable
+
+import zenoh
+
+from .agent import AgentRunner
+from .wire import decode_reset
+from .zenoh_host import BLOCK, session_config
+
+
+def run_agent(connect: str, run_id: str, robot: int, algorithm: str | None = None, timeout_s: float = 60.0,
+              log: Callable[[str], None] = print) -> int:
+    """Serve one robot until the run ends; returns a process exit status (0 = the run ended normally)."""
+    prefix = f"swarm/{run_id}"
+    inbox: queue.SimpleQueue[tuple[str, bytes]] = queue.SimpleQueue()
+
+    def push(kind: str) -> Callable[[zenoh.Sample], None]:
+        return lambda sample: inbox.put((kind, sample.payload.to_bytes()))
+
+    session = zenoh.open(session_config(connect=[connect]))
+    declared = []
+    try:
+        deadline = time.monotonic() + timeout_s
+        while not list(session.info.peers_zid()):
+            if time.monotonic() > deadline:
+                log(f"swarm agent: no runtime at {connect} after {timeout_s:g} s")
+                return 1
+            time.sleep(0.01)
+        for kind in ("reset", "obs"):
+            declared.append(session.declare_subscriber(f"{prefix}/robot/{robot}/{kind}",
+                                                       zenoh.handlers.Callback(push(kind), indirect=False)))
+        declared.append(session.declare_subscriber(f"{prefix}/end", zenoh.handlers.Callback(push("end"), indirect=False)))
+        act = session.declare_publisher(f"{prefix}/robot/{robot}/act", congestion_control=BLOCK)
+        declared.append(act)
+        declared.append(session.liveliness().declare_token(f"{prefix}/robot/{robot}/alive"))
+        runner: AgentRunner | None = None
+        while True:
+            try:
+                kind, data = inbox.get(timeout=timeout_s)
+            except queue.Empty:
+                log(f"swarm agent: nothing from the runtime for {timeout_s:g} s; giving up")
+                return 1
+            if kind == "end":
+                log("swarm agent: run ended")
+                return 0
+            if kind == "reset":
+                reset = decode_reset(data)
+                runner = AgentRunner(reset, algorithm)
+                log(f"swarm agent: robot {robot} of run {run_id}, algorithm {algorithm or reset.algorithm}")
+            elif kind == "obs" and runner is not None:
+                act.put(runner.handle(data))
+    finally:
+        for d in reversed(declared):
+            try:
+                d.undeclare()
+            except Exception:
+                pass
+        session.close()

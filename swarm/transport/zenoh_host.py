@@ -1,0 +1,193 @@
+"""Observations and actions through real zenoh sessions, in lockstep.
+
+Key expressions (``<run>`` is unique per run, so parallel runs never cross-talk):
+
+* ``swarm/<run>/robot/<id>/reset``  runtime -> agent: robot facts, algorithm, parameters, seed
+* ``swarm/<run>/robot/<id>/obs``    runtime -> agent: the observation of tick t
+* ``swarm/<run>/robot/<id>/act``    agent -> runtime: the action for tick t
+* ``swarm/<run>/robot/<id>/alive``  liveliness token of a remote agent (its loss = the agent died)
+* ``swarm/<run>/end``               runtime -> agents: the run is over
+
+Agents in the runtime's process share its session with ``Callback(indirect=False)`` subscribers, so a
+put runs the agent synchronously (about 10 us per round trip, reference/zenoh-pymunk.md A4). Remote
+agents connect to the runtime's ``listen`` endpoint; the runtime waits for every live agent's action for
+tick t before advancing, so thread timing never changes a result. A remote agent that loses its
+liveliness token or stays silent for ``timeout_s`` is marked failed at that tick and its robot stops.
+Sessions open in peer mode with multicast scouting off and no endpoints unless given (loopback only).
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+import uuid
+from typing import Sequence
+
+import zenoh
+
+from ..api import Action
+from .agent import AgentRunner
+from .base import HostStats, TickInput
+from .wire import ResetPacket, WireError, decode_act, encode_obs, encode_reset
+
+BLOCK = zenoh.CongestionControl.BLOCK
+
+
+def session_config(listen: Sequence[str] = (), connect: Sequence[str] = ()) -> zenoh.Config:
+    """Peer mode, no multicast scouting, only the given endpoints (reference/zenoh-pymunk.md A1, A5)."""
+    c = zenoh.Config()
+    c.insert_json5("mode", '"peer"')
+    c.insert_json5("scouting/multicast/enabled", "false")
+    c.insert_json5("scouting/delay", "0")
+    c.insert_json5("listen/endpoints", json.dumps(list(listen)))
+    c.insert_json5("connect/endpoints", json.dumps(list(connect)))
+    c.insert_json5("connect/timeout_ms", "1000")
+    return c
+
+
+def new_run_id(key: str) -> str:
+    return f"{key}-{uuid.uuid4().hex[:8]}"
+
+
+def robot_of(key_expr: object) -> int | None:
+    """The robot id in ``swarm/<run>/robot/<id>/...``."""
+    parts = str(key_expr).split("/")
+    try:
+        return int(parts[parts.index("robot") + 1])
+    except (ValueError, IndexError):
+        return None
+
+
+class ZenohHost:
+    needs_delta = True
+
+    def __init__(self, run_id: str, listen: Sequence[str] = (), remote: Sequence[int] = (),
+                 timeout_s: float = 10.0, join_timeout_s: float = 60.0) -> None:
+        self.stats = HostStats()
+        self.run_id = run_id
+        self.prefix = f"swarm/{run_id}"
+        self.remote = set(remote)
+        self.timeout_s = timeout_s
+        self.join_timeout_s = join_timeout_s
+        self.session = zenoh.open(session_config(listen=listen))
+        self._cond = threading.Condition()
+        self._replies: dict[int, bytes] = {}
+        self._alive: set[int] = set()
+        self._lost: set[int] = set()
+        self._runners: dict[int, AgentRunner] = {}
+        self._publishers: dict[int, zenoh.Publisher] = {}
+        self._declared: list = []
+        self._declared.append(self.session.declare_subscriber(
+            f"{self.prefix}/robot/*/act", zenoh.handlers.Callback(self._on_act, indirect=False)))
+        if self.remote:
+            self._declared.append(self.session.liveliness().declare_subscriber(
+                f"{self.prefix}/robot/*/alive", zenoh.handlers.Callback(self._on_alive, indirect=False), history=True))
+
+    # ---------------------------------------------------------------------------------- callbacks ----
+    def _on_act(self, sample: zenoh.Sample) -> None:
+        robot = robot_of(sample.key_expr)
+        if robot is None:
+            return
+        with self._cond:
+            self._replies[robot] = sample.payload.to_bytes()
+            self._cond.notify_all()
+
+    def _on_alive(self, sample: zenoh.Sample) -> None:
+        robot = robot_of(sample.key_expr)
+        if robot is None:
+            return
+        with self._cond:
+            if sample.kind == zenoh.SampleKind.PUT:
+                self._alive.add(robot)
+            else:
+                self._lost.add(robot)
+            self._cond.notify_all()
+
+    def _local_agent(self, robot: int, runner: AgentRunner) -> None:
+        act_key = f"{self.prefix}/robot/{robot}/act"
+
+        def on_obs(sample: zenoh.Sample) -> None:
+            self.session.put(act_key, runner.handle(sample.payload.to_bytes()), congestion_control=BLOCK)
+
+        self._declared.append(self.session.declare_subscriber(
+            f"{self.prefix}/robot/{robot}/obs", zenoh.handlers.Callback(on_obs, indirect=False)))
+
+    # ---------------------------------------------------------------------------------- interface ----
+    def start(self, resets: Sequence[ResetPacket]) -> None:
+        for reset in resets:
+            i = reset.robot.id
+            self._publishers[i] = self.session.declare_publisher(f"{self.prefix}/robot/{i}/obs", congestion_control=BLOCK)
+            if i not in self.remote:
+                runner = AgentRunner(reset)
+                self._runners[i] = runner
+                self._local_agent(i, runner)
+        if self.remote:
+            deadline = time.monotonic() + self.join_timeout_s
+            with self._cond:
+                self._cond.wait_for(lambda: self.remote <= self._alive or time.monotonic() > deadline,
+                                    timeout=self.join_timeout_s)
+            missing = self.remote - self._alive
+            for i in sorted(missing):
+                self.stats.failures[i] = (0, "never joined")
+            for reset in resets:
+                if reset.robot.id in self.remote and reset.robot.id not in missing:
+                    self.session.put(f"{self.prefix}/robot/{reset.robot.id}/reset", encode_reset(reset),
+                                     congestion_control=BLOCK)
+
+    def act(self, tick: int, inputs: Sequence[TickInput | None]) -> list[Action | None]:
+        live = [i for i, inp in enumerate(inputs) if inp is not None and i not in self.stats.failures]
+        with self._cond:
+            self._replies.clear()
+        for i in live:
+            inp = inputs[i]
+            assert inp is not None and inp.changed_idx is not None
+            o = inp.obs
+            flat = o.known.reshape(-1)
+            packet = encode_obs(tick, i, o.pose, inp.changed_idx, flat[inp.changed_idx], inp.inbox_bytes,
+                                o.neighbours, o.collided, o.nav, o.distance_travelled, o.energy_used)
+            self._publishers[i].put(packet)
+        waiting = [i for i in live if i in self.remote]
+        if waiting:
+            deadline = time.monotonic() + self.timeout_s
+            with self._cond:
+                self._cond.wait_for(lambda: all(i in self._replies or i in self._lost for i in waiting)
+                                    or time.monotonic() > deadline, timeout=self.timeout_s)
+        actions: list[Action | None] = [None] * len(inputs)
+        with self._cond:
+            replies = dict(self._replies)
+            lost = set(self._lost)
+        for i in live:
+            data = replies.get(i)
+            if data is None:
+                self.stats.failures[i] = (tick, "agent lost" if i in lost else f"no action within {self.timeout_s:g} s")
+                continue
+            try:
+                packet = decode_act(data)
+            except WireError:
+                self.stats.malformed += 1
+                actions[i] = Action()
+                continue
+            if packet.tick != tick or packet.robot_id != i:
+                self.stats.malformed += 1
+                actions[i] = Action()
+                continue
+            actions[i] = packet.action
+        return actions
+
+    def close(self) -> None:
+        try:
+            self.session.put(f"{self.prefix}/end", b"end", congestion_control=BLOCK)
+        except Exception:  # the session may already be failing; closing below is what matters
+            pass
+        for d in self._declared:
+            try:
+                d.undeclare()
+            except Exception:
+                pass
+        for p in self._publishers.values():
+            try:
+                p.undeclare()
+            except Exception:
+                pass
+        self.session.close()

@@ -1,0 +1,44 @@
+"""Small algorithms for runtime tests (loaded as ``tests.swarm.agents:Class``)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from swarm.api import Action
+from swarm.messages import message
+
+
+@message("test.ping")
+@dataclass(frozen=True)
+class Ping:
+    sender: int
+    tick: int
+
+
+class Talker:
+    """Stands still, broadcasts a Ping every tick, and logs (tick, sender, sent_tick) of what it hears."""
+
+    name = "talker"
+    log: dict[int, list[tuple[int, int, int]]] = {}
+
+    def reset(self, robot, params, rng):
+        self.id = robot.id
+        Talker.log[self.id] = []
+
+    def act(self, obs):
+        for m in obs.inbox:
+            if isinstance(m, Ping):
+                Talker.log[self.id].append((obs.tick, m.sender, m.tick))
+        return Action(velocity=(0.0, 0.0), messages=(Ping(self.id, obs.tick),))
+
+
+class Quiet:
+    """Stands still and says nothing."""
+
+    name = "quiet"
+
+    def reset(self, robot, params, rng):
+        pass
+
+    def act(self, obs):
+        return Action(velocity=(0.0, 0.0))

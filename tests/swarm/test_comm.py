@@ -1,0 +1,145 @@
+"""The radio medium and map sharing: one-tick delivery, the link model decides, deltas equal full maps."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from maps import Map, generate
+from radio import RadioConfig, build_link_model
+from swarm.comm import CommSpec, MapSharing, Medium
+from swarm.messages import MapUpdate, decode, encode
+from swarm.simulation import Simulation
+from tests.swarm.agents import Ping, Talker
+
+TALKER = "tests.swarm.agents:Talker"
+
+
+def walled_map(walls: int = 1) -> Map:
+    """A 20 x 10 m box split by ``walls`` 1 m concrete walls at x = 9.5.. m (one cell gap between walls)."""
+    solid = np.zeros((20, 40), dtype=bool)
+    solid[0, :] = solid[-1, :] = solid[:, 0] = solid[:, -1] = True
+    for k in range(walls):
+        solid[:, 18 + 3 * k: 20 + 3 * k] = True
+    return Map(solid=solid, material=solid.astype(np.uint8), materials=("air", "concrete"))
+
+
+def talk(truth, poses, radio, ticks=4, comm=None):
+    Talker.log = {}
+    spec = {"algorithm": {"name": TALKER}, "robots": {"count": len(poses)}, "radio": radio,
+            "comm": comm or {"map_sharing": "off"}, "stop": {"max_ticks": ticks, "explored": 1.0},
+            "map": {"kind": "file", "path": "unused.npz"}}
+    return Simulation(spec, truth=truth, start_poses=np.array(poses, dtype=float)).run()
+
+
+def test_one_tick_delivery_and_no_self_delivery():
+    talk(walled_map(0), [(3, 3, 0), (6, 3, 0)], {"model": "global"}, ticks=4)
+    heard = Talker.log
+    assert [(t, s, st) for t, s, st in heard[1]] == [(1, 0, 0), (2, 0, 1), (3, 0, 2)], \
+        "each ping arrives exactly one tick after it was sent, and only then"
+    assert all(s != 0 for _, s, _ in heard[0]) and all(s != 1 for _, s, _ in heard[1])
+
+
+def test_concrete_blocks_and_open_space_carries():
+    # 2 robots 13 m apart: open space at 2.4 GHz loses 17.3*log10(13) + 32.4 + 20*log10(2.4) = 59.3 dB
+    # -> 15 - 59.3 = -44.3 dBm >= -82 dBm: linked.
+    r = talk(walled_map(0), [(3, 5, 0), (16, 5, 0)], {"model": "multiwall"})
+    assert r.summary["messages"]["delivered"] > 0
+    # Three 15 dB concrete walls add 45 dB -> -89.3 dBm < -82 dBm: no link, nothing arrives.
+    r = talk(walled_map(3), [(3, 5, 0), (16, 5, 0)], {"model": "multiwall"})
+    assert r.summary["messages"]["delivered"] == 0 and Talker.log[1] == []
+    # Line of sight fails through any wall, global never does.
+    assert talk(walled_map(1), [(3, 5, 0), (13, 5, 0)], {"model": "los"}).summary["messages"]["delivered"] == 0
+    assert talk(walled_map(1), [(3, 5, 0), (13, 5, 0)], {"model": "global"}).summary["messages"]["delivered"] > 0
+
+
+def test_delivery_follows_the_link_matrix_exactly():
+    truth = generate("building", 60, 3)
+    sim = Simulation({"map": {"kind": "building", "size": 60, "seed": 3}, "robots": {"count": 7, "spawn": "random"},
+                      "algorithm": {"name": TALKER}, "comm": {"map_sharing": "off"}, "stop": {"max_ticks": 3},
+                      "seed": 11}, truth=truth)
+    Talker.log = {}
+    sim.run()
+    link = build_link_model(truth, RadioConfig()).evaluate(sim.world.poses[:, :2]).link
+    assert 0 < link.sum() < 7 * 6, "a mix of links and no links makes the test meaningful"
+    for i in range(7):
+        heard = {s for t, s, _ in Talker.log[i] if t == 1}
+        assert heard == set(np.flatnonzero(link[i]).tolist())
+
+
+def test_loss_is_seeded_and_counted():
+    poses = [(3, 3, 0), (6, 3, 0), (9, 3, 0)]
+    a = talk(walled_map(0), poses, {"model": "global"}, ticks=200, comm={"map_sharing": "off", "loss": 0.5})
+    b = talk(walled_map(0), poses, {"model": "global"}, ticks=200, comm={"map_sharing": "off", "loss": 0.5})
+    ma, mb = a.summary["messages"], b.summary["messages"]
+    assert ma == mb
+    attempts = ma["delivered"] + ma["dropped_loss"]
+    assert attempts == 200 * 3 * 2 and 0.4 < ma["dropped_loss"] / attempts < 0.6
+
+
+def test_bandwidth_budget_drops_what_does_not_fit():
+    size = len(encode(Ping(0, 0)))
+    r = talk(walled_map(0), [(3, 3, 0), (6, 3, 0)], {"model": "global"}, ticks=20,
+             comm={"map_sharing": "off", "bandwidth": size - 1})
+    assert r.summary["messages"]["delivered"] == 0 and r.summary["messages"]["dropped_bandwidth"] == 2 * 20
+
+
+def test_delta_sharing_gives_the_same_run_as_full_maps():
+    spec = {"map": {"kind": "building", "size": 40}, "robots": {"count": 3}, "seed": 5, "stop": {"max_ticks": 600}}
+    delta = Simulation({**spec, "comm": {"map_sharing": "delta"}})
+    full = Simulation({**spec, "comm": {"map_sharing": "full"}})
+    rd, rf = delta.run(), full.run()
+    assert np.array_equal(delta.known, full.known)
+    assert rd.timeseries["explored"] == rf.timeseries["explored"]
+    assert rd.summary["messages"]["map_bytes_sent"] < rf.summary["messages"]["map_bytes_sent"]
+
+
+def test_map_sharing_makes_maps_converge():
+    spec = {"map": {"kind": "building", "size": 40}, "robots": {"count": 3}, "seed": 5, "stop": {"max_ticks": 300},
+            "radio": {"model": "global"}}
+    shared, alone = Simulation(spec), Simulation({**spec, "comm": {"map_sharing": "off"}})
+    shared.run(), alone.run()
+    union = shared.known.max(axis=0)
+    assert (shared.known[0] > 0).sum() > 0.9 * (union > 0).sum()
+    assert (alone.known[0] > 0).sum() < (alone.known.max(axis=0) > 0).sum()
+
+
+def test_gap_in_deltas_is_repaired_with_a_full_map():
+    rng = np.random.default_rng(0)
+    shape = (30, 30)
+    spec = CommSpec(share_every=1)
+    sharing = MapSharing(2, shape, spec)
+    known = np.zeros((2, *shape), np.uint8)
+    receiver = np.zeros(shape, np.uint8)
+    for tick in range(12):
+        cells = rng.integers(0, 900, 40)  # knowledge only grows (UNSEEN < FREE < SOLID), as lidar writes it
+        flat = known[0].reshape(-1)
+        flat[cells] = np.maximum(flat[cells], rng.integers(1, 3, 40))
+        out = sharing.outgoing(tick, known, np.zeros((2, 3)))
+        for msg in out[0]:
+            if isinstance(msg, MapUpdate) and msg.seq in (3, 4, 8):
+                continue  # lost on the way
+            sharing.receive(1, decode(encode(msg)), receiver)
+        for msg in out[1]:
+            sharing.receive(0, decode(encode(msg)), known[0])  # robot 1's request reaches robot 0
+    final = sharing.outgoing(12, known, np.zeros((2, 3)))
+    for msg in final[0]:
+        sharing.receive(1, msg, receiver)
+    assert np.array_equal(receiver, known[0]), "after the requested full map the receiver knows what the sender knows"
+
+
+def test_medium_rejects_a_forged_sender():
+    medium = Medium(2, CommSpec(), np.random.default_rng(0))
+    with pytest.raises(ValueError, match="claiming sender"):
+        medium.envelope(0, Ping(sender=1, tick=0))
+
+
+def test_comm_metrics_in_the_time_series():
+    r = Simulation({"map": {"kind": "building", "size": 40}, "robots": {"count": 4}, "seed": 2,
+                    "stop": {"max_ticks": 100}}).run()
+    ts = r.timeseries
+    for column in ("msgs_sent", "bytes_sent", "msgs_delivered", "msgs_dropped", "comm_groups", "biggest_group",
+                   "all_connected"):
+        assert len(ts[column]) == len(ts["tick"])
+    assert ts["msgs_sent"][-1] > 0 and 0 < ts["biggest_group"][-1] <= 1
+    assert r.summary["messages"]["last_contact"][0] > 0
