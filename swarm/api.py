@@ -52,8 +52,7 @@ def cell_centre(row: int, col: int) -> tuple[float, float]:
     return (col + 0.5) * CELL_M, (row + 0.5) * CELL_M
 
 
-@dataclass(frozen=True)
-class Neighbour:
+class Neighbour(NamedTuple):
     """Another robot this robot can sense this tick (within sensing range and line of sight)."""
 
     id: int

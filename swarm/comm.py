@@ -108,6 +108,7 @@ class Medium:
         n = self.n
         inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         budget = np.full((n, n), self.spec.bandwidth, dtype=np.int64) if self.spec.bandwidth else None
+        reach = [np.flatnonzero(link[:, j]) for j in range(n)]
         for j in range(n):
             for env in outboxes[j]:
                 size = len(env.data)
@@ -115,7 +116,7 @@ class Medium:
                 self.stats.bytes_sent += size
                 if isinstance(env.message, MapUpdate):
                     self.stats.map_bytes_sent += size
-                receivers = np.flatnonzero(link[:, j])
+                receivers = reach[j]
                 self.stats.dropped_link += (n - 1) - len(receivers)
                 if self.spec.loss > 0.0 and len(receivers):
                     keep = self.rng.random(len(receivers)) >= self.spec.loss

@@ -166,7 +166,15 @@ class MapUpdate:
             raise MessageError("map_update: more cells than the map has")
 
     def cells(self) -> tuple[np.ndarray, np.ndarray]:
-        """(flat indices, values) carried by this update; raises MessageError if corrupt."""
+        """(flat indices, values) carried by this update, decoded once per message (a broadcast reaches
+        many receivers); raises MessageError if corrupt."""
+        cached = self.__dict__.get("_cells")
+        if cached is None:
+            cached = self._decode_cells()
+            self.__dict__["_cells"] = cached
+        return cached
+
+    def _decode_cells(self) -> tuple[np.ndarray, np.ndarray]:
         h, w = self.shape
         try:
             raw = zlib.decompress(self.payload, bufsize=max(64, 5 * self.count + 16))
@@ -182,6 +190,8 @@ class MapUpdate:
         if len(raw) != 4 * n + (n + 3) // 4:
             raise MessageError("map_update: wrong payload length")
         gaps = np.frombuffer(raw[: 4 * n], dtype="<u4").astype(np.int64)
+        if n > 1 and not (gaps[1:] > 0).all():
+            raise MessageError("map_update: repeated cells")
         idx = np.cumsum(gaps)
         values = _unpack2(np.frombuffer(raw[4 * n:], dtype=np.uint8), n)
         if n and (idx[-1] >= h * w or values is None or (values > 2).any()):
@@ -193,8 +203,9 @@ class MapUpdate:
         flat indices."""
         if known.shape != self.shape:
             raise MessageError(f"map_update: shape {self.shape} does not match the receiver's {known.shape}")
-        idx, values = self.cells()
-        np.maximum.at(known.reshape(-1), idx, values)  # .at: correct even if a sender repeats an index
+        idx, values = self.cells()  # distinct indices (checked when decoded)
+        flat = known.reshape(-1)
+        flat[idx] = np.maximum(flat[idx], values)
         return idx
 
 
@@ -205,13 +216,13 @@ def _pack2(values: np.ndarray) -> bytes:
     return (q[:, 0] | (q[:, 1] << 2) | (q[:, 2] << 4) | (q[:, 3] << 6)).astype(np.uint8).tobytes()
 
 
+_UNPACK_LUT = ((np.arange(256, dtype=np.uint8)[:, None] >> np.array([0, 2, 4, 6], dtype=np.uint8)) & 3).astype(np.uint8)
+
+
 def _unpack2(packed: np.ndarray, n: int) -> np.ndarray | None:
     if len(packed) != (n + 3) // 4:
         return None
-    out = np.empty((len(packed), 4), dtype=np.uint8)
-    for k in range(4):
-        out[:, k] = (packed >> (2 * k)) & 3
-    return out.reshape(-1)[:n]
+    return _UNPACK_LUT[packed].reshape(-1)[:n]
 
 
 def map_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],

@@ -33,7 +33,7 @@ class Navigator:
         self.goal: tuple[float, float] | None = None
         self.state = "idle"
         self.path_length = 0.0
-        self.corridor: tuple[np.ndarray, np.ndarray] | None = None
+        self.corridor: np.ndarray | None = None  # flat cell indices
         self.best_remaining = math.inf
         self.ticks_since_progress = 0
         self.replans = 0
@@ -96,7 +96,7 @@ class Navigator:
         self.state = "moving"
 
     def _corridor_blocked(self, known: np.ndarray) -> bool:
-        return self.corridor is not None and bool((known[self.corridor] >= SOLID).any())
+        return self.corridor is not None and int(known.reshape(-1).take(self.corridor).max(initial=0)) >= SOLID
 
     def _track_progress(self, pose: Pose, known: np.ndarray) -> None:
         remaining = self.follower.remaining_m
@@ -121,7 +121,7 @@ def _inside(point: tuple[float, float], shape: tuple[int, int]) -> bool:
     return 0 <= point[0] < shape[1] * CELL_M and 0 <= point[1] < shape[0] * CELL_M
 
 
-def _corridor(polyline: np.ndarray, known: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _corridor(polyline: np.ndarray, known: np.ndarray) -> np.ndarray:
     """Cells the robot's disc sweeps along the polyline (sampled every 0.2 m, each sample's cell and its 4
     neighbours, the footprint :func:`swarm.grid.configuration_space` keeps clear) that are not SOLID now:
     if one of them turns SOLID, the path must change."""
@@ -135,8 +135,7 @@ def _corridor(polyline: np.ndarray, known: np.ndarray) -> tuple[np.ndarray, np.n
     cells[:, 0] = np.clip(cells[:, 0], 0, shape[0] - 1)
     cells[:, 1] = np.clip(cells[:, 1], 0, shape[1] - 1)
     flat = np.unique(cells[:, 0] * shape[1] + cells[:, 1])
-    flat = flat[known.reshape(-1)[flat] < SOLID]
-    return np.divmod(flat, shape[1])
+    return flat[known.reshape(-1)[flat] < SOLID]
 
 
 _CROSS = np.array([(0, 0), (-1, 0), (1, 0), (0, -1), (0, 1)])

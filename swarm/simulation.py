@@ -242,16 +242,17 @@ class Simulation:
             return [()]
         near = (links.distance <= self.neighbour_range) & (links.walls == 0)
         np.fill_diagonal(near, False)
-        out: list[tuple[Neighbour, ...]] = []
-        for i in range(n):
-            row = []
-            for j in np.flatnonzero(near[i]).tolist():
-                dx, dy = poses[j, 0] - poses[i, 0], poses[j, 1] - poses[i, 1]
-                bearing = float((np.arctan2(dy, dx) - poses[i, 2] + np.pi) % (2 * np.pi) - np.pi)
-                row.append(Neighbour(id=j, distance=float(links.distance[i, j]), bearing=bearing,
-                                     x=float(poses[j, 0]), y=float(poses[j, 1])))
-            out.append(tuple(row))
-        return out
+        if not near.any():
+            return [()] * n
+        dx = poses[None, :, 0] - poses[:, None, 0]
+        dy = poses[None, :, 1] - poses[:, None, 1]
+        bearing = (np.arctan2(dy, dx) - poses[:, None, 2] + np.pi) % (2 * np.pi) - np.pi
+        rows, cols = np.nonzero(near)
+        found: list[list[Neighbour]] = [[] for _ in range(n)]
+        for i, j, d, b, x, y in zip(rows.tolist(), cols.tolist(), links.distance[rows, cols].tolist(),
+                                    bearing[rows, cols].tolist(), poses[cols, 0].tolist(), poses[cols, 1].tolist()):
+            found[i].append(Neighbour(j, d, b, x, y))
+        return [tuple(f) for f in found]
 
     def _inputs(self, tick: int, poses: np.ndarray, collided: np.ndarray, inboxes: list[list[Envelope]],
                 merged: list[list[np.ndarray]], links: Any, needs_delta: bool) -> list[TickInput | None]:
