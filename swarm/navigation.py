@@ -17,6 +17,7 @@ import numpy as np
 from . import grid
 from .api import CELL_M, SOLID, NavStatus, Pose, cell_of
 from .motion import Follower
+from .planners import get_planner
 from .spec import NavigationSpec
 from .world import MotionParams
 
@@ -26,9 +27,11 @@ PROGRESS_M = 0.05
 
 
 class Navigator:
-    def __init__(self, spec: NavigationSpec, motion: MotionParams) -> None:
+    def __init__(self, spec: NavigationSpec, motion: MotionParams, rng: np.random.Generator | None = None) -> None:
         self.spec = spec
         self.motion = motion
+        self.planner = get_planner(spec.planner)
+        self.rng = rng if rng is not None else np.random.default_rng(0)
         self.follower = Follower(motion)
         self.goal: tuple[float, float] | None = None
         self.state = "idle"
@@ -80,7 +83,7 @@ class Navigator:
                                          unseen_traversable=self.spec.unseen == "traversable")
         start = grid.nearest_in(space, _clip(cell_of(pose.x, pose.y), known.shape), SNAP_RADIUS_CELLS)
         goal = grid.nearest_in(space, _clip(cell_of(*self.goal), known.shape), SNAP_RADIUS_CELLS)
-        path = None if start is None or goal is None else grid.plan(space, start, goal)
+        path = None if start is None or goal is None else self.planner.plan(space, start, goal, self.rng)
         if path is None:
             self.state = "unreachable"
             self.corridor = None

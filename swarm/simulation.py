@@ -35,7 +35,7 @@ from .navigation import Navigator
 from .result import RunResult
 from .sensing import ExplorationTracker, Lidar, LidarParams
 from .spawn import spawn
-from .spec import ROBOT_STREAM, RunSpec, seed_streams
+from .spec import ROBOT_STREAM, RunSpec, planner_rng, seed_streams
 from .transport import AgentHost, TickInput, make_host
 from .transport.wire import ResetPacket
 from .world import MotionParams, World
@@ -96,7 +96,8 @@ class Simulation:
         self.tracker = ExplorationTracker(self.truth)
         self.known = np.zeros((n, *self.truth.shape), dtype=np.uint8)
         self._views = [self._read_only(i) for i in range(n)]
-        self.navigators = [Navigator(self.spec.navigation, self.motion) for _ in range(n)]
+        self.navigators = [Navigator(self.spec.navigation, self.motion, planner_rng(self.spec.seed, i))
+                           for i in range(n)]
         self.links = build_link_model(self.truth, config_from_mapping(self.spec.radio))
         self.comm = from_mapping(CommSpec, self.spec.comm)
         self.medium = Medium(n, self.comm, self.streams.radio)

@@ -95,15 +95,20 @@ class NavigationSpec:
     ``unseen``: plan through unseen cells (``traversable``, optimistic) or not (``blocked``, the default,
     as MAES's pessimistic planner). ``margin_m``: clearance kept beyond the robot radius.
     ``stuck_ticks``: no progress for this long triggers a replan; after ``max_replans`` failed replans
-    the goal is reported ``blocked`` to the algorithm."""
+    the goal is reported ``blocked`` to the algorithm. ``planner``: ``astar`` (optimal grid paths) or any
+    planner registered under ``swarm.planners`` (``iboa``)."""
 
     unseen: str = "blocked"
     margin_m: float = 0.05
     stuck_ticks: int = 30
     max_replans: int = 3
+    planner: str = "astar"
 
     def __post_init__(self) -> None:
+        from .planners import check_planner
+
         check_choice("navigation.unseen", self.unseen, ("blocked", "traversable"))
+        check_planner(self.planner)
         check_float("navigation.margin_m", self.margin_m, 0.0, 1.0)
         check_int("navigation.stuck_ticks", self.stuck_ticks, 1, 10_000)
         check_int("navigation.max_replans", self.max_replans, 0, 100)
@@ -263,6 +268,12 @@ def derive_seed(*parts: int | str) -> int:
 
 ROBOT_STREAM = 3
 """Robot i's algorithm stream is ``SeedSequence(seed, spawn_key=(ROBOT_STREAM, i))``."""
+PLANNER_STREAM = 4
+"""Robot i's path-planner stream (stochastic planners such as IBOA) is ``spawn_key=(PLANNER_STREAM, i)``."""
+
+
+def planner_rng(seed: int, robot: int) -> np.random.Generator:
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(PLANNER_STREAM, robot)))
 
 
 def seed_streams(spec: RunSpec) -> SeedStreams:

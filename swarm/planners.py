@@ -1,0 +1,65 @@
+"""Path planners for the navigator, found by name like algorithms (entry-point group ``swarm.planners``).
+
+A planner is a class with ``name`` and ``plan(space, start, goal, rng) -> int[N, 2] cells | None``: a
+path through the robot's configuration space (``space``, bool[H, W]) whose consecutive cells are joined
+by straight segments inside ``space``. ``astar`` (the default, :func:`swarm.grid.plan`) is built in;
+``iboa`` (the IBOA planner of seed paper 001) is registered by the ``algorithms`` package.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from importlib.metadata import entry_points
+from typing import Protocol
+
+import numpy as np
+
+from maps.errors import InvalidInput
+
+from . import grid
+
+GROUP = "swarm.planners"
+
+
+class PathPlanner(Protocol):
+    name: str
+
+    def plan(self, space: np.ndarray, start: tuple[int, int], goal: tuple[int, int],
+             rng: np.random.Generator) -> np.ndarray | None: ...
+
+
+class AStar:
+    """Optimal 8-connected grid paths (:func:`swarm.grid.plan`)."""
+
+    name = "astar"
+
+    def plan(self, space: np.ndarray, start: tuple[int, int], goal: tuple[int, int],
+             rng: np.random.Generator) -> np.ndarray | None:
+        return grid.plan(space, start, goal)
+
+
+def available() -> list[str]:
+    return sorted({"astar", *(ep.name for ep in entry_points(group=GROUP))})
+
+
+@lru_cache(maxsize=None)
+def _planner_class(name: str) -> type:
+    if name == "astar":
+        return AStar
+    for ep in entry_points(group=GROUP):
+        if ep.name == name:
+            try:
+                return ep.load()
+            except (ImportError, AttributeError) as exc:
+                raise InvalidInput("navigation.planner", name, f"an installed planner ({exc})") from None
+    raise InvalidInput("navigation.planner", name, " | ".join(available()))
+
+
+def get_planner(name: str) -> PathPlanner:
+    """A fresh planner instance."""
+    return _planner_class(name)()
+
+
+def check_planner(name: str) -> str:
+    _planner_class(name)
+    return name
