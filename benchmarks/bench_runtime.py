@@ -43,13 +43,16 @@ def main() -> None:
     profiler = cProfile.Profile() if args.profile else None
     if profiler:
         profiler.enable()
+    cpu0 = time.process_time()
     result = sim.run()
+    cpu = time.process_time() - cpu0
     if profiler:
         profiler.disable()
     s = result.summary
     rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     print(result.one_line())
-    print(f"ticks {s['ticks']}  run {s['wall_time_s']:.2f} s  -> {s['ticks'] / s['wall_time_s']:.0f} ticks/s"
+    print(f"ticks {s['ticks']}  run {s['wall_time_s']:.2f} s wall, {cpu:.2f} s CPU -> "
+          f"{s['ticks'] / s['wall_time_s']:.0f} ticks/s wall, {s['ticks'] / cpu:.0f} ticks per CPU-second"
           f"  (set-up {setup:.2f} s)  peak RSS {rss_mb:.0f} MB  plans {sum(s['plans'])}")
     if profiler:
         pstats.Stats(profiler).sort_stats("tottime").print_stats(25)

@@ -26,6 +26,8 @@ from typing import ClassVar, Sequence
 
 import networkx as nx
 import numpy as np
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import connected_components
 
 from maps.errors import InvalidInput
 from maps.model import Map
@@ -72,25 +74,28 @@ class LinkState:
         i.e. can exchange information both ways; with symmetric links this is the ordinary connected
         components. ``"weak"``: connected when link direction is ignored.
         """
-        if connectivity == "strong":
-            comps = self._strong
-        elif connectivity == "weak":
-            comps = nx.weakly_connected_components(self._graph)
-        else:
+        if connectivity not in ("strong", "weak"):
             raise InvalidInput("connectivity", connectivity, "'strong' | 'weak'")
-        return sorted((frozenset(int(i) for i in c) for c in comps), key=min)
+        cached = self._groups.get(connectivity)
+        if cached is None:
+            # scipy's components on the sender -> receiver adjacency: the same partition networkx gives
+            # (tested), ~50x faster, and this runs every recorded tick.
+            n, labels = connected_components(csr_matrix(self.link.T), directed=True, connection=connectivity)
+            cached = sorted((frozenset(np.flatnonzero(labels == k).tolist()) for k in range(n)), key=min)
+            self._groups[connectivity] = cached
+        return list(cached)
 
     @cached_property
-    def _graph(self) -> nx.DiGraph:
+    def _groups(self) -> dict[str, list[frozenset[int]]]:
+        return {}
+
+    def graph(self) -> nx.DiGraph:
+        """The links as a networkx graph: an edge j -> i where j's message reaches i."""
         graph = nx.DiGraph()
         graph.add_nodes_from(range(self.n_robots))
         receivers, senders = np.nonzero(self.link)
-        graph.add_edges_from(zip(senders.tolist(), receivers.tolist()))  # edge j -> i: j's message reaches i
+        graph.add_edges_from(zip(senders.tolist(), receivers.tolist()))
         return graph
-
-    @cached_property
-    def _strong(self) -> list[set[int]]:
-        return list(nx.strongly_connected_components(self._graph))
 
     def all_connected(self) -> bool:
         """Every robot can reach every other (one strong group); MAES's "all connected" statistic."""

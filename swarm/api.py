@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar, Mapping, NamedTuple, Protocol, runtime_checkable
+from typing import Any, ClassVar, Mapping, NamedTuple, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
@@ -62,6 +62,52 @@ class Neighbour(NamedTuple):
     y: float
 
 
+class Neighbours(Sequence[Neighbour]):
+    """A robot's sensed neighbours, built into :class:`Neighbour` tuples only when first read (most
+    algorithms never look, and building them for 16 packed robots costs more than the rest of a tick).
+
+    Holds the tick's (R, R) ``near`` mask, distance and bearing matrices and (R, 2) positions, and this
+    robot's row."""
+
+    __slots__ = ("_source", "_items")
+
+    def __init__(self, row: int, near: Any, distance: Any, bearing: Any, xy: Any) -> None:
+        self._source: tuple[Any, ...] | None = (row, near, distance, bearing, xy)
+        self._items: tuple[Neighbour, ...] | None = None
+
+    def _all(self) -> tuple[Neighbour, ...]:
+        if self._items is None:
+            assert self._source is not None
+            row, near, distance, bearing, xy = self._source
+            cols = np.flatnonzero(near[row])
+            self._items = tuple(Neighbour(*r) for r in zip(cols.tolist(), distance[row, cols].tolist(),
+                                                           bearing[row, cols].tolist(), xy[cols, 0].tolist(),
+                                                           xy[cols, 1].tolist()))
+            self._source = None
+        return self._items
+
+    def __getitem__(self, index):  # type: ignore[override]
+        return self._all()[index]
+
+    def __len__(self) -> int:
+        return len(self._all())
+
+    def __iter__(self):
+        return iter(self._all())
+
+    def __bool__(self) -> bool:
+        if self._source is not None:
+            row, near = self._source[0], self._source[1]
+            return bool(near[row].any())
+        return bool(self._items)
+
+    def __eq__(self, other: object) -> bool:
+        return tuple(self) == tuple(other) if isinstance(other, Sequence) else NotImplemented
+
+    def __repr__(self) -> str:
+        return f"Neighbours{self._all()!r}"
+
+
 @dataclass(frozen=True)
 class NavStatus:
     """What the runtime's navigator is doing for this robot."""
@@ -96,7 +142,7 @@ class Observation:
     pose: Pose
     known: np.ndarray                       # uint8[H, W], read-only view of the robot's own map
     inbox: tuple[Any, ...] = ()             # messages delivered this tick (sent by others at tick - 1)
-    neighbours: tuple[Neighbour, ...] = ()
+    neighbours: Sequence[Neighbour] = ()    # robots in sensing range and line of sight
     collided: bool = False                  # touched a wall or robot since the last decision
     nav: NavStatus = NavStatus()
     distance_travelled: float = 0.0         # metres since the start
@@ -135,6 +181,6 @@ class NoParams:
 
 
 __all__ = [
-    "Action", "CELL_M", "Explorer", "FREE", "NavStatus", "Neighbour", "NoParams", "Observation", "Pose",
+    "Action", "CELL_M", "Explorer", "FREE", "NavStatus", "Neighbour", "Neighbours", "NoParams", "Observation", "Pose",
     "ROBOT_RADIUS_M", "RobotInfo", "SOLID", "UNSEEN", "cell_centre", "cell_of",
 ]

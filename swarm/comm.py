@@ -177,20 +177,30 @@ class MapSharing:
             out[i].append(map_update(i, self.seq[i], tick, known[i], tuple(poses[i]), changed))
         return out
 
-    def receive(self, receiver: int, msg: Any, known: np.ndarray) -> np.ndarray | None:
-        """Handle a service message: merge a MapUpdate (returns the flat indices it carried) or note a
-        MapRequest addressed to ``receiver``; anything else is left to the algorithm (returns None)."""
-        if isinstance(msg, MapUpdate):
-            idx = msg.merge_into(known)
+    def receive(self, receiver: int, messages: Sequence[Any], known: np.ndarray) -> np.ndarray | None:
+        """Handle one receiver's service messages of a tick: merge every MapUpdate in one pass (returns the
+        flat indices they carried, or None) and note MapRequests addressed to it. Other messages are left
+        to the algorithm."""
+        updates = []
+        for msg in messages:
+            if isinstance(msg, MapUpdate):
+                if msg.shape != known.shape:
+                    raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape}")
+                updates.append(msg)
+            elif isinstance(msg, MapRequest) and msg.target == receiver:
+                self.full_requested[receiver] = True
+        if not updates:
+            return None
+        cells = [u.cells() for u in updates]
+        idx = np.concatenate([c[0] for c in cells])
+        np.maximum.at(known.reshape(-1), idx, np.concatenate([c[1] for c in cells]))
+        for msg in updates:
             last = self.seen_seq[receiver, msg.sender]
             if not msg.full and msg.seq != last + 1 and self.spec.map_sharing == "delta":
                 if msg.sender not in self.requests[receiver]:
                     self.requests[receiver].append(msg.sender)
             self.seen_seq[receiver, msg.sender] = max(last, msg.seq) if not msg.full else msg.seq
-            return idx
-        if isinstance(msg, MapRequest) and msg.target == receiver:
-            self.full_requested[receiver] = True
-        return None
+        return idx
 
 
 def decode_or_none(data: bytes) -> Any:

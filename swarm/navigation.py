@@ -129,11 +129,12 @@ def _corridor(polyline: np.ndarray, known: np.ndarray) -> np.ndarray:
     neighbours, the footprint :func:`swarm.grid.configuration_space` keeps clear) that are not SOLID now:
     if one of them turns SOLID, the path must change."""
     shape = known.shape
-    points = [polyline[:1]]
-    for a, b in zip(polyline[:-1], polyline[1:]):
-        n = max(1, int(np.ceil(np.hypot(*(b - a)) / 0.2)))
-        points.append(a + (b - a) * (np.arange(1, n + 1)[:, None] / n))
-    cells = np.floor(np.vstack(points)[:, ::-1] / CELL_M).astype(np.int64)
+    seg = np.diff(polyline, axis=0)
+    steps = np.maximum(1, np.ceil(np.hypot(seg[:, 0], seg[:, 1]) / 0.2).astype(np.int64))
+    which = np.repeat(np.arange(len(seg)), steps)
+    frac = (np.arange(steps.sum()) - np.repeat(np.cumsum(steps) - steps, steps) + 1) / np.repeat(steps, steps)
+    points = np.vstack([polyline[:1], polyline[which] + seg[which] * frac[:, None]])
+    cells = np.floor(points[:, ::-1] / CELL_M).astype(np.int64)
     cells = (cells[:, None, :] + _CROSS[None, :, :]).reshape(-1, 2)
     cells[:, 0] = np.clip(cells[:, 0], 0, shape[0] - 1)
     cells[:, 1] = np.clip(cells[:, 1], 0, shape[1] - 1)

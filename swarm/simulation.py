@@ -28,7 +28,7 @@ from maps import CELL_M, Map, generate
 from maps.params import from_mapping
 from radio import build_link_model, config_from_mapping
 
-from .api import Action, Neighbour, Observation, Pose, RobotInfo
+from .api import Action, Neighbour, Neighbours, Observation, Pose, RobotInfo
 from .comm import CommSpec, Envelope, MapSharing, Medium
 from .metrics import Metrics
 from .navigation import Navigator
@@ -212,8 +212,8 @@ class Simulation:
         for i, inbox in enumerate(inboxes):
             if self.failed[i]:
                 continue
-            for env in inbox:
-                idx = self.sharing.receive(i, env.message, self.known[i])
+            if inbox:
+                idx = self.sharing.receive(i, [env.message for env in inbox], self.known[i])
                 if idx is not None:
                     merged[i].append(idx)
         return inboxes, merged
@@ -236,8 +236,8 @@ class Simulation:
         return outboxes
 
     # ------------------------------------------------------------------------------- observations ----
-    def _neighbours(self, poses: np.ndarray, links: Any) -> list[tuple[Neighbour, ...]]:
-        """Robots within ``neighbour_range`` and in line of sight (no wall crossed), per robot."""
+    def _neighbours(self, poses: np.ndarray, links: Any) -> list[Sequence[Neighbour]]:
+        """Robots within ``neighbour_range`` and in line of sight (no wall crossed), per robot (lazy)."""
         n = len(poses)
         if n == 1:
             return [()]
@@ -248,12 +248,8 @@ class Simulation:
         dx = poses[None, :, 0] - poses[:, None, 0]
         dy = poses[None, :, 1] - poses[:, None, 1]
         bearing = (np.arctan2(dy, dx) - poses[:, None, 2] + np.pi) % (2 * np.pi) - np.pi
-        rows, cols = np.nonzero(near)
-        found: list[list[Neighbour]] = [[] for _ in range(n)]
-        for i, j, d, b, x, y in zip(rows.tolist(), cols.tolist(), links.distance[rows, cols].tolist(),
-                                    bearing[rows, cols].tolist(), poses[cols, 0].tolist(), poses[cols, 1].tolist()):
-            found[i].append(Neighbour(j, d, b, x, y))
-        return [tuple(f) for f in found]
+        xy = poses[:, :2].copy()
+        return [Neighbours(i, near, links.distance, bearing, xy) for i in range(n)]
 
     def _inputs(self, tick: int, poses: np.ndarray, collided: np.ndarray, inboxes: list[list[Envelope]],
                 merged: list[list[np.ndarray]], links: Any, needs_delta: bool) -> list[TickInput | None]:

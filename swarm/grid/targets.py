@@ -49,10 +49,15 @@ def default_view_reach_cells(radius_m: float, margin_m: float) -> int:
     return int(math.ceil((radius_m + margin_m) / CELL_M)) + 1
 
 
+LOCAL_FIRST_M = 15.0
+"""Search a window of this half-width around the robot first (see :func:`nearest_reachable_unseen`)."""
+
+
 def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m: float = ROBOT_RADIUS_M,
                              unseen_traversable: bool = False, exclude: np.ndarray | None = None, *,
                              margin_m: float = DEFAULT_MARGIN_M, view_reach_cells: int | None = None,
-                             snap_radius_cells: int | None = None) -> tuple[tuple[int, int], float] | None:
+                             snap_radius_cells: int | None = None,
+                             local_first_m: float | None = LOCAL_FIRST_M) -> tuple[tuple[int, int], float] | None:
     """The configuration-space cell nearest ``start`` by path length from which a frontier is in view.
 
     Returns (cell, distance_m) or None when no frontier is reachable (exploration is over, or the rest is
@@ -62,9 +67,25 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
     ``start`` is the robot's cell; when it lies in inflated space (a robot pushed against a wall) it snaps
     to the nearest configuration-space cell within ``snap_radius_cells`` (default: view reach + 1), and
     the straight snapping distance is added to the returned distance.
+
+    Speed: the search first runs on a window of half-width ``local_first_m`` around ``start``; a target
+    found there at a path distance no longer than that half-width is the global answer too (any shorter
+    path stays inside the window), so the whole-map search runs only when the nearest unknown is far.
+    ``local_first_m=None`` searches the whole map at once.
     """
     k = check_known(known)
     s = check_cell(start, k.shape, "start")
+    if local_first_m is not None:
+        w = int(local_first_m / CELL_M) + 1
+        r0, c0 = max(s[0] - w, 0), max(s[1] - w, 0)
+        r1, c1 = min(s[0] + w + 1, k.shape[0]), min(s[1] + w + 1, k.shape[1])
+        if (r1 - r0) * (c1 - c0) < k.size:
+            local = nearest_reachable_unseen(
+                k[r0:r1, c0:c1], (s[0] - r0, s[1] - c0), radius_m, unseen_traversable,
+                None if exclude is None else np.asarray(exclude)[r0:r1, c0:c1], margin_m=margin_m,
+                view_reach_cells=view_reach_cells, snap_radius_cells=snap_radius_cells, local_first_m=None)
+            if local is not None and local[1] <= local_first_m:
+                return (local[0][0] + r0, local[0][1] + c0), local[1]
     radius = check_length(radius_m, "radius_m")
     margin = check_length(margin_m, "margin_m")
     assert radius is not None and margin is not None

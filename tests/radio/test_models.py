@@ -14,6 +14,7 @@ import pytest
 from maps import generate
 from maps.errors import InvalidInput
 from radio import RadioConfig, build_link_model
+from radio.models import LinkState
 
 from .plans import Plan, open_floor, vertical_wall
 
@@ -219,3 +220,19 @@ def test_unknown_map_material_fails_at_build_time_unless_configured():
     assert err.value.field == "material" and err.value.value == "plaster"
     # defined in the config: 4 dB per crossing: 15 - 62.512044 - 4 = -51.512044
     assert budget(m, materials={"plaster": 4.0}).rssi_dbm == pytest.approx(-51.512044, abs=1e-6)
+
+
+def test_groups_match_networkx_components():
+    import networkx as nx
+
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        link = rng.random((9, 9)) < 0.2
+        np.fill_diagonal(link, False)
+        zeros = np.zeros((9, 9))
+        state = LinkState(zeros, zeros.astype(np.int32), np.zeros((9, 9, 1), np.int32), ("air",), zeros, zeros,
+                          zeros, link)
+        graph = state.graph()
+        for mode, fn in (("strong", nx.strongly_connected_components), ("weak", nx.weakly_connected_components)):
+            expected = sorted((frozenset(c) for c in fn(graph)), key=min)
+            assert state.groups(mode) == expected

@@ -119,12 +119,10 @@ def test_gap_in_deltas_is_repaired_with_a_full_map():
         for msg in out[0]:
             if isinstance(msg, MapUpdate) and msg.seq in (3, 4, 8):
                 continue  # lost on the way
-            sharing.receive(1, decode(encode(msg)), receiver)
-        for msg in out[1]:
-            sharing.receive(0, decode(encode(msg)), known[0])  # robot 1's request reaches robot 0
+            sharing.receive(1, [decode(encode(msg))], receiver)
+        sharing.receive(0, [decode(encode(m)) for m in out[1]], known[0])  # robot 1's request reaches robot 0
     final = sharing.outgoing(12, known, np.zeros((2, 3)))
-    for msg in final[0]:
-        sharing.receive(1, msg, receiver)
+    sharing.receive(1, final[0], receiver)
     assert np.array_equal(receiver, known[0]), "after the requested full map the receiver knows what the sender knows"
 
 
@@ -143,3 +141,36 @@ def test_comm_metrics_in_the_time_series():
         assert len(ts[column]) == len(ts["tick"])
     assert ts["msgs_sent"][-1] > 0 and 0 < ts["biggest_group"][-1] <= 1
     assert r.summary["messages"]["last_contact"][0] > 0
+
+
+class Looker:
+    """Records what it senses of its neighbours."""
+
+    name = "looker"
+    seen: dict = {}
+
+    def reset(self, robot, params, rng):
+        self.id = robot.id
+
+    def act(self, obs):
+        Looker.seen[self.id] = list(obs.neighbours)
+        from swarm.api import Action
+
+        return Action(velocity=(0.0, 0.0))
+
+
+def test_neighbours_are_robots_in_range_and_line_of_sight():
+    Looker.seen = {}
+    truth = walled_map(1)                                   # 20 x 10 m, wall at x in [9, 10) m
+    poses = [(1.5, 1.5, 0.0), (4.5, 5.5, np.pi / 2), (12, 5, 0.0), (8.5, 8.5, 0.0)]
+    spec = {"algorithm": {"name": "tests.swarm.test_comm:Looker"}, "robots": {"count": 4},
+            "stop": {"max_ticks": 1, "explored": 1.0}, "map": {"kind": "file", "path": "unused.npz"}}
+    Simulation(spec, truth=truth, start_poses=np.array(poses)).run()
+    ids = {i: sorted(n.id for n in Looker.seen[i]) for i in range(4)}
+    assert ids[0] == [1], "robot 2 is behind the wall, robot 3 is 9.9 m away (beyond the 7 m lidar range)"
+    assert ids[1] == [0, 3] and ids[3] == [1]
+    assert ids[2] == [], "the wall hides everyone from robot 2"
+    n = Looker.seen[1][0]
+    assert n.id == 0 and n.distance == pytest.approx(5.0) and (n.x, n.y) == (1.5, 1.5)
+    # robot 1 faces north (+y); robot 0 is at dx=-3, dy=-4: bearing atan2(-4, -3) - pi/2, wrapped
+    assert n.bearing == pytest.approx(np.arctan2(-4, -3) - np.pi / 2 + 2 * np.pi)

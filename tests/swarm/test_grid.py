@@ -630,3 +630,19 @@ def test_nearest_reachable_unseen_optimistic_mode_can_cross_unseen() -> None:
 def test_nearest_reachable_unseen_rejects_bad_exclude() -> None:
     with pytest.raises(InvalidInput):
         grid.nearest_reachable_unseen(room(6, 6), (2, 2), exclude=np.zeros((3, 3), dtype=bool))
+
+
+def test_local_first_search_equals_the_whole_map_search():
+    from maps import generate
+
+    truth = generate("building", 100, 5)
+    rng = np.random.default_rng(1)
+    known = np.where(truth.solid, 2, 1).astype(np.uint8)
+    hidden = rng.random(known.shape) < 0.02           # scattered unknown cells: near and far frontiers
+    known[hidden] = 0
+    known[:, 120:] = 0                                 # and a large unknown region far from some starts
+    free = np.argwhere(known == 1)
+    for cell in free[rng.choice(len(free), 40, replace=False)]:
+        start = (int(cell[0]), int(cell[1]))
+        assert grid.nearest_reachable_unseen(known, start) == grid.nearest_reachable_unseen(known, start,
+                                                                                            local_first_m=None)
