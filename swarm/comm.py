@@ -56,12 +56,13 @@ class CommSpec:
 
 @dataclass
 class Envelope:
-    """One encoded message in flight."""
+    """One encoded message in flight; after delivery, ``delivered_to`` lists the robots that got it."""
 
     sender: int
     seq: int
     data: bytes
     message: Any
+    delivered_to: list[int] = field(default_factory=list)
 
 
 @dataclass
@@ -131,6 +132,7 @@ class Medium:
                             continue
                         budget[i, j] -= size
                     inboxes[i].append(env)
+                    env.delivered_to.append(i)
                     self.stats.delivered += 1
                     self.stats.bytes_delivered += size
                     self.stats.last_contact[i] = tick + 1
