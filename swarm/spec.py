@@ -16,6 +16,7 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import dataclass, field, fields
+from functools import cached_property
 from typing import Any, Mapping
 
 import numpy as np
@@ -193,19 +194,24 @@ class RunSpec:
     # -------------------------------------------------------------------------------- identity ----
     def canonical(self) -> dict[str, Any]:
         """The fully-resolved spec as a JSON-able dict with sorted keys."""
+        return json.loads(self.to_json())
+
+    @cached_property
+    def _json(self) -> str:
         out: dict[str, Any] = {"version": SPEC_VERSION}
         for f in fields(self):
             value = getattr(self, f.name)
             out[f.name] = to_mapping(value) if hasattr(value, "__dataclass_fields__") else _plain(value)
-        return json.loads(json.dumps(out, sort_keys=True))
+        return json.dumps(out, sort_keys=True, separators=(",", ":"))
 
     def to_json(self) -> str:
-        return json.dumps(self.canonical(), sort_keys=True, separators=(",", ":"))
+        """Canonical JSON: sorted keys, no spaces (what :attr:`key` hashes)."""
+        return self._json
 
-    @property
+    @cached_property
     def key(self) -> str:
         """16 hex digits of SHA-256 over the canonical JSON: stable across processes and dict order."""
-        return hashlib.sha256(self.to_json().encode()).hexdigest()[:16]
+        return hashlib.sha256(self._json.encode()).hexdigest()[:16]
 
 
 def _plain(v: Any) -> Any:

@@ -30,6 +30,7 @@ def cli() -> None:
 def _register() -> None:
     from . import map_cmd, run_cmd  # noqa: F401  (commands register themselves on import)
     from . import radio_cmd  # noqa: F401
+    from . import campaign_cmd  # noqa: F401
 
 
 def _usage_message(exc: click.UsageError) -> str:

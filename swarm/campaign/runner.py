@@ -1,0 +1,208 @@
+"""Run a campaign into a results folder: skip what is done, execute the rest, commit parts as runs finish."""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass
+from importlib.metadata import PackageNotFoundError, version
+from pathlib import Path
+from typing import Any, Callable
+
+from maps.errors import InvalidInput
+
+from .executors import Executor, make_executor
+from .spec import CampaignSpec, Run, parse_campaign
+from .store import THRESHOLD_COLUMNS, ResultsStore
+
+NONDETERMINISTIC_COLUMNS = ("wall_time_s", "worker_pid", "worker_rss_mb", "part", "swarm_version")
+TIMESERIES_COLUMNS = ("tick", "explored", "coverage", "distance_m", "collisions", "msgs_sent", "bytes_sent",
+                      "msgs_delivered", "bytes_delivered", "msgs_dropped", "comm_groups", "biggest_group",
+                      "all_connected")
+
+
+def swarm_version() -> str:
+    try:
+        return version("swarm-sim")
+    except PackageNotFoundError:  # running from a source tree without installing
+        return "unknown"
+
+
+@dataclass
+class Outcome:
+    total: int
+    skipped: int
+    ran: int
+    failed: int
+    wall_s: float
+
+
+def parse_shard(text: str | None) -> tuple[int, int] | None:
+    if text is None:
+        return None
+    try:
+        i, n = (int(v) for v in text.split("/"))
+    except ValueError:
+        raise InvalidInput("--shard", text, "i/N with 0 <= i < N, e.g. 3/10") from None
+    if not (n >= 1 and 0 <= i < n):
+        raise InvalidInput("--shard", text, "i/N with 0 <= i < N, e.g. 3/10")
+    return i, n
+
+
+def select(runs: list[Run], shard: tuple[int, int] | None) -> list[Run]:
+    if shard is None:
+        return runs
+    i, n = shard
+    return [r for r in runs if r.index % n == i]
+
+
+def runs_row(campaign: CampaignSpec, run: Run, result: dict[str, Any]) -> dict[str, Any]:
+    spec = run.spec
+    row: dict[str, Any] = {
+        "key": run.key, "campaign": campaign.name, "index": run.index, "replicate": run.replicate,
+        "map": run.cell["map"], "size": run.cell["size"], "robots": spec.robots.count, "spawn": spec.robots.spawn,
+        "algorithm": run.cell["algorithm"], "radio": run.cell["radio"], "comm": run.cell.get("comm", "default"),
+        "transport": spec.transport, "map_kind": spec.map.kind, "algorithm_name": spec.algorithm.name,
+        "radio_model": spec.radio["model"], **run.seeds, "status": result["status"], "error": result["error"],
+        "explored_target": spec.stop.explored, "max_ticks": spec.stop.max_ticks,
+    }
+    s = result["summary"]
+    if s is not None:
+        msgs = s["messages"]
+        row.update(ticks=s["ticks"], stop_reason=s["stop_reason"], explored=s["explored"], coverage=s["coverage"],
+                   **{col: s["ticks_to"].get(t) for t, col in THRESHOLD_COLUMNS.items()},
+                   distance_m=float(sum(s["distance_m"])), collisions=s["collisions"], msgs_sent=msgs["sent"],
+                   bytes_sent=msgs["bytes_sent"], msgs_delivered=msgs["delivered"],
+                   bytes_delivered=msgs["bytes_delivered"],
+                   msgs_dropped=msgs["dropped_link"] + msgs["dropped_loss"] + msgs["dropped_bandwidth"],
+                   failed_robots=len(s["failed_robots"]))
+    else:
+        row.update(ticks=None, stop_reason="error", explored=None, coverage=None,
+                   **{col: None for col in THRESHOLD_COLUMNS.values()}, distance_m=None, collisions=None,
+                   msgs_sent=None, bytes_sent=None, msgs_delivered=None, bytes_delivered=None, msgs_dropped=None,
+                   failed_robots=None)
+    row.update(spec_json=spec.to_json(), wall_time_s=result["wall_time_s"], worker_pid=result["worker_pid"],
+               worker_rss_mb=result["worker_rss_mb"], swarm_version=swarm_version())
+    return row
+
+
+def timeseries_rows(key: str, ts: dict[str, list[Any]] | None) -> list[dict[str, Any]]:
+    if not ts:
+        return []
+    cols = [c for c in TIMESERIES_COLUMNS if c in ts]
+    return [{"key": key, **dict(zip(cols, values))} for values in zip(*(ts[c] for c in cols))]
+
+
+class Progress:
+    """A one-line bar on a terminal, a plain line every ``every_s`` seconds otherwise."""
+
+    def __init__(self, total: int, stream: Any = None, every_s: float = 30.0) -> None:
+        self.total = total
+        self.stream = stream or sys.stderr
+        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+        self.every_s = every_s
+        self.t0 = time.monotonic()
+        self.last = 0.0
+        self.done = 0
+        self.failed = 0
+
+    def update(self, ok: bool) -> None:
+        self.done += 1
+        self.failed += 0 if ok else 1
+        now = time.monotonic()
+        if self.tty or now - self.last >= self.every_s or self.done == self.total:
+            self.last = now
+            self._print(now)
+
+    def _print(self, now: float) -> None:
+        elapsed = max(now - self.t0, 1e-9)
+        rate = self.done / elapsed * 60
+        left = (self.total - self.done) / (self.done / elapsed) if self.done else float("nan")
+        eta = time.strftime("%H:%M:%S", time.gmtime(left)) if left == left else "?"
+        width = 30
+        filled = int(width * self.done / max(self.total, 1))
+        bar = "#" * filled + "." * (width - filled)
+        text = (f"[{bar}] {self.done}/{self.total} runs, {self.failed} failed, {rate:.1f} runs/min, ETA {eta}"
+                if self.tty else
+                f"{self.done}/{self.total} runs done, {self.failed} failed, {rate:.1f} runs/min, ETA {eta}")
+        if self.tty:
+            self.stream.write("\r" + text + ("\n" if self.done == self.total else ""))
+        else:
+            self.stream.write(text + "\n")
+        self.stream.flush()
+
+
+def run_campaign(spec: CampaignSpec, folder: str | Path, executor: Executor | None = None,
+                 shard: tuple[int, int] | None = None, retry_failed: bool = False, progress: bool = True,
+                 flush_runs: int = 20, flush_seconds: float = 30.0,
+                 on_result: Callable[[dict[str, Any]], None] | None = None) -> Outcome:
+    """Execute the runs of ``spec`` not yet in ``folder`` (and failed ones if ``retry_failed``)."""
+    store = ResultsStore(folder)
+    store.open_for(spec.source)
+    runs = select(spec.runs(), shard)
+    done = store.done_keys()
+    todo = [r for r in runs if done.get(r.key) != "ok" and (retry_failed or done.get(r.key) != "failed")]
+    by_key = {r.key: r for r in todo}
+    t0 = time.monotonic()
+    own = executor is None
+    executor = executor or make_executor()
+    bar = Progress(len(todo)) if progress and todo else None
+    rows: list[dict[str, Any]] = []
+    ts_rows: list[dict[str, Any]] = []
+    last_flush = time.monotonic()
+    failed = 0
+
+    def flush() -> None:
+        nonlocal rows, ts_rows, last_flush
+        if rows:
+            store.write_part(rows, ts_rows)
+        rows, ts_rows, last_flush = [], [], time.monotonic()
+
+    try:
+        for result in executor.run((r.key, r.spec.canonical()) for r in todo):
+            run = by_key[result["key"]]
+            rows.append(runs_row(spec, run, result))
+            ts_rows.extend(timeseries_rows(run.key, result["timeseries"]))
+            failed += result["status"] != "ok"
+            if bar:
+                bar.update(result["status"] == "ok")
+            if on_result:
+                on_result(result)
+            if len(rows) >= flush_runs or time.monotonic() - last_flush >= flush_seconds:
+                flush()
+    finally:
+        flush()
+        if own:
+            executor.close()
+    return Outcome(total=len(runs), skipped=len(runs) - len(todo), ran=len(todo), failed=failed,
+                   wall_s=time.monotonic() - t0)
+
+
+def status(folder: str | Path) -> dict[str, Any]:
+    """done / failed / pending counts of a results folder against its spec."""
+    store = ResultsStore(folder)
+    spec = parse_campaign(store.spec_source(), str(Path(folder) / "campaign.toml"))
+    keys = [r.key for r in spec.runs()]
+    done = store.done_keys()
+    ok = sum(1 for k in keys if done.get(k) == "ok")
+    failed = sum(1 for k in keys if done.get(k) == "failed")
+    errors: dict[str, int] = {}
+    table = store.runs_table()
+    if table is not None and failed:
+        for st, err in zip(table.column("status").to_pylist(), table.column("error").to_pylist()):
+            if st == "failed":
+                errors[err] = errors.get(err, 0) + 1
+    return {"campaign": spec.name, "total": len(keys), "done": ok, "failed": failed,
+            "pending": len(keys) - ok - failed, "errors": errors, "parts": len(store.run_files())}
+
+
+def deterministic_rows(folder: str | Path) -> list[dict[str, Any]]:
+    """Runs rows without the fields that legitimately differ between executions (for comparisons)."""
+    table = ResultsStore(folder).runs_table()
+    if table is None:
+        return []
+    rows = [{k: v for k, v in row.items() if k not in NONDETERMINISTIC_COLUMNS} for row in table.to_pylist()]
+    return sorted(rows, key=lambda r: r["key"])
+
+
+__all__ = ["Outcome", "Progress", "deterministic_rows", "parse_shard", "run_campaign", "status"]

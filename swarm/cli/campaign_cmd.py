@@ -1,0 +1,92 @@
+"""``swarm campaign``: run a campaign spec, check its progress, build its report."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from maps.errors import InvalidInput
+
+from . import cli
+
+QUICK_OUTPUT = Path("swarm-results") / "quick"
+
+
+@cli.group("campaign")
+def campaign_group() -> None:
+    """Many runs from one TOML spec: process pool or Dask, resumable Parquet results, reports."""
+
+
+def _quick_spec_path() -> Path:
+    from importlib.resources import files
+
+    return Path(str(files("swarm.campaign") / "examples" / "quick.toml"))
+
+
+@campaign_group.command("run")
+@click.argument("spec_path", metavar="SPEC.toml", required=False,
+                type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("-o", "--output", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help=f"Results folder (created; re-running resumes). [default with no SPEC: {QUICK_OUTPUT}]")
+@click.option("--workers", type=click.IntRange(1, 1024), default=None,
+              help="Worker processes (default: one per core).")
+@click.option("--dask", default=None, metavar="local|tcp://HOST:PORT",
+              help="Run on Dask: 'local' starts a LocalCluster of --workers processes; an address joins a cluster.")
+@click.option("--inline", is_flag=True, help="Run in this process, one after another (debugging).")
+@click.option("--shard", default=None, metavar="i/N", help="Run only every N-th run starting at i (job arrays).")
+@click.option("--retry-failed", is_flag=True, help="Run again the runs that failed before.")
+@click.option("--report/--no-report", "make_report", default=None,
+              help="Build the report when done [default: only for the built-in quick campaign].")
+@click.option("--part-size", type=click.IntRange(1, 100_000), default=20, show_default=True,
+              help="Runs per committed Parquet part (a crash loses at most the runs of one part in progress).")
+@click.option("--quiet", is_flag=True, help="No progress output.")
+def run_cmd(spec_path: Path | None, output: Path | None, workers: int | None, dask: str | None, inline: bool,
+            shard: str | None, retry_failed: bool, make_report: bool | None, part_size: int, quiet: bool) -> None:
+    """Run every run of SPEC.toml that OUTPUT does not hold yet.
+
+    With no SPEC: the built-in quick campaign (48 short runs) into ./swarm-results/quick, then its report.
+    """
+    from ..campaign import load_campaign, make_executor, run_campaign
+    from ..campaign.runner import parse_shard
+
+    quick = spec_path is None
+    if quick:
+        spec_path = _quick_spec_path()
+        output = output or QUICK_OUTPUT
+        make_report = True if make_report is None else make_report
+    if output is None:
+        raise InvalidInput("-o", None, "a results folder for this campaign")
+    if inline and (dask or workers):
+        raise InvalidInput("--inline", True, "not together with --workers or --dask")
+    shard_t = parse_shard(shard)
+    spec = load_campaign(spec_path)
+    n_runs = len(spec.runs())
+    executor = make_executor(workers=workers, dask=dask, inline=inline)
+    click.echo(f"campaign {spec.name}: {n_runs} runs -> {output} ({executor.name})", err=quiet)
+    try:
+        outcome = run_campaign(spec, output, executor=executor, shard=shard_t, retry_failed=retry_failed,
+                               progress=not quiet, flush_runs=part_size)
+    finally:
+        executor.close()
+    click.echo(f"{outcome.ran} ran ({outcome.failed} failed), {outcome.skipped} already done, "
+               f"in {outcome.wall_s:.0f} s")
+    if make_report:
+        from ..campaign.report import build_report
+
+        report_dir = output / "report"
+        build_report(output, report_dir)
+        click.echo(f"report: {report_dir / 'README.md'}")
+
+
+@campaign_group.command("status")
+@click.argument("folder", metavar="DIR", type=click.Path(exists=True, file_okay=False, path_type=Path))
+def status_cmd(folder: Path) -> None:
+    """Done, failed and pending runs of a results folder."""
+    from ..campaign import status
+
+    s = status(folder)
+    click.echo(f"{s['campaign']}: {s['done']} done, {s['failed']} failed, {s['pending']} pending "
+               f"of {s['total']} runs ({s['parts']} parts)")
+    for error, count in sorted(s["errors"].items(), key=lambda kv: -kv[1])[:10]:
+        click.echo(f"  {count} x {error}")
