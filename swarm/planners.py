@@ -1,8 +1,8 @@
 """Path planners for the navigator, found by name like algorithms (entry-point group ``swarm.planners``).
 
-A planner is a class with ``name`` and ``plan(space, start, goal, rng) -> int[N, 2] cells | None``: a
-path through the robot's configuration space (``space``, bool[H, W]) whose consecutive cells are joined
-by straight segments inside ``space``. ``astar`` (the default, :func:`swarm.grid.plan`) is built in;
+A planner is a class with ``name`` and ``plan(space, start, goal, rng) -> int[N, 2] cells | None``: an
+8-connected path of cells (consecutive cells are neighbours) through the robot's configuration space
+(``space``, bool[H, W]); the navigator shortcuts it with :func:`swarm.grid.simplify`. ``astar`` (the default, :func:`swarm.grid.plan`) is built in;
 ``iboa`` (the IBOA planner of seed paper 001) is registered by the ``algorithms`` package.
 """
 
