@@ -30,6 +30,8 @@ def cli() -> None:
 def _register() -> None:
     from . import map_cmd, run_cmd  # noqa: F401  (commands register themselves on import)
     from . import radio_cmd  # noqa: F401
+    from . import view_cmd  # noqa: F401
+    from . import plan_cmd  # noqa: F401
     from . import campaign_cmd  # noqa: F401
 
 

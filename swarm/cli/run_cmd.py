@@ -92,13 +92,15 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
 @click.option("--run-id", default=None, help="Name of the run on the wire (default: the spec key + a nonce).")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), help="Write the result JSON.")
 @click.option("--gif", type=click.Path(dir_okay=False, path_type=Path), help="Write an animation.")
+@click.option("--record", "record_out", type=click.Path(dir_okay=False, path_type=Path),
+              help="Record the run (.swr) for 'swarm view'.")
 @click.option("--print-spec", is_flag=True, help="Print the fully-resolved spec (TOML-ready JSON) and exit.")
 def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed: int | None,
             map_params: tuple[str, ...], robots: int | None, spawn: str | None, algorithm: str | None,
             algorithm_params: tuple[str, ...], seed: int | None, max_ticks: int | None, explored: float | None,
             transport: str | None, sets: tuple[str, ...], listen: tuple[str, ...], remote: tuple[int, ...],
             agent_timeout: float, run_id: str | None, json_out: Path | None, gif: Path | None,
-            print_spec: bool) -> None:
+            record_out: Path | None, print_spec: bool) -> None:
     """Run one exploration and print a one-line summary.
 
     With no arguments: 4 robots with the frontier explorer on a 50 x 50 building, seed 0.
@@ -123,12 +125,22 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
 
         recorder = GifRecorder(sim.truth)
         sim.observers = (recorder,)
+    run_recorder = None
+    if record_out is not None:
+        from ..record import Recorder
+
+        if not (record_out.parent if str(record_out.parent) else Path(".")).is_dir():
+            raise InvalidInput("--record", str(record_out), "a path in an existing folder")
+        run_recorder = Recorder.attach(sim)
     result = sim.run()
     click.echo(result.one_line())
     if json_out is not None:
         click.echo(f"wrote {result.write_json(json_out)}")
     if recorder is not None:
         click.echo(f"wrote {recorder.save(gif)}")
+    if run_recorder is not None and record_out is not None:
+        run_recorder.finish(sim, result)
+        click.echo(f"wrote {run_recorder.save(record_out)}")
 
 
 def _transport_options(spec, listen: tuple[str, ...], remote: tuple[int, ...], timeout: float,

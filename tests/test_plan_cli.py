@@ -1,0 +1,97 @@
+"""``swarm plan``: the path's length beside the A* and any-angle optima, the picture, and bad input."""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+from PIL import Image
+
+from maps import generate
+from maps.io import save_npz
+from swarm.cli import main
+
+
+@pytest.fixture(scope="module")
+def map_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("plan") / "b.npz"
+    save_npz(generate("building", 20, seed=2), path)
+    return path
+
+
+def run(capsys, *args: str) -> tuple[int, str, str]:
+    code = main(list(args))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def metres(out: str, label: str) -> float:
+    m = re.search(rf"{re.escape(label)}: ([0-9.]+) m", out)
+    assert m, f"no '{label}' line in:\n{out}"
+    return float(m.group(1))
+
+
+def test_iboa_path_is_drawn_and_measured_against_both_optima(map_file, tmp_path, capsys):
+    png = tmp_path / "p.png"
+    code, out, err = run(capsys, "plan", str(map_file), "--from", "3,3", "--to", "16,16", "-o", str(png))
+    assert code == 0, err
+    iboa, astar = metres(out, "iboa"), metres(out, "optimal 8-connected grid path (A*)")
+    any_angle = metres(out, "any-angle shortest path (physical limit)")
+    assert any_angle <= astar and any_angle <= iboa + 1e-9, "nothing beats the physical limit"
+    assert any_angle >= 13 * 2 ** 0.5 - 1.0, "at least the straight line between the snapped points"
+    ratio = float(re.search(r"A\*\): [0-9.]+ m \(ratio ([0-9.]+)\)", out).group(1))
+    assert ratio == pytest.approx(iboa / astar, abs=2e-3)
+    assert "configuration space of the true map" in out
+    with Image.open(png) as img:
+        assert img.width >= 200 and img.height > img.width       # legend strip below the map
+        colours = {c for _, c in img.convert("RGB").getcolors(1 << 20)}
+    assert (220, 30, 30) in colours and (40, 90, 220) in colours  # planned path and A* reference drawn
+
+
+def test_astar_planner_matches_the_optimum(map_file, capsys):
+    code, out, _ = run(capsys, "plan", str(map_file), "--from", "3,3", "--to", "16,16", "--planner", "astar")
+    assert code == 0
+    assert metres(out, "astar") == metres(out, "optimal 8-connected grid path (A*)")
+    assert "(ratio 1.000)" in out
+
+
+def test_same_seed_same_path_and_params_are_used(map_file, capsys):
+    args = ["plan", str(map_file), "--from", "3,3", "--to", "16,16", "--seed", "4"]
+    first = metres(run(capsys, *args)[1], "iboa")
+    assert metres(run(capsys, *args)[1], "iboa") == first
+    code, out, _ = run(capsys, *args, "--param", "simplify=none")
+    assert code == 0 and "waypoints (grid path before simplification" in out
+    assert metres(out, "iboa") >= first - 1e-9, "without simplification the path is the (longer) grid path"
+
+
+def test_a_point_next_to_a_wall_snaps_like_the_navigator(map_file, capsys):
+    code, out, _ = run(capsys, "plan", str(map_file), "--from", "1.1,3", "--to", "16,16", "--planner", "astar")
+    assert code == 0 and "--from moved to" in out
+
+
+@pytest.mark.parametrize("args, needle", [
+    (["--from", "3,3", "--to", "40,3"], "--to: got '40,3'; allowed: a point inside the map"),
+    (["--from", "0.2,0.2", "--to", "16,16"], "--from: got '0.2,0.2'; allowed: a point in free space"),
+    (["--from", "3,3", "--to", "16,16", "--planner", "rrt"], "--planner: got 'rrt'; allowed: iboa | astar"),
+    (["--from", "3,3", "--to", "16,16", "--param", "pop=3"], "--param pop"),
+    (["--from", "3,3", "--to", "16,16", "--planner", "astar", "--param", "pop_size=3"], "only with --planner iboa"),
+    (["--from", "3;3", "--to", "16,16"], "--from"),
+])
+def test_bad_input_is_one_line_and_exit_2(map_file, capsys, args, needle):
+    code, out, err = run(capsys, "plan", str(map_file), *args)
+    assert code == 2 and needle in err
+    assert err.count("\n") == 1 and err.startswith("swarm: error: ") and "Traceback" not in err
+
+
+def test_unreachable_goal_is_bad_input(tmp_path, capsys):
+    import numpy as np
+
+    from maps import Map
+
+    solid = np.ones((40, 40), bool)
+    solid[1:-1, 1:19] = False
+    solid[1:-1, 21:-1] = False                         # two rooms, no door
+    path = tmp_path / "two.npz"
+    save_npz(Map(solid=solid, material=solid.astype(np.uint8), materials=("air", "concrete")), path)
+    code, _, err = run(capsys, "plan", str(path), "--from", "3,3", "--to", "15,15")
+    assert code == 2 and "--to" in err and "reach" in err
