@@ -90,3 +90,23 @@ def status_cmd(folder: Path) -> None:
                f"of {s['total']} runs ({s['parts']} parts)")
     for error, count in sorted(s["errors"].items(), key=lambda kv: -kv[1])[:10]:
         click.echo(f"  {count} x {error}")
+
+
+@campaign_group.command("report")
+@click.argument("folder", metavar="DIR", type=click.Path(path_type=Path))
+@click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
+              help="Report folder (created; files of an earlier report there are replaced). [default: DIR/report]")
+@click.option("--target", type=float, default=0.98, show_default=True,
+              help="Explored fraction that counts as done: time to target, DNF, success rate.")
+@click.option("--maes-csv", "maes_csv", is_flag=True,
+              help="Also write one MAES statistics CSV per run (MAES's header and file naming) into maes-csv/.")
+@click.option("--format", "fmt", type=click.Choice(["png", "svg", "pdf"]), default="png", show_default=True,
+              help="Figure file format.")
+def report_cmd(folder: Path, output: Path | None, target: float, maes_csv: bool, fmt: str) -> None:
+    """Curves, cactus/ECDF plots, paired comparisons and tables of the results in DIR."""
+    from ..campaign.report import build_report
+    from ..campaign.report.build import check_target
+
+    check_target(target)
+    readme = build_report(folder, output or folder / "report", target=target, maes_csv=maes_csv, fmt=fmt)
+    click.echo(f"report: {readme}")

@@ -1,0 +1,282 @@
+"""``build_report``: a results folder in, a report folder out (README.md, figures, tables, MAES CSVs).
+
+Layout of the report folder::
+
+    README.md                        everything below, linked, with the summary tables inline
+    curves/<cmp>__<cell>.png|.csv    explored % vs time, mean and 95 % band per line (csv: the plotted numbers)
+    cactus/<cmp>__<cell>.png         cactus + ECDF of ticks to target
+    paired/algorithms__<cell>.png    per-replicate scatter for every pair of algorithms
+    tables/summary.md|.tex|.csv      per cell and algorithm: runs, successes, DNF, ticks to target
+    tables/paired.md|.tex|.csv       per cell and algorithm pair: wins, ties, differences, Wilcoxon p
+    tables/comm_effect.md|.tex|.csv  per cell: mean ticks per radio model and their ordering
+    tables/runs.csv                  every run with its ticks to target
+    tables/failed.csv                failed runs and their errors
+    maes-csv/*.csv                   with --maes-csv: one MAES statistics CSV per run (+ maes-csv-index.csv)
+    files.txt                        what this report wrote
+
+``<cmp>`` is the dimension compared inside a figure (``algorithms``, ``radio``, ``comm``; ``cells`` when
+nothing varies) and ``<cell>`` the labels of every other shown dimension in grid order, e.g.
+``curves/algorithms__building_150_16_together_multiwall.png``.
+"""
+
+from __future__ import annotations
+
+import shlex
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from maps.errors import InvalidInput
+
+from ..store import ResultsStore
+from . import figures, stats, tables
+from .load import DIMS, CampaignData, load
+from .output import ReportWriter, slug
+from .series import sample
+
+COMPARE = ("algorithm", "radio", "comm")
+PREFIX = {"algorithm": "algorithms", "radio": "radio", "comm": "comm", None: "cells"}
+DEFAULT_TARGET = 0.98
+
+
+@dataclass
+class FigureSet:
+    """One figure cell: its title and the files drawn for it."""
+
+    compare: str | None
+    title: str
+    curves: str
+    cactus: str
+    data: str
+
+
+@dataclass
+class Report:
+    """What the README is rendered from (paths are relative to the report folder)."""
+
+    data: CampaignData
+    target: float
+    command: str
+    fmt: str
+    runs_t: pd.DataFrame
+    ttt_source: str
+    figures: list[FigureSet] = field(default_factory=list)
+    summary: tables.Table | None = None
+    summary_rows: int = 0
+    paired: tables.Table | None = None
+    wins: tables.Table | None = None
+    paired_figures: list[tuple[str, str]] = field(default_factory=list)
+    comm: tables.Table | None = None
+    comm_unexpected: int = 0
+    comm_rows: int = 0
+    maes: dict[str, Any] | None = None
+    notes: list[str] = field(default_factory=list)
+    written: list[str] = field(default_factory=list)
+
+
+def check_target(target: Any) -> float:
+    if isinstance(target, bool) or not isinstance(target, (int, float)) or not 0 < float(target) <= 1:
+        raise InvalidInput("--target", target, "an explored fraction in (0, 1], e.g. 0.98")
+    return float(target)
+
+
+def command_line(results_dir: Path, report_dir: Path, target: float, maes_csv: bool, fmt: str) -> str:
+    """The ``swarm`` command that builds this same report (what the README says made it)."""
+    parts = ["swarm", "campaign", "report", str(results_dir), "-o", str(report_dir), "--target", f"{target:g}"]
+    if maes_csv:
+        parts.append("--maes-csv")
+    if fmt != "png":
+        parts += ["--format", fmt]
+    return shlex.join(parts)
+
+
+def build_report(results_dir: str | Path, report_dir: str | Path, *, target: float = DEFAULT_TARGET,
+                 maes_csv: bool = False, fmt: str = "png") -> Path:
+    """Write the report of ``results_dir`` into ``report_dir``; returns the path of its README.md."""
+    from .readme import render
+
+    target = check_target(target)
+    if fmt not in figures.FORMATS:
+        raise InvalidInput("--format", fmt, ", ".join(figures.FORMATS))
+    results_dir, report_dir = Path(results_dir), Path(report_dir)
+    data = load(results_dir)
+    out = ReportWriter(report_dir)
+    store = ResultsStore(data.folder)
+    dims = list(data.dims)
+    ok = data.ok.reset_index(drop=True)
+    cell_id = ok.groupby(dims, observed=True, sort=True).ngroup().to_numpy() if len(ok) else np.zeros(0, np.int64)
+    sampled = sample(store, ok, cell_id, data.every, target)
+    runs_t = stats.add_time_to_target(ok, target, sampled.first_at_target)
+    column = stats.threshold_column(target)
+    source = (f"the exact per-tick crossing recorded in column `{column}`" if column else
+              f"the first time-series row at or above the target (rows every {data.every} ticks, so up to "
+              f"{data.every - 1} ticks late)")
+    rep = Report(data=data, target=target, command=command_line(results_dir, report_dir, target, maes_csv, fmt),
+                 fmt=fmt, runs_t=runs_t, ttt_source=source)
+    if len(ok):
+        _figures(rep, out, ok.assign(cell=cell_id), sampled)
+        _summary(rep, out)
+        _paired(rep, out)
+        _comm(rep, out)
+    _run_tables(rep, out)
+    _notes(rep)
+    if maes_csv:
+        from ..maes_csv import write_runs
+
+        rep.maes = write_runs(store, data, out, "maes-csv")
+    rep.written = list(out.written)
+    readme = out.write("README.md", render(rep))
+    out.finish()
+    return readme
+
+
+# ------------------------------------------------------------------------------------------ parts ----
+def comparisons(data: CampaignData) -> list[str | None]:
+    found: list[str | None] = [d for d in COMPARE if d in data.dims and data.varies(d)]
+    return found or [None]  # nothing compared: one figure per cell
+
+
+def describe(values: dict[str, str]) -> str:
+    """A figure title from cell labels, e.g. 'building, size 150, 16 robots, spawn together, radio multiwall'."""
+    words = {"map": "{}", "size": "size {}", "robots": "{} robots", "spawn": "spawn {}", "algorithm": "algorithm {}",
+             "radio": "radio {}", "comm": "comm {}", "transport": "transport {}"}
+    return ", ".join("1 robot" if (d, v) == ("robots", "1") else words[d].format(v) for d, v in values.items())
+
+
+class _Names:
+    """File-name stems, made unique if two label sets slug to the same text."""
+
+    def __init__(self) -> None:
+        self.used: set[str] = set()
+
+    def __call__(self, prefix: str, values: dict[str, str]) -> str:
+        base = f"{prefix}__" + "_".join(slug(v) for v in values.values())
+        name, k = base, 2
+        while name in self.used:
+            name, k = f"{base}-{k}", k + 1
+        self.used.add(name)
+        return name
+
+
+def _figures(rep: Report, out: ReportWriter, ok: pd.DataFrame, sampled: Any) -> None:
+    data, dims, fmt = rep.data, list(rep.data.dims), rep.fmt
+    cells = ok.drop_duplicates("cell").sort_values("cell")[[*dims, "cell"]]
+    names = _Names()
+    for compare in comparisons(data):
+        fig_dims = [d for d in dims if d != compare]
+        for keys, grp in cells.groupby(fig_dims, observed=True, sort=True):
+            if compare is not None and len(grp) < 2:
+                continue  # a single line compares nothing
+            values = dict(zip(fig_dims, (str(k) for k in keys)))
+            name, title = names(PREFIX[compare], values), describe(values)
+            curves, times, rows = [], [], []
+            for _, cell in grp.iterrows():
+                c = int(cell["cell"])
+                label = str(cell[compare]) if compare else "all runs"
+                colour = data.orders[compare].index(label) if compare else 0
+                members = sampled.cell_rows[c]
+                mean, lo, hi, n = stats.mean_band(sampled.cell_values[c])
+                ttt = rep.runs_t["ttt"].to_numpy()[members]
+                curves.append(figures.Curve(label, colour, sampled.cell_ticks[c], mean, lo, hi, len(members),
+                                            int(np.isfinite(ttt).sum())))
+                times.append(figures.Times(label, colour, ttt))
+                rows.append(pd.DataFrame({"line": label, "tick": sampled.cell_ticks[c],
+                                          "minutes": sampled.cell_ticks[c] / figures.TICKS_PER_MINUTE,
+                                          "explored_mean_pct": np.round(100 * mean, 4),
+                                          "ci95_low_pct": np.round(100 * lo, 4), "ci95_high_pct": np.round(100 * hi, 4),
+                                          "runs": n}))
+            max_ticks = float(rep.runs_t["max_ticks"].to_numpy()[np.concatenate(
+                [sampled.cell_rows[int(c)] for c in grp["cell"]])].max())
+            out.write(f"curves/{name}.{fmt}", figures.curves_figure(curves, title, rep.target, fmt))
+            out.write(f"curves/{name}.csv", tables.csv_text(pd.concat(rows, ignore_index=True)))
+            out.write(f"cactus/{name}.{fmt}", figures.cactus_figure(times, title, rep.target, max_ticks, fmt))
+            rep.figures.append(FigureSet(compare, title, f"curves/{name}.{fmt}", f"cactus/{name}.{fmt}",
+                                         f"curves/{name}.csv"))
+
+
+def _summary(rep: Report, out: ReportWriter) -> None:
+    dims = [d for d in rep.data.dims if d != "algorithm"] + ["algorithm"]
+    df = stats.summary(rep.runs_t, dims)
+    table = tables.summary_table(df, dims)
+    pct = f"{100 * rep.target:g} %"
+    _write_table(out, "summary", df, table, f"Ticks to {pct} explored per cell and algorithm "
+                 f"(campaign {rep.data.name}; means and medians over successful runs; DNF: target not reached).")
+    rep.summary, rep.summary_rows = table, len(df)
+
+
+def _paired(rep: Report, out: ReportWriter) -> None:
+    if "algorithm" not in rep.data.dims or not rep.data.varies("algorithm"):
+        return
+    dims = list(rep.data.dims)
+    cell = [d for d in dims if d != "algorithm"]
+    pairs = stats.pair_runs(rep.runs_t, dims, "algorithm")
+    if pairs.empty:
+        return
+    df = stats.paired_table(pairs, cell)
+    rep.paired = tables.paired_table(df, cell)
+    rep.wins = tables.wins_table(stats.overall_wins(pairs))
+    _write_table(out, "paired", df, rep.paired, "Paired comparison of algorithms per cell (pairs share map and "
+                 "start poses; ticks to target with DNF counted at max ticks; Wilcoxon signed-rank, two-sided).")
+    out.write("tables/pairs.csv", tables.csv_text(pairs))
+    names = _Names()
+    for keys, grp in pairs.groupby(cell, observed=True, sort=True):
+        values = dict(zip(cell, (str(k) for k in keys)))
+        panels = []
+        for (a, b), pg in grp.groupby(["a", "b"], observed=True, sort=True):
+            w = pg["winner"]
+            panels.append(figures.PairPanel(str(a), str(b), pg["t_a"].to_numpy(float), pg["t_b"].to_numpy(float),
+                                            (~pg["ok_a"] | ~pg["ok_b"]).to_numpy(bool), int((w == "a").sum()),
+                                            int((w == "b").sum()), int((w == "tie").sum())))
+        max_ticks = float(rep.runs_t["max_ticks"].max())
+        name = names("algorithms", values)
+        path = f"paired/{name}.{rep.fmt}"
+        out.write(path, figures.paired_figure(panels, describe(values), max_ticks, rep.fmt))
+        rep.paired_figures.append((describe(values), path))
+
+
+def _comm(rep: Report, out: ReportWriter) -> None:
+    if "radio" not in rep.data.dims or not rep.data.varies("radio"):
+        return
+    dims = list(rep.data.dims)
+    cell = [d for d in dims if d != "radio"]
+    ok = rep.runs_t
+    models = dict(zip(ok["radio"].astype(str), ok["radio_model"].astype(str)))
+    df = stats.comm_effect(ok, dims, models)
+    labels = [lab for lab in rep.data.orders["radio"] if f"mean:{lab}" in df]
+    rep.comm = tables.comm_table(df, cell, labels)
+    rep.comm_unexpected = sum(1 for v in df["as_expected"] if v is False)  # None: no expectation
+    rep.comm_rows = len(df)
+    _write_table(out, "comm_effect", df, rep.comm, "Mean ticks to target per radio model (DNF counted at max "
+                 "ticks) and their ordering; expected: global <= material-aware (multiwall, maes) <= LOS.")
+
+
+def _write_table(out: ReportWriter, name: str, df: pd.DataFrame, table: tables.Table, caption: str) -> None:
+    out.write(f"tables/{name}.md", tables.markdown(table))
+    out.write(f"tables/{name}.tex", tables.latex(table, caption, f"tab:{name.replace('_', '-')}"))
+    out.write(f"tables/{name}.csv", tables.csv_text(df))
+
+
+def _run_tables(rep: Report, out: ReportWriter) -> None:
+    data = rep.data
+    cols = ["key", *DIMS, "replicate", "status", "stop_reason", "ticks", "max_ticks", "explored", "map_seed"]
+    runs = data.runs[cols].merge(rep.runs_t[["key", "ttt", "success"]], on="key", how="left")
+    runs["success"] = runs["success"].fillna(False).astype(bool)
+    out.write("tables/runs.csv", tables.csv_text(runs.rename(columns={"ttt": "ticks_to_target"})))
+    failed = data.failed[["key", *DIMS, "replicate", "error"]]
+    out.write("tables/failed.csv", tables.csv_text(failed))
+
+
+def _notes(rep: Report) -> None:
+    ok = rep.runs_t
+    short = ok[pd.to_numeric(ok["explored_target"], errors="coerce") < rep.target - 1e-12]
+    if len(short):
+        rep.notes.append(f"{len(short)} runs stop at `stop.explored` = "
+                         f"{', '.join(f'{v:g}' for v in sorted(short['explored_target'].unique()))}, below the "
+                         f"target {rep.target:g}: they stop before reaching it and count as DNF. Use `--target` "
+                         f"at or below the campaign's stop rule.")
+    if rep.data.spec_error:
+        rep.notes.append(f"campaign.toml could not be read by this installation ({rep.data.spec_error}); grid "
+                         f"order follows the data and pending runs are unknown.")

@@ -1,0 +1,214 @@
+"""The report's README.md: what was run, what came out, every figure and table linked, and how the numbers
+were computed (so a reader can trust or dispute them without reading this code)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from . import tables
+
+if TYPE_CHECKING:
+    from .build import Report
+
+INLINE_ROWS = 300
+"""Tables longer than this are linked, not inlined (a 54,000-run campaign has ~1,600 summary rows)."""
+EMBED_FIGURES = 24
+"""Up to this many curve figures are shown inline; more are listed as links."""
+FAILED_SHOWN = 50
+FILE_NOTES = {"tables/runs.csv": ": every committed run with its cell, stop reason and ticks to target",
+              "tables/pairs.csv": ": every pair of runs compared", "tables/failed.csv": ": failed runs and errors"}
+SECTION = {"algorithm": "Algorithms compared", "radio": "Radio models compared", "comm": "Comm settings compared",
+           None: "Every cell"}
+
+
+def render(rep: Report) -> str:
+    parts = [_head(rep), _runs(rep), _campaign(rep), _summary(rep), _curves(rep), _cactus(rep), _paired(rep),
+             _comm(rep), _failed(rep), _maes(rep), _method(rep), _files(rep)]
+    return "\n".join(p for p in parts if p).rstrip() + "\n"
+
+
+def _pct(x: float) -> str:
+    return f"{100 * x:g} %"
+
+
+def _head(rep: Report) -> str:
+    d = rep.data
+    lines = [f"# Campaign report: {d.name}", ""]
+    if d.description:
+        lines += [d.description, ""]
+    lines += [f"- Made by: `{rep.command}`",
+              f"- Target: **{_pct(rep.target)} explored**. Time to target is {rep.ttt_source}; a run that never "
+              f"reaches it is DNF (did not finish), as in MAES.",
+              "- Time: a tick is 0.1 simulated seconds (600 ticks = 1 simulated minute). Curves are in simulated "
+              "minutes; tables, cactus and paired plots in ticks.", ""]
+    return "\n".join(lines)
+
+
+def _runs(rep: Report) -> str:
+    d = rep.data
+    pending = "unknown" if d.pending is None else str(d.pending)
+    total = "unknown" if d.total is None else str(d.total)
+    lines = ["## Runs", "", "| Done | Failed | Pending | Total in spec |", "|---:|---:|---:|---:|",
+             f"| {len(d.ok)} | {len(d.failed)} | {pending} | {total} |", ""]
+    if len(d.ok):
+        reasons = d.ok["stop_reason"].value_counts().sort_index()
+        lines += ["Stop reasons of done runs: " + ", ".join(f"{r} {n}" for r, n in reasons.items()) + ".", ""]
+    if d.pending:
+        lines += [f"{d.pending} runs are still pending: the statistics below cover finished runs only.", ""]
+    if len(d.failed):
+        lines += ["Failed runs are excluded from every statistic (see [Failed runs](#failed-runs)).", ""]
+    for note in rep.notes:
+        lines += [f"> **Note.** {note}", ""]
+    return "\n".join(lines)
+
+
+def _campaign(rep: Report) -> str:
+    d = rep.data
+    spec = d.spec
+    lines = ["## Campaign", ""]
+    if spec is not None:
+        stop = ", ".join(f"{k} = {v}" for k, v in sorted(spec.stop.items())) or "run defaults"
+        lines += [f"Seed {spec.seed}, {spec.replicates} replicates (maps) per cell, stop rule: {stop}, a "
+                  f"time-series row every {spec.timeseries_every} ticks, {len(spec.exclude)} exclude and "
+                  f"{len(spec.include)} include rules.", ""]
+    lines += ["| Dimension | Values (spec order) |", "|---|---|"]
+    lines += [f"| {dim} | {', '.join(f'`{v}`' for v in d.orders[dim])} |" for dim in d.orders if d.orders[dim]]
+    lines += ["", "<details><summary>campaign.toml</summary>", "", "```toml", d.source.rstrip(), "```", "",
+              "</details>", ""]
+    return "\n".join(lines)
+
+
+def _links(name: str) -> str:
+    return f"[Markdown](tables/{name}.md) · [LaTeX](tables/{name}.tex) · [CSV](tables/{name}.csv)"
+
+
+def _inline(table: tables.Table | None, rows: int, name: str) -> list[str]:
+    if table is None:
+        return []
+    if rows <= INLINE_ROWS:
+        return [tables.markdown(table), _links(name), ""]
+    return [f"{rows} rows: too long to show here. {_links(name)}", ""]
+
+
+def _summary(rep: Report) -> str:
+    if rep.summary is None:
+        return "## Summary\n\nNo finished runs yet.\n"
+    lines = [f"## Summary: ticks to {_pct(rep.target)} explored", "",
+             "Per cell and algorithm, over done runs. Mean, median, fastest and slowest cover the runs that reached "
+             "the target; *Mean ticks (DNF = max)* counts every DNF run at its `max_ticks`; *Timeouts* are the "
+             "DNF runs stopped by `max_ticks`.", ""]
+    return "\n".join(lines + _inline(rep.summary, rep.summary_rows, "summary"))
+
+
+def _curves(rep: Report) -> str:
+    if not rep.figures:
+        return ""
+    lines = ["## Explored vs time", "",
+             "Mean explored % over replicates (maps) with a 95 % t-interval band; a run that stopped keeps its "
+             "final value. The dotted line is the target. Each figure has its numbers in a CSV next to it.", ""]
+    embed = sum(1 for _ in rep.figures) <= EMBED_FIGURES
+    for compare in dict.fromkeys(f.compare for f in rep.figures):
+        lines += [f"### {SECTION[compare]}", ""]
+        for f in (f for f in rep.figures if f.compare == compare):
+            if embed:
+                lines += [f"**{f.title}** ([data]({f.data}))", "", f"![{f.title}]({f.curves})", ""]
+            else:
+                lines.append(f"- [{f.title}]({f.curves}) ([data]({f.data}))")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def _cactus(rep: Report) -> str:
+    if not rep.figures:
+        return ""
+    lines = ["## Time to target: cactus and ECDF", "",
+             "Left: runs that reached the target sorted by ticks (log scale), as maes-csv-reader's cactus plot. "
+             "Right: the fraction of all runs done by a given tick; it stops at the success rate.", ""]
+    for compare in dict.fromkeys(f.compare for f in rep.figures):
+        lines += [f"### {SECTION[compare]}", ""]
+        lines += [f"- [{f.title}]({f.cactus})" for f in rep.figures if f.compare == compare]
+        lines.append("")
+    return "\n".join(lines)
+
+
+def _paired(rep: Report) -> str:
+    if rep.paired is None or rep.wins is None:
+        return ""
+    lines = ["## Paired comparisons between algorithms", "",
+             "Runs pair when they share everything but the algorithm, replicate included: the same map and start "
+             "poses. *a faster* counts pairs where a reached the target and b did not or later. Differences are "
+             "a − b in ticks with DNF counted at `max_ticks`; Wilcoxon signed-rank p (two-sided, zero differences "
+             "dropped) from 6 pairs up.", "", "### All cells pooled", "", tables.markdown(rep.wins),
+             "### Per cell", ""]
+    lines += _inline(rep.paired, len(rep.paired.rows), "paired")
+    lines += ["Per-replicate scatter plots (a point above the diagonal: b took longer than a on that map):", ""]
+    lines += [f"- [{title}]({path})" for title, path in rep.paired_figures]
+    return "\n".join(lines) + "\n"
+
+
+def _comm(rep: Report) -> str:
+    if rep.comm is None:
+        return ""
+    lines = ["## Communication effect", "",
+             "Mean ticks to target per radio model in each cell (DNF counted at `max_ticks`; *(k/n)* when only k "
+             "of n runs reached the target). The paper expects global <= material-aware (multiwall, maes) <= LOS; "
+             f"**{rep.comm_unexpected} of {rep.comm_rows} cells** break that order (*As expected* = **no**).", ""]
+    return "\n".join(lines + _inline(rep.comm, rep.comm_rows, "comm_effect"))
+
+
+def _failed(rep: Report) -> str:
+    failed = rep.data.failed
+    if failed.empty:
+        return ""
+    lines = ["## Failed runs", "", f"{len(failed)} runs failed; they are excluded from every statistic. "
+             f"All of them with their errors: [tables/failed.csv](tables/failed.csv).", "",
+             "| Key | Cell | Replicate | Error |", "|---|---|---:|---|"]
+    for _, r in failed.head(FAILED_SHOWN).iterrows():
+        cell = ", ".join(str(r[d]) for d in rep.data.dims)
+        error = " ".join(str(r["error"]).split())[:200].replace("|", "\\|")
+        lines.append(f"| `{r['key']}` | {cell} | {int(r['replicate'])} | {error} |")
+    if len(failed) > FAILED_SHOWN:
+        lines.append(f"| … | {len(failed) - FAILED_SHOWN} more | | |")
+    return "\n".join(lines) + "\n"
+
+
+def _maes(rep: Report) -> str:
+    m = rep.maes
+    if m is None:
+        return ""
+    lines = ["## MAES CSV export", "",
+             f"{m['files']} files in [`{m['folder']}/`]({m['folder']}/), one per done run, in the format of MAES's "
+             "`StatisticsCSVWriter` (header, column order, file naming, `_e{explored}-c{covered}` suffix); "
+             f"[`{m['index']}`]({m['index']}) maps each file to its run key. Differences from MAES:", ""]
+    lines += [f"- {note}" for note in m["notes"]]
+    return "\n".join(lines) + "\n"
+
+
+def _method(rep: Report) -> str:
+    return "\n".join([
+        "## Method", "",
+        f"- **Time to target**: {rep.ttt_source}.",
+        "- **Curves**: each run's explored fraction is sampled on its cell's tick grid (the last recorded value at "
+        "or before each grid tick; at most 400 points). After a run stops it holds its final value: it is "
+        "finished, and dropping it would make the mean jump up or down as runs leave. The band is a two-sided "
+        "95 % Student-t interval of the mean across replicates, n − 1 degrees of freedom.",
+        "- **Cells**: a cell is one value of every grid dimension; a figure compares the values of one dimension "
+        "(algorithm, radio or comm) with the others fixed. Replicates are maps: every algorithm and radio model "
+        "of a replicate meets the same map and start poses.",
+        "- **DNF** runs did not reach the target (timeout, stall, all robots failed, or a lower stop rule). "
+        "Means over successes ignore them, which flatters cells with many DNFs: read them with the success "
+        "rate, or use the DNF = max column (a lower bound).",
+        "- **Failed runs** (an exception in the run) are listed and excluded; **pending** runs are simply absent.",
+        ""])
+
+
+def _files(rep: Report) -> str:
+    written = rep.written
+    tables_ = [f for f in written if f.startswith("tables/")]
+    lines = ["## Files", "", "- [files.txt](files.txt): every file of this report"]
+    lines += [f"- [{f}]({f})" + FILE_NOTES.get(f, "") for f in tables_ if f.endswith(".csv")]
+    for folder in ("curves", "cactus", "paired", "maes-csv"):
+        count = sum(1 for f in written if f.startswith(f"{folder}/"))
+        if count:
+            lines.append(f"- `{folder}/`: {count} files")
+    return "\n".join(lines) + "\n"
