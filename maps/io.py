@@ -18,7 +18,8 @@ import tempfile
 import tomllib
 import zipfile
 from pathlib import Path
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 

@@ -23,7 +23,8 @@ from __future__ import annotations
 import json
 import types
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 

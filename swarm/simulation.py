@@ -310,7 +310,8 @@ class Simulation:
                             bytes_delivered=stats.bytes_delivered,
                             msgs_dropped=stats.dropped_link + stats.dropped_loss + stats.dropped_bandwidth,
                             comm_groups=len(groups), biggest_group=max(len(g) for g in groups) / n,
-                            all_connected=len(groups) == 1)
+                            all_connected=len(groups) == 1,
+                            mean_pair_distance_m=float(links.distance.mean()) if n > 1 else 0.0)
 
     def _result(self, tick: int, stop_reason: str, collisions: int, wall: float, host: AgentHost) -> RunResult:
         summary = {

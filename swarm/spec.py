@@ -16,8 +16,9 @@ from __future__ import annotations
 import hashlib
 import json
 from dataclasses import dataclass, field, fields
-from functools import cached_property
-from typing import Any, Mapping
+from functools import cached_property, lru_cache
+from collections.abc import Mapping
+from typing import Any
 
 import numpy as np
 
@@ -249,8 +250,23 @@ def _resolve_comm(d: dict[str, Any]) -> dict[str, Any]:
     return to_mapping(from_mapping(CommSpec, d, prefix="comm."))
 
 
-_EXTERNAL_SECTIONS = {"lidar": _resolve_lidar, "motion": _resolve_motion, "radio": _resolve_radio,
-                      "comm": _resolve_comm}
+def _memo(resolve):  # noqa: ANN001, ANN202 - a pure resolver cached on its input's canonical JSON
+    @lru_cache(maxsize=256)
+    def cached(text: str) -> str:
+        return json.dumps(resolve(json.loads(text)), sort_keys=True)
+
+    def wrapper(d: dict[str, Any]) -> dict[str, Any]:
+        try:
+            text = json.dumps(d, sort_keys=True)
+        except TypeError:  # not JSON-able: let the resolver report it
+            return resolve(d)
+        return json.loads(cached(text))
+
+    return wrapper
+
+
+_EXTERNAL_SECTIONS = {name: _memo(fn) for name, fn in {"lidar": _resolve_lidar, "motion": _resolve_motion,
+                                                       "radio": _resolve_radio, "comm": _resolve_comm}.items()}
 
 
 # ---------------------------------------------------------------------------------------- seeds ----

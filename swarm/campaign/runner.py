@@ -18,7 +18,7 @@ from .store import THRESHOLD_COLUMNS, ResultsStore
 NONDETERMINISTIC_COLUMNS = ("wall_time_s", "worker_pid", "worker_rss_mb", "part", "swarm_version")
 TIMESERIES_COLUMNS = ("tick", "explored", "coverage", "distance_m", "collisions", "msgs_sent", "bytes_sent",
                       "msgs_delivered", "bytes_delivered", "msgs_dropped", "comm_groups", "biggest_group",
-                      "all_connected")
+                      "all_connected", "mean_pair_distance_m")
 
 
 def swarm_version() -> str:

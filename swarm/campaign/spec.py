@@ -52,8 +52,10 @@ import itertools
 import json
 import tomllib
 from dataclasses import dataclass, field
+from functools import cached_property, lru_cache
 from pathlib import Path
-from typing import Any, Mapping
+from collections.abc import Mapping
+from typing import Any
 
 from maps.errors import InvalidInput
 
@@ -106,8 +108,9 @@ class CampaignSpec:
     def timeseries_every(self) -> int:
         return int(self.output.get("timeseries_every", 10))
 
-    def runs(self) -> list[Run]:
-        """Every run, in a stable order (grid order, then replicate); specs validated."""
+    def cells(self) -> list[dict[str, Option]]:
+        """The grid cells (one option per dimension): the cross product minus ``[[exclude]]`` plus
+        ``[[include]]``, in a stable order."""
         cells = [dict(zip(self.grid, combo)) for combo in itertools.product(*self.grid.values())]
         cells = [c for c in cells if not any(_matches(c, rule) for rule in self.exclude)]
         for k, rule in enumerate(self.include):
@@ -117,16 +120,24 @@ class CampaignSpec:
                     raise InvalidInput(f"include[{k}].{dim}", None, "a value for every grid dimension")
                 extra[dim] = self._option(dim, rule[dim], f"include[{k}].{dim}")
             cells.append(extra)
+        return cells
+
+    def runs(self) -> list[Run]:
+        """Every run, in a stable order (grid order, then replicate); specs validated (built once, cached)."""
+        return list(self._runs)
+
+    @cached_property
+    def _runs(self) -> tuple[Run, ...]:
         out: list[Run] = []
         seen: set[str] = set()
-        for cell in cells:
+        for cell in self.cells():
             for rep in range(self.replicates):
-                run = self._run(len(out), cell, rep)
+                run = self.run_for(cell, rep, len(out))
                 if run.key in seen:
                     continue  # an [[include]] that repeats a grid cell
                 seen.add(run.key)
                 out.append(run)
-        return out
+        return tuple(out)
 
     def _option(self, dim: str, value: Any, where: str) -> Option:
         for opt in self.grid.get(dim, ()):
@@ -134,13 +145,12 @@ class CampaignSpec:
                 return opt
         return _parse_option(dim, value, where)
 
-    def _run(self, index: int, cell: Mapping[str, Option], rep: int) -> Run:
+    def run_for(self, cell: Mapping[str, Option], rep: int, index: int = 0) -> Run:
+        """The run of a grid cell at replicate ``rep`` (``index``: its position in :meth:`runs`)."""
         kind_opt, size = cell["map"], cell["size"].value
         kind = kind_opt.value["kind"]
         size_key = size if isinstance(size, int) else "x".join(map(str, size))
-        seeds = {"map_seed": derive_seed(self.seed, kind, size_key, rep, "map"),
-                 "spawn_seed": derive_seed(self.seed, kind, size_key, rep, "spawn"),
-                 "run_seed": derive_seed(self.seed, kind, size_key, rep, "run")}
+        seeds = _world_seeds(self.seed, kind, size_key, rep)
         spec: dict[str, Any] = json.loads(json.dumps(self.run))
         spec["seed"] = seeds["run_seed"]
         spec["map"] = {**kind_opt.value, "size": size, "seed": seeds["map_seed"]}
@@ -155,11 +165,19 @@ class CampaignSpec:
         spec["stop"] = {**spec.get("stop", {}), **self.stop}
         spec["record_every"] = self.timeseries_every
         labels = {dim: opt.label for dim, opt in cell.items()}
-        return Run(index=index, cell=labels, replicate=rep, spec=RunSpec.from_mapping(spec), seeds=seeds)
+        return Run(index=index, cell=labels, replicate=rep, spec=RunSpec.from_mapping(spec), seeds=dict(seeds))
 
     def to_json(self) -> str:
         return json.dumps({"format": SPEC_FORMAT, "name": self.name, "seed": self.seed,
                            "replicates": self.replicates, "source": self.source}, sort_keys=True)
+
+
+@lru_cache(maxsize=65536)
+def _world_seeds(campaign_seed: int, kind: str, size_key: int | str, replicate: int) -> dict[str, int]:
+    """Map, spawn and run seeds of one world: a function of (campaign seed, kind, size, replicate) only."""
+    return {"map_seed": derive_seed(campaign_seed, kind, size_key, replicate, "map"),
+            "spawn_seed": derive_seed(campaign_seed, kind, size_key, replicate, "spawn"),
+            "run_seed": derive_seed(campaign_seed, kind, size_key, replicate, "run")}
 
 
 # -------------------------------------------------------------------------------------- parsing ----

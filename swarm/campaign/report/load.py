@@ -8,7 +8,6 @@ takes most of a minute and the report only needs labels and a count.
 
 from __future__ import annotations
 
-import itertools
 import json
 import tomllib
 from dataclasses import dataclass
@@ -19,7 +18,7 @@ import pandas as pd
 
 from maps.errors import InvalidInput
 
-from ..spec import CampaignSpec, _matches, campaign_from_mapping
+from ..spec import CampaignSpec, campaign_from_mapping
 from ..store import ResultsStore
 
 DIMS = ("map", "size", "robots", "spawn", "algorithm", "radio", "comm", "transport")
@@ -102,15 +101,11 @@ def expected_runs(spec: CampaignSpec) -> int:
 
     Two cells with identical run specs (e.g. a comm option that restates a default) share their keys and
     count once, as in :meth:`CampaignSpec.runs`. Seeds depend only on (map kind, size, replicate), so cells
-    equal at replicate 0 are equal at every replicate. Uses the spec's private helpers: a public
-    ``CampaignSpec.cells()`` would be better (asked for in the issue note).
+    equal at replicate 0 are equal at every replicate.
     """
-    cells = [dict(zip(spec.grid, combo)) for combo in itertools.product(*spec.grid.values())]
-    cells = [c for c in cells if not any(_matches(c, rule) for rule in spec.exclude)]
-    for k, rule in enumerate(spec.include):
-        cells.append({dim: spec._option(dim, rule[dim], f"include[{k}].{dim}") for dim in spec.grid if dim in rule})
+    cells = spec.cells()
     try:
-        distinct = {spec._run(0, cell, 0).key for cell in cells}
+        distinct = {spec.run_for(cell, 0).key for cell in cells}
     except InvalidInput:  # a spec this installation cannot build: count distinct option values instead
         distinct = {json.dumps({d: o.value for d, o in c.items()}, sort_keys=True, default=str) for c in cells}
     return len(distinct) * spec.replicates
