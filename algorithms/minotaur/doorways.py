@@ -1,0 +1,192 @@
+"""Doorways as a robot knows them: geometry, which sides they were seen from, whether anyone passed.
+
+Alg. 3 ends with "if any doorway is seen from both sides or was passed through, mark it as explored";
+MAES (reference/maes.md 7.2) marks a doorway explored when a heartbeat brings the same doorway seen with
+the opposite exit direction. We keep the two facts separately (``sides`` bitmask, ``passed``) so they
+merge by OR when doorway lists meet, whatever order messages arrive in.
+
+Doorways are axis-aligned: ``axis`` 0 is an opening that runs along x (a horizontal wall, crossed along
+y), ``axis`` 1 runs along y (a vertical wall, crossed along x), as ``maps.building`` records true doors.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from swarm.api import CELL_M
+
+MATCH_M = 1.25
+"""Two doorway records with the same axis and centres closer than this are the same doorway (two scans of
+a 1 m wall find its gap on each of the wall's two cell rows, 0.5 m apart)."""
+SIDE_CLEAR_M = 0.25
+"""A point is on a side of a doorway when it is this far beyond the wall's face."""
+
+Wire = tuple[float, float, int, float, float, int, int]
+"""A doorway on the wire: (x, y, axis, width, depth, sides, passed)."""
+
+
+@dataclass
+class Doorway:
+    """One doorway; ``x, y`` is the centre of the opening (m), ``width`` along the wall, ``depth`` across."""
+
+    x: float
+    y: float
+    axis: int
+    width: float
+    depth: float
+    sides: int = 0              # bit 0: seen from the low side (-normal), bit 1: from the high side
+    passed: bool = False
+    found_tick: int = 0
+    resolved: bool = False      # local: nothing unseen is left behind it (not shared, re-checked)
+    failed_until: int = -1      # local: the navigator could not get through; skip until this tick
+    _cut: tuple[int, int, int, int] | None = field(default=None, repr=False, compare=False)
+
+    # ---------------------------------------------------------------------------------- geometry ----
+    @property
+    def explored(self) -> bool:
+        return self.sides == 3 or self.passed
+
+    @property
+    def normal(self) -> tuple[float, float]:
+        return (0.0, 1.0) if self.axis == 0 else (1.0, 0.0)
+
+    def across(self, x: float, y: float) -> float:
+        """Signed distance of a point from the door's centre line along the normal."""
+        return y - self.y if self.axis == 0 else x - self.x
+
+    def along(self, x: float, y: float) -> float:
+        """Signed distance of a point from the door's centre along the opening."""
+        return x - self.x if self.axis == 0 else y - self.y
+
+    def side_of(self, x: float, y: float) -> int:
+        """-1 or +1 when the point is clearly on one side of the wall, 0 inside it."""
+        d = self.across(x, y)
+        if abs(d) <= self.depth / 2 + SIDE_CLEAR_M:
+            return 0
+        return 1 if d > 0 else -1
+
+    def in_front(self, x: float, y: float, slack_m: float = 0.5) -> bool:
+        """The point is within the opening's extent along the wall (widened by ``slack_m``)."""
+        return abs(self.along(x, y)) <= self.width / 2 + slack_m
+
+    def point(self, side: int, distance_m: float) -> tuple[float, float]:
+        """The point ``distance_m`` from the wall's face on ``side``, in front of the opening's centre."""
+        nx, ny = self.normal
+        d = side * (self.depth / 2 + distance_m)
+        return self.x + nx * d, self.y + ny * d
+
+    def cut(self) -> tuple[int, int, int, int]:
+        """Cells (r0, c0, r1, c1), inclusive, that close the opening for "without passing a doorway"
+        searches: the opening across the wall's thickness, one cell wider than the gap on each end."""
+        if self._cut is None:
+            half_w, half_d = self.width / 2, self.depth / 2
+            if self.axis == 0:
+                x0, x1, y0, y1 = self.x - half_w, self.x + half_w, self.y - half_d, self.y + half_d
+            else:
+                x0, x1, y0, y1 = self.x - half_d, self.x + half_d, self.y - half_w, self.y + half_w
+            c0, c1 = math.floor(x0 / CELL_M + 1e-6), math.ceil(x1 / CELL_M - 1e-6) - 1
+            r0, r1 = math.floor(y0 / CELL_M + 1e-6), math.ceil(y1 / CELL_M - 1e-6) - 1
+            if self.axis == 0:
+                c0, c1 = c0 - 1, c1 + 1
+            else:
+                r0, r1 = r0 - 1, r1 + 1
+            self._cut = (r0, c0, r1, c1)
+        return self._cut
+
+    def matches(self, other: Doorway) -> bool:
+        return self.axis == other.axis and math.hypot(self.x - other.x, self.y - other.y) < MATCH_M
+
+    # --------------------------------------------------------------------------------------- wire ----
+    def wire(self) -> Wire:
+        return (round(self.x, 3), round(self.y, 3), self.axis, round(self.width, 3), round(self.depth, 3),
+                self.sides, int(self.passed))
+
+    @classmethod
+    def from_wire(cls, w: Wire, tick: int = 0) -> Doorway:
+        x, y, axis, width, depth, sides, passed = w
+        return cls(float(x), float(y), int(axis), float(width), float(depth), int(sides) & 3, bool(passed),
+                   found_tick=tick)
+
+
+def valid_wire(w: object) -> bool:
+    """A received doorway tuple that is safe to use (messages come from other robots: never trust them)."""
+    if not isinstance(w, tuple) or len(w) != 7:
+        return False
+    x, y, axis, width, depth, sides, passed = w
+    nums = (x, y, width, depth)
+    return (all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in nums)
+            and axis in (0, 1) and 0 < width <= 50 and 0 < depth <= 50 and isinstance(sides, int)
+            and isinstance(passed, int) and 0 <= x <= 1e5 and 0 <= y <= 1e5)
+
+
+class DoorwayBook:
+    """The doorways one robot knows, matched by position, merged by OR of their explored facts.
+
+    Lookups go through a grid of ``MATCH_M`` buckets (a match is always in the 3 x 3 buckets around a
+    point), because every heartbeat brings every doorway its sender knows. ``version`` changes whenever a
+    record is added or changes, so derived views can be cached."""
+
+    def __init__(self) -> None:
+        self.doors: list[Doorway] = []
+        self._buckets: dict[tuple[int, int, int], list[Doorway]] = {}
+        self.version = 0
+        self._xy = np.zeros((0, 2))
+        self._wire: tuple[int, tuple[Wire, ...]] = (-1, ())
+
+    def __iter__(self):
+        return iter(self.doors)
+
+    def __len__(self) -> int:
+        return len(self.doors)
+
+    @staticmethod
+    def _key(door: Doorway) -> tuple[int, int, int]:
+        return door.axis, math.floor(door.x / MATCH_M), math.floor(door.y / MATCH_M)
+
+    def find(self, door: Doorway) -> Doorway | None:
+        axis, bx, by = self._key(door)
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                for d in self._buckets.get((axis, bx + dx, by + dy), ()):
+                    if d.matches(door):
+                        return d
+        return None
+
+    def add(self, door: Doorway) -> tuple[Doorway, bool]:
+        """Add or merge; returns (the stored record, whether it is new)."""
+        known = self.find(door)
+        if known is None:
+            self.doors.append(door)
+            self._buckets.setdefault(self._key(door), []).append(door)
+            self._xy = np.vstack([self._xy, [[door.x, door.y]]])
+            self.version += 1
+            return door, True
+        sides, passed = known.sides | door.sides, known.passed or door.passed
+        if (sides, passed) != (known.sides, known.passed):
+            known.sides, known.passed = sides, passed
+            self.version += 1
+        return known, False
+
+    def touch(self) -> None:
+        """A record's explored facts changed in place."""
+        self.version += 1
+
+    def unexplored(self, tick: int) -> list[Doorway]:
+        return [d for d in self.doors if not d.explored and not d.resolved and d.failed_until < tick]
+
+    def near(self, x: float, y: float, radius: float) -> list[int]:
+        """Indices of the doorways whose centre is within ``radius`` of (x, y)."""
+        if not self.doors:
+            return []
+        d2 = (self._xy[:, 0] - x) ** 2 + (self._xy[:, 1] - y) ** 2
+        return np.flatnonzero(d2 <= radius * radius).tolist()
+
+    def wire(self) -> tuple[Wire, ...]:
+        version, wire = self._wire
+        if version != self.version:
+            wire = tuple(d.wire() for d in self.doors)
+            self._wire = (self.version, wire)
+        return wire

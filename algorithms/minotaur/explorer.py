@@ -1,0 +1,553 @@
+"""Minotaur: wall following, spiralling, doorway detection and doorway auctions.
+
+Follows Schmidt, Sørensen, Beregaard and Albano, "Spiralling Human-Inspired Exploration Algorithm with
+Doorway Detection" (``seeds/002``): section 3.1 and Alg. 1 (single robot), section 3.2 and Alg. 2 (many
+robots), section 3.3 and Alg. 3 (doorway detection, :mod:`.detection`), section 3.4 and Alg. 4 (doorway
+auction, :mod:`.auction`), section 3.5 (the Greed fallback), section 4.2 (spiralling, :mod:`.walls`) and
+4.3 (doorway detection details); and MAES's implementation (``reference/maes.md`` section 7.2).
+
+States (``debug["state"]``):
+
+- ``start``: "while no walls or explored areas are in range, move forward" (direct velocity);
+- ``room``: explore the room "while unexplored area is reachable without passing doorways": follow the
+  wall or the edge of explored space in the spin direction (``mode`` ``follow-wall`` / ``follow-edge``,
+  :func:`.walls.choose`), look at a gap that may be a doorway (``inspect``), or, with nothing in visual
+  range, go to the nearest unseen cell in the room (``room-greedy``);
+- ``door``: the room is done (or an auction was won): go through the nearest unexplored doorway in the
+  room, else the nearest one anywhere (:func:`.rooms.choose_door`);
+- ``greedy``: no doorway applies: the nearest unseen cell anywhere (Greed, section 3.5);
+- ``done``: nothing unseen is reachable; stand still and look again now and then.
+
+Every ``scan_every`` ticks the map around the robot is scanned for doorways; a new one is stored, and
+with more than one robot auctioned (Alg. 2 "store and handle doorway (Alg. 4)"); doorways seen from
+both sides or passed through become explored. Every ``share_every`` ticks the robot broadcasts its
+doorway list with its current target (:class:`.messages.DoorwayList`), and a short
+:class:`.messages.Heading` whenever its target changes in between.
+
+Departures from the paper and from MAES, on purpose (details in each module's docstring):
+
+1. **Map sharing** is the runtime's service (``comm.map_sharing``), which merges every update into the
+   receiver's map: MAES's heartbeat merge (only with two heartbeats in one tick, senders' maps only,
+   maes.md section 2 item 4) is not reproduced. Doorway lists travel in their own message at the same
+   cadence (the map message type is the runtime's); the parameter ``share_every`` should match
+   ``comm.share_every`` (both 10 by default), the algorithm cannot read the run's comm section.
+2. **Spiral** (section 4.2) exists here; MAES has none. It is not a separate state: the wall-following
+   sweep keeps following the edge of explored space once no wall end is left (:mod:`.walls`).
+3. **Targets are planned** by the runtime's navigator on the robot's own map; MAES drives straight.
+   Because the navigator plans on seen cells only, a doorway is passed in two steps: to a point 1 m in
+   front of it (from where the lidar sees through), then to ``pass_through_m`` beyond it.
+4. **Doorway detection** works on axis-aligned walls of the grid and accepts a gap as soon as the map
+   shows it (:mod:`.detection`); partially seen gaps become ``inspect`` targets instead of the paper's
+   "move forward the door width" / "move to the intersection" manoeuvres.
+5. **Doorways that lead nowhere new**: before going through a doorway the robot checks that unseen
+   space is reachable behind it without passing another doorway; if not it marks it resolved (locally)
+   and skips it. The paper would walk through and back.
+6. **Doorway or Greed** (``greedy_if_nearer``, on by default): when the room is done and no unexplored
+   doorway is in it, the robot goes to the nearest unseen cell if that is nearer than the nearest
+   unexplored doorway elsewhere. Alg. 1 always takes the doorway; with many robots that sent most of
+   them on long trips to far doorways (measured: half of all robot time on 100 x 100 buildings with 16
+   robots, and 40 % more ticks to 99 %). ``greedy_if_nearer=false`` is the paper's rule.
+7. **Spin split** (Alg. 2): a robot takes counter-clockwise if its rank by id among the robots it
+   knows to be in its room (neighbours in sight and map-update poses from the last 50 ticks, inside the
+   same door-bounded space) is even, clockwise if odd; it re-decides on entering a room.
+8. **Auction**: the paper's rules (the auctioneer bids, floor(n/2) of the n bids win), not MAES's
+   (ceil(n/2), auctioneer never bids); duplicate auctions for one doorway resolve to the lower id.
+9. **Others' targets**: a robot leaves a doorway another robot announced it is going through to it
+   (for 100 ticks), and keeps its greedy targets 3 m from other robots' announced targets (MAES's
+   Minotaur excludes other robots' destinations when it re-targets after a deadlock). Not in the paper.
+10. **Deadlocks**: a target the navigator reports unreachable or blocked is avoided for
+    ``exclude_ticks`` (MAES re-targets after five unchanged coarse positions); a wall end or edge whose
+    unseen cell is still unseen after the robot went to look (a corner the lidar cannot hit) is never
+    chosen again.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from swarm import grid
+from swarm.api import (
+    CELL_M,
+    FREE,
+    SOLID,
+    UNSEEN,
+    Action,
+    Observation,
+    RobotInfo,
+    cell_centre,
+    cell_of,
+)
+from swarm.messages import MapUpdate, MessageError
+
+from . import rooms, walls
+from .auction import Auctions
+from .cells import clip, line_of_sight, local, mask
+from .detection import Pending, cells, scan
+from .doorways import Doorway, DoorwayBook
+from .messages import AuctionResult, Bid, DoorwayFound, DoorwayList, Heading
+from .params import MinotaurParams
+from .peers import Peers
+
+MIN_HOLD_TICKS = 5
+"""A greedy target whose unseen cells were seen is kept at least this long (each new target is a replan)."""
+OTHERS_FRESH_TICKS = 50
+"""Poses of other robots older than this do not count when splitting the spin."""
+IDLE_RECHECK_TICKS = 50
+APPROACH_M = 1.0
+"""A doorway is approached to this far in front of its face before the robot drives through."""
+APPROACH_REACH_M = 0.5
+CLAIM_FRESH_TICKS = 100
+"""A doorway another robot announced it is going through is left to it for this long."""
+TARGET_FRESH_TICKS = 30
+TARGET_AVOID_M = 3.0
+"""Greedy targets keep this far from other robots' current targets (heard within TARGET_FRESH_TICKS)."""
+START_MAX_TICKS = 100
+VIEW_REACH = 2
+"""Cells from a frontier a greedy target may be (swarm.grid's default for a 0.3 m robot)."""
+PASS_CHECK_M = 3.0
+"""Passages through a doorway are watched while the robot is this close to it."""
+GREEDY_MODES = ("room-greedy", "greedy")
+
+
+class Minotaur:
+    name = "minotaur"
+    Params = MinotaurParams
+
+    # --------------------------------------------------------------------------------- lifecycle ----
+    def reset(self, robot: RobotInfo, params: MinotaurParams, rng: np.random.Generator) -> None:
+        self.robot = robot
+        self.p = params
+        self.rng = rng                  # Minotaur is deterministic; kept for the interface's contract
+        self.id = robot.id
+        self.follow_cells = cells(max(robot.lidar_range - params.follow_margin_m, CELL_M))
+        self.edge_cells = round(params.edge_offset_m / CELL_M)
+        self.radius_cells = cells(robot.lidar_range + params.lookahead_m)
+        self.window_cells = self.radius_cells + self.follow_cells + 4
+        # what the robot does
+        self.state = "start"
+        self.mode = "start"
+        self.spin = 1                                            # +1 counter-clockwise, -1 clockwise
+        self.target: tuple[float, float] | None = None
+        self.anchor: tuple[int, int] | None = None               # the unseen cell(s) the target is for
+        self.anchor_box = 0
+        self.chosen_at = -10**9
+        self.idle_until = -1
+        self.travel: tuple[float, float] | None = None           # direction of the last choice (the sweep)
+        self.door: Doorway | None = None                         # the doorway of the ``door`` state
+        self.door_side = 0
+        self.door_phase = ""                                     # approach | through
+        # what it knows
+        self.book = DoorwayBook()
+        self.peers = Peers()
+        self.auctions = Auctions(robot.id, params.auction_ticks, params.result_timeout_ticks)
+        self.excluded: dict[tuple[int, int], int] = {}           # cells the navigator failed to reach
+        self.inspected: set[tuple[int, int]] = set()             # jambs of gaps already looked at
+        self.futile: set[tuple[int, int]] = set()                # anchors still unseen after a visit
+        self.last_side: dict[int, int] = {}                      # doorway index -> side the robot was on
+        self.passed_log: list[tuple[int, Doorway]] = []
+        # per tick
+        self.outbox: list[Any] = []
+        self.announce_now = False
+        self._tick_cache: dict[str, Any] = {}
+        self._obs: Observation | None = None
+        self._debug_doors: tuple[int, list[tuple[float, float, int, float, bool]]] = (-1, [])
+
+    def act(self, obs: Observation) -> Action:
+        self._obs = obs
+        self._tick_cache = {}
+        self.outbox = []
+        if self.travel is None:
+            self.travel = (math.cos(obs.pose.theta), math.sin(obs.pose.theta))
+        self._read_inbox(obs)
+        if obs.tick % self.p.scan_every == self.id % self.p.scan_every:
+            self._scan(obs)
+        self._close_auctions(obs)
+        before = self._heading()
+        action = self._decide(obs)
+        if self.robot.n_robots > 1:
+            if obs.tick % self.p.share_every == 0:
+                self.outbox.append(DoorwayList(self.id, self.book.wire(), *self._heading()))
+            elif self.announce_now or before != self._heading():
+                self.outbox.append(Heading(self.id, *self._heading()))
+        self.announce_now = False
+        return Action(goal=action.goal, velocity=action.velocity, clear_goal=action.clear_goal,
+                      messages=tuple(self.outbox), debug=self._debug())
+
+    # ------------------------------------------------------------------------------------- radio ----
+    def _read_inbox(self, obs: Observation) -> None:
+        tick = obs.tick
+        for m in obs.inbox:
+            if isinstance(m, MapUpdate):
+                self.peers.saw(m.sender, m.pose[0], m.pose[1], tick)
+            elif not _well_formed(m):
+                continue
+            elif isinstance(m, (DoorwayList, Heading)):
+                self.peers.heard(tick, m, self.book)
+            elif isinstance(m, DoorwayFound):
+                self._on_found(obs, m)
+            elif isinstance(m, Bid):
+                self.auctions.receive_bid(tick, m)
+            elif isinstance(m, AuctionResult):
+                door, _ = self.book.add(Doorway.from_wire(m.door, tick))
+                if self.auctions.won(tick, m) and self.state != "door" and not door.explored:
+                    self._go_through(door, m.side, "auction")
+        self.auctions.expire(tick)
+
+    def _heading(self) -> tuple[tuple[float, float], tuple]:
+        """(target or NaNs, the doorway being passed or ()), as heartbeats and headings carry them."""
+        target = self.target if self.target is not None else (math.nan, math.nan)
+        door = self.door.wire() if self.state == "door" and self.door is not None else ()
+        return target, door
+
+    def _on_found(self, obs: Observation, m: DoorwayFound) -> None:
+        """Alg. 4 on the receiving side: bid if the doorway is reachable on the auctioneer's side without
+        passing another doorway."""
+        door, _ = self.book.add(Doorway.from_wire(m.door, obs.tick))
+        mine = self.auctions.running_for(door)
+        if mine is not None:
+            if m.sender > self.id:
+                return                           # ours goes on; the other auctioneer withdraws
+            self.auctions.withdraw(obs.tick, mine)
+        if door.explored or self.state == "door":
+            return
+        distance = self._door_distance(obs, door, m.side)
+        if math.isfinite(distance):
+            self.outbox.append(self.auctions.bid(obs.tick, m, distance))
+
+    def _close_auctions(self, obs: Observation) -> None:
+        for auction, result in self.auctions.close_due(obs.tick):
+            self.outbox.append(result)
+            if self.id in result.winners and self.state != "door" and not auction.door.explored:
+                self._go_through(auction.door, auction.side, "auction")
+
+    # ---------------------------------------------------------------------------------- doorways ----
+    def _scan(self, obs: Observation) -> None:
+        """Alg. 3: find doorways around the robot, auction new ones, mark sides seen and passages."""
+        for door in self._detected(obs)[0]:
+            door.found_tick = obs.tick
+            stored, new = self.book.add(door)
+            if new:
+                self._announce(obs, stored)
+        x, y = obs.pose.x, obs.pose.y
+        for k in self.book.near(x, y, self.robot.lidar_range):
+            d = self.book.doors[k]
+            side = d.side_of(x, y)
+            if side == 0:
+                continue
+            if not d.sides & _bit(side) and line_of_sight(obs.known, (x, y), (d.x, d.y)):
+                d.sides |= _bit(side)                      # seen from this side
+                self.book.touch()
+            if math.hypot(d.x - x, d.y - y) < PASS_CHECK_M and d.in_front(x, y, 1.0):
+                if self.last_side.get(k, side) == -side:
+                    self._passed(obs.tick, d)
+                self.last_side[k] = side
+
+    def _announce(self, obs: Observation, door: Doorway) -> None:
+        """Alg. 2 "store & handle doorway": auction it when other robots may be around."""
+        if self.robot.n_robots < 2 or self.state == "door" or door.explored:
+            return
+        side = door.side_of(obs.pose.x, obs.pose.y)
+        if side == 0 or self.auctions.running_for(door) is not None:
+            return
+        own = self._door_distance(obs, door, side)
+        if math.isfinite(own):
+            self.outbox.append(self.auctions.start(obs.tick, door, side, own))
+
+    def _passed(self, tick: int, door: Doorway) -> None:
+        if not door.passed:
+            door.passed = True
+            self.book.touch()
+            self.passed_log.append((tick, door))
+
+    def _door_distance(self, obs: Observation, door: Doorway, side: int) -> float:
+        _, cut = self._spaces(obs)
+        start = rooms.snap(cut, (obs.pose.x, obs.pose.y))
+        if start is None:
+            return math.inf
+        return rooms.door_distance(cut, start, door, side)
+
+    def _go_through(self, door: Doorway, side: int, why: str) -> None:
+        """Go through ``door`` from ``side``: first to a point in front of it, from where the lidar sees
+        through (the navigator plans on known cells only), then to a point beyond it."""
+        self.state = "door"
+        self.mode = why
+        self.door = door
+        self.door_side = side
+        self.door_phase = "approach"
+        self.announce_now = True
+        self._set_target(door.point(side, APPROACH_M), None, 0)
+
+    # --------------------------------------------------------------------------------- decisions ----
+    def _decide(self, obs: Observation) -> Action:
+        nav = obs.nav.state
+        tick = obs.tick
+        if nav in ("unreachable", "blocked") and self.target is not None and obs.nav.goal == self.target:
+            self._exclude(self.target, tick)
+            if self.state == "door" and self.door is not None:
+                self.door.failed_until = tick + self.p.exclude_ticks
+                self.state = "room"
+                self.announce_now = True
+            self.target = None
+        if self.state == "start":
+            if tick < START_MAX_TICKS and not self._wall_in_range(obs) and self._ahead_clear(obs):
+                return Action(velocity=(self.robot.max_speed, 0.0))
+            self.state = "room"
+            self._choose_spin(obs)
+        if self.state == "door":
+            action = self._through_door(obs)
+            if action is not None:
+                return action
+        if self._needs_decision(obs):
+            if self.anchor is not None and self.target is not None and self._anchor_unseen(obs.known):
+                self.futile.add(self.anchor)     # went to look and it is still unseen: an occluded corner
+            self._choose(obs)
+        if self.target is None:
+            return Action(velocity=(0.0, 0.0), clear_goal=True)
+        return Action(goal=self.target)
+
+    def _through_door(self, obs: Observation) -> Action | None:
+        """The ``door`` state: approach, then pass; None once through (the robot is in a new room)."""
+        assert self.door is not None
+        door = self.door
+        x, y = obs.pose.x, obs.pose.y
+        through = door.side_of(x, y) == -self.door_side and door.in_front(x, y, 1.0)
+        arrived = (obs.nav.state == "reached" and obs.nav.goal == self.target) or (
+            self.target is not None and math.hypot(self.target[0] - x, self.target[1] - y) < APPROACH_REACH_M)
+        if through or (arrived and self.door_phase == "through"):
+            self._passed(obs.tick, door)
+            door.sides |= _bit(-self.door_side)
+            self.book.touch()
+            self.state = "room"
+            self.target = None
+            self.announce_now = True
+            self._choose_spin(obs)
+            return None
+        if arrived:
+            self.door_phase = "through"
+            self._set_target(door.point(-self.door_side, self.p.pass_through_m), None, 0, obs)
+        return Action(goal=self.target)
+
+    def _needs_decision(self, obs: Observation) -> bool:
+        if self.target is None:
+            return obs.tick >= self.idle_until
+        age = obs.tick - self.chosen_at
+        if obs.nav.state == "reached" and obs.nav.goal == self.target:
+            return True
+        if math.hypot(self.target[0] - obs.pose.x, self.target[1] - obs.pose.y) < self.p.reach_m:
+            return True
+        if age >= self.p.recheck_ticks:
+            return True
+        if self.mode not in GREEDY_MODES:
+            return False        # a follow target is a place on the lane: keep going even when its anchor is seen
+        return age >= MIN_HOLD_TICKS and not self._anchor_unseen(obs.known)
+
+    def _anchor_unseen(self, known: np.ndarray) -> bool:
+        if self.anchor is None:
+            return True
+        r, c = self.anchor
+        k = self.anchor_box
+        return bool((known[max(r - k, 0):r + k + 1, max(c - k, 0):c + k + 1] == UNSEEN).any())
+
+    def _choose(self, obs: Observation) -> None:
+        """Alg. 1/2's body: follow in the room, else the nearest unseen in the room, else a doorway in the
+        room, else the nearer of a doorway elsewhere and the nearest unseen cell (Greed), else nothing."""
+        tick = obs.tick
+        self.excluded = {c: t for c, t in self.excluded.items() if t > tick}
+        if self._follow_target(obs) is not None:
+            return
+        here = (obs.pose.x, obs.pose.y)
+        space, cut = self._spaces(obs)
+        blocked = mask(self.excluded, obs.known.shape)
+        views = rooms.view_cells(obs.known, space, VIEW_REACH)
+        if blocked is not None:
+            views &= ~blocked
+        avoid = self.peers.targets_mask(obs.known.shape, tick, TARGET_FRESH_TICKS, TARGET_AVOID_M)
+        start = rooms.snap(cut, here)
+        if start is not None:
+            found = rooms.nearest_in_room(cut, start, views & ~avoid) if avoid is not None else None
+            if found is None:
+                found = rooms.nearest_in_room(cut, start, views)
+            if found is not None:
+                self._set_greedy("room", "room-greedy", found[0], obs)
+                return
+        choice = None
+        start_any = rooms.snap(space, here)
+        if start_any is not None:
+            claimed = self.peers.claimed(tick, CLAIM_FRESH_TICKS)
+            doors = [d for d in self.book.unexplored(tick) if not any(c.matches(d) for c in claimed)]
+            choice = rooms.choose_door(space, cut if start is not None else space, start or start_any, doors, views)
+            if choice is not None and choice[2]:
+                self._go_through(choice[0], choice[1], "door-in-room")
+                return
+        cell = clip(cell_of(*here), obs.known.shape)
+        exclude = blocked if avoid is None else (avoid if blocked is None else blocked | avoid)
+        found = grid.nearest_reachable_unseen(obs.known, cell, radius_m=self.robot.radius, exclude=exclude)
+        if found is None and avoid is not None:
+            found = grid.nearest_reachable_unseen(obs.known, cell, radius_m=self.robot.radius, exclude=blocked)
+        if choice is not None and (found is None or not self.p.greedy_if_nearer or choice[3] <= found[1]):
+            self._go_through(choice[0], choice[1], "door-anywhere")
+            return
+        if found is not None:
+            self._set_greedy("greedy", "greedy", found[0], obs)
+            return
+        self.state, self.mode = "done", "done"
+        self.target = None
+        self.idle_until = tick + IDLE_RECHECK_TICKS
+
+    def _follow_target(self, obs: Observation) -> walls.FollowTarget | None:
+        """Alg. 1 "if wall or explored area in visual range && unexplored area ahead: follow it"."""
+        kw, origin = self._window(obs)
+        cut_w = rooms.cut_doors(grid.configuration_space(kw, radius_m=self.robot.radius), self.book, origin)
+        start = grid.nearest_in(cut_w, local(cell_of(obs.pose.x, obs.pose.y), origin, kw.shape), rooms.SNAP_CELLS)
+        if start is None:
+            return None
+        room_dist = grid.distance_field(cut_w, [start])
+        inspect: list[tuple[int, int, int, int]] = []
+        jambs: dict[tuple[int, int], tuple[int, int]] = {}
+        if self.p.inspect_doorways:
+            for r, c, dr, dc, jamb in self._detected(obs)[1]:
+                if jamb not in self.inspected:
+                    inspect.append((r - origin[0], c - origin[1], dr, dc))
+                    jambs[(r - origin[0], c - origin[1])] = jamb
+        assert self.travel is not None
+        ft = walls.choose(kw, cut_w, room_dist, start, self.travel, self.spin, self.radius_cells, self.follow_cells,
+                          self.edge_cells, inspect, mask(self.excluded, kw.shape, origin),
+                          mask(self.futile, kw.shape, origin))
+        if ft is None:
+            return None
+        if ft.kind == "inspect":
+            self.inspected.add(jambs[ft.anchor])
+        self.state, self.mode = "room", ("inspect" if ft.kind == "inspect" else "follow-" + ft.kind)
+        cell = (ft.cell[0] + origin[0], ft.cell[1] + origin[1])
+        self._set_target(cell_centre(*cell), (ft.anchor[0] + origin[0], ft.anchor[1] + origin[1]), 0, obs)
+        return ft
+
+    def _set_greedy(self, state: str, mode: str, cell: tuple[int, int], obs: Observation) -> None:
+        self.state, self.mode = state, mode
+        self._set_target(cell_centre(*cell), cell, VIEW_REACH + 1, obs)
+
+    def _set_target(self, xy: tuple[float, float], anchor: tuple[int, int] | None, box: int,
+                    obs: Observation | None = None) -> None:
+        self.target = (float(xy[0]), float(xy[1]))
+        self.anchor = anchor
+        self.anchor_box = box
+        obs = obs or self._obs
+        if obs is not None:
+            self.chosen_at = obs.tick
+            dx, dy = self.target[0] - obs.pose.x, self.target[1] - obs.pose.y
+            n = math.hypot(dx, dy)
+            if n > 0.3:
+                self.travel = (dx / n, dy / n)
+
+    def _choose_spin(self, obs: Observation) -> None:
+        """Alg. 2: half the robots in the room counter-clockwise, half clockwise (by rank of id among the
+        robots known to be in the same door-bounded space around the robot)."""
+        if self.p.spin != "split":
+            self.spin = 1 if self.p.spin == "ccw" else -1
+            return
+        kw, origin = self._window(obs)
+        space_w = rooms.cut_doors(grid.configuration_space(kw, radius_m=self.robot.radius), self.book, origin)
+        start = grid.nearest_in(space_w, local(cell_of(obs.pose.x, obs.pose.y), origin, kw.shape), rooms.SNAP_CELLS)
+        for nb in obs.neighbours:          # read only here: the runtime builds them lazily
+            self.peers.saw(nb.id, nb.x, nb.y, obs.tick)
+        ids = [self.id]
+        if start is not None:
+            dist = grid.distance_field(space_w, [start])
+            for j, x, y in self.peers.fresh_poses(obs.tick, OTHERS_FRESH_TICKS):
+                r, c = cell_of(x, y)
+                inside = 0 <= r - origin[0] < kw.shape[0] and 0 <= c - origin[1] < kw.shape[1]
+                cell = grid.nearest_in(space_w, local((r, c), origin, kw.shape), 2)
+                if inside and cell is not None and np.isfinite(dist[cell]):
+                    ids.append(j)
+        self.spin = 1 if sorted(ids).index(self.id) % 2 == 0 else -1
+
+    # ------------------------------------------------------------------------------------- helpers ----
+    def _window(self, obs: Observation) -> tuple[np.ndarray, tuple[int, int]]:
+        """The knowledge map around the robot (lidar range + look-ahead + follow distance), cached per tick."""
+        cached = self._tick_cache.get("window")
+        if cached is None:
+            r, c = cell_of(obs.pose.x, obs.pose.y)
+            h, w = obs.known.shape
+            k = self.window_cells
+            r0, c0 = max(r - k, 0), max(c - k, 0)
+            cached = (obs.known[r0:min(r + k + 1, h), c0:min(c + k + 1, w)], (r0, c0))
+            self._tick_cache["window"] = cached
+        return cached
+
+    def _detected(self, obs: Observation) -> tuple[list[Doorway], list[Pending]]:
+        """Doorways and pending gaps in the window around the robot (cached per tick)."""
+        cached = self._tick_cache.get("detected")
+        if cached is None:
+            kw, origin = self._window(obs)
+            cached = scan(kw, self.p.min_door_width_m, self.p.max_door_width_m, self.p.wall_continue_m, origin)
+            self._tick_cache["detected"] = cached
+        return cached
+
+    def _spaces(self, obs: Observation) -> tuple[np.ndarray, np.ndarray]:
+        """The robot's configuration space and the same with every known doorway closed (cached per tick)."""
+        cached = self._tick_cache.get("spaces")
+        if cached is None:
+            space = grid.configuration_space(obs.known, radius_m=self.robot.radius)
+            cached = (space, rooms.cut_doors(space, self.book))
+            self._tick_cache["spaces"] = cached
+        return cached
+
+    def _exclude(self, xy: tuple[float, float], tick: int) -> None:
+        r, c = cell_of(*xy)
+        for dr in (-1, 0, 1):
+            for dc in (-1, 0, 1):
+                self.excluded[(r + dr, c + dc)] = tick + self.p.exclude_ticks
+
+    def _wall_in_range(self, obs: Observation) -> bool:
+        kw, origin = self._window(obs)
+        rr, cc = np.nonzero(kw == SOLID)
+        if not rr.size:
+            return False
+        x = (cc + origin[1] + 0.5) * CELL_M - obs.pose.x
+        y = (rr + origin[0] + 0.5) * CELL_M - obs.pose.y
+        return bool((x * x + y * y <= self.robot.lidar_range ** 2).any())
+
+    def _ahead_clear(self, obs: Observation) -> bool:
+        x, y, th = obs.pose
+        for d in (0.5, 1.0, 1.5):
+            r, c = cell_of(x + d * math.cos(th), y + d * math.sin(th))
+            if not (0 <= r < obs.known.shape[0] and 0 <= c < obs.known.shape[1]) or obs.known[r, c] != FREE:
+                return False
+        return True
+
+    def _doorways_view(self) -> list[tuple[float, float, int, float, bool]]:
+        version, view = self._debug_doors
+        if version != self.book.version:
+            view = [(d.x, d.y, d.axis, d.width, d.explored) for d in self.book.doors]
+            self._debug_doors = (self.book.version, view)
+        return view
+
+    def _debug(self) -> dict[str, Any]:
+        """For the viewer: state and mode, spin, target, the doorway being passed, every known doorway
+        (x, y, axis, width, explored) and the auctions this robot runs."""
+        return {"state": self.state, "mode": self.mode, "spin": "ccw" if self.spin > 0 else "cw",
+                "target": self.target, "door": self.door.wire() if self.state == "door" and self.door else None,
+                "doorways": self._doorways_view(), "auctions": sorted(self.auctions.open)}
+
+
+def _well_formed(m: Any) -> bool:
+    """A Minotaur message whose fields are safe to use (the codec validates what comes over the wire;
+    in-process delivery hands over the sender's object, so check again). A doorway list is checked
+    entry by entry when merged, only for the entries that changed: it is the bulk of the traffic."""
+    if isinstance(m, DoorwayList):
+        return isinstance(m.doors, tuple) and Heading(m.sender, m.target, m.door).is_valid()
+    check = getattr(m, "validate", None)
+    if check is None:
+        return False
+    try:
+        check()
+    except (MessageError, TypeError, ValueError, AttributeError):
+        return False
+    return True
+
+
+def _bit(side: int) -> int:
+    return 1 if side < 0 else 2

@@ -1,0 +1,293 @@
+"""TNF, The Next Frontier: frontier utility = information gain + distance term - coordination penalty.
+
+Sources: Colares and Chaimowicz, "The Next Frontier: combining information gain and distance cost for
+decentralized multi-robot exploration", ACM SAC 2016 (its full text was not available to us; the public
+descriptions are the two below); the Minotaur paper (``seeds/002_4d965c322f298e5f.txt``) section 2.2:
+TNF scores frontiers by information gain and the cost of getting there, and "each robot stores the newest
+destination received from each other robot. When the robot decides upon the next frontier to explore, a
+wavefront will be created from each stored destination, reducing the score of each frontier near it";
+and how MAES implements TNF and FF-TNF (reference/maes.md section 7.3), whose structure and constants we
+keep. The utility terms are in :mod:`algorithms.tnf_utility`.
+
+**Behaviour.** A robot decides when it has no destination, reached it, its destination was seen (no
+unseen cell left in view reach of it), the navigator reports it ``unreachable`` or ``blocked``, or it
+made no progress for ``deadlock_ticks`` (the last three exclude that destination for ``exclude_ticks``).
+To decide it clusters the frontier cells of its own map (:func:`swarm.grid.frontier_clusters`), scores
+each reachable cluster with ``U = I + D - C`` and drives to the best one's target. It broadcasts the
+chosen destination (:class:`Destination`) at once and every ``announce_every`` ticks while it pursues it;
+each receiver keeps the newest destination of each sender. A robot that has heard nothing from others has
+no penalty. After a collision it backs off, then steps to a random free cell about 1 m away (MAES's
+collision mitigation; the draw uses the ``rng`` given to ``reset``) and decides again. Maps are shared
+by the runtime's map-sharing service, as for every algorithm.
+
+**Departures** from MAES's implementation (its bugs, reference/maes.md section 2.1, and its shortcuts)
+and, where marked, from the paper's description:
+
+1. *Distance term well defined.* MAES uses ``w = sqrt(sum_c |robot - c| / Dmax)`` summed over the
+   frontier's cells, so ``w > 1`` for any frontier of a few cells and ``(1 - w)^(beta-1)`` becomes large and
+   negative (beta = 10) or flips sign with the parity of beta. Here ``w = d / d_max`` with ``d`` the
+   robot's **path length** to the frontier's target on its own configuration space (MAES: straight
+   lines) and ``d_max`` the largest over the candidates, so ``w`` is in [0, 1], and the Beta kernel is
+   divided by its maximum so D is in [0, 1] (unscaled, alpha = beta = 8 peaks at 6e-5 and would never
+   matter).
+2. *Information gain on the same scale.* MAES divides the Gaussian sum by the number of frontiers, a
+   per-decision constant that leaves I anywhere from below 1 to above 100 and lets it swamp D. We divide
+   by the largest candidate's sum instead (also a per-decision constant, so the ranking by I alone is
+   unchanged), which puts I in (0, 1]. The Gaussian and its constants (A = 5, B = 0.5, C = 0.1; a cell's
+   value is 0.5 when unseen, 0 otherwise) are MAES's.
+3. *Coordination penalty with the right sign, from destinations, for every frontier.* MAES's plain TNF
+   subtracts ``sum over sensed robots of sqrt(sum_c |p_r - c| / Dmax_r)``, which grows with distance and so
+   penalises frontiers *far* from the others (and computes p_r from a relative bearing as if it were
+   global); its FF-TNF subtracts a wavefront from the announced destinations but clears the destination
+   list after scoring the *first* frontier. Here, following the paper, one wavefront (a geodesic distance
+   field through non-solid cells, bounded at ``penalty_radius_m``) from all stored destinations lowers
+   every frontier by ``max(0, 1 - d / penalty_radius_m)``.
+4. *Destinations travel over the radio.* MAES broadcasts (map, id, destination) every 20 ticks only when
+   another robot is sensed, stops the robot for that tick and merges maps by reference on the highest id.
+   Here the destination is broadcast when chosen and every ``announce_every`` ticks; whoever the radio
+   reaches hears it; maps go through the runtime's map-sharing service.
+5. *Conflicts are resolved at once* (``yield_on_conflict``; an addition to the paper). Robots that start together all choose the
+   same frontier in the same tick, before anyone has heard anyone; the paper and MAES use destinations
+   only at a robot's next decision, so they would travel together to the first frontier. A robot that
+   hears a lower-id robot announce a *new* destination within ``penalty_radius_m / 2`` of its own decides
+   again, with the penalty. Re-announcements of a destination it already stored do not count (its last
+   decision included them), and a robot yields at most once between two decisions of its own (reached,
+   seen, unreachable...), which bounds the cascade of 16 robots spawned together yielding to each
+   other's every new choice (150 x 150 building, first 3000 ticks: ~1100 yields without the two rules,
+   ~800 with them, against ~1000 decisions of their own).
+6. *Frontiers and targets.* Frontier cells are FREE 0.5 m cells with an UNSEEN 4-neighbour (the
+   runtime's rule; MAES: 1 m tiles with an unseen 8-neighbour). The target is the reachable view cell
+   nearest the cluster's representative cell (MAES: the integer mean of the first, middle and last cells,
+   which can fall inside a wall), and the runtime's navigator drives there.
+7. *Recovery.* MAES's HardReset after 5 (cumulative, not consecutive) colliding ticks is replaced by the
+   no-progress watchdog and time-limited exclusions shared with Greed (:mod:`algorithms.recovery`); MAES
+   TNF drops an unreachable frontier only for the current decision.
+8. ``forget_ticks`` (default 0 = never, as the paper) can make stored destinations expire (an addition).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from maps.params import check_bool, check_float, check_int
+from swarm.api import CELL_M, Action, Observation, RobotInfo, cell_centre, cell_of
+from swarm.grid import configuration_space
+from swarm.grid.cspace import DEFAULT_MARGIN_M
+from swarm.grid.targets import default_view_reach_cells
+from swarm.messages import MessageError, message
+
+from .recovery import Backoff, Exclusions, Watchdog, unseen_near
+from .tnf_utility import FrontierScore, score_frontiers
+
+
+@message("tnf.destination")
+@dataclass(frozen=True)
+class Destination:
+    """Where ``sender`` is heading: the target of the frontier it chose, metres."""
+
+    sender: int
+    x: float
+    y: float
+
+    def validate(self) -> None:
+        for v in (self.x, self.y):
+            if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
+                raise MessageError("tnf.destination: x and y must be finite numbers")
+
+
+@dataclass(frozen=True)
+class TNFParams:
+    alpha: float = 1.0               # Beta-kernel shape of the distance term (MAES 2024 campaign: 1, 10;
+    beta: float = 10.0               # the 2022 MAES paper: 8, 8)
+    penalty_radius_m: float = 0.0    # coordination wavefront reach; 0 = the lidar range
+    announce_every: int = 20         # re-broadcast the destination this often (MAES: 20 ticks)
+    forget_ticks: int = 0            # drop a destination not refreshed for this long; 0 = keep the newest
+    yield_on_conflict: bool = True   # decide again when a lower-id robot announces a nearby destination
+    min_frontier_cells: int = 1      # smaller frontier clusters are ignored
+    deadlock_ticks: int = 50         # no progress this long -> exclude the destination; 0 disables
+    progress_m: float = 0.5
+    exclude_ticks: int = 300
+    exclude_radius_m: float = 1.0
+    backoff_ticks: int = 15          # reverse this long after a collision; 0 disables collision mitigation
+    backoff_speed: float = 0.3
+    sidestep_ticks: int = 30         # give the random sidestep after a collision at most this long
+    idle_recheck_ticks: int = 20     # with no frontier left, look again this often
+
+    def __post_init__(self) -> None:
+        check_float("alpha", self.alpha, 1.0, 100.0)
+        check_float("beta", self.beta, 1.0, 100.0)
+        check_float("penalty_radius_m", self.penalty_radius_m, 0.0, 1000.0)
+        check_int("announce_every", self.announce_every, 1, 1_000_000)
+        check_int("forget_ticks", self.forget_ticks, 0, 10_000_000)
+        check_bool("yield_on_conflict", self.yield_on_conflict)
+        check_int("min_frontier_cells", self.min_frontier_cells, 1, 1_000_000)
+        check_int("deadlock_ticks", self.deadlock_ticks, 0, 1_000_000)
+        check_float("progress_m", self.progress_m, 0.0, 100.0, lo_open=True)
+        check_int("exclude_ticks", self.exclude_ticks, 0, 1_000_000)
+        check_float("exclude_radius_m", self.exclude_radius_m, 0.0, 100.0)
+        check_int("backoff_ticks", self.backoff_ticks, 0, 1000)
+        check_float("backoff_speed", self.backoff_speed, 0.0, 10.0, lo_open=True)
+        check_int("sidestep_ticks", self.sidestep_ticks, 1, 10_000)
+        check_int("idle_recheck_ticks", self.idle_recheck_ticks, 1, 1_000_000)
+
+
+SIDESTEP_CELLS = 2   # MAES steps to a neighbouring 1 m tile: 2 cells here
+_SIDESTEPS = tuple((dr * SIDESTEP_CELLS, dc * SIDESTEP_CELLS)
+                   for dr in (-1, 0, 1) for dc in (-1, 0, 1) if (dr, dc) != (0, 0))
+
+
+class TNF:
+    """The Next Frontier (see the module docstring)."""
+
+    name = "tnf"
+    Params = TNFParams
+
+    def reset(self, robot: RobotInfo, params: TNFParams, rng: np.random.Generator) -> None:
+        self.robot = robot
+        self.params = params
+        self.rng = rng
+        self.reach = default_view_reach_cells(robot.radius, DEFAULT_MARGIN_M)
+        self.penalty_radius = params.penalty_radius_m or robot.lidar_range
+        self.destinations: dict[int, tuple[tuple[int, int], int]] = {}   # sender -> (cell, tick heard)
+        self.target: tuple[int, int] | None = None
+        self.goal: tuple[float, float] | None = None
+        self.last_choice: FrontierScore | None = None
+        self.may_yield = True        # at most one yield between two decisions of its own
+        self.yield_now = False
+        self.announced_at = -1
+        self.next_look = 0
+        self.decide = True
+        self.sidestep_pending = False
+        self.sidestep: tuple[tuple[float, float], int] | None = None
+        self.backoff = Backoff(params.backoff_ticks, params.backoff_speed)
+        self.watchdog = Watchdog(params.deadlock_ticks, params.progress_m)
+        self.exclusions = Exclusions(params.exclude_radius_m, params.exclude_ticks)
+
+    # ------------------------------------------------------------------------------------------ act ----
+    def act(self, obs: Observation) -> Action:
+        self._read_inbox(obs)
+        if self.backoff.active(obs.tick) or self.backoff.start_if_collided(obs):
+            self.sidestep_pending = True   # once backed off, sidestep (MAES collision mitigation)
+            return Action(velocity=self.backoff.command())
+        if self.sidestep_pending:
+            self.sidestep_pending = False
+            self.sidestep = self._sidestep(obs)
+            if self.sidestep is not None:
+                return Action(goal=self.sidestep[0])
+        if self.sidestep is not None:
+            goal, until = self.sidestep
+            done = obs.nav.goal == goal and obs.nav.state in ("reached", "unreachable", "blocked")
+            if obs.tick < until and not done:
+                return Action(goal=goal)
+            self.sidestep = None
+            self.decide = True
+        why = self._must_decide(obs)
+        if why is not None:
+            self.may_yield = self.may_yield or why == "own"
+            self._decide(obs)
+        if self.target is None:
+            return Action(velocity=(0.0, 0.0), clear_goal=True)
+        return Action(goal=self.goal, messages=self._announce(obs.tick))
+
+    # ------------------------------------------------------------------------------------- messages ----
+    def _read_inbox(self, obs: Observation) -> None:
+        for msg in obs.inbox:
+            if not isinstance(msg, Destination) or msg.sender == self.robot.id:
+                continue
+            h, w = obs.known.shape
+            r, c = cell_of(msg.x, msg.y)
+            cell = (min(max(r, 0), h - 1), min(max(c, 0), w - 1))
+            known_before = self.destinations.get(msg.sender)
+            self.destinations[msg.sender] = (cell, obs.tick)
+            news = known_before is None or known_before[0] != cell   # a re-announcement changes nothing
+            if (self.params.yield_on_conflict and news and self.may_yield and msg.sender < self.robot.id
+                    and self.target is not None
+                    and CELL_M * math.dist(cell, self.target) < self.penalty_radius / 2):
+                self.may_yield = False
+                self.yield_now = True
+        if self.params.forget_ticks:
+            horizon = obs.tick - self.params.forget_ticks
+            self.destinations = {s: v for s, v in self.destinations.items() if v[1] > horizon}
+
+    def _announce(self, tick: int) -> tuple[Destination, ...]:
+        if self.robot.n_robots < 2 or self.goal is None:
+            return ()
+        if self.announced_at >= 0 and tick - self.announced_at < self.params.announce_every:
+            return ()
+        self.announced_at = tick
+        return (Destination(sender=self.robot.id, x=self.goal[0], y=self.goal[1]),)
+
+    # ------------------------------------------------------------------------------------- deciding ----
+    def _must_decide(self, obs: Observation) -> str | None:
+        """Why the robot must decide now ("own" or "yield"), or None."""
+        if self.target is None:
+            return "own" if self.decide or obs.tick >= self.next_look else None
+        nav = obs.nav if obs.nav.goal == self.goal else None  # a status about an older goal says nothing
+        if nav is not None and nav.state in ("unreachable", "blocked"):
+            self.exclusions.add(self.target, obs.tick)
+            return "own"
+        if self.watchdog.stuck(obs):
+            self.exclusions.add(self.target, obs.tick)
+            self.watchdog.restart(obs)
+            return "own"
+        if self.decide or (nav is not None and nav.state == "reached"):
+            return "own"
+        if not unseen_near(obs.known, self.target, self.reach + 1):
+            return "own"
+        return "yield" if self.yield_now else None
+
+    def _decide(self, obs: Observation) -> None:
+        self.decide = self.yield_now = False
+        previous = self.target
+        reached = obs.nav.state == "reached" and obs.nav.goal == self.goal
+        best = self._best(obs)
+        if best is not None and best.target == previous and reached:
+            # Standing on the target while unseen cells in view reach stay hidden: give it up.
+            self.exclusions.add(best.target, obs.tick)
+            best = self._best(obs)
+        self.last_choice = best
+        if best is None:
+            self.target = self.goal = None
+            self.next_look = obs.tick + self.params.idle_recheck_ticks
+            return
+        self.target = best.target
+        self.goal = cell_centre(*best.target)
+        if self.target != previous:
+            self.watchdog.restart(obs)
+            self.announced_at = -1    # announce the new destination at once
+
+    def _best(self, obs: Observation) -> FrontierScore | None:
+        p = self.params
+        dest = [cell for cell, _ in self.destinations.values()]
+        scores = score_frontiers(obs.known, _clip(cell_of(obs.pose.x, obs.pose.y), obs.known.shape),
+                                 np.array(dest, dtype=np.int64).reshape(-1, 2), alpha=p.alpha, beta=p.beta,
+                                 robot_radius_m=self.robot.radius, penalty_radius_m=self.penalty_radius,
+                                 reach=self.reach, exclude=self.exclusions.mask(obs.known.shape, obs.tick),
+                                 min_size=p.min_frontier_cells)
+        return scores[0] if scores else None
+
+    # ------------------------------------------------------------------------------------ collisions ----
+    def _sidestep(self, obs: Observation) -> tuple[tuple[float, float], int] | None:
+        """MAES TNF's collision mitigation: a random free spot about 1 m away that no sensed robot is
+        near, as (goal, give-up tick); None when there is none."""
+        space = configuration_space(obs.known, self.robot.radius)
+        r, c = cell_of(obs.pose.x, obs.pose.y)
+        h, w = space.shape
+        taken = [cell_of(n.x, n.y) for n in obs.neighbours]
+        options = []
+        for dr, dc in _SIDESTEPS:
+            rr, cc = r + dr, c + dc
+            if 0 <= rr < h and 0 <= cc < w and space[rr, cc] and all(
+                    max(abs(rr - tr), abs(cc - tc)) > SIDESTEP_CELLS for tr, tc in taken):
+                options.append((rr, cc))
+        if not options:
+            return None
+        pick = options[int(self.rng.integers(len(options)))]
+        return cell_centre(*pick), obs.tick + self.params.sidestep_ticks
+
+
+def _clip(cell: tuple[int, int], shape: tuple[int, ...]) -> tuple[int, int]:
+    return min(max(cell[0], 0), shape[0] - 1), min(max(cell[1], 0), shape[1] - 1)

@@ -1,0 +1,134 @@
+"""Minotaur's doorway detection scored against the true doors of generated buildings (issue 7).
+
+    python benchmarks/bench_minotaur_doors.py --seeds 20 --sizes 50 100 --robots 1 4 --workers 2
+
+Every run explores a seeded building to ``--explored`` (99 %) with Minotaur; the doorways all robots
+know at the end (their ``debug["doorways"]``, merged by position) are matched to the building
+generator's true doors (``Map.graph`` edges: centre, axis): a detection is a true positive when a true
+door of the same axis has its centre within ``--match-m`` (1.5 m) and is not matched yet (nearest first).
+Precision = matched detections / detections; recall = matched doors / true doors. The row "detector on
+the true map" runs the detector alone on each fully known map: what the robots could find at best.
+
+Maps and spawns are those of ``benchmarks/compare.py`` for the same seed (``derive_seed``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import math
+import sys
+import time
+from multiprocessing import Pool
+
+import numpy as np
+
+from algorithms.minotaur.detection import detect
+from algorithms.minotaur.doorways import MATCH_M
+from algorithms.minotaur.params import MinotaurParams
+from maps import generate
+from swarm.api import FREE, SOLID
+from swarm.simulation import Simulation
+from swarm.spec import derive_seed
+
+Door = tuple[float, float, int]
+
+
+def true_doors(m) -> list[Door]:
+    return [(float(d["x"]), float(d["y"]), 0 if d["axis"] == "x" else 1) for _, _, d in m.graph.edges(data=True)]
+
+
+def merge(found: list[Door]) -> list[Door]:
+    """One entry per doorway (robots' records of one doorway differ by a cell or two)."""
+    out: list[Door] = []
+    for x, y, a in found:
+        if not any(b == a and math.hypot(x - u, y - v) < MATCH_M for u, v, b in out):
+            out.append((x, y, a))
+    return out
+
+
+def score(found: list[Door], truth: list[Door], match_m: float) -> tuple[int, int, int]:
+    """(true positives, detections, true doors), matching nearest pairs first."""
+    pairs = sorted((math.hypot(x - u, y - v), i, j) for i, (x, y, a) in enumerate(found)
+                   for j, (u, v, b) in enumerate(truth) if a == b and math.hypot(x - u, y - v) <= match_m)
+    used_f: set[int] = set()
+    used_t: set[int] = set()
+    for _, i, j in pairs:
+        if i not in used_f and j not in used_t:
+            used_f.add(i)
+            used_t.add(j)
+    return len(used_f), len(found), len(truth)
+
+
+def run_one(cell: tuple) -> tuple:
+    size, robots, seed, explored, max_ticks, match_m = cell
+    spec = {"seed": derive_seed(seed, "run"),
+            "map": {"kind": "building", "size": size, "seed": derive_seed(seed, "building", size)},
+            "robots": {"count": robots, "spawn": "together", "spawn_seed": derive_seed(seed, "building", size, "spawn")},
+            "algorithm": {"name": "minotaur"}, "radio": {"model": "multiwall"},
+            "stop": {"explored": explored, "max_ticks": max_ticks}}
+    last: dict[int, list] = {}
+
+    def watch(view) -> None:
+        for i, a in enumerate(view.actions):
+            if a is not None and a.debug:
+                last[i] = a.debug["doorways"]
+
+    t0 = time.perf_counter()
+    sim = Simulation(spec, observers=[watch])
+    result = sim.run()
+    found = merge([(x, y, axis) for doors in last.values() for x, y, axis, _, _ in doors])
+    tp, n_found, n_true = score(found, true_doors(sim.truth), match_m)
+    return (size, robots, seed, tp, n_found, n_true, result.summary["explored"], result.summary["ticks"],
+            time.perf_counter() - t0)
+
+
+def truth_map_row(size: int, seeds: int, match_m: float) -> tuple[int, int, int]:
+    p = MinotaurParams()
+    tot = [0, 0, 0]
+    for seed in range(seeds):
+        m = generate("building", size, derive_seed(seed, "building", size))
+        known = np.where(m.solid, SOLID, FREE).astype(np.uint8)
+        doors = [(d.x, d.y, d.axis) for d in detect(known, p.min_door_width_m, p.max_door_width_m, p.wall_continue_m)]
+        for k, v in enumerate(score(doors, true_doors(m), match_m)):
+            tot[k] += v
+    return tot[0], tot[1], tot[2]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--seeds", type=int, default=20)
+    ap.add_argument("--sizes", nargs="+", type=int, default=[50, 100])
+    ap.add_argument("--robots", nargs="+", type=int, default=[1, 4])
+    ap.add_argument("--explored", type=float, default=0.99)
+    ap.add_argument("--max-ticks", type=int, default=100_000)
+    ap.add_argument("--match-m", type=float, default=1.5)
+    ap.add_argument("--workers", type=int, default=2)
+    args = ap.parse_args()
+    cells = [(s, r, seed, args.explored, args.max_ticks, args.match_m)
+             for s, r, seed in itertools.product(args.sizes, args.robots, range(args.seeds))]
+    t0 = time.perf_counter()
+    with Pool(args.workers) as pool:
+        rows = pool.map(run_one, cells, chunksize=1)
+    print("command: python " + " ".join(sys.argv))
+    print(f"{len(rows)} runs in {time.perf_counter() - t0:.0f} s; doorways matched to true doors within "
+          f"{args.match_m} m (same axis)\n")
+    print("| size | robots | runs | explored (min) | true doors | detected | correct | precision | recall |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    total = [0, 0, 0]
+    for s, r in itertools.product(args.sizes, args.robots):
+        sel = [row for row in rows if row[:2] == (s, r)]
+        tp, nf, nt = (sum(row[k] for row in sel) for k in (3, 4, 5))
+        total = [total[0] + tp, total[1] + nf, total[2] + nt]
+        print(f"| {s} | {r} | {len(sel)} | {min(row[6] for row in sel):.3f} | {nt} | {nf} | {tp} | "
+              f"{tp / max(nf, 1):.3f} | {tp / max(nt, 1):.3f} |")
+    tp, nf, nt = total
+    print(f"| all | | {len(rows)} | | {nt} | {nf} | {tp} | {tp / max(nf, 1):.3f} | {tp / max(nt, 1):.3f} |")
+    for s in args.sizes:
+        tp, nf, nt = truth_map_row(s, args.seeds, args.match_m)
+        print(f"| {s} | detector on the true map | {args.seeds} | 1.000 | {nt} | {nf} | {tp} | "
+              f"{tp / max(nf, 1):.3f} | {tp / max(nt, 1):.3f} |")
+
+
+if __name__ == "__main__":
+    main()

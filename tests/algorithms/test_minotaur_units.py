@@ -1,0 +1,238 @@
+"""Minotaur's pieces on their own: parameters, messages, the spin sweep, wall/edge candidates, rooms
+bounded by doorways, and the explorer's contract (deterministic, documented debug, spin split)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from algorithms.minotaur import Minotaur, MinotaurParams, rooms, walls
+from algorithms.minotaur.doorways import Doorway, valid_wire
+from algorithms.minotaur.messages import (
+    AuctionResult,
+    Bid,
+    DoorwayFound,
+    DoorwayList,
+    Heading,
+)
+from maps.errors import InvalidInput
+from swarm import grid
+from swarm.api import FREE, SOLID, UNSEEN
+from swarm.messages import decode, encode
+from swarm.simulation import Simulation
+from tests.algorithms.test_minotaur_doorways import (
+    blank,
+    wall_with_door,
+)
+
+
+# ------------------------------------------------------------------------------------- parameters ----
+@pytest.mark.parametrize("bad", [
+    {"max_door_width_m": 0.1}, {"min_door_width_m": 3.5}, {"spin": "left"}, {"auction_ticks": 1},
+    {"inspect_doorways": 1}, {"follow_margin_m": -1.0}, {"scan_every": 0}, {"reach_m": math.nan},
+])
+def test_bad_parameters_are_refused(bad: dict) -> None:
+    with pytest.raises(InvalidInput):
+        MinotaurParams(**bad)
+
+
+def test_unknown_parameter_is_an_error_naming_it() -> None:
+    with pytest.raises(InvalidInput, match="door_widht"):
+        Simulation({"algorithm": {"name": "minotaur", "params": {"door_widht": 2.0}}})
+
+
+# --------------------------------------------------------------------------------------- messages ----
+WIRE = (16.5, 6.0, 1, 2.0, 1.0, 1, 0)
+
+
+@pytest.mark.parametrize("msg", [
+    DoorwayList(1, (WIRE, (3.0, 4.0, 0, 2.0, 0.5, 3, 1)), (2.0, 3.0), WIRE),
+    DoorwayList(1, (), (math.inf, 0.0), ()),
+    Heading(2, (1.5, 2.5), ()),
+    DoorwayFound(0, 7, WIRE, -1),
+    Bid(3, 0, 7, 12.5),
+    AuctionResult(0, 7, WIRE, -1, (3, 1)),
+])
+def test_messages_survive_the_wire(msg: object) -> None:
+    assert decode(encode(msg)) == msg
+
+
+@pytest.mark.parametrize("wire,ok", [
+    (WIRE, True), ((16.5, 6.0, 2, 2.0, 1.0, 1, 0), False), ((math.nan, 6.0, 1, 2.0, 1.0, 1, 0), False),
+    ((16.5, 6.0, 1, -2.0, 1.0, 1, 0), False), ((16.5, 6.0, 1), False), ("door", False), ((True,) * 7, False),
+])
+def test_received_doorways_are_validated(wire: object, ok: bool) -> None:
+    assert valid_wire(wire) is ok
+
+
+# ------------------------------------------------------------------------------------ spin sweep ----
+def test_spin_sweep_starts_at_the_robot_side_and_turns_to_the_front() -> None:
+    at, east = (10.0, 10.0), (1.0, 0.0)
+    # right (south), front (east), left (north), behind (west) of a robot travelling east
+    rows, cols = np.array([5, 10, 15, 10]), np.array([10, 15, 10, 5])
+    ccw = walls.spin_keys(rows - 0.5, cols - 0.5, at, east, 1)
+    cw = walls.spin_keys(rows - 0.5, cols - 0.5, at, east, -1)
+    assert list(np.argsort(ccw)) == [0, 1, 2, 3]        # counter-clockwise: wall on the right
+    assert list(np.argsort(cw)) == [2, 1, 0, 3]         # clockwise: wall on the left
+
+
+def partially_seen_room() -> np.ndarray:
+    """A 30 x 20 m room known only within 7 m of a robot at (10, 5): 4 m from its south wall."""
+    solid = blank(30, 20)
+    yy, xx = np.mgrid[0:40, 0:60]
+    seen = (xx + 0.5 - 20) ** 2 + (yy + 0.5 - 10) ** 2 <= 14 ** 2
+    known = np.where(solid, SOLID, FREE).astype(np.uint8)
+    known[~seen] = UNSEEN
+    return known
+
+
+def test_candidates_are_wall_ends_and_edges() -> None:
+    known = partially_seen_room()
+    rows, cols, nr, nc, ar, ac, kind = walls.candidates(known)
+    ends = kind == 0
+    assert ends.any() and (~ends).any()
+    assert (known[rows[ends], cols[ends]] == SOLID).all() and (known[ar[ends], ac[ends]] == UNSEEN).all()
+    assert (known[rows[~ends], cols[~ends]] == FREE).all() and (known[ar[~ends], ac[~ends]] == UNSEEN).all()
+    # every wall end continues into the unknown along the wall and its normal points into free space
+    assert (known[rows[ends] + nr[ends], cols[ends] + nc[ends]] == FREE).all()
+
+
+def test_counter_clockwise_follows_the_right_hand_wall_ahead() -> None:
+    known = partially_seen_room()
+    space = grid.configuration_space(known)
+    at = (10, 20)
+    dist = grid.distance_field(space, [at])
+    ccw = walls.choose(known, space, dist, at, (1.0, 0.0), 1, 17, 10, 2, [], None)
+    cw = walls.choose(known, space, dist, at, (1.0, 0.0), -1, 17, 10, 2, [], None)
+    assert ccw is not None and cw is not None
+    assert ccw.kind == "wall" and ccw.cell[1] > at[1]                 # ahead, along the south wall
+    assert ccw.cell[0] == pytest.approx(1 + 10, abs=1)               # 5 m (follow distance) off the wall face
+    assert cw.cell[0] > at[0]                                        # clockwise goes the other way round
+
+
+# ----------------------------------------------------------------------------------------- rooms ----
+def test_a_doorway_closes_the_room() -> None:
+    m = wall_with_door()
+    known = np.where(m.solid, SOLID, FREE).astype(np.uint8)
+    door = Doorway(12.5, 6.0, 1, 2.0, 1.0)
+    space = grid.configuration_space(known)
+    cut = rooms.cut_doors(space, [door])
+    left, right = (12, 10), (12, 40)
+    assert np.isfinite(grid.distance_field(space, [left])[right])
+    assert not np.isfinite(grid.distance_field(cut, [left])[right])
+    assert math.isfinite(rooms.door_distance(cut, left, door, -1))
+    assert rooms.door_distance(cut, left, door, 1) == math.inf        # the far side: only through the door
+
+
+def test_choose_door_skips_doorways_with_nothing_behind() -> None:
+    m = wall_with_door()
+    known = np.where(m.solid, SOLID, FREE).astype(np.uint8)
+    space = grid.configuration_space(known)
+    door = Doorway(12.5, 6.0, 1, 2.0, 1.0)
+    views = rooms.view_cells(known, space, 2)
+    assert rooms.choose_door(space, rooms.cut_doors(space, [door]), (12, 10), [door], views) is None
+    assert door.resolved                                              # everything behind it is known
+    known[8:16, 34:40] = UNSEEN                                       # something unseen in the far room
+    views = rooms.view_cells(known, grid.configuration_space(known), 2)
+    door.resolved = False
+    choice = rooms.choose_door(space, rooms.cut_doors(space, [door]), (12, 10), [door], views)
+    assert choice is not None and choice[0] is door and choice[1] == -1 and choice[2]
+
+
+# -------------------------------------------------------------------------------------- explorer ----
+def small_run(robots: int = 2, params: dict | None = None, ticks: int = 300):
+    debug: list[list[dict]] = []
+
+    def watch(view) -> None:
+        debug.append([dict(a.debug) for a in view.actions])
+
+    spec = {"robots": {"count": robots}, "algorithm": {"name": "minotaur", "params": params or {}}, "seed": 5,
+            "stop": {"max_ticks": ticks}}
+    poses = np.array([[4.0 + i, 6.0, 0.0] for i in range(robots)])
+    result = Simulation(spec, truth=wall_with_door(), observers=[watch], start_poses=poses).run()
+    return result, debug
+
+
+def test_same_spec_same_run() -> None:
+    a, _ = small_run()
+    b, _ = small_run()
+    assert a.summary["ticks"] == b.summary["ticks"] and a.summary["final_poses"] == b.summary["final_poses"]
+
+
+def test_debug_reports_state_target_and_doorways() -> None:
+    _, debug = small_run(robots=1)
+    states = {d[0]["state"] for d in debug}
+    assert states <= {"start", "room", "door", "greedy", "done"} and "room" in states
+    last = debug[-1][0]
+    assert last["spin"] in ("ccw", "cw") and isinstance(last["doorways"], list)
+    assert any(d[0]["target"] is not None for d in debug)
+
+
+def test_robots_in_one_room_split_their_spin() -> None:
+    _, debug = small_run(robots=2)
+    assert {debug[1][0]["spin"], debug[1][1]["spin"]} == {"ccw", "cw"}          # Alg. 2
+    _, debug = small_run(robots=2, params={"spin": "ccw"})
+    assert {debug[1][0]["spin"], debug[1][1]["spin"]} == {"ccw"}                # Alg. 1 for everyone
+
+
+def test_explorer_class_contract() -> None:
+    assert Minotaur.name == "minotaur" and Minotaur.Params is MinotaurParams
+
+
+BAD_MESSAGES = [
+    DoorwayList(0, ([1, 2],), (1.0, 2.0), ()), DoorwayList(0, ((1.0,) * 7, ("a",) * 7), (math.nan, 1.0), ()),
+    DoorwayList(0, "x", (1, 2), ()), Heading(0, [1, 2], ()), DoorwayFound(0, [1], WIRE, -1),
+    Bid(0, 1, [3], 2.0), Bid(0, 1, 3, "far"), AuctionResult(0, 1, WIRE, 1, 5), DoorwayFound(0, 1, WIRE, 0),
+]
+
+
+def test_malformed_messages_are_ignored_not_fatal() -> None:
+    """Messages come from other robots: a bad one must neither crash the receiver nor enter its book."""
+    from swarm.api import Observation, Pose, RobotInfo
+
+    agent = Minotaur()
+    agent.reset(RobotInfo(id=1, n_robots=3, map_shape=(40, 40)), MinotaurParams(), np.random.default_rng(0))
+    known = np.zeros((40, 40), np.uint8)
+    known[5:35, 5:35] = FREE
+    for tick, msg in enumerate(BAD_MESSAGES):
+        agent.act(Observation(tick=tick, robot_id=1, pose=Pose(10.0, 10.0, 0.0), known=known, inbox=(msg,)))
+    assert len(agent.book) == 0 and not agent.auctions.bid_in
+
+
+@pytest.mark.parametrize("msg", BAD_MESSAGES[4:])   # (a list for a pair comes back as a tuple)
+def test_malformed_messages_are_refused_by_the_codec(msg: object) -> None:
+    from swarm.messages import MessageError
+
+    with pytest.raises(MessageError):
+        decode(encode(msg))
+
+
+# ------------------------------------------------------------------------------------------ peers ----
+def test_peers_merge_changed_doorways_and_remember_targets_and_claims() -> None:
+    from algorithms.minotaur.doorways import DoorwayBook
+    from algorithms.minotaur.peers import Peers
+
+    peers, book = Peers(), DoorwayBook()
+    other = (3.0, 4.0, 0, 2.0, 0.5, 0, 0)
+    peers.heard(10, DoorwayList(2, (WIRE, other), (5.0, 5.0), ()), book)
+    assert len(book) == 2 and not book.doors[0].explored
+    peers.heard(20, DoorwayList(2, (WIRE[:5] + (3, 1), other), (6.0, 5.0), WIRE), book)   # now explored
+    assert len(book) == 2 and book.doors[0].explored
+    assert [d.x for d in peers.claimed(30, 100)] == [WIRE[0]] and peers.claimed(200, 100) == []
+    near = peers.targets_mask((40, 40), 25, 30, 1.0)
+    assert near is not None and near[10, 12] and not near[10, 20]          # 1 m around (6, 5)
+    assert peers.targets_mask((40, 40), 100, 30, 1.0) is None               # too old
+    peers.heard(40, Heading(2, (math.nan, math.nan), ()), book)            # stopped, no doorway
+    assert peers.targets_mask((40, 40), 41, 30, 1.0) is None and peers.claimed(41, 100) == []
+
+
+def test_same_run_over_zenoh() -> None:
+    """Minotaur's messages and debug survive the wire: the zenoh transport gives the in-process result."""
+    spec = {"map": {"kind": "building", "size": 50}, "robots": {"count": 3}, "algorithm": {"name": "minotaur"},
+            "seed": 2, "stop": {"max_ticks": 200}}
+    a = Simulation(spec).run().summary
+    b = Simulation({**spec, "transport": "zenoh"}).run().summary
+    assert a["final_poses"] == b["final_poses"] and a["messages"]["sent"] == b["messages"]["sent"]
+    assert b["messages"]["malformed_from_agents"] == 0
