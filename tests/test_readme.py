@@ -8,6 +8,7 @@ from pathlib import Path
 
 from maps.io import check_legend
 from radio import config_from_mapping
+from swarm.campaign import parse_campaign
 from swarm.spec import RunSpec
 
 README = (Path(__file__).resolve().parents[1] / "README.md").read_text()
@@ -22,6 +23,8 @@ def test_every_toml_block_is_valid_for_what_it_configures():
             check_legend(data)
         elif set(data) == {"radio"}:
             config_from_mapping(data["radio"])
+        elif "campaign" in data:
+            assert parse_campaign(block).runs()
         elif "project" in data:
             assert "swarm.algorithms" in data["project"]["entry-points"]
         else:

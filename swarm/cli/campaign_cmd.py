@@ -102,11 +102,15 @@ def status_cmd(folder: Path) -> None:
               help="Also write one MAES statistics CSV per run (MAES's header and file naming) into maes-csv/.")
 @click.option("--format", "fmt", type=click.Choice(["png", "svg", "pdf"]), default="png", show_default=True,
               help="Figure file format.")
-def report_cmd(folder: Path, output: Path | None, target: float, maes_csv: bool, fmt: str) -> None:
+@click.option("--figures", "figures_file", type=click.Path(path_type=Path), default=None,
+              help="A figure layout TOML: multi-panel figures drawn first (e.g. examples/minotaur-paper-figures.toml).")
+def report_cmd(folder: Path, output: Path | None, target: float, maes_csv: bool, fmt: str,
+               figures_file: Path | None) -> None:
     """Curves, cactus/ECDF plots, paired comparisons and tables of the results in DIR."""
     from ..campaign.report import build_report
     from ..campaign.report.build import check_target
 
     check_target(target)
-    readme = build_report(folder, output or folder / "report", target=target, maes_csv=maes_csv, fmt=fmt)
+    readme = build_report(folder, output or folder / "report", target=target, maes_csv=maes_csv, fmt=fmt,
+                          figures_file=figures_file)
     click.echo(f"report: {readme}")

@@ -300,3 +300,69 @@ def test_cli_bad_input_is_one_line_and_status_2(synthetic, tmp_path, capsys, arg
     _, err = capsys.readouterr()
     assert code == 2
     assert err.count("\n") == 1 and err.startswith("swarm: error:") and needle in err
+
+
+# ------------------------------------------------------------------------------- figure layouts ----
+LAYOUT = """
+[[figure]]
+name = "two_panels"
+title = "Algorithms and radios"
+[[figure.panel]]
+compare = "algorithm"
+robots = 2
+radio = "global"
+[[figure.panel]]
+compare = "radio"
+title = "greed"
+algorithm = "greed"
+"""
+
+
+def test_layout_figure_panels_select_and_pool_runs(real, tmp_path):
+    results, _ = real
+    (tmp_path / "layout.toml").write_text(LAYOUT)
+    readme = build_report(results, tmp_path / "rep", figures_file=tmp_path / "layout.toml")
+    folder = readme.parent
+    assert (folder / "figures" / "two_panels.png").read_bytes()[:4] == b"\x89PNG"
+    data = pd.read_csv(folder / "figures" / "two_panels.csv")
+    runs = data.groupby(["panel", "line"])["runs"].max().to_dict()
+    # panel 1 fixes everything but the algorithm: 2 replicates per line; panel 2 pools robots 1 and 2: 4
+    assert runs == {(1, "frontier"): 2, (1, "greed"): 2, (2, "global"): 4, (2, "los"): 4}
+    text = readme.read_text()
+    assert "## Figures" in text and "figures/two_panels.png" in text and "greed (pooled over robots)" in text
+    assert "--figures" in text  # the command that made the report
+    # a pooled line is the mean of its runs: panel 2's 'los' line at its last tick equals the runs' mean
+    runs_t = pd.read_csv(folder / "tables" / "runs.csv")
+    los = runs_t[(runs_t["algorithm"] == "greed") & (runs_t["radio"] == "los")]
+    last = data[(data["panel"] == 2) & (data["line"] == "los")].iloc[-1]
+    assert last["explored_mean_pct"] == pytest.approx(100 * los["explored"].mean(), abs=1e-3)
+
+
+@pytest.mark.parametrize("layout, needle", [
+    ('[[figure]]\nname = "a"\n[[figure.panel]]\ncompare = "algorithm"\nradio = "wifi"\n', "figure[0].panel[0].radio: got 'wifi'"),
+    ('[[figure]]\nname = "a"\n[[figure.panel]]\ncompare = "colour"\n', "figure[0].panel[0].compare: got 'colour'"),
+    ('[[figure]]\nname = "a b"\n[[figure.panel]]\ncompare = "radio"\n', "figure[0].name: got 'a b'"),
+    ('[[figure]]\nname = "a"\n', "figure[0].panel: got None"),
+    ('[[figure]]\nname = "a"\n[[figure.panel]]\ncompare = "radio"\nradio = "los"\n', "figure[0].panel[0].radio: got 'los'"),
+    ('[[figure]]\nname = "a"\n[[figure.panel]]\ncompare = "radio"\nrobot = 2\n', "figure[0].panel[0].robot: got 2"),
+])
+def test_bad_layouts_are_one_line_errors_and_write_nothing(real, tmp_path, capsys, layout, needle):
+    results, _ = real
+    (tmp_path / "layout.toml").write_text(layout)
+    code = main(["campaign", "report", str(results), "-o", str(tmp_path / "rep"), "--figures",
+                 str(tmp_path / "layout.toml")])
+    _, err = capsys.readouterr()
+    assert code == 2 and err.count("\n") == 1 and needle in err, err
+    assert not (tmp_path / "rep").exists()
+
+
+def test_example_paper_layout_is_valid_for_the_paper_campaign():
+    from swarm.campaign import load_campaign
+    from swarm.campaign.report.layout import check_layout, load_layout
+
+    root = Path(__file__).resolve().parents[2]
+    spec = load_campaign(root / "examples" / "minotaur-paper-small.toml")
+    orders = {dim: [o.label for o in opts] for dim, opts in spec.grid.items()}
+    layout = load_layout(root / "examples" / "minotaur-paper-figures.toml")
+    check_layout(layout, orders)
+    assert [f.name for f in layout] == ["fig7", "fig8", "fig9"] and all(len(f.panels) == 2 for f in layout)

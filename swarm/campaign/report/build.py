@@ -6,6 +6,7 @@ Layout of the report folder::
     curves/<cmp>__<cell>.png|.csv    explored % vs time, mean and 95 % band per line (csv: the plotted numbers)
     cactus/<cmp>__<cell>.png         cactus + ECDF of ticks to target
     paired/algorithms__<cell>.png    per-replicate scatter for every pair of algorithms
+    figures/<name>.png|.csv          with --figures: the multi-panel figures of a layout file (layout.py)
     tables/summary.md|.tex|.csv      per cell and algorithm: runs, successes, DNF, ticks to target
     tables/paired.md|.tex|.csv       per cell and algorithm pair: wins, ties, differences, Wilcoxon p
     tables/comm_effect.md|.tex|.csv  per cell: mean ticks per radio model and their ordering
@@ -34,6 +35,7 @@ from maps.errors import InvalidInput
 from ..store import ResultsStore
 from . import figures, stats, tables
 from .load import DIMS, CampaignData, load
+from .layout import FigureLayout, check_layout, load_layout
 from .output import ReportWriter, slug
 from .series import sample
 
@@ -54,6 +56,17 @@ class FigureSet:
 
 
 @dataclass
+class LayoutFigure:
+    """A figure drawn from a layout file (``--figures``)."""
+
+    name: str
+    title: str
+    path: str
+    data: str
+    panels: list[str]
+
+
+@dataclass
 class Report:
     """What the README is rendered from (paths are relative to the report folder)."""
 
@@ -64,6 +77,8 @@ class Report:
     runs_t: pd.DataFrame
     ttt_source: str
     figures: list[FigureSet] = field(default_factory=list)
+    layout_figures: list[LayoutFigure] = field(default_factory=list)
+    layout_file: str | None = None
     summary: tables.Table | None = None
     summary_rows: int = 0
     paired: tables.Table | None = None
@@ -83,9 +98,12 @@ def check_target(target: Any) -> float:
     return float(target)
 
 
-def command_line(results_dir: Path, report_dir: Path, target: float, maes_csv: bool, fmt: str) -> str:
+def command_line(results_dir: Path, report_dir: Path, target: float, maes_csv: bool, fmt: str,
+                 figures_file: Path | None = None) -> str:
     """The ``swarm`` command that builds this same report (what the README says made it)."""
     parts = ["swarm", "campaign", "report", str(results_dir), "-o", str(report_dir), "--target", f"{target:g}"]
+    if figures_file is not None:
+        parts += ["--figures", str(figures_file)]
     if maes_csv:
         parts.append("--maes-csv")
     if fmt != "png":
@@ -94,15 +112,20 @@ def command_line(results_dir: Path, report_dir: Path, target: float, maes_csv: b
 
 
 def build_report(results_dir: str | Path, report_dir: str | Path, *, target: float = DEFAULT_TARGET,
-                 maes_csv: bool = False, fmt: str = "png") -> Path:
-    """Write the report of ``results_dir`` into ``report_dir``; returns the path of its README.md."""
+                 maes_csv: bool = False, fmt: str = "png", figures_file: str | Path | None = None) -> Path:
+    """Write the report of ``results_dir`` into ``report_dir``; returns the path of its README.md.
+
+    ``figures_file``: a figure layout (:mod:`.layout`) whose multi-panel figures are drawn first."""
     from .readme import render
 
     target = check_target(target)
     if fmt not in figures.FORMATS:
         raise InvalidInput("--format", fmt, ", ".join(figures.FORMATS))
     results_dir, report_dir = Path(results_dir), Path(report_dir)
+    layout_figs = load_layout(figures_file) if figures_file is not None else ()
     data = load(results_dir)
+    if layout_figs:
+        check_layout(layout_figs, {d: data.orders[d] for d in data.dims})
     out = ReportWriter(report_dir)
     store = ResultsStore(data.folder)
     dims = list(data.dims)
@@ -114,9 +137,13 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
     source = (f"the exact per-tick crossing recorded in column `{column}`" if column else
               f"the first time-series row at or above the target (rows every {data.every} ticks, so up to "
               f"{data.every - 1} ticks late)")
-    rep = Report(data=data, target=target, command=command_line(results_dir, report_dir, target, maes_csv, fmt),
-                 fmt=fmt, runs_t=runs_t, ttt_source=source)
+    figures_path = Path(figures_file) if figures_file is not None else None
+    rep = Report(data=data, target=target,
+                 command=command_line(results_dir, report_dir, target, maes_csv, fmt, figures_path),
+                 fmt=fmt, runs_t=runs_t, ttt_source=source,
+                 layout_file=figures_path.name if figures_path is not None else None)
     if len(ok):
+        _layout_figures(rep, out, ok.assign(cell=cell_id), sampled, layout_figs)
         _figures(rep, out, ok.assign(cell=cell_id), sampled)
         _summary(rep, out)
         _paired(rep, out)
@@ -195,6 +222,57 @@ def _figures(rep: Report, out: ReportWriter, ok: pd.DataFrame, sampled: Any) -> 
             out.write(f"cactus/{name}.{fmt}", figures.cactus_figure(times, title, rep.target, max_ticks, fmt))
             rep.figures.append(FigureSet(compare, title, f"curves/{name}.{fmt}", f"cactus/{name}.{fmt}",
                                          f"curves/{name}.csv"))
+
+
+def _pooled_curve(rep: Report, sampled: Any, cells: list[int], label: str, colour: int) -> tuple[figures.Curve, pd.DataFrame]:
+    """One line from the runs of several cells: each cell's grid resampled onto a common grid (value at g =
+    the last value at a tick <= g; a finished run holds its final value), then mean and band over all runs."""
+    ticks = [sampled.cell_ticks[c] for c in cells]
+    end = max(int(t[-1]) for t in ticks)
+    step = max(int(t[1] - t[0]) if len(t) > 1 else rep.data.every for t in ticks)
+    grid = np.arange(0, end + step, step, dtype=np.int64)
+    grid[-1] = min(grid[-1], end) if len(grid) > 1 else grid[-1]
+    blocks = [sampled.cell_values[c][:, np.searchsorted(t, grid, side="right") - 1] for c, t in zip(cells, ticks)]
+    values = np.concatenate(blocks, axis=0)
+    members = np.concatenate([sampled.cell_rows[c] for c in cells])
+    mean, lo, hi, n = stats.mean_band(values)
+    ttt = rep.runs_t["ttt"].to_numpy()[members]
+    curve = figures.Curve(label, colour, grid, mean, lo, hi, len(members), int(np.isfinite(ttt).sum()))
+    rows = pd.DataFrame({"line": label, "tick": grid, "minutes": grid / figures.TICKS_PER_MINUTE,
+                         "explored_mean_pct": np.round(100 * mean, 4), "ci95_low_pct": np.round(100 * lo, 4),
+                         "ci95_high_pct": np.round(100 * hi, 4), "runs": n})
+    return curve, rows
+
+
+def _layout_figures(rep: Report, out: ReportWriter, ok: pd.DataFrame, sampled: Any,
+                    layout: tuple[FigureLayout, ...]) -> None:
+    data, fmt = rep.data, rep.fmt
+    cells = ok.drop_duplicates("cell")
+    for fig in layout:
+        panels, rows, titles = [], [], []
+        for k, panel in enumerate(fig.panels):
+            chosen = cells
+            for dim, value in panel.fixed:
+                chosen = chosen[chosen[dim].astype(str) == value]
+            pooled = [d for d in data.dims if d != panel.compare and d not in dict(panel.fixed) and data.varies(d)]
+            title = (panel.title or describe({d: v for d, v in panel.fixed})) + (
+                f" (pooled over {', '.join(pooled)})" if pooled else "")
+            curves = []
+            for label in data.orders[panel.compare]:
+                members = chosen[chosen[panel.compare].astype(str) == label]["cell"].astype(int).tolist()
+                if members:
+                    curve, frame = _pooled_curve(rep, sampled, members, label, data.orders[panel.compare].index(label))
+                    curves.append(curve)
+                    rows.append(frame.assign(panel=k + 1).loc[:, ["panel", *frame.columns]])
+            panels.append((title, curves))
+            titles.append(title)
+        if not any(curves for _, curves in panels):
+            rep.notes.append(f"Figure `{fig.name}` of the layout has no finished runs to draw.")
+            continue
+        out.write(f"figures/{fig.name}.{fmt}", figures.panels_figure(panels, fig.title, rep.target, fmt))
+        out.write(f"figures/{fig.name}.csv", tables.csv_text(pd.concat(rows, ignore_index=True)))
+        rep.layout_figures.append(LayoutFigure(fig.name, fig.title, f"figures/{fig.name}.{fmt}",
+                                               f"figures/{fig.name}.csv", titles))
 
 
 def _summary(rep: Report, out: ReportWriter) -> None:

@@ -194,3 +194,35 @@ def paired_figure(panels: Sequence[PairPanel], title: str, max_ticks: float, fmt
             ax.set_visible(False)
         fig.suptitle(_text(f"paired by replicate (same map and start): {title}"))
         return render(fig, fmt)
+
+
+def panels_figure(panels: Sequence[tuple[str, Sequence[Curve]]], title: str, target: float, fmt: str) -> bytes:
+    """Several explored-vs-time panels side by side on one time axis scale each (the layout of a paper's
+    figure); ``panels`` = (panel title, its curves)."""
+    with matplotlib.rc_context(_RC):
+        n = len(panels)
+        fig = _figure(4.6 * n + 0.4, 4.2, left=0.42 / (4.6 * n + 0.4) * 1.6, wspace=0.18, top=0.86)
+        fig.suptitle(_text(title))
+        for k, (panel_title, curves) in enumerate(panels):
+            ax = fig.add_subplot(1, n, k + 1)
+            end = max((int(c.ticks[-1]) for c in curves), default=0)
+            for c in curves:
+                t, m, lo, hi = c.ticks, c.mean, c.lo, c.hi
+                if t[-1] < end:
+                    t, m, lo, hi = (np.append(t, end), np.append(m, m[-1]), np.append(lo, lo[-1]), np.append(hi, hi[-1]))
+                x = t / TICKS_PER_MINUTE
+                ax.plot(x, 100 * m, color=colour(c.colour), lw=1.5,
+                        label=_text(f"{c.label} (n = {c.runs}, {c.successes} reached)"))
+                if np.any(np.isfinite(lo)):
+                    ax.fill_between(x, np.clip(100 * lo, 0, 100), np.clip(100 * hi, 0, 100), color=colour(c.colour),
+                                    alpha=0.18, lw=0)
+            ax.axhline(100 * target, color="0.4", lw=0.8, ls=":")
+            ax.set_xlim(0, end / TICKS_PER_MINUTE if end else 1)
+            ax.set_ylim(0, 100)
+            ax.set_xlabel("simulated time (minutes)")
+            if k == 0:
+                ax.set_ylabel("explored (%)")
+            ax.set_title(_text(panel_title))
+            ax.grid(alpha=0.3)
+            ax.legend(loc="lower right")
+        return render(fig, fmt)

@@ -22,7 +22,7 @@ SECTION = {"algorithm": "Algorithms compared", "radio": "Radio models compared",
 
 
 def render(rep: Report) -> str:
-    parts = [_head(rep), _runs(rep), _campaign(rep), _summary(rep), _curves(rep), _cactus(rep), _paired(rep),
+    parts = [_head(rep), _runs(rep), _campaign(rep), _layout(rep), _summary(rep), _curves(rep), _cactus(rep), _paired(rep),
              _comm(rep), _failed(rep), _maes(rep), _method(rep), _files(rep)]
     return "\n".join(p for p in parts if p).rstrip() + "\n"
 
@@ -98,6 +98,18 @@ def _summary(rep: Report) -> str:
              "the target; *Mean ticks (DNF = max)* counts every DNF run at its `max_ticks`; *Timeouts* are the "
              "DNF runs stopped by `max_ticks`.", ""]
     return "\n".join(lines + _inline(rep.summary, rep.summary_rows, "summary"))
+
+
+def _layout(rep: Report) -> str:
+    if not rep.layout_figures:
+        return ""
+    lines = ["## Figures", "",
+             f"Drawn as laid out in `{rep.layout_file}`: mean explored % over the runs of each line with a 95 % "
+             "t-interval band; dimensions a panel does not fix are pooled.", ""]
+    for f in rep.layout_figures:
+        lines += [f"**{f.title}** ([data]({f.data}))", "", f"![{f.title}]({f.path})", ""]
+        lines += [f"{k}. {t}" for k, t in enumerate(f.panels, 1)] + [""]
+    return "\n".join(lines)
 
 
 def _curves(rep: Report) -> str:

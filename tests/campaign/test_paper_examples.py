@@ -1,0 +1,77 @@
+"""The example campaigns (issue 11): the Minotaur paper's full grid, its small version, and a real run of
+the small spec cut to one replicate of the 50-tile maps, every run finishing and its report building."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from swarm.campaign import load_campaign, make_executor, parse_campaign, run_campaign, status
+from swarm.campaign.report import build_report
+from swarm.campaign.report.load import expected_runs
+
+ROOT = Path(__file__).resolve().parents[2]
+FULL = ROOT / "examples" / "minotaur-paper.toml"
+SMALL = ROOT / "examples" / "minotaur-paper-small.toml"
+
+
+def test_examples_quick_is_the_built_in_quick_campaign() -> None:
+    builtin = ROOT / "swarm" / "campaign" / "examples" / "quick.toml"
+    assert (ROOT / "examples" / "quick.toml").read_text() == builtin.read_text()
+
+
+@pytest.fixture(scope="module")
+def full():
+    return load_campaign(FULL)  # validates all 54,000 run specs: ~25 s, so once per module
+
+
+def test_full_paper_campaign_is_table_2(full) -> None:
+    spec = full
+    assert spec.seed == 123456 and spec.stop["explored"] == 0.98
+    labels = {dim: [o.label for o in opts] for dim, opts in spec.grid.items()}
+    assert labels == {"map": ["building", "cave"], "size": ["50", "100", "150"], "robots": ["1", "2", "4", "8", "16"],
+                      "spawn": ["together", "random"], "algorithm": ["TNF", "Minotaur", "Greed"],
+                      "radio": ["global", "LOS", "materials"]}
+    assert expected_runs(spec) == 54_000
+
+
+def test_small_campaign_is_the_full_grid_with_fewer_replicates(full) -> None:
+    small = load_campaign(SMALL)
+    assert small.replicates < full.replicates
+    assert small.grid == full.grid and small.run == full.run and small.stop == full.stop
+    # seeds depend on (campaign seed, kind, size, replicate) only: the small runs are the full's first ones
+    for cell in small.cells()[::97]:
+        for rep in range(small.replicates):
+            assert small.run_for(cell, rep).key == full.run_for(cell, rep).key
+
+
+def small_50_one_replicate() -> str:
+    text = SMALL.read_text()
+    text, n_rep = re.subn(r"(?m)^replicates = \d+$", "replicates = 1", text)
+    text, n_size = re.subn(r"(?m)^size = \[.*\]$", "size = [50]", text)
+    assert n_rep == 1 and n_size == 1
+    return text
+
+
+def test_small_spec_on_50_tile_maps_finishes_every_run_and_reports(tmp_path: Path) -> None:
+    spec = parse_campaign(small_50_one_replicate())
+    assert expected_runs(spec) == 180
+    results = tmp_path / "results"
+    run_campaign(spec, results, executor=make_executor(workers=2), progress=False)
+    counts = status(results)
+    assert (counts["done"], counts["failed"], counts["pending"]) == (180, 0, 0)
+    report = build_report(results, tmp_path / "report")
+    folder = report.parent
+    runs = pd.read_csv(folder / "tables" / "runs.csv")
+    assert len(runs) == 180 and set(runs["stop_reason"]) == {"explored"}
+    assert (runs["explored"] >= 0.98).all()
+    readme = (folder / "README.md").read_text()
+    assert "minotaur-paper-small" in readme
+    for link in re.findall(r"\]\(([^)#]+)\)", readme):
+        assert (folder / link).exists(), link
+    assert list((folder / "curves").glob("algorithms__building_50_16_*_materials.png"))
+    summary = (folder / "tables" / "summary.md").read_text()
+    assert "Minotaur" in summary and "TNF" in summary and "Greed" in summary
