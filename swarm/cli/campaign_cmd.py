@@ -104,13 +104,15 @@ def status_cmd(folder: Path) -> None:
               help="Figure file format.")
 @click.option("--figures", "figures_file", type=click.Path(path_type=Path), default=None,
               help="A figure layout TOML: multi-panel figures drawn first (e.g. examples/minotaur-paper-figures.toml).")
+@click.option("--cell-figures/--no-cell-figures", "cell_figures", default=True, show_default=True,
+              help="Per-cell curves, cactus and paired figures (a big campaign has over a thousand).")
 def report_cmd(folder: Path, output: Path | None, target: float, maes_csv: bool, fmt: str,
-               figures_file: Path | None) -> None:
+               figures_file: Path | None, cell_figures: bool) -> None:
     """Curves, cactus/ECDF plots, paired comparisons and tables of the results in DIR."""
     from ..campaign.report import build_report
     from ..campaign.report.build import check_target
 
     check_target(target)
     readme = build_report(folder, output or folder / "report", target=target, maes_csv=maes_csv, fmt=fmt,
-                          figures_file=figures_file)
+                          figures_file=figures_file, cell_figures=cell_figures)
     click.echo(f"report: {readme}")

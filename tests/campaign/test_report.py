@@ -307,6 +307,7 @@ LAYOUT = """
 [[figure]]
 name = "two_panels"
 title = "Algorithms and radios"
+columns = 1
 [[figure.panel]]
 compare = "algorithm"
 robots = 2
@@ -365,4 +366,21 @@ def test_example_paper_layout_is_valid_for_the_paper_campaign():
     orders = {dim: [o.label for o in opts] for dim, opts in spec.grid.items()}
     layout = load_layout(root / "examples" / "minotaur-paper-figures.toml")
     check_layout(layout, orders)
-    assert [f.name for f in layout] == ["fig7", "fig8", "fig9"] and all(len(f.panels) == 2 for f in layout)
+    assert [f.name for f in layout[:3]] == ["fig7", "fig8", "fig9"] and all(len(f.panels) == 2 for f in layout[:3])
+    # the overviews: one panel per (size, robots) of the grid, 5 per row
+    assert all(len(f.panels) == 15 and f.columns == 5 for f in layout[3:])
+
+
+def test_no_cell_figures_keeps_tables_and_layout_figures_only(real, tmp_path):
+    results, _ = real
+    (tmp_path / "layout.toml").write_text(LAYOUT)
+    code = main(["campaign", "report", str(results), "-o", str(tmp_path / "rep"), "--figures",
+                 str(tmp_path / "layout.toml"), "--no-cell-figures"])
+    assert code in (0, None)
+    folder = tmp_path / "rep"
+    assert not (folder / "curves").exists() and not (folder / "cactus").exists() and not (folder / "paired").exists()
+    assert (folder / "figures" / "two_panels.png").exists() and (folder / "tables" / "summary.md").exists()
+    text = (folder / "README.md").read_text()
+    assert "--no-cell-figures" in text
+    for link in re.findall(r"\]\(([^)#]+)\)", text):
+        assert (folder / link).exists(), link

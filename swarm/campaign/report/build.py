@@ -79,6 +79,7 @@ class Report:
     figures: list[FigureSet] = field(default_factory=list)
     layout_figures: list[LayoutFigure] = field(default_factory=list)
     layout_file: str | None = None
+    cell_figures: bool = True
     summary: tables.Table | None = None
     summary_rows: int = 0
     paired: tables.Table | None = None
@@ -99,11 +100,13 @@ def check_target(target: Any) -> float:
 
 
 def command_line(results_dir: Path, report_dir: Path, target: float, maes_csv: bool, fmt: str,
-                 figures_file: Path | None = None) -> str:
+                 figures_file: Path | None = None, cell_figures: bool = True) -> str:
     """The ``swarm`` command that builds this same report (what the README says made it)."""
     parts = ["swarm", "campaign", "report", str(results_dir), "-o", str(report_dir), "--target", f"{target:g}"]
     if figures_file is not None:
         parts += ["--figures", str(figures_file)]
+    if not cell_figures:
+        parts.append("--no-cell-figures")
     if maes_csv:
         parts.append("--maes-csv")
     if fmt != "png":
@@ -112,10 +115,13 @@ def command_line(results_dir: Path, report_dir: Path, target: float, maes_csv: b
 
 
 def build_report(results_dir: str | Path, report_dir: str | Path, *, target: float = DEFAULT_TARGET,
-                 maes_csv: bool = False, fmt: str = "png", figures_file: str | Path | None = None) -> Path:
+                 maes_csv: bool = False, fmt: str = "png", figures_file: str | Path | None = None,
+                 cell_figures: bool = True) -> Path:
     """Write the report of ``results_dir`` into ``report_dir``; returns the path of its README.md.
 
-    ``figures_file``: a figure layout (:mod:`.layout`) whose multi-panel figures are drawn first."""
+    ``figures_file``: a figure layout (:mod:`.layout`) whose multi-panel figures are drawn first.
+    ``cell_figures=False``: no per-cell curves, cactus and paired figures (tables and layout figures only;
+    a 540-cell campaign has ~1,200 of them, ~70 MB: right for exploring, too much to publish)."""
     from .readme import render
 
     target = check_target(target)
@@ -139,12 +145,13 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
               f"{data.every - 1} ticks late)")
     figures_path = Path(figures_file) if figures_file is not None else None
     rep = Report(data=data, target=target,
-                 command=command_line(results_dir, report_dir, target, maes_csv, fmt, figures_path),
+                 command=command_line(results_dir, report_dir, target, maes_csv, fmt, figures_path, cell_figures),
                  fmt=fmt, runs_t=runs_t, ttt_source=source,
-                 layout_file=figures_path.name if figures_path is not None else None)
+                 layout_file=figures_path.name if figures_path is not None else None, cell_figures=cell_figures)
     if len(ok):
         _layout_figures(rep, out, ok.assign(cell=cell_id), sampled, layout_figs)
-        _figures(rep, out, ok.assign(cell=cell_id), sampled)
+        if cell_figures:
+            _figures(rep, out, ok.assign(cell=cell_id), sampled)
         _summary(rep, out)
         _paired(rep, out)
         _comm(rep, out)
@@ -269,7 +276,7 @@ def _layout_figures(rep: Report, out: ReportWriter, ok: pd.DataFrame, sampled: A
         if not any(curves for _, curves in panels):
             rep.notes.append(f"Figure `{fig.name}` of the layout has no finished runs to draw.")
             continue
-        out.write(f"figures/{fig.name}.{fmt}", figures.panels_figure(panels, fig.title, rep.target, fmt))
+        out.write(f"figures/{fig.name}.{fmt}", figures.panels_figure(panels, fig.title, rep.target, fmt, fig.columns))
         out.write(f"figures/{fig.name}.csv", tables.csv_text(pd.concat(rows, ignore_index=True)))
         rep.layout_figures.append(LayoutFigure(fig.name, fig.title, f"figures/{fig.name}.{fmt}",
                                                f"figures/{fig.name}.csv", titles))
@@ -299,6 +306,8 @@ def _paired(rep: Report, out: ReportWriter) -> None:
     _write_table(out, "paired", df, rep.paired, "Paired comparison of algorithms per cell (pairs share map and "
                  "start poses; ticks to target with DNF counted at max ticks; Wilcoxon signed-rank, two-sided).")
     out.write("tables/pairs.csv", tables.csv_text(pairs))
+    if not rep.cell_figures:
+        return
     names = _Names()
     for keys, grp in pairs.groupby(cell, observed=True, sort=True):
         values = dict(zip(cell, (str(k) for k in keys)))

@@ -196,15 +196,20 @@ def paired_figure(panels: Sequence[PairPanel], title: str, max_ticks: float, fmt
         return render(fig, fmt)
 
 
-def panels_figure(panels: Sequence[tuple[str, Sequence[Curve]]], title: str, target: float, fmt: str) -> bytes:
-    """Several explored-vs-time panels side by side on one time axis scale each (the layout of a paper's
-    figure); ``panels`` = (panel title, its curves)."""
+def panels_figure(panels: Sequence[tuple[str, Sequence[Curve]]], title: str, target: float, fmt: str,
+                  columns: int = 0) -> bytes:
+    """Explored-vs-time panels in a grid (the layout of a paper's figure); ``panels`` = (panel title, its
+    curves); ``columns`` panels per row (0: one row)."""
     with matplotlib.rc_context(_RC):
         n = len(panels)
-        fig = _figure(4.6 * n + 0.4, 4.2, left=0.42 / (4.6 * n + 0.4) * 1.6, wspace=0.18, top=0.86)
+        cols = min(columns or n, n)
+        rows = -(-n // cols)
+        width, height = 4.6 * cols + 0.4, 3.9 * rows + 0.5
+        fig = _figure(width, height, left=0.7 / width, right=1 - 0.15 / width, bottom=0.55 / height,
+                      top=1 - 0.6 / height, wspace=0.18, hspace=0.45)
         fig.suptitle(_text(title))
         for k, (panel_title, curves) in enumerate(panels):
-            ax = fig.add_subplot(1, n, k + 1)
+            ax = fig.add_subplot(rows, cols, k + 1)
             end = max((int(c.ticks[-1]) for c in curves), default=0)
             for c in curves:
                 t, m, lo, hi = c.ticks, c.mean, c.lo, c.hi
@@ -219,8 +224,9 @@ def panels_figure(panels: Sequence[tuple[str, Sequence[Curve]]], title: str, tar
             ax.axhline(100 * target, color="0.4", lw=0.8, ls=":")
             ax.set_xlim(0, end / TICKS_PER_MINUTE if end else 1)
             ax.set_ylim(0, 100)
-            ax.set_xlabel("simulated time (minutes)")
-            if k == 0:
+            if k // cols == rows - 1:
+                ax.set_xlabel("simulated time (minutes)")
+            if k % cols == 0:
                 ax.set_ylabel("explored (%)")
             ax.set_title(_text(panel_title))
             ax.grid(alpha=0.3)

@@ -6,6 +6,7 @@ chosen panels side by side (the Minotaur paper's Figures 7-9). A layout file nam
     [[figure]]
     name = "fig7"                                  # file stem: figures/fig7.png and figures/fig7.csv
     title = "Figure 7"
+    columns = 2                                    # panels per row (default: all in one row)
     [[figure.panel]]
     compare = "radio"                              # one line per label of this dimension
     map = "building"
@@ -52,6 +53,8 @@ class FigureLayout:
     name: str
     title: str
     panels: tuple[Panel, ...]
+    columns: int = 0
+    """Panels per row; 0 = all in one row."""
 
 
 def load_layout(path: str | Path) -> tuple[FigureLayout, ...]:
@@ -78,9 +81,13 @@ def parse_layout(text: str, source: str = "<string>") -> tuple[FigureLayout, ...
     out, names = [], set()
     for i, fig in enumerate(figures):
         where = f"figure[{i}]"
-        unknown = set(fig) - {"name", "title", "panel"}
+        unknown = set(fig) - {"name", "title", "columns", "panel"}
         if unknown:
-            raise InvalidInput(f"{where}.{sorted(unknown)[0]}", fig[sorted(unknown)[0]], "name, title and [[figure.panel]]")
+            raise InvalidInput(f"{where}.{sorted(unknown)[0]}", fig[sorted(unknown)[0]],
+                               "name, title, columns and [[figure.panel]]")
+        columns = fig.get("columns", 0)
+        if isinstance(columns, bool) or not isinstance(columns, int) or not 0 <= columns <= 12:
+            raise InvalidInput(f"{where}.columns", columns, "an integer from 1 to 12 (panels per row)")
         name = fig.get("name")
         if not isinstance(name, str) or not re.fullmatch(r"[A-Za-z0-9_-]+", name):
             raise InvalidInput(f"{where}.name", name, "a file-name stem of letters, digits, '-' and '_'")
@@ -93,7 +100,8 @@ def parse_layout(text: str, source: str = "<string>") -> tuple[FigureLayout, ...
         panels = fig.get("panel")
         if not isinstance(panels, list) or not panels:
             raise InvalidInput(f"{where}.panel", panels, "one or more [[figure.panel]] tables")
-        out.append(FigureLayout(name, title, tuple(_panel(p, f"{where}.panel[{j}]") for j, p in enumerate(panels))))
+        out.append(FigureLayout(name, title, tuple(_panel(p, f"{where}.panel[{j}]") for j, p in enumerate(panels)),
+                                columns))
     return tuple(out)
 
 

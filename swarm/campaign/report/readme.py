@@ -153,8 +153,9 @@ def _paired(rep: Report) -> str:
              "dropped) from 6 pairs up.", "", "### All cells pooled", "", tables.markdown(rep.wins),
              "### Per cell", ""]
     lines += _inline(rep.paired, len(rep.paired.rows), "paired")
-    lines += ["Per-replicate scatter plots (a point above the diagonal: b took longer than a on that map):", ""]
-    lines += [f"- [{title}]({path})" for title, path in rep.paired_figures]
+    if rep.paired_figures:
+        lines += ["Per-replicate scatter plots (a point above the diagonal: b took longer than a on that map):", ""]
+        lines += [f"- [{title}]({path})" for title, path in rep.paired_figures]
     return "\n".join(lines) + "\n"
 
 
