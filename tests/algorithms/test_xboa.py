@@ -228,3 +228,13 @@ def test_same_spec_twice_is_identical_and_another_seed_differs():
     assert a.deterministic_view() == b.deterministic_view()
     c = Simulation({**spec, "seed": 4}).run()
     assert c.deterministic_view()["summary"] != a.deterministic_view()["summary"]
+
+
+def test_inprocess_and_zenoh_transports_agree():
+    """Each robot's optimiser draws from its own stream: the zenoh agents reproduce the in-process run."""
+    spec = {**SMALL, "robots": {"count": 2}, "stop": {"max_ticks": 400}}
+    a = Simulation({**spec, "transport": "inprocess"}).run()
+    b = Simulation({**spec, "transport": "zenoh"}).run()
+    strip = lambda r: {k: v for k, v in r.deterministic_view().items() if k not in ("spec", "key")}
+    assert strip(a) == strip(b)
+    assert a.summary["messages"]["delivered"] > 0
