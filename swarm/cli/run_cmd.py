@@ -92,6 +92,8 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
 @click.option("--run-id", default=None, help="Name of the run on the wire (default: the spec key + a nonce).")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), help="Write the result JSON.")
 @click.option("--gif", type=click.Path(dir_okay=False, path_type=Path), help="Write an animation.")
+@click.option("--mp4", type=click.Path(dir_okay=False, path_type=Path),
+              help="Write the animation as MP4 (needs the 'video' extra: imageio-ffmpeg).")
 @click.option("--record", "record_out", type=click.Path(dir_okay=False, path_type=Path),
               help="Record the run (.swr) for 'swarm view'.")
 @click.option("--print-spec", is_flag=True, help="Print the fully-resolved spec (TOML-ready JSON) and exit.")
@@ -100,7 +102,7 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
             algorithm_params: tuple[str, ...], seed: int | None, max_ticks: int | None, explored: float | None,
             transport: str | None, sets: tuple[str, ...], listen: tuple[str, ...], remote: tuple[int, ...],
             agent_timeout: float, run_id: str | None, json_out: Path | None, gif: Path | None,
-            record_out: Path | None, print_spec: bool) -> None:
+            mp4: Path | None, record_out: Path | None, print_spec: bool) -> None:
     """Run one exploration and print a one-line summary.
 
     With no arguments: 4 robots with the frontier explorer on a 50 x 50 building, seed 0.
@@ -117,10 +119,16 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
     if print_spec:
         click.echo(json.dumps(spec.canonical(), indent=1, sort_keys=True))
         return
+    if mp4 is not None:
+        try:
+            import imageio_ffmpeg  # noqa: F401
+        except ImportError:
+            raise InvalidInput("--mp4", str(mp4), "an MP4 path once the video extra is installed "
+                               "(pip install 'swarm-sim[video]')") from None
     options = _transport_options(spec, listen, remote, agent_timeout, run_id)
     sim = Simulation(spec, transport=options)
     recorder = None
-    if gif is not None:
+    if gif is not None or mp4 is not None:
         from ..animation import GifRecorder
 
         recorder = GifRecorder(sim.truth)
@@ -136,8 +144,10 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
     click.echo(result.one_line())
     if json_out is not None:
         click.echo(f"wrote {result.write_json(json_out)}")
-    if recorder is not None:
+    if recorder is not None and gif is not None:
         click.echo(f"wrote {recorder.save(gif)}")
+    if recorder is not None and mp4 is not None:
+        click.echo(f"wrote {recorder.save_mp4(mp4)}")
     if run_recorder is not None and record_out is not None:
         run_recorder.finish(sim, result)
         click.echo(f"wrote {run_recorder.save(record_out)}")
