@@ -19,6 +19,7 @@ import numpy as np
 
 from swarm import grid
 from swarm.api import FREE, cell_of
+from swarm.grid.targets import geodesic_dilate
 
 from .doorways import Doorway
 
@@ -38,22 +39,6 @@ def cut_doors(space: np.ndarray, doors: Iterable[Doorway], origin: tuple[int, in
             continue
         out[max(r0, 0):r1 + 1, max(c0, 0):c1 + 1] = False
     return out
-
-
-def geodesic_dilate(seeds: np.ndarray, within: np.ndarray, steps: int) -> np.ndarray:
-    """Cells reachable from ``seeds`` in at most ``steps`` 4-connected moves through ``within``."""
-    grown = seeds & within
-    for _ in range(steps):
-        nxt = grown.copy()
-        nxt[1:] |= grown[:-1]
-        nxt[:-1] |= grown[1:]
-        nxt[:, 1:] |= grown[:, :-1]
-        nxt[:, :-1] |= grown[:, 1:]
-        nxt &= within
-        if np.array_equal(nxt, grown):
-            break
-        grown = nxt
-    return grown
 
 
 def view_cells(known: np.ndarray, space: np.ndarray, reach: int) -> np.ndarray:

@@ -195,6 +195,14 @@ class _Names:
         return name
 
 
+def _curve_rows(label: str, ticks: np.ndarray, mean: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                n: np.ndarray) -> pd.DataFrame:
+    """The numbers a curve plots, as the CSV written beside its figure."""
+    return pd.DataFrame({"line": label, "tick": ticks, "minutes": ticks / figures.TICKS_PER_MINUTE,
+                         "explored_mean_pct": np.round(100 * mean, 4), "ci95_low_pct": np.round(100 * lo, 4),
+                         "ci95_high_pct": np.round(100 * hi, 4), "runs": n})
+
+
 def _figures(rep: Report, out: ReportWriter, ok: pd.DataFrame, sampled: Any) -> None:
     data, dims, fmt = rep.data, list(rep.data.dims), rep.fmt
     cells = ok.drop_duplicates("cell").sort_values("cell")[[*dims, "cell"]]
@@ -217,11 +225,7 @@ def _figures(rep: Report, out: ReportWriter, ok: pd.DataFrame, sampled: Any) -> 
                 curves.append(figures.Curve(label, colour, sampled.cell_ticks[c], mean, lo, hi, len(members),
                                             int(np.isfinite(ttt).sum())))
                 times.append(figures.Times(label, colour, ttt))
-                rows.append(pd.DataFrame({"line": label, "tick": sampled.cell_ticks[c],
-                                          "minutes": sampled.cell_ticks[c] / figures.TICKS_PER_MINUTE,
-                                          "explored_mean_pct": np.round(100 * mean, 4),
-                                          "ci95_low_pct": np.round(100 * lo, 4), "ci95_high_pct": np.round(100 * hi, 4),
-                                          "runs": n}))
+                rows.append(_curve_rows(label, sampled.cell_ticks[c], mean, lo, hi, n))
             max_ticks = float(rep.runs_t["max_ticks"].to_numpy()[np.concatenate(
                 [sampled.cell_rows[int(c)] for c in grp["cell"]])].max())
             out.write(f"curves/{name}.{fmt}", figures.curves_figure(curves, title, rep.target, fmt))
@@ -245,10 +249,7 @@ def _pooled_curve(rep: Report, sampled: Any, cells: list[int], label: str, colou
     mean, lo, hi, n = stats.mean_band(values)
     ttt = rep.runs_t["ttt"].to_numpy()[members]
     curve = figures.Curve(label, colour, grid, mean, lo, hi, len(members), int(np.isfinite(ttt).sum()))
-    rows = pd.DataFrame({"line": label, "tick": grid, "minutes": grid / figures.TICKS_PER_MINUTE,
-                         "explored_mean_pct": np.round(100 * mean, 4), "ci95_low_pct": np.round(100 * lo, 4),
-                         "ci95_high_pct": np.round(100 * hi, 4), "runs": n})
-    return curve, rows
+    return curve, _curve_rows(label, grid, mean, lo, hi, n)
 
 
 def _layout_figures(rep: Report, out: ReportWriter, ok: pd.DataFrame, sampled: Any,

@@ -87,26 +87,32 @@ def _text(label: str) -> str:
     return label.replace("$", r"\$")
 
 
+def _draw_curves(ax: Any, curves: Sequence[Curve], target: float) -> None:
+    """Mean lines with 95 % bands in simulated minutes, the target as a dotted line, axes limited to the
+    data; a line whose runs have all stopped holds its final value to the axis's end."""
+    end = max((int(c.ticks[-1]) for c in curves), default=0)
+    for c in curves:
+        t, m, lo, hi = c.ticks, c.mean, c.lo, c.hi
+        if t[-1] < end:
+            t, m, lo, hi = (np.append(t, end), np.append(m, m[-1]), np.append(lo, lo[-1]), np.append(hi, hi[-1]))
+        x = t / TICKS_PER_MINUTE
+        ax.plot(x, 100 * m, color=colour(c.colour), lw=1.5,
+                label=_text(f"{c.label} (n = {c.runs}, {c.successes} reached)"))
+        if np.any(np.isfinite(lo)):
+            ax.fill_between(x, np.clip(100 * lo, 0, 100), np.clip(100 * hi, 0, 100), color=colour(c.colour),
+                            alpha=0.18, lw=0)
+    ax.axhline(100 * target, color="0.4", lw=0.8, ls=":")
+    ax.set_xlim(0, end / TICKS_PER_MINUTE if end else 1)
+    ax.set_ylim(0, 100)
+
+
 def curves_figure(curves: Sequence[Curve], title: str, target: float, fmt: str) -> bytes:
     """Explored % vs simulated minutes, mean over replicates with a 95 % band; runs that stopped hold their
     final value."""
     with matplotlib.rc_context(_RC):
         fig = _figure(6.4, 4.2)
         ax = fig.add_subplot()
-        end = max(int(c.ticks[-1]) for c in curves)
-        for c in curves:
-            t, m, lo, hi = c.ticks, c.mean, c.lo, c.hi
-            if t[-1] < end:  # every run of this line has stopped: it holds its value to the figure's end
-                t, m, lo, hi = (np.append(t, end), np.append(m, m[-1]), np.append(lo, lo[-1]), np.append(hi, hi[-1]))
-            x = t / TICKS_PER_MINUTE
-            ax.plot(x, 100 * m, color=colour(c.colour), lw=1.5,
-                    label=_text(f"{c.label} (n = {c.runs}, {c.successes} reached)"))
-            if np.any(np.isfinite(lo)):
-                ax.fill_between(x, np.clip(100 * lo, 0, 100), np.clip(100 * hi, 0, 100), color=colour(c.colour),
-                                alpha=0.18, lw=0)
-        ax.axhline(100 * target, color="0.4", lw=0.8, ls=":")
-        ax.set_xlim(0, end / TICKS_PER_MINUTE if end else 1)
-        ax.set_ylim(0, 100)
+        _draw_curves(ax, curves, target)
         ax.set_xlabel("simulated time (minutes; 600 ticks = 1 min)")
         ax.set_ylabel("explored (%)")
         ax.set_title(_text(title))
@@ -210,20 +216,7 @@ def panels_figure(panels: Sequence[tuple[str, Sequence[Curve]]], title: str, tar
         fig.suptitle(_text(title))
         for k, (panel_title, curves) in enumerate(panels):
             ax = fig.add_subplot(rows, cols, k + 1)
-            end = max((int(c.ticks[-1]) for c in curves), default=0)
-            for c in curves:
-                t, m, lo, hi = c.ticks, c.mean, c.lo, c.hi
-                if t[-1] < end:
-                    t, m, lo, hi = (np.append(t, end), np.append(m, m[-1]), np.append(lo, lo[-1]), np.append(hi, hi[-1]))
-                x = t / TICKS_PER_MINUTE
-                ax.plot(x, 100 * m, color=colour(c.colour), lw=1.5,
-                        label=_text(f"{c.label} (n = {c.runs}, {c.successes} reached)"))
-                if np.any(np.isfinite(lo)):
-                    ax.fill_between(x, np.clip(100 * lo, 0, 100), np.clip(100 * hi, 0, 100), color=colour(c.colour),
-                                    alpha=0.18, lw=0)
-            ax.axhline(100 * target, color="0.4", lw=0.8, ls=":")
-            ax.set_xlim(0, end / TICKS_PER_MINUTE if end else 1)
-            ax.set_ylim(0, 100)
+            _draw_curves(ax, curves, target)
             if k // cols == rows - 1:
                 ax.set_xlabel("simulated time (minutes)")
             if k % cols == 0:
