@@ -75,7 +75,8 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from algorithms.boa import Belief, DecisionParams, Lidar, Plan, heading_index, minimize, predicted_observed
+from algorithms.boa import Belief, DecisionParams, Lidar, Plan, heading_index, predicted_observed
+from algorithms.boa.decision import minimize_with_restarts
 from algorithms.boa.fitness import ExplorationProblem
 from algorithms.boa.variants import VARIANTS, get_variant
 from maps.errors import InvalidInput
@@ -312,16 +313,7 @@ def search(problem: ExplorationProblem, box: list[tuple[float, float]], excluded
         f = problem(X)
         return np.where(bad[problem.cells(X)].any(axis=1), 0.0, f)
 
-    boa = dp.boa_params()
-    best = None
-    for _ in range(dp.retries + 1):
-        res = minimize(fitness, box * dp.n_goals, rng=rng, variant=dp.variant, pop_size=dp.pop_size,
-                       max_gen=dp.max_gen, early_stop=dp.early_stop, params=boa)
-        if best is None or res.f < best.f:
-            best = res
-        if res.f < 0:
-            break
-    assert best is not None
+    best, _, _ = minimize_with_restarts(fitness, box * dp.n_goals, dp, rng)
     plan = problem.plan(best.x) if best.f < 0 else None
     return Choice(plan, int(-best.f) if plan is not None else 0, problem.nfev)
 

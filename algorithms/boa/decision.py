@@ -96,11 +96,20 @@ def decide(belief: Belief, cell: tuple[int, int], heading: int, battery: int | N
         f = float(problem(x[None, :])[0])
         plan = problem.plan(x) if f < 0 else None
         return Decision(plan, f, gains.size, gains.size, 1, 0)
+    best, attempts, ngen = minimize_with_restarts(problem, problem.bounds, params, rng)
+    plan = problem.plan(best.x) if best.f < 0 else None
+    return Decision(plan, best.f, problem.nfev, problem.n_distinct, attempts, ngen)
+
+
+def minimize_with_restarts(fun: Any, bounds: Any, params: DecisionParams,
+                           rng: np.random.Generator) -> tuple[Any, int, int]:
+    """The optimiser run up to ``params.retries + 1`` times, stopping at the first run that finds a feasible
+    goal (negative fitness): the best result, the runs made and the generations used in all of them."""
     boa = params.boa_params()
     best = None
     attempts = ngen = 0
     for attempts in range(1, params.retries + 2):
-        res = minimize(problem, problem.bounds, rng=rng, variant=params.variant, pop_size=params.pop_size,
+        res = minimize(fun, bounds, rng=rng, variant=params.variant, pop_size=params.pop_size,
                        max_gen=params.max_gen, early_stop=params.early_stop, params=boa)
         ngen += res.ngen
         if best is None or res.f < best.f:
@@ -108,5 +117,4 @@ def decide(belief: Belief, cell: tuple[int, int], heading: int, battery: int | N
         if res.f < 0:
             break
     assert best is not None
-    plan = problem.plan(best.x) if best.f < 0 else None
-    return Decision(plan, best.f, problem.nfev, problem.n_distinct, attempts, ngen)
+    return best, attempts, ngen
