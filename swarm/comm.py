@@ -24,6 +24,7 @@ import numpy as np
 
 from maps.params import check_choice, check_float, check_int
 
+from .knowledge import merge_cells, sync_changes
 from .messages import MapRequest, MapUpdate, MessageError, decode, encode, map_update
 
 SHARING_MODES = ("delta", "full", "off")
@@ -170,10 +171,10 @@ class MapSharing:
                 changed = None
             else:
                 assert self.last_shared is not None
-                changed = np.flatnonzero(known[i] != self.last_shared[i])
+                changed = sync_changes(known[i], self.last_shared[i])
                 if not len(changed):
                     continue
-            if self.last_shared is not None:
+            if self.last_shared is not None and changed is None:
                 self.last_shared[i] = known[i]
             self.seq[i] += 1
             out[i].append(map_update(i, self.seq[i], tick, known[i], tuple(poses[i]), changed))
@@ -194,8 +195,9 @@ class MapSharing:
         if not updates:
             return None
         cells = [u.cells() for u in updates]
-        idx = np.concatenate([c[0] for c in cells])
-        np.maximum.at(known.reshape(-1), idx, np.concatenate([c[1] for c in cells]))
+        for c_idx, c_values in cells:
+            merge_cells(known, c_idx, c_values)
+        idx = cells[0][0] if len(cells) == 1 else np.concatenate([c[0] for c in cells])
         for msg in updates:
             last = self.seen_seq[receiver, msg.sender]
             if not msg.full and msg.seq != last + 1 and self.spec.map_sharing == "delta":

@@ -25,7 +25,7 @@ from .api import CELL_M, FREE, SOLID, UNSEEN
 
 __all__ = [
     "FREE", "SOLID", "UNSEEN", "ExplorationTracker", "LogOddsGrid", "active_flags", "classify_logodds",
-    "count_cells", "count_known", "empty_knowledge", "merge",
+    "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "sync_changes",
 ]
 
 
@@ -71,6 +71,47 @@ def merge(into: np.ndarray, other: np.ndarray) -> int:
     if not into.flags.c_contiguous:
         raise InvalidInput("into", "a non-contiguous view", "a C-contiguous uint8[H, W] array")
     return int(_merge_max_kernel(into, np.ascontiguousarray(other)))
+
+
+@njit(cache=True)
+def _merge_cells_kernel(flat: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
+    for k in range(idx.shape[0]):
+        i = idx[k]
+        if values[k] > flat[i]:
+            flat[i] = values[k]
+
+
+def merge_cells(known: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
+    """Raise cells ``idx`` (flat indices, repeats allowed) of ``known`` to at least ``values``, in place:
+    ``numpy.maximum.at`` semantics at the cost of one pass (``ufunc.at`` is ~20x slower, and merging
+    received map updates runs for every receiver every sharing tick). Indices must be in range."""
+    if not (known.flags.c_contiguous and known.flags.writeable):
+        raise InvalidInput("known", "a read-only or non-contiguous map", "a writable C-contiguous uint8 map")
+    _merge_cells_kernel(known.reshape(-1), np.ascontiguousarray(idx, dtype=np.int64), np.ascontiguousarray(values, dtype=np.uint8))
+
+
+@njit(cache=True)
+def _sync_changes_kernel(current: np.ndarray, last: np.ndarray, out: np.ndarray) -> int:
+    m = 0
+    for i in range(current.shape[0]):
+        v = current[i]
+        if v != last[i]:
+            last[i] = v
+            out[m] = i
+            m += 1
+    return m
+
+
+def sync_changes(current: np.ndarray, last: np.ndarray) -> np.ndarray:
+    """Flat indices (ascending) where ``current`` differs from ``last``, copying them into ``last``: after
+    the call ``last == current``. One pass instead of compare + nonzero + copy (the map-sharing service
+    does this for every robot every sharing tick)."""
+    cur, prev = current.reshape(-1), last.reshape(-1)
+    if cur.shape != prev.shape or not last.flags.c_contiguous:
+        raise InvalidInput("last", getattr(last, "shape", None), f"a C-contiguous map shaped like current {current.shape}")
+    out = np.empty(cur.shape[0], dtype=np.int64)
+    m = _sync_changes_kernel(np.ascontiguousarray(cur), prev, out)
+    return out[:m].copy()
 
 
 def count_known(known: np.ndarray) -> int:

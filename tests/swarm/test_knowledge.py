@@ -9,7 +9,7 @@ from maps import InvalidInput, Map
 from swarm.api import FREE, SOLID, UNSEEN
 from swarm.knowledge import (
     ExplorationTracker, LogOddsGrid, active_flags, classify_logodds, count_cells, count_known, empty_knowledge,
-    merge,
+    merge, merge_cells, sync_changes,
 )
 
 
@@ -56,6 +56,35 @@ def test_merge_refuses_mismatched_maps() -> None:
     with pytest.raises(InvalidInput) as err:
         merge(ro, a)
     assert err.value.field == "into"
+
+
+def test_merge_cells_equals_maximum_at_with_repeated_indices() -> None:
+    rng = np.random.default_rng(4)
+    for _ in range(20):
+        known = rng.integers(0, 3, size=(9, 13), dtype=np.uint8)
+        idx = rng.integers(0, known.size, size=60)
+        values = rng.integers(0, 3, size=60, dtype=np.uint8)
+        expected = known.copy()
+        np.maximum.at(expected.reshape(-1), idx, values)
+        merge_cells(known, idx, values)
+        assert np.array_equal(known, expected)
+    ro = empty_knowledge((3, 3))
+    ro.setflags(write=False)
+    with pytest.raises(InvalidInput) as err:
+        merge_cells(ro, np.array([0]), np.array([1], np.uint8))
+    assert err.value.field == "known"
+
+
+def test_sync_changes_reports_the_changed_cells_and_brings_last_up_to_date() -> None:
+    rng = np.random.default_rng(5)
+    current = rng.integers(0, 3, size=(7, 11), dtype=np.uint8)
+    last = current.copy()
+    last[rng.random(last.shape) < 0.2] = 0
+    expected = np.flatnonzero(current != last)
+    got = sync_changes(current, last)
+    assert got.tolist() == expected.tolist() and len(got) > 0
+    assert np.array_equal(last, current)
+    assert sync_changes(current, last).size == 0
 
 
 def test_empty_knowledge_and_counts() -> None:
