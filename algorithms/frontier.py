@@ -14,7 +14,7 @@ import numpy as np
 
 from maps.params import check_int
 from swarm import grid
-from swarm.api import UNSEEN, Action, Observation, RobotInfo, cell_centre, cell_of
+from swarm.api import Action, Observation, RobotInfo, cell_centre, cell_of
 
 
 TARGET_REACH_CELLS = 3
@@ -57,7 +57,7 @@ class FrontierExplorer:
         :func:`swarm.grid.nearest_reachable_unseen`)."""
         r, c = self.target  # type: ignore[misc]
         k = TARGET_REACH_CELLS
-        return bool((known[max(r - k, 0):r + k + 1, max(c - k, 0):c + k + 1] == UNSEEN).any())
+        return not known[max(r - k, 0):r + k + 1, max(c - k, 0):c + k + 1].all()  # UNSEEN == 0
 
     def _choose(self, obs: Observation) -> None:
         self.excluded = {cell: until for cell, until in self.excluded.items() if until > obs.tick}

@@ -91,9 +91,19 @@ def merge_cells(known: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
 
 
 @njit(cache=True)
-def _sync_changes_kernel(current: np.ndarray, last: np.ndarray, out: np.ndarray) -> int:
+def _sync_changes_kernel(current: np.ndarray, last: np.ndarray, cur64: np.ndarray, last64: np.ndarray,
+                         out: np.ndarray) -> int:
+    """Compare 8 cells at a time (uint64 views of the same memory), bytes only inside differing words."""
     m = 0
-    for i in range(current.shape[0]):
+    for k in range(cur64.shape[0]):
+        if cur64[k] != last64[k]:
+            for i in range(8 * k, 8 * k + 8):
+                v = current[i]
+                if v != last[i]:
+                    last[i] = v
+                    out[m] = i
+                    m += 1
+    for i in range(8 * cur64.shape[0], current.shape[0]):
         v = current[i]
         if v != last[i]:
             last[i] = v
@@ -109,8 +119,10 @@ def sync_changes(current: np.ndarray, last: np.ndarray) -> np.ndarray:
     cur, prev = current.reshape(-1), last.reshape(-1)
     if cur.shape != prev.shape or not last.flags.c_contiguous:
         raise InvalidInput("last", getattr(last, "shape", None), f"a C-contiguous map shaped like current {current.shape}")
+    cur = np.ascontiguousarray(cur)
+    words = cur.shape[0] // 8
     out = np.empty(cur.shape[0], dtype=np.int64)
-    m = _sync_changes_kernel(np.ascontiguousarray(cur), prev, out)
+    m = _sync_changes_kernel(cur, prev, cur[:8 * words].view(np.uint64), prev[:8 * words].view(np.uint64), out)
     return out[:m].copy()
 
 

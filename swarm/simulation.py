@@ -213,9 +213,7 @@ class Simulation:
             if self.failed[i]:
                 continue
             if inbox:
-                idx = self.sharing.receive(i, [env.message for env in inbox], self.known[i])
-                if idx is not None:
-                    merged[i].append(idx)
+                merged[i] = self.sharing.receive(i, [env.message for env in inbox], self.known[i])
         return inboxes, merged
 
     def _send(self, tick: int, poses: np.ndarray, actions: list[Action | None], links: Any) -> list[list[Envelope]]:

@@ -18,8 +18,7 @@ from collections.abc import Iterable
 import numpy as np
 
 from swarm import grid
-from swarm.api import FREE, cell_of
-from swarm.grid.targets import geodesic_dilate
+from swarm.api import cell_of
 
 from .doorways import Doorway
 
@@ -44,7 +43,7 @@ def cut_doors(space: np.ndarray, doors: Iterable[Doorway], origin: tuple[int, in
 def view_cells(known: np.ndarray, space: np.ndarray, reach: int) -> np.ndarray:
     """Configuration-space cells from which a frontier is in view (the Greed target set of
     :func:`swarm.grid.nearest_reachable_unseen`: within ``reach`` 4-steps of a frontier through FREE)."""
-    return geodesic_dilate(grid.frontier_mask(known), known == FREE, reach) & space
+    return grid.view_cells(known, reach) & space
 
 
 def snap(space: np.ndarray, xy: tuple[float, float]) -> tuple[int, int] | None:

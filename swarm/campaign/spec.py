@@ -241,7 +241,7 @@ def campaign_from_mapping(raw: Mapping[str, Any]) -> CampaignSpec:
     run_base = _table(raw, "run")
     for key in ("seed", "map", "robots", "algorithm", "radio", "transport", "stop", "record_every"):
         if key in run_base:
-            raise InvalidInput(f"run.{key}", run_base[key], f"not in [run]: set it in [grid], [stop] or [output]")
+            raise InvalidInput(f"run.{key}", run_base[key], "not in [run]: set it in [grid], [stop] or [output]")
     stop = _table(raw, "stop")
     output = _table(raw, "output")
     for key in output:

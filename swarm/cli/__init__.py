@@ -8,8 +8,6 @@ Subcommand modules import heavy dependencies inside their functions so ``swarm -
 
 from __future__ import annotations
 
-import sys
-
 import click
 
 from maps.errors import InvalidInput

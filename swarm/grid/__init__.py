@@ -14,7 +14,7 @@ Typical use (the runtime's navigator)::
 
 Module map: :mod:`.cspace` (passable, configuration_space, nearest_in), :mod:`.search` (plan,
 distance_field, nearest_reachable), :mod:`.path` (simplify, path_length_m, segment_clear),
-:mod:`.frontiers` (frontier_mask, frontier_clusters), :mod:`.targets` (nearest_reachable_unseen),
+:mod:`.frontiers` (frontier_mask, frontier_clusters), :mod:`.targets` (nearest_reachable_unseen, view_cells),
 :mod:`._kernels` (the numba search and line kernels).
 """
 
@@ -22,10 +22,10 @@ from .cspace import DEFAULT_MARGIN_M, configuration_space, inflation_offsets, ne
 from .frontiers import FrontierCluster, frontier_clusters, frontier_mask
 from .path import cells_to_metres, path_length_m, segment_clear, simplify
 from .search import distance_field, nearest_reachable, plan
-from .targets import nearest_reachable_unseen
+from .targets import nearest_reachable_unseen, view_cells
 
 __all__ = [
     "DEFAULT_MARGIN_M", "FrontierCluster", "cells_to_metres", "configuration_space", "distance_field",
     "frontier_clusters", "frontier_mask", "inflation_offsets", "nearest_in", "nearest_reachable",
-    "nearest_reachable_unseen", "passable", "path_length_m", "plan", "segment_clear", "simplify",
+    "nearest_reachable_unseen", "passable", "path_length_m", "plan", "segment_clear", "simplify", "view_cells",
 ]

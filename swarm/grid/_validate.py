@@ -24,7 +24,7 @@ def check_known(known: Any, field: str = "known") -> np.ndarray:
     if arr.ndim != 2 or arr.size == 0 or not np.issubdtype(arr.dtype, np.integer):
         raise InvalidInput(field, f"array {arr.dtype}{list(arr.shape)}",
                            "a non-empty 2-D integer array (uint8 UNSEEN=0 / FREE=1 / SOLID=2)")
-    if arr.min() < 0 or arr.max() > SOLID:
+    if arr.max() > SOLID or (arr.dtype.kind == "i" and arr.min() < 0):  # unsigned maps cannot go below 0
         raise InvalidInput(field, f"values in [{arr.min()}, {arr.max()}]", "cell values 0, 1 or 2")
     return arr
 

@@ -21,11 +21,13 @@ import math
 
 import numpy as np
 
-from ..api import CELL_M, FREE, ROBOT_RADIUS_M
+from ..api import CELL_M, ROBOT_RADIUS_M
+from ._kernels import grid_view_cells
 from ._validate import check_cell, check_count, check_known, check_length, check_same_shape, check_space
 from .cspace import DEFAULT_MARGIN_M, configuration_space, nearest_in
-from .frontiers import frontier_mask
 from .search import nearest_reachable
+
+_NO_EXCLUDE = np.zeros((0, 0), dtype=bool)
 
 
 def geodesic_dilate(seeds: np.ndarray, within: np.ndarray, steps: int) -> np.ndarray:
@@ -42,6 +44,23 @@ def geodesic_dilate(seeds: np.ndarray, within: np.ndarray, steps: int) -> np.nda
             break
         grown = nxt
     return grown
+
+
+def view_cells(known: np.ndarray, reach: int, exclude: np.ndarray | None = None) -> np.ndarray:
+    """FREE cells from which a frontier cell is at most ``reach`` 4-connected steps away through FREE
+    cells: ``geodesic_dilate(frontier_mask(known) & ~exclude, known == FREE, reach)`` (bool[H, W]), in one
+    compiled pass (the target search of every frontier-driven algorithm runs it on the whole map)."""
+    k = np.ascontiguousarray(check_known(known), dtype=np.uint8)
+    steps = check_count(reach, "reach", 0)
+    assert steps is not None
+    ex = _NO_EXCLUDE
+    if exclude is not None:
+        ex = check_space(exclude, "exclude")
+        check_same_shape(ex, k.shape, "exclude")
+        ex = np.ascontiguousarray(ex)
+    out = np.zeros(k.shape, dtype=bool)
+    grid_view_cells(k, ex, steps, out)
+    return out
 
 
 def default_view_reach_cells(radius_m: float, margin_m: float) -> int:
@@ -95,18 +114,13 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
     snap = check_count(snap_radius_cells, "snap_radius_cells", 0, allow_none=True)
     if snap is None:
         snap = reach + 1
-    frontier = frontier_mask(k)
-    space = configuration_space(k, radius, margin, unseen_traversable)
-    if exclude is not None:
-        ex = check_space(exclude, "exclude")
-        check_same_shape(ex, k.shape, "exclude")
-        frontier &= ~ex
-        space_targets = ~ex
-    else:
-        space_targets = np.ones(k.shape, dtype=bool)
-    if not frontier.any():
+    view = view_cells(k, reach, exclude)
+    if not view.any():
         return None
-    view = geodesic_dilate(frontier, k == FREE, reach) & space & space_targets
+    space = configuration_space(k, radius, margin, unseen_traversable)
+    view &= space
+    if exclude is not None:
+        view &= ~np.asarray(exclude)
     if not view.any():
         return None
     snapped = nearest_in(space, s, snap)
