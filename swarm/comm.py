@@ -180,10 +180,10 @@ class MapSharing:
             out[i].append(map_update(i, self.seq[i], tick, known[i], tuple(poses[i]), changed))
         return out
 
-    def receive(self, receiver: int, messages: Sequence[Any], known: np.ndarray) -> list[np.ndarray]:
-        """Handle one receiver's service messages of a tick: merge every MapUpdate (returns the flat index
-        arrays they carried, one per update, possibly overlapping) and note MapRequests addressed to it.
-        Other messages are left to the algorithm."""
+    def receive(self, receiver: int, messages: Sequence[Any], known: np.ndarray) -> list[np.ndarray | None]:
+        """Handle one receiver's service messages of a tick: merge every MapUpdate and note MapRequests
+        addressed to it. Returns, per merged update, the flat indices it carried (None for a full map: any
+        cell may have changed). Other messages are left to the algorithm."""
         updates = []
         for msg in messages:
             if isinstance(msg, MapUpdate):
@@ -194,16 +194,23 @@ class MapSharing:
                 self.full_requested[receiver] = True
         if not updates:
             return []
-        cells = [u.cells() for u in updates]
-        for c_idx, c_values in cells:
-            merge_cells(known, c_idx, c_values)
+        touched: list[np.ndarray | None] = []
+        flat = known.reshape(-1)
+        for u in updates:
+            if u.full:
+                np.maximum(flat, u.dense(), out=flat)
+                touched.append(None)
+            else:
+                idx, values = u.cells()
+                merge_cells(known, idx, values)
+                touched.append(idx)
         for msg in updates:
             last = self.seen_seq[receiver, msg.sender]
             if not msg.full and msg.seq != last + 1 and self.spec.map_sharing == "delta":
                 if msg.sender not in self.requests[receiver]:
                     self.requests[receiver].append(msg.sender)
             self.seen_seq[receiver, msg.sender] = max(last, msg.seq) if not msg.full else msg.seq
-        return [c[0] for c in cells]
+        return touched
 
 
 def decode_or_none(data: bytes) -> Any:

@@ -174,18 +174,36 @@ class MapUpdate:
             self.__dict__["_cells"] = cached
         return cached
 
-    def _decode_cells(self) -> tuple[np.ndarray, np.ndarray]:
-        h, w = self.shape
-        try:
-            raw = zlib.decompress(self.payload, bufsize=max(64, 5 * self.count + 16))
-        except zlib.error:
-            raise MessageError("map_update: corrupt payload") from None
-        if self.full:
-            values = _unpack2(np.frombuffer(raw, dtype=np.uint8), h * w)
+    def dense(self) -> np.ndarray:
+        """A full update's map as flat ``uint8[H * W]`` (read-only, decoded once): merging a whole map is
+        one vectorised maximum, much cheaper than scattering its tens of thousands of known cells."""
+        if not self.full:
+            raise MessageError("map_update: dense() needs a full update")
+        cached = self.__dict__.get("_dense")
+        if cached is None:
+            h, w = self.shape
+            values = _unpack2(np.frombuffer(self._raw(), dtype=np.uint8), h * w)
             if values is None:
                 raise MessageError("map_update: wrong payload length")
+            if (values > 2).any():
+                raise MessageError("map_update: cell values outside 0..2")
+            values.flags.writeable = False
+            cached = self.__dict__["_dense"] = values
+        return cached
+
+    def _raw(self) -> bytes:
+        try:
+            return zlib.decompress(self.payload, bufsize=max(64, 5 * self.count + 16))
+        except zlib.error:
+            raise MessageError("map_update: corrupt payload") from None
+
+    def _decode_cells(self) -> tuple[np.ndarray, np.ndarray]:
+        h, w = self.shape
+        if self.full:
+            values = self.dense()
             idx = np.flatnonzero(values)
             return idx, values[idx]
+        raw = self._raw()
         n = self.count
         if len(raw) != 4 * n + (n + 3) // 4:
             raise MessageError("map_update: wrong payload length")

@@ -30,6 +30,7 @@ from radio import build_link_model, config_from_mapping
 
 from .api import Action, Neighbour, Neighbours, Observation, Pose, RobotInfo
 from .comm import CommSpec, Envelope, MapSharing, Medium
+from .knowledge import sync_changes
 from .metrics import Metrics
 from .navigation import Navigator
 from .result import RunResult
@@ -208,7 +209,7 @@ class Simulation:
     def _receive(self) -> tuple[list[list[Envelope]], list[list[np.ndarray]]]:
         """This tick's inboxes (sent last tick); map updates are merged into the receiver's map."""
         inboxes, self.inboxes = self.inboxes, [[] for _ in range(self.spec.robots.count)]
-        merged: list[list[np.ndarray]] = [[] for _ in inboxes]
+        merged: list[list[np.ndarray | None]] = [[] for _ in inboxes]
         for i, inbox in enumerate(inboxes):
             if self.failed[i]:
                 continue
@@ -250,7 +251,7 @@ class Simulation:
         return [Neighbours(i, near, links.distance, bearing, xy) for i in range(n)]
 
     def _inputs(self, tick: int, poses: np.ndarray, collided: np.ndarray, inboxes: list[list[Envelope]],
-                merged: list[list[np.ndarray]], links: Any, needs_delta: bool) -> list[TickInput | None]:
+                merged: list[list[np.ndarray | None]], links: Any, needs_delta: bool) -> list[TickInput | None]:
         distance = self.world.distance.tolist()
         energy = (self.world.distance + self.world.rotation).tolist()
         pose_rows = poses.tolist()
@@ -271,11 +272,14 @@ class Simulation:
                 inputs.append(TickInput(obs))
         return inputs
 
-    def _changed_cells(self, i: int, pose: list[float], merged: list[np.ndarray]) -> np.ndarray:
-        """Flat indices of robot i's knowledge cells changed since its last observation: the lidar only
-        writes within range of the robot, merges report their cells, so only those places are compared."""
+    def _changed_cells(self, i: int, pose: list[float], merged: list[np.ndarray | None]) -> np.ndarray:
+        """Flat indices (ascending) of robot i's knowledge cells changed since its last observation: the
+        lidar only writes within range of the robot, delta merges report their cells, so only those places
+        are compared; after a full-map merge the whole map is."""
         assert self._mirror is not None
         known, mirror = self.known[i], self._mirror[i]
+        if any(m is None for m in merged):
+            return sync_changes(known, mirror)
         h, w = known.shape
         reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2
         r, c = int(pose[1] / CELL_M), int(pose[0] / CELL_M)
