@@ -13,6 +13,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 from . import grid
 from .api import CELL_M, SOLID, NavStatus, Pose, cell_of
@@ -99,7 +100,7 @@ class Navigator:
         self.state = "moving"
 
     def _corridor_blocked(self, known: np.ndarray) -> bool:
-        return self.corridor is not None and int(known.reshape(-1).take(self.corridor).max(initial=0)) >= SOLID
+        return self.corridor is not None and _any_solid(known.reshape(-1), self.corridor)
 
     def _track_progress(self, pose: Pose, known: np.ndarray) -> None:
         remaining = self.follower.remaining_m
@@ -126,20 +127,68 @@ def _inside(point: tuple[float, float], shape: tuple[int, int]) -> bool:
 
 def _corridor(polyline: np.ndarray, known: np.ndarray) -> np.ndarray:
     """Cells the robot's disc sweeps along the polyline (sampled every 0.2 m, each sample's cell and its 4
-    neighbours, the footprint :func:`swarm.grid.configuration_space` keeps clear) that are not SOLID now:
-    if one of them turns SOLID, the path must change."""
-    shape = known.shape
-    seg = np.diff(polyline, axis=0)
-    steps = np.maximum(1, np.ceil(np.hypot(seg[:, 0], seg[:, 1]) / 0.2).astype(np.int64))
-    which = np.repeat(np.arange(len(seg)), steps)
-    frac = (np.arange(steps.sum()) - np.repeat(np.cumsum(steps) - steps, steps) + 1) / np.repeat(steps, steps)
-    points = np.vstack([polyline[:1], polyline[which] + seg[which] * frac[:, None]])
-    cells = np.floor(points[:, ::-1] / CELL_M).astype(np.int64)
-    cells = (cells[:, None, :] + _CROSS[None, :, :]).reshape(-1, 2)
-    cells[:, 0] = np.clip(cells[:, 0], 0, shape[0] - 1)
-    cells[:, 1] = np.clip(cells[:, 1], 0, shape[1] - 1)
-    flat = np.unique(cells[:, 0] * shape[1] + cells[:, 1])
-    return flat[known.reshape(-1)[flat] < SOLID]
+    neighbours, the footprint :func:`swarm.grid.configuration_space` keeps clear) that are not SOLID now,
+    as ascending flat indices: if one of them turns SOLID, the path must change."""
+    poly = np.ascontiguousarray(polyline, dtype=np.float64)
+    flat = _corridor_kernel(poly, known, CELL_M, 0.2)
+    return np.sort(flat)
 
 
-_CROSS = np.array([(0, 0), (-1, 0), (1, 0), (0, -1), (0, 1)])
+@njit(cache=True)
+def _any_solid(flat: np.ndarray, cells: np.ndarray) -> bool:  # pragma: no cover - compiled
+    for i in range(cells.shape[0]):
+        if flat[cells[i]] >= SOLID:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _corridor_kernel(poly: np.ndarray, known: np.ndarray, cell: float, spacing: float) -> np.ndarray:  # pragma: no cover
+    """Distinct non-SOLID flat cells of the footprints of the samples: the polyline's first point, then
+    for each segment ``ceil(length / spacing)`` (at least 1) points at fractions k / steps, k = 1..steps."""
+    h, w = known.shape
+    seen = np.zeros(h * w, dtype=np.bool_)
+    out = np.empty(64, dtype=np.int64)
+    m = 0
+    n_seg = poly.shape[0] - 1
+    for s in range(-1, n_seg):
+        if s < 0:
+            steps = 1
+        else:
+            dx = poly[s + 1, 0] - poly[s, 0]
+            dy = poly[s + 1, 1] - poly[s, 1]
+            steps = max(1, int(np.ceil(np.hypot(dx, dy) / spacing)))
+        for k in range(1, steps + 1):
+            if s < 0:
+                x, y = poly[0, 0], poly[0, 1]
+            else:
+                frac = k / steps
+                x = poly[s, 0] + dx * frac
+                y = poly[s, 1] + dy * frac
+            r0 = int(np.floor(y / cell))
+            c0 = int(np.floor(x / cell))
+            for t in range(5):
+                r, c = r0, c0
+                if t == 1:
+                    r -= 1
+                elif t == 2:
+                    r += 1
+                elif t == 3:
+                    c -= 1
+                elif t == 4:
+                    c += 1
+                r = min(max(r, 0), h - 1)
+                c = min(max(c, 0), w - 1)
+                p = r * w + c
+                if seen[p]:
+                    continue
+                seen[p] = True
+                if known[r, c] >= SOLID:
+                    continue
+                if m == out.shape[0]:
+                    bigger = np.empty(2 * m, dtype=np.int64)
+                    bigger[:m] = out
+                    out = bigger
+                out[m] = p
+                m += 1
+    return out[:m].copy()
