@@ -81,9 +81,9 @@ def configuration_space(known: np.ndarray, radius_m: float = ROBOT_RADIUS_M, mar
                         unseen_traversable: bool = False) -> np.ndarray:
     """Cells where the robot's centre may be (see the module docstring for the clearance rule).
 
-    Computed as a dilation of the blocked cells by the offsets of :func:`inflation_offsets`, decomposed
-    into one horizontal run per width and one vertical shift per row offset, so the cost is O(radius) whole-
-    array operations rather than O(radius^2).
+    Computed as an erosion of the passable cells by the offsets of :func:`inflation_offsets` (cells off
+    the map count as blocked), decomposed into one horizontal run per width and one vertical shift per row
+    offset, all in-place ``&=`` on slices, so the cost is O(radius) whole-array operations, not O(radius^2).
     """
     radius = check_length(radius_m, "radius_m")
     margin = check_length(margin_m, "margin_m")
@@ -95,17 +95,32 @@ def configuration_space(known: np.ndarray, radius_m: float = ROBOT_RADIUS_M, mar
     half_width: dict[int, int] = {}  # each row of the offsets is a centred run [-j, j] (distance grows with |dc|)
     for dr, dc in offsets:
         half_width[dr] = max(half_width.get(dr, 0), abs(dc))
-    k = max(max(abs(dr) for dr in half_width), max(half_width.values()))
     h, w = free.shape
-    blocked = np.ones((h + 2 * k, w + 2 * k), dtype=bool)
-    blocked[k:k + h, k:k + w] = ~free
-    runs = [blocked[:, k:k + w]]  # runs[j]: blocked dilated horizontally by [-j, j]
+    flat_free = free.reshape(-1)
+    runs = [free]  # runs[j][r, c]: free on all of row r, columns c-j..c+j (and all on the map)
     for j in range(1, max(half_width.values()) + 1):
-        runs.append(runs[-1] | blocked[:, k - j:k - j + w] | blocked[:, k + j:k + j + w])
-    inflated = np.zeros((h, w), dtype=bool)
+        run = runs[-1].copy()
+        if j < w:  # shifted on the flat array (one fast loop); what wraps across rows is cleared below
+            flat = run.reshape(-1)
+            flat[j:] &= flat_free[:-j]
+            flat[:-j] &= flat_free[j:]
+        run[:, :min(j, w)] = False
+        run[:, max(w - j, 0):] = False
+        runs.append(run)
+    space = runs[half_width.get(0, 0)].copy() if 0 in half_width else free.copy()
     for dr, j in half_width.items():
-        inflated |= runs[j][k + dr:k + dr + h]
-    return free & ~inflated
+        if dr == 0:
+            continue
+        if abs(dr) >= h:
+            space[:] = False
+            break
+        if dr > 0:   # needs row r + dr: the last dr rows have none
+            space[:h - dr] &= runs[j][dr:]
+            space[h - dr:] = False
+        else:
+            space[-dr:] &= runs[j][:h + dr]
+            space[:-dr] = False
+    return space
 
 
 def nearest_in(space: np.ndarray, cell: tuple[int, int], max_radius_cells: int | None = None
