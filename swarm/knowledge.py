@@ -25,7 +25,7 @@ from .api import CELL_M, FREE, SOLID, UNSEEN
 
 __all__ = [
     "FREE", "SOLID", "UNSEEN", "ExplorationTracker", "LogOddsGrid", "active_flags", "classify_logodds",
-    "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "sync_changes",
+    "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "sync_changes", "sync_region",
 ]
 
 
@@ -124,6 +124,46 @@ def sync_changes(current: np.ndarray, last: np.ndarray) -> np.ndarray:
     out = np.empty(cur.shape[0], dtype=np.int64)
     m = _sync_changes_kernel(cur, prev, cur[:8 * words].view(np.uint64), prev[:8 * words].view(np.uint64), out)
     return out[:m].copy()
+
+
+@njit(cache=True)
+def _sync_window_kernel(current: np.ndarray, last: np.ndarray, r0: int, r1: int, c0: int, c1: int,
+                        idx: np.ndarray, out: np.ndarray) -> int:
+    w = current.shape[1]
+    m = 0
+    for r in range(r0, r1):
+        for c in range(c0, c1):
+            v = current[r, c]
+            if v != last[r, c]:
+                last[r, c] = v
+                out[m] = r * w + c
+                m += 1
+    flat_cur = current.reshape(-1)
+    flat_last = last.reshape(-1)
+    for k in range(idx.shape[0]):
+        i = idx[k]
+        v = flat_cur[i]
+        if v != flat_last[i]:
+            flat_last[i] = v
+            out[m] = i
+            m += 1
+    return m
+
+
+def sync_region(current: np.ndarray, last: np.ndarray, rows: tuple[int, int], cols: tuple[int, int],
+                cells: np.ndarray | None = None) -> np.ndarray:
+    """:func:`sync_changes` restricted to a window (``rows``/``cols`` half-open ranges) plus the given flat
+    ``cells`` (any order, repeats allowed): the changed ones among them, ascending, copied into ``last``.
+    The zenoh transport ships each robot only what changed where its lidar looked or a merge wrote."""
+    if current.shape != last.shape or not (current.flags.c_contiguous and last.flags.c_contiguous):
+        raise InvalidInput("last", getattr(last, "shape", None), f"a C-contiguous map shaped like current {current.shape}")
+    extra = np.zeros(0, np.int64) if cells is None else np.ascontiguousarray(cells, dtype=np.int64)
+    out = np.empty((rows[1] - rows[0]) * (cols[1] - cols[0]) + len(extra), dtype=np.int64)
+    m = _sync_window_kernel(current, last, rows[0], rows[1], cols[0], cols[1], extra, out)
+    found = out[:m]
+    if len(extra):
+        found = np.sort(found)
+    return found.copy()
 
 
 def count_known(known: np.ndarray) -> int:

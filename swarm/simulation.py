@@ -30,7 +30,7 @@ from radio import build_link_model, config_from_mapping
 
 from .api import Action, Neighbour, Neighbours, Observation, Pose, RobotInfo
 from .comm import CommSpec, Envelope, MapSharing, Medium
-from .knowledge import sync_changes
+from .knowledge import sync_changes, sync_region
 from .metrics import Metrics
 from .navigation import Navigator
 from .result import RunResult
@@ -283,15 +283,9 @@ class Simulation:
         h, w = known.shape
         reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2
         r, c = int(pose[1] / CELL_M), int(pose[0] / CELL_M)
-        r0, r1, c0, c1 = max(r - reach, 0), min(r + reach + 1, h), max(c - reach, 0), min(c + reach + 1, w)
-        rr, cc = np.nonzero(known[r0:r1, c0:c1] != mirror[r0:r1, c0:c1])
-        idx = (rr + r0) * w + (cc + c0)
-        if merged:
-            flat_k, flat_m = known.reshape(-1), mirror.reshape(-1)
-            extra = np.concatenate(merged)
-            idx = np.union1d(idx, extra[flat_k[extra] != flat_m[extra]])
-        mirror.reshape(-1)[idx] = known.reshape(-1)[idx]
-        return idx
+        rows = (max(r - reach, 0), min(r + reach + 1, h))
+        cols = (max(c - reach, 0), min(c + reach + 1, w))
+        return sync_region(known, mirror, rows, cols, np.concatenate(merged) if merged else None)
 
     def _note_failures(self, tick: int, host: AgentHost) -> None:
         for i, (at, reason) in sorted(host.stats.failures.items()):

@@ -21,8 +21,8 @@ from typing import Any
 import msgpack
 import numpy as np
 
-from ..api import Action, NavStatus, Neighbour, Pose, RobotInfo
-from ..messages import MessageError, decode, encode
+from ..api import Action, NavStatus, Neighbour, Neighbours, Pose, RobotInfo
+from ..messages import MessageError, decode, encode, gaps_u32
 
 WIRE_VERSION = 1
 MAX_PACKET_BYTES = 8 * 1024 * 1024
@@ -122,10 +122,9 @@ def encode_obs(tick: int, robot_id: int, pose: Pose, changed_idx: np.ndarray, ch
                inbox: tuple[bytes, ...], neighbours: tuple[Neighbour, ...], collided: bool, nav: NavStatus,
                distance_travelled: float, energy_used: float) -> bytes:
     idx = np.asarray(changed_idx, dtype=np.int64)
-    gaps = np.diff(idx, prepend=0).astype("<u4").tobytes()
-    cells = zlib.compress(gaps + np.asarray(changed_val, dtype=np.uint8).tobytes(), 1) if len(idx) else b""
-    return _pack(["obs", WIRE_VERSION, tick, robot_id, list(pose), len(idx), cells, list(inbox),
-                  [[n.id, n.distance, n.bearing, n.x, n.y] for n in neighbours], collided,
+    cells = zlib.compress(gaps_u32(idx) + np.asarray(changed_val, dtype=np.uint8).tobytes(), 1) if len(idx) else b""
+    rows = neighbours.rows() if isinstance(neighbours, Neighbours) else [list(n) for n in neighbours]
+    return _pack(["obs", WIRE_VERSION, tick, robot_id, list(pose), len(idx), cells, list(inbox), rows, collided,
                   [list(nav.goal) if nav.goal is not None else None, nav.state, nav.path_length,
                    nav.ticks_since_progress], distance_travelled, energy_used])
 

@@ -105,10 +105,11 @@ class ZenohHost:
             self._cond.notify_all()
 
     def _local_agent(self, robot: int, runner: AgentRunner) -> None:
-        act_key = f"{self.prefix}/robot/{robot}/act"
+        publisher = self.session.declare_publisher(f"{self.prefix}/robot/{robot}/act", congestion_control=BLOCK)
+        self._declared.append(publisher)
 
         def on_obs(sample: zenoh.Sample) -> None:
-            self.session.put(act_key, runner.handle(sample.payload.to_bytes()), congestion_control=BLOCK)
+            publisher.put(runner.handle(sample.payload.to_bytes()))
 
         self._declared.append(self.session.declare_subscriber(
             f"{self.prefix}/robot/{robot}/obs", zenoh.handlers.Callback(on_obs, indirect=False)))

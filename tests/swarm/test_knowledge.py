@@ -9,7 +9,7 @@ from maps import InvalidInput, Map
 from swarm.api import FREE, SOLID, UNSEEN
 from swarm.knowledge import (
     ExplorationTracker, LogOddsGrid, active_flags, classify_logodds, count_cells, count_known, empty_knowledge,
-    merge, merge_cells, sync_changes,
+    merge, merge_cells, sync_changes, sync_region,
 )
 
 
@@ -85,6 +85,22 @@ def test_sync_changes_reports_the_changed_cells_and_brings_last_up_to_date() -> 
     assert got.tolist() == expected.tolist() and len(got) > 0
     assert np.array_equal(last, current)
     assert sync_changes(current, last).size == 0
+
+
+def test_sync_region_sees_the_window_and_the_listed_cells_only() -> None:
+    rng = np.random.default_rng(6)
+    current = rng.integers(0, 3, size=(12, 10), dtype=np.uint8)
+    last = np.zeros_like(current)
+    listed = np.array([5, 5, 113, 0, 47])
+    got = sync_region(current, last, (3, 7), (2, 6), listed)
+    window = np.zeros(current.shape, dtype=bool)
+    window[3:7, 2:6] = True
+    expected = np.union1d(np.flatnonzero(window & (current != 0)), listed[current.reshape(-1)[listed] != 0])
+    assert got.tolist() == expected.tolist()
+    assert np.array_equal(last.reshape(-1)[expected], current.reshape(-1)[expected])
+    others = np.setdiff1d(np.arange(current.size), expected)
+    assert not last.reshape(-1)[others].any()  # nothing outside the window and the list was copied
+    assert sync_region(current, last, (3, 7), (2, 6), listed).size == 0
 
 
 def test_empty_knowledge_and_counts() -> None:
