@@ -29,7 +29,8 @@ class InvalidInput(ValueError):
         self.field = field
         self.value = value
         self.allowed = allowed
-        super().__init__(f"{field}: got {_short_repr(value)}; allowed: {allowed}")
+        one_line = f"{field}: got {_short_repr(value)}; allowed: {allowed}"
+        super().__init__(one_line.replace("\r", "\\r").replace("\n", "\\n"))  # field names may come from the input
 
 
 def require(condition: bool, field: str, value: Any, allowed: str) -> None:

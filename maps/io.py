@@ -284,8 +284,8 @@ def check_legend(raw: Mapping[str, Any]) -> dict[str, Any]:
         if key not in allowed:
             raise InvalidInput(f"legend.{key}", raw[key], f"one of {', '.join(sorted(allowed))}")
     mpp = raw.get("metres_per_pixel", CELL_M)
-    if (not isinstance(mpp, (int, float)) or isinstance(mpp, bool) or not mpp > 0
-            or abs(mpp / CELL_M - round(mpp / CELL_M)) > 1e-9 or round(mpp / CELL_M) > 64):
+    if (not isinstance(mpp, (int, float)) or isinstance(mpp, bool) or not 0 < mpp <= 32
+            or abs(mpp / CELL_M - round(mpp / CELL_M)) > 1e-9):
         raise InvalidInput("legend.metres_per_pixel", mpp, "a positive multiple of 0.5 up to 32")
     tol = raw.get("tolerance", 0)
     if not isinstance(tol, int) or isinstance(tol, bool) or not 0 <= tol <= 255:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from PIL import Image
 
@@ -223,6 +223,8 @@ def test_fuzz_pgm_loader(tmp_path_factory, text):
                        st.one_of(st.integers(-5, 300), st.floats(allow_nan=True), st.text(max_size=8),
                                  st.dictionaries(st.text(max_size=8), st.text(max_size=8), max_size=3)),
                        max_size=4))
+@example({"colours": {"\n": ""}})                         # a newline in a key used to break the one-line error
+@example({"metres_per_pixel": 8.98846567431158e+307})     # used to overflow round() instead of being refused
 def test_fuzz_legend(raw):
     try:
         check_legend(raw)
