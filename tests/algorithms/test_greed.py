@@ -154,42 +154,6 @@ def test_registered_with_its_parameters():
     assert "deadlock_ticks" in names and "exclude_ticks" in names
 
 
-# ------------------------------------------------------------------------------- whole runs ----
-@pytest.mark.parametrize("kind", ["building", "cave"])
-def test_one_robot_explores_a_50_map(kind):
-    r = Simulation({"seed": 1, "map": {"kind": kind, "size": 50}, "robots": {"count": 1},
-                    "algorithm": {"name": "greed"}}).run()
-    assert r.summary["stop_reason"] == "explored", r.one_line()
-    assert r.summary["ticks_to"]["0.99"] is not None
-
-
-SMALL = {"seed": 4, "map": {"kind": "building", "size": 30}, "robots": {"count": 3},
-         "algorithm": {"name": "greed"}, "radio": {"model": "multiwall"}, "stop": {"max_ticks": 500}}
-
-
-def test_same_spec_twice_is_identical():
-    a = Simulation(SMALL).run()
-    b = Simulation(SMALL).run()
-    assert a.deterministic_view() == b.deterministic_view()
-    assert a.summary["messages"]["delivered"] > 0
-
-
-def test_inprocess_and_zenoh_transports_agree():
-    a = Simulation({**SMALL, "transport": "inprocess"}).run()
-    b = Simulation({**SMALL, "transport": "zenoh"}).run()
-    strip = lambda r: {k: v for k, v in r.deterministic_view().items() if k not in ("spec", "key")}
-    assert strip(a) == strip(b)
-
-
-@pytest.mark.parametrize("radio", ["global", "los", "multiwall", "maes"])
-@pytest.mark.parametrize("sharing", ["delta", "full"])
-def test_runs_with_every_link_model_and_sharing_mode(radio, sharing):
-    r = Simulation({**SMALL, "radio": {"model": radio}, "comm": {"map_sharing": sharing},
-                    "stop": {"max_ticks": 300}}).run()
-    assert r.summary["explored"] > 0.2, r.one_line()
-    assert r.summary["messages"]["malformed"] == 0
-
-
 # -------------------------------------------------------------------------- communication ----
 COMMS = {
     "global": {"radio": {"model": "global"}},
