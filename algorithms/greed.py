@@ -52,13 +52,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from maps.params import check_float, check_int
+from maps.params import check_int
 from swarm import grid
 from swarm.api import Action, Observation, RobotInfo, cell_centre, cell_of
 from swarm.grid.cspace import DEFAULT_MARGIN_M
 from swarm.grid.targets import default_view_reach_cells
 
-from .recovery import Backoff, Exclusions, Watchdog, unseen_near
+from .recovery import Backoff, Exclusions, Watchdog, check_recovery_params, unseen_near
 
 
 @dataclass(frozen=True)
@@ -73,12 +73,7 @@ class GreedParams:
     idle_recheck_ticks: int = 20     # with no target, look again this often
 
     def __post_init__(self) -> None:
-        check_int("deadlock_ticks", self.deadlock_ticks, 0, 1_000_000)
-        check_float("progress_m", self.progress_m, 0.0, 100.0, lo_open=True)
-        check_int("exclude_ticks", self.exclude_ticks, 0, 1_000_000)
-        check_float("exclude_radius_m", self.exclude_radius_m, 0.0, 100.0)
-        check_int("backoff_ticks", self.backoff_ticks, 0, 1000)
-        check_float("backoff_speed", self.backoff_speed, 0.0, 10.0, lo_open=True)
+        check_recovery_params(self)
         check_int("recheck_ticks", self.recheck_ticks, 0, 1_000_000)
         check_int("idle_recheck_ticks", self.idle_recheck_ticks, 1, 1_000_000)
 

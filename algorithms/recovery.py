@@ -19,9 +19,24 @@ from __future__ import annotations
 
 import math
 
+from typing import Any
+
 import numpy as np
 
+from maps.params import check_float, check_int
 from swarm.api import CELL_M, FREE, Observation, cell_of
+
+
+def check_recovery_params(p: Any) -> None:
+    """Bounds of the parameters an explorer passes to :class:`Watchdog`, :class:`Exclusions` and
+    :class:`Backoff` (``deadlock_ticks``, ``progress_m``, ``exclude_ticks``, ``exclude_radius_m``,
+    ``backoff_ticks``, ``backoff_speed``): one definition for every explorer that uses them."""
+    check_int("deadlock_ticks", p.deadlock_ticks, 0, 1_000_000)
+    check_float("progress_m", p.progress_m, 0.0, 100.0, lo_open=True)
+    check_int("exclude_ticks", p.exclude_ticks, 0, 1_000_000)
+    check_float("exclude_radius_m", p.exclude_radius_m, 0.0, 100.0)
+    check_int("backoff_ticks", p.backoff_ticks, 0, 1000)
+    check_float("backoff_speed", p.backoff_speed, 0.0, 10.0, lo_open=True)
 
 
 class Backoff:

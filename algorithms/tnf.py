@@ -79,7 +79,7 @@ from swarm.grid.cspace import DEFAULT_MARGIN_M
 from swarm.grid.targets import default_view_reach_cells
 from swarm.messages import MessageError, message
 
-from .recovery import Backoff, Exclusions, Watchdog, unseen_near
+from .recovery import Backoff, Exclusions, Watchdog, check_recovery_params, unseen_near
 from .tnf_utility import FrontierScore, score_frontiers
 
 
@@ -124,12 +124,7 @@ class TNFParams:
         check_int("forget_ticks", self.forget_ticks, 0, 10_000_000)
         check_bool("yield_on_conflict", self.yield_on_conflict)
         check_int("min_frontier_cells", self.min_frontier_cells, 1, 1_000_000)
-        check_int("deadlock_ticks", self.deadlock_ticks, 0, 1_000_000)
-        check_float("progress_m", self.progress_m, 0.0, 100.0, lo_open=True)
-        check_int("exclude_ticks", self.exclude_ticks, 0, 1_000_000)
-        check_float("exclude_radius_m", self.exclude_radius_m, 0.0, 100.0)
-        check_int("backoff_ticks", self.backoff_ticks, 0, 1000)
-        check_float("backoff_speed", self.backoff_speed, 0.0, 10.0, lo_open=True)
+        check_recovery_params(self)
         check_int("sidestep_ticks", self.sidestep_ticks, 1, 10_000)
         check_int("idle_recheck_ticks", self.idle_recheck_ticks, 1, 1_000_000)
 
