@@ -192,19 +192,16 @@ class MapSharing:
                 updates.append(msg)
             elif isinstance(msg, MapRequest) and msg.target == receiver:
                 self.full_requested[receiver] = True
-        if not updates:
-            return []
         touched: list[np.ndarray | None] = []
         flat = known.reshape(-1)
-        for u in updates:
-            if u.full:
-                np.maximum(flat, u.dense(), out=flat)
+        for msg in updates:
+            if msg.full:
+                np.maximum(flat, msg.dense(), out=flat)
                 touched.append(None)
             else:
-                idx, values = u.cells()
+                idx, values = msg.cells()
                 merge_cells(known, idx, values)
                 touched.append(idx)
-        for msg in updates:
             last = self.seen_seq[receiver, msg.sender]
             if not msg.full and msg.seq != last + 1 and self.spec.map_sharing == "delta":
                 if msg.sender not in self.requests[receiver]:

@@ -160,10 +160,7 @@ def sync_region(current: np.ndarray, last: np.ndarray, rows: tuple[int, int], co
     extra = np.zeros(0, np.int64) if cells is None else np.ascontiguousarray(cells, dtype=np.int64)
     out = np.empty((rows[1] - rows[0]) * (cols[1] - cols[0]) + len(extra), dtype=np.int64)
     m = _sync_window_kernel(current, last, rows[0], rows[1], cols[0], cols[1], extra, out)
-    found = out[:m]
-    if len(extra):
-        found = np.sort(found)
-    return found.copy()
+    return np.sort(out[:m]) if len(extra) else out[:m].copy()
 
 
 def count_known(known: np.ndarray) -> int:

@@ -130,8 +130,7 @@ def _corridor(polyline: np.ndarray, known: np.ndarray) -> np.ndarray:
     neighbours, the footprint :func:`swarm.grid.configuration_space` keeps clear) that are not SOLID now,
     as ascending flat indices: if one of them turns SOLID, the path must change."""
     poly = np.ascontiguousarray(polyline, dtype=np.float64)
-    flat = _corridor_kernel(poly, known, CELL_M, 0.2)
-    return np.sort(flat)
+    return np.sort(_corridor_kernel(poly, known, CELL_M, 0.2))
 
 
 @njit(cache=True)
@@ -142,53 +141,46 @@ def _any_solid(flat: np.ndarray, cells: np.ndarray) -> bool:  # pragma: no cover
     return False
 
 
+_FOOTPRINT_DR = np.array([0, -1, 1, 0, 0])
+_FOOTPRINT_DC = np.array([0, 0, 0, -1, 1])
+
+
+@njit(cache=True)
+def _mark_footprint(x: float, y: float, known: np.ndarray, cell: float, seen: np.ndarray,
+                    out: np.ndarray, m: int) -> tuple[np.ndarray, int]:  # pragma: no cover - compiled
+    """Append the not yet seen, non-SOLID cells of the footprint of point (x, y) (clipped to the map)."""
+    h, w = known.shape
+    r0 = int(np.floor(y / cell))
+    c0 = int(np.floor(x / cell))
+    for t in range(_FOOTPRINT_DR.shape[0]):
+        r = min(max(r0 + _FOOTPRINT_DR[t], 0), h - 1)
+        c = min(max(c0 + _FOOTPRINT_DC[t], 0), w - 1)
+        p = r * w + c
+        if seen[p]:
+            continue
+        seen[p] = True
+        if known[r, c] >= SOLID:
+            continue
+        if m == out.shape[0]:
+            bigger = np.empty(2 * m, dtype=np.int64)
+            bigger[:m] = out
+            out = bigger
+        out[m] = p
+        m += 1
+    return out, m
+
+
 @njit(cache=True)
 def _corridor_kernel(poly: np.ndarray, known: np.ndarray, cell: float, spacing: float) -> np.ndarray:  # pragma: no cover
     """Distinct non-SOLID flat cells of the footprints of the samples: the polyline's first point, then
     for each segment ``ceil(length / spacing)`` (at least 1) points at fractions k / steps, k = 1..steps."""
-    h, w = known.shape
-    seen = np.zeros(h * w, dtype=np.bool_)
-    out = np.empty(64, dtype=np.int64)
-    m = 0
-    n_seg = poly.shape[0] - 1
-    for s in range(-1, n_seg):
-        if s < 0:
-            steps = 1
-        else:
-            dx = poly[s + 1, 0] - poly[s, 0]
-            dy = poly[s + 1, 1] - poly[s, 1]
-            steps = max(1, int(np.ceil(np.hypot(dx, dy) / spacing)))
+    seen = np.zeros(known.size, dtype=np.bool_)
+    out, m = _mark_footprint(poly[0, 0], poly[0, 1], known, cell, seen, np.empty(64, dtype=np.int64), 0)
+    for s in range(poly.shape[0] - 1):
+        dx = poly[s + 1, 0] - poly[s, 0]
+        dy = poly[s + 1, 1] - poly[s, 1]
+        steps = max(1, int(np.ceil(np.hypot(dx, dy) / spacing)))
         for k in range(1, steps + 1):
-            if s < 0:
-                x, y = poly[0, 0], poly[0, 1]
-            else:
-                frac = k / steps
-                x = poly[s, 0] + dx * frac
-                y = poly[s, 1] + dy * frac
-            r0 = int(np.floor(y / cell))
-            c0 = int(np.floor(x / cell))
-            for t in range(5):
-                r, c = r0, c0
-                if t == 1:
-                    r -= 1
-                elif t == 2:
-                    r += 1
-                elif t == 3:
-                    c -= 1
-                elif t == 4:
-                    c += 1
-                r = min(max(r, 0), h - 1)
-                c = min(max(c, 0), w - 1)
-                p = r * w + c
-                if seen[p]:
-                    continue
-                seen[p] = True
-                if known[r, c] >= SOLID:
-                    continue
-                if m == out.shape[0]:
-                    bigger = np.empty(2 * m, dtype=np.int64)
-                    bigger[:m] = out
-                    out = bigger
-                out[m] = p
-                m += 1
-    return out[:m].copy()
+            frac = k / steps
+            out, m = _mark_footprint(poly[s, 0] + dx * frac, poly[s, 1] + dy * frac, known, cell, seen, out, m)
+    return out[:m]

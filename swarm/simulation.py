@@ -206,7 +206,7 @@ class Simulation:
         return self._result(tick, stop_reason, collisions, time.perf_counter() - t0, host)
 
     # ---------------------------------------------------------------------------------- messaging ----
-    def _receive(self) -> tuple[list[list[Envelope]], list[list[np.ndarray]]]:
+    def _receive(self) -> tuple[list[list[Envelope]], list[list[np.ndarray | None]]]:
         """This tick's inboxes (sent last tick); map updates are merged into the receiver's map."""
         inboxes, self.inboxes = self.inboxes, [[] for _ in range(self.spec.robots.count)]
         merged: list[list[np.ndarray | None]] = [[] for _ in inboxes]
