@@ -91,24 +91,27 @@ def merge_cells(known: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
 
 
 @njit(cache=True)
+def _sync_cell(current: np.ndarray, last: np.ndarray, i: int, out: np.ndarray, m: int) -> int:  # pragma: no cover
+    """Copy flat cell ``i`` into ``last`` and record it in ``out[m]`` if it differs; returns the new count."""
+    v = current[i]
+    if v != last[i]:
+        last[i] = v
+        out[m] = i
+        m += 1
+    return m
+
+
+@njit(cache=True)
 def _sync_changes_kernel(current: np.ndarray, last: np.ndarray, cur64: np.ndarray, last64: np.ndarray,
-                         out: np.ndarray) -> int:
+                         out: np.ndarray) -> int:  # pragma: no cover - compiled
     """Compare 8 cells at a time (uint64 views of the same memory), bytes only inside differing words."""
     m = 0
     for k in range(cur64.shape[0]):
         if cur64[k] != last64[k]:
             for i in range(8 * k, 8 * k + 8):
-                v = current[i]
-                if v != last[i]:
-                    last[i] = v
-                    out[m] = i
-                    m += 1
+                m = _sync_cell(current, last, i, out, m)
     for i in range(8 * cur64.shape[0], current.shape[0]):
-        v = current[i]
-        if v != last[i]:
-            last[i] = v
-            out[m] = i
-            m += 1
+        m = _sync_cell(current, last, i, out, m)
     return m
 
 
@@ -127,26 +130,14 @@ def sync_changes(current: np.ndarray, last: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
-def _sync_window_kernel(current: np.ndarray, last: np.ndarray, r0: int, r1: int, c0: int, c1: int,
-                        idx: np.ndarray, out: np.ndarray) -> int:
-    w = current.shape[1]
+def _sync_window_kernel(current: np.ndarray, last: np.ndarray, w: int, r0: int, r1: int, c0: int, c1: int,
+                        idx: np.ndarray, out: np.ndarray) -> int:  # pragma: no cover - compiled
     m = 0
     for r in range(r0, r1):
         for c in range(c0, c1):
-            v = current[r, c]
-            if v != last[r, c]:
-                last[r, c] = v
-                out[m] = r * w + c
-                m += 1
-    flat_cur = current.reshape(-1)
-    flat_last = last.reshape(-1)
+            m = _sync_cell(current, last, r * w + c, out, m)
     for k in range(idx.shape[0]):
-        i = idx[k]
-        v = flat_cur[i]
-        if v != flat_last[i]:
-            flat_last[i] = v
-            out[m] = i
-            m += 1
+        m = _sync_cell(current, last, idx[k], out, m)
     return m
 
 
@@ -159,7 +150,8 @@ def sync_region(current: np.ndarray, last: np.ndarray, rows: tuple[int, int], co
         raise InvalidInput("last", getattr(last, "shape", None), f"a C-contiguous map shaped like current {current.shape}")
     extra = np.zeros(0, np.int64) if cells is None else np.ascontiguousarray(cells, dtype=np.int64)
     out = np.empty((rows[1] - rows[0]) * (cols[1] - cols[0]) + len(extra), dtype=np.int64)
-    m = _sync_window_kernel(current, last, rows[0], rows[1], cols[0], cols[1], extra, out)
+    m = _sync_window_kernel(current.reshape(-1), last.reshape(-1), current.shape[1], rows[0], rows[1], cols[0],
+                            cols[1], extra, out)
     return np.sort(out[:m]) if len(extra) else out[:m].copy()
 
 

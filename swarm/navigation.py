@@ -147,8 +147,9 @@ _FOOTPRINT_DC = np.array([0, 0, 0, -1, 1])
 
 @njit(cache=True)
 def _mark_footprint(x: float, y: float, known: np.ndarray, cell: float, seen: np.ndarray,
-                    out: np.ndarray, m: int) -> tuple[np.ndarray, int]:  # pragma: no cover - compiled
-    """Append the not yet seen, non-SOLID cells of the footprint of point (x, y) (clipped to the map)."""
+                    out: np.ndarray, m: int) -> int:  # pragma: no cover - compiled
+    """Append the not yet seen, non-SOLID cells of the footprint of point (x, y) (clipped to the map) to
+    ``out`` from position ``m``; returns the new count."""
     h, w = known.shape
     r0 = int(np.floor(y / cell))
     c0 = int(np.floor(x / cell))
@@ -161,26 +162,26 @@ def _mark_footprint(x: float, y: float, known: np.ndarray, cell: float, seen: np
         seen[p] = True
         if known[r, c] >= SOLID:
             continue
-        if m == out.shape[0]:
-            bigger = np.empty(2 * m, dtype=np.int64)
-            bigger[:m] = out
-            out = bigger
         out[m] = p
         m += 1
-    return out, m
+    return m
 
 
 @njit(cache=True)
 def _corridor_kernel(poly: np.ndarray, known: np.ndarray, cell: float, spacing: float) -> np.ndarray:  # pragma: no cover
     """Distinct non-SOLID flat cells of the footprints of the samples: the polyline's first point, then
     for each segment ``ceil(length / spacing)`` (at least 1) points at fractions k / steps, k = 1..steps."""
+    n_seg = poly.shape[0] - 1
+    steps = np.empty(n_seg, dtype=np.int64)
+    for s in range(n_seg):
+        steps[s] = max(1, int(np.ceil(np.hypot(poly[s + 1, 0] - poly[s, 0], poly[s + 1, 1] - poly[s, 1]) / spacing)))
     seen = np.zeros(known.size, dtype=np.bool_)
-    out, m = _mark_footprint(poly[0, 0], poly[0, 1], known, cell, seen, np.empty(64, dtype=np.int64), 0)
-    for s in range(poly.shape[0] - 1):
+    out = np.empty(min(known.size, _FOOTPRINT_DR.shape[0] * (1 + steps.sum())), dtype=np.int64)
+    m = _mark_footprint(poly[0, 0], poly[0, 1], known, cell, seen, out, 0)
+    for s in range(n_seg):
         dx = poly[s + 1, 0] - poly[s, 0]
         dy = poly[s + 1, 1] - poly[s, 1]
-        steps = max(1, int(np.ceil(np.hypot(dx, dy) / spacing)))
-        for k in range(1, steps + 1):
-            frac = k / steps
-            out, m = _mark_footprint(poly[s, 0] + dx * frac, poly[s, 1] + dy * frac, known, cell, seen, out, m)
+        for k in range(1, steps[s] + 1):
+            frac = k / steps[s]
+            m = _mark_footprint(poly[s, 0] + dx * frac, poly[s, 1] + dy * frac, known, cell, seen, out, m)
     return out[:m]
