@@ -267,8 +267,8 @@ def grid_view_cells(known: np.ndarray, exclude: np.ndarray, reach: int,
     through FREE cells from a frontier cell (FREE with an UNSEEN 4-neighbour) that ``exclude`` does not
     hold (``exclude``: bool[H, W], or an empty array for none). Returns the number of frontier cells.
 
-    Equal to ``geodesic_dilate(frontier_mask(known) & ~exclude, known == FREE, reach)`` in one scan and a
-    breadth-first search bounded by ``reach``, instead of about 20 whole-array passes.
+    One scan for the frontier cells and a breadth-first search bounded by ``reach``, instead of about 20
+    whole-array shift-and-or passes.
     """
     h, w = known.shape
     has_ex = exclude.shape[0] == h

@@ -30,26 +30,11 @@ from .search import nearest_reachable
 _NO_EXCLUDE = np.zeros((0, 0), dtype=bool)
 
 
-def geodesic_dilate(seeds: np.ndarray, within: np.ndarray, steps: int) -> np.ndarray:
-    """Cells reachable from ``seeds`` in at most ``steps`` 4-connected moves through ``within`` cells."""
-    grown = seeds & within
-    for _ in range(steps):
-        nxt = grown.copy()
-        nxt[1:] |= grown[:-1]
-        nxt[:-1] |= grown[1:]
-        nxt[:, 1:] |= grown[:, :-1]
-        nxt[:, :-1] |= grown[:, 1:]
-        nxt &= within
-        if np.array_equal(nxt, grown):
-            break
-        grown = nxt
-    return grown
-
-
 def view_cells(known: np.ndarray, reach: int, exclude: np.ndarray | None = None) -> np.ndarray:
-    """FREE cells from which a frontier cell is at most ``reach`` 4-connected steps away through FREE
-    cells: ``geodesic_dilate(frontier_mask(known) & ~exclude, known == FREE, reach)`` (bool[H, W]), in one
-    compiled pass (the target search of every frontier-driven algorithm runs it on the whole map)."""
+    """FREE cells from which a frontier cell (:func:`swarm.grid.frontier_mask`) not in ``exclude`` is at
+    most ``reach`` 4-connected steps away through FREE cells (bool[H, W]); excluded frontier cells seed
+    nothing but may be passed through. One compiled pass: the target search of every frontier-driven
+    algorithm runs it on the whole map."""
     k = np.ascontiguousarray(check_known(known), dtype=np.uint8)
     steps = check_count(reach, "reach", 0)
     assert steps is not None

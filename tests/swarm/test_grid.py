@@ -534,6 +534,23 @@ def view_cells_brute(known: np.ndarray, space: np.ndarray, reach: int) -> np.nda
     return out
 
 
+def test_view_cells_matches_the_breadth_first_definition() -> None:
+    rng = np.random.default_rng(13)
+    for trial in range(40):
+        h, w = (int(v) for v in rng.integers(1, 30, size=2))
+        k = random_known(rng, h, w, rng.uniform(0.05, 0.3)) if min(h, w) > 2 else rng.integers(0, 3, (h, w)).astype(np.uint8)
+        k[rng.random(k.shape) < 0.1] = UNSEEN
+        reach = int(rng.integers(0, 4))
+        everywhere = np.ones(k.shape, dtype=bool)
+        assert np.array_equal(grid.view_cells(k, reach), view_cells_brute(k, everywhere, reach)), trial
+    k = np.full((5, 7), FREE, dtype=np.uint8)
+    k[:, 0] = UNSEEN
+    exclude = np.zeros(k.shape, dtype=bool)
+    exclude[:3, 1] = True                         # excluded frontier cells seed nothing, but may be passed
+    got = grid.view_cells(k, 1, exclude)
+    assert got[3:, 1].all() and got[3:, 2].all() and not got[:2, 2].any() and got[2, 1]
+
+
 def test_nearest_reachable_unseen_prefers_path_distance_over_a_wall() -> None:
     k = np.full((14, 24), SOLID, dtype=np.uint8)
     k[1:13, 1:12] = FREE          # the robot's room
