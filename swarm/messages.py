@@ -29,6 +29,8 @@ from typing import Any, Callable, TypeVar
 import msgpack
 import numpy as np
 
+from . import _cellcodec
+
 T = TypeVar("T")
 
 MAX_MESSAGE_BYTES = 4 * 1024 * 1024
@@ -182,10 +184,11 @@ class MapUpdate:
         cached = self.__dict__.get("_dense")
         if cached is None:
             h, w = self.shape
-            values = _unpack2(np.frombuffer(self._raw(), dtype=np.uint8), h * w)
-            if values is None:
+            packed = np.frombuffer(self._raw(), dtype=np.uint8)
+            if len(packed) != (h * w + 3) // 4:
                 raise MessageError("map_update: wrong payload length")
-            if (values > 2).any():
+            values = np.empty(h * w, dtype=np.uint8)
+            if _cellcodec.unpack2(packed, h * w, values) > 2:
                 raise MessageError("map_update: cell values outside 0..2")
             values.flags.writeable = False
             cached = self.__dict__["_dense"] = values
@@ -207,14 +210,14 @@ class MapUpdate:
         n = self.count
         if len(raw) != 4 * n + (n + 3) // 4:
             raise MessageError("map_update: wrong payload length")
-        gaps = np.frombuffer(raw[: 4 * n], dtype="<u4").astype(np.int64)
-        if n > 1 and not (gaps[1:] > 0).all():
+        idx = np.empty(n, dtype=np.int64)
+        values = np.empty(n, dtype=np.uint8)
+        status = _cellcodec.unpack_delta(np.frombuffer(raw, dtype=np.uint8), n, h * w, idx, values)
+        if status == _cellcodec.DELTA_REPEATED:
             raise MessageError("map_update: repeated cells")
-        idx = np.cumsum(gaps)
-        values = _unpack2(np.frombuffer(raw[4 * n:], dtype=np.uint8), n)
-        if n and (idx[-1] >= h * w or values is None or (values > 2).any()):
+        if status != _cellcodec.DELTA_OK:
             raise MessageError("map_update: cells outside the map")
-        return idx, values if values is not None else np.zeros(0, np.uint8)
+        return idx, values
 
     def merge_into(self, known: np.ndarray) -> np.ndarray:
         """Elementwise max of the carried cells into ``known`` (a map of the same shape); returns their
@@ -225,22 +228,6 @@ class MapUpdate:
         flat = known.reshape(-1)
         flat[idx] = np.maximum(flat[idx], values)
         return idx
-
-
-def _pack2(values: np.ndarray) -> bytes:
-    padded = np.zeros((len(values) + 3) // 4 * 4, dtype=np.uint8)
-    padded[: len(values)] = values
-    q = padded.reshape(-1, 4)
-    return (q[:, 0] | (q[:, 1] << 2) | (q[:, 2] << 4) | (q[:, 3] << 6)).astype(np.uint8).tobytes()
-
-
-_UNPACK_LUT = ((np.arange(256, dtype=np.uint8)[:, None] >> np.array([0, 2, 4, 6], dtype=np.uint8)) & 3).astype(np.uint8)
-
-
-def _unpack2(packed: np.ndarray, n: int) -> np.ndarray | None:
-    if len(packed) != (n + 3) // 4:
-        return None
-    return _UNPACK_LUT[packed].reshape(-1)[:n]
 
 
 def gaps_u32(idx: np.ndarray) -> bytes:
@@ -257,13 +244,12 @@ def map_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[
                changed: np.ndarray | None) -> MapUpdate:
     """Build a MapUpdate: ``changed`` = flat indices changed since the last update, or None for the full map."""
     if changed is None:
-        payload = zlib.compress(_pack2(known.reshape(-1)), 6)
+        payload = zlib.compress(_cellcodec.pack2(known.reshape(-1)), 6)
         count = int(np.count_nonzero(known))
         full = True
     else:
         changed = np.sort(np.asarray(changed, dtype=np.int64))
-        values = known.reshape(-1)[changed]
-        payload = zlib.compress(gaps_u32(changed) + _pack2(values), 6)
+        payload = zlib.compress(_cellcodec.pack_delta(known.reshape(-1), changed), 6)
         count = int(len(changed))
         full = False
     return MapUpdate(sender=sender, seq=seq, tick=tick, full=full, shape=(int(known.shape[0]), int(known.shape[1])),

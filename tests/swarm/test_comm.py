@@ -174,3 +174,57 @@ def test_neighbours_are_robots_in_range_and_line_of_sight():
     assert n.id == 0 and n.distance == pytest.approx(5.0) and (n.x, n.y) == (1.5, 1.5)
     # robot 1 faces north (+y); robot 0 is at dx=-3, dy=-4: bearing atan2(-4, -3) - pi/2, wrapped
     assert n.bearing == pytest.approx(np.arctan2(-4, -3) - np.pi / 2 + 2 * np.pi)
+
+
+def _reference_payload(known: np.ndarray, changed: np.ndarray | None) -> bytes:
+    """The documented MapUpdate layout written with plain numpy: 2-bit values four to a byte, low bits
+    first; deltas prefixed by little-endian uint32 gaps between ascending flat indices."""
+    flat = known.reshape(-1)
+    values = flat if changed is None else flat[changed]
+    padded = np.zeros((len(values) + 3) // 4 * 4, dtype=np.uint8)
+    padded[:len(values)] = values
+    q = padded.reshape(-1, 4)
+    packed = (q[:, 0] | (q[:, 1] << 2) | (q[:, 2] << 4) | (q[:, 3] << 6)).astype(np.uint8).tobytes()
+    if changed is None:
+        return packed
+    return np.diff(changed, prepend=0).astype("<u4").tobytes() + packed
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (7, 13), (30, 41)])
+def test_map_update_payload_layout_and_round_trip(shape):
+    import zlib
+
+    from swarm.messages import map_update
+
+    rng = np.random.default_rng(shape[0])
+    known = rng.integers(0, 3, shape).astype(np.uint8)
+    size = known.size
+    for changed in (None, np.zeros(0, np.int64), np.array([size - 1]), np.arange(size),
+                    np.sort(rng.choice(size, size // 2 + 1, replace=False))):
+        msg = decode(encode(map_update(3, 1, 0, known, (1.0, 2.0, 0.5), changed)))
+        assert zlib.decompress(msg.payload) == _reference_payload(known, changed)
+        idx, values = msg.cells()
+        want = np.flatnonzero(known) if changed is None else changed
+        assert np.array_equal(idx, want) and np.array_equal(values, known.reshape(-1)[want])
+        if changed is None:
+            assert np.array_equal(msg.dense(), known.reshape(-1))
+
+
+@pytest.mark.parametrize("raw, n, full, error", [
+    (np.array([2, 0, 3], "<u4").tobytes() + bytes([0b010101]), 3, False, "repeated cells"),
+    (np.array([0, 0], "<u4").tobytes() + bytes([0b0101]), 2, False, "repeated cells"),
+    (np.array([5, 20], "<u4").tobytes() + bytes([0b0101]), 2, False, "cells outside the map"),
+    (np.array([5, 6], "<u4").tobytes() + bytes([0b1101]), 2, False, "cells outside the map"),  # value 3
+    (np.array([5], "<u4").tobytes(), 1, False, "wrong payload length"),
+    (bytes([0b11]) + bytes(5), 24, True, "outside 0..2"),
+    (bytes(5), 24, True, "wrong payload length"),
+])
+def test_corrupt_map_update_payloads_are_rejected(raw, n, full, error):
+    import zlib
+
+    from swarm.messages import MessageError
+
+    msg = MapUpdate(sender=1, seq=1, tick=0, full=full, shape=(4, 6), count=n, payload=zlib.compress(raw),
+                    pose=(0.0, 0.0, 0.0))
+    with pytest.raises(MessageError, match=error):
+        decode(encode(msg)).cells()

@@ -1,0 +1,75 @@
+"""Compiled byte layouts of map-update payloads (before zlib), see :class:`swarm.messages.MapUpdate`.
+
+* full map: every cell as 2 bits, four cells per byte, first cell in the low bits;
+* delta: ``n`` little-endian uint32 gaps between ascending flat indices (the first from 0), then the
+  ``n`` cell values packed as above.
+
+Map sharing encodes about 1.5 updates and decodes up to 15 per tick on a 16-robot run; done with numpy
+these are ten array passes and temporaries each (a full 300 x 300 map unpacked through a lookup table
+took ~400 us), here one pass.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+
+@njit(cache=True)
+def pack2(values: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """``values`` (uint8, each 0..3) packed four to a byte."""
+    n = values.shape[0]
+    out = np.zeros((n + 3) // 4, dtype=np.uint8)
+    for i in range(n):
+        out[i >> 2] |= np.uint8((values[i] & 3) << (2 * (i & 3)))
+    return out
+
+
+@njit(cache=True)
+def pack_delta(flat: np.ndarray, idx: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """The delta layout of the cells ``idx`` (ascending flat indices) of ``flat``."""
+    n = idx.shape[0]
+    out = np.zeros(4 * n + (n + 3) // 4, dtype=np.uint8)
+    prev = 0
+    for i in range(n):
+        gap = idx[i] - prev
+        prev = idx[i]
+        for b in range(4):
+            out[4 * i + b] = np.uint8((gap >> (8 * b)) & 0xFF)
+        out[4 * n + (i >> 2)] |= np.uint8((flat[idx[i]] & 3) << (2 * (i & 3)))
+    return out
+
+
+@njit(cache=True)
+def unpack2(packed: np.ndarray, n: int, out: np.ndarray) -> int:  # pragma: no cover - compiled
+    """Unpack ``n`` 2-bit values of ``packed`` into ``out``; returns the largest value (3 is invalid)."""
+    top = 0
+    for i in range(n):
+        v = (packed[i >> 2] >> (2 * (i & 3))) & 3
+        out[i] = v
+        if v > top:
+            top = v
+    return top
+
+
+DELTA_OK, DELTA_REPEATED, DELTA_OUTSIDE = 0, 1, 2
+
+
+@njit(cache=True)
+def unpack_delta(raw: np.ndarray, n: int, size: int, idx: np.ndarray, values: np.ndarray) -> int:  # pragma: no cover
+    """Decode the delta layout (``raw`` has exactly ``4 n + ceil(n / 4)`` bytes) into ``idx`` (int64)
+    and ``values`` (uint8). Returns DELTA_OK, DELTA_REPEATED (a zero gap after the first: the same cell
+    twice) or DELTA_OUTSIDE (an index >= ``size`` or a value above 2)."""
+    at = 0
+    for i in range(n):
+        gap = (np.int64(raw[4 * i]) | (np.int64(raw[4 * i + 1]) << 8) | (np.int64(raw[4 * i + 2]) << 16)
+               | (np.int64(raw[4 * i + 3]) << 24))
+        if i > 0 and gap == 0:
+            return DELTA_REPEATED
+        at += gap
+        idx[i] = at
+    if n and at >= size:
+        return DELTA_OUTSIDE
+    if unpack2(raw[4 * n:], n, values) > 2:
+        return DELTA_OUTSIDE
+    return DELTA_OK
