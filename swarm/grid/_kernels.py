@@ -261,28 +261,61 @@ def grid_shortcut(space: np.ndarray, path: np.ndarray) -> np.ndarray:  # pragma:
 
 
 @njit(cache=True)
+def _grid_frontier_mask(known: np.ndarray, exclude: np.ndarray, view: np.ndarray) -> None:  # pragma: no cover
+    """``view`` = FREE cells with an UNSEEN 4-neighbour, minus ``exclude`` (or an empty array for none).
+
+    Branch-free over each row's interior so the compiler vectorises it (about 10x the speed of testing
+    cell by cell); a missing neighbour row is replaced by the row itself, which can never add a frontier
+    cell (a cell must be FREE, not UNSEEN)."""
+    h, w = known.shape
+    for r in range(h):
+        up = known[r - 1] if r > 0 else known[r]
+        down = known[r + 1] if r + 1 < h else known[r]
+        row = known[r]
+        out = view[r]
+        for c in range(1, w - 1):
+            out[c] = (row[c] == 1) & ((up[c] == 0) | (down[c] == 0) | (row[c - 1] == 0) | (row[c + 1] == 0))
+        for c in (0, w - 1):
+            side = (up[c] == 0) | (down[c] == 0)
+            if c > 0:
+                side |= row[c - 1] == 0
+            if c + 1 < w:
+                side |= row[c + 1] == 0
+            out[c] = (row[c] == 1) & side
+    if exclude.shape[0] == h:
+        for r in range(h):
+            for c in range(w):
+                view[r, c] = view[r, c] > exclude[r, c]  # a and not b, without a branch
+
+
+@njit(cache=True)
 def grid_view_cells(known: np.ndarray, exclude: np.ndarray, reach: int,
                     view: np.ndarray) -> int:  # pragma: no cover - compiled
-    """Mark in ``view`` (bool[H, W], all False on entry) the FREE cells at most ``reach`` 4-connected steps
-    through FREE cells from a frontier cell (FREE with an UNSEEN 4-neighbour) that ``exclude`` does not
-    hold (``exclude``: bool[H, W], or an empty array for none). Returns the number of frontier cells.
+    """Mark in ``view`` (bool[H, W], C-contiguous, all False on entry) the FREE cells at most ``reach``
+    4-connected steps through FREE cells from a frontier cell (FREE with an UNSEEN 4-neighbour) that
+    ``exclude`` does not hold (``exclude``: bool[H, W], or an empty array for none). Returns the number of
+    frontier cells.
 
-    One scan for the frontier cells and a breadth-first search bounded by ``reach``, instead of about 20
-    whole-array shift-and-or passes.
+    One vectorised pass for the frontier cells, collected eight at a time (frontier cells are rare: a
+    whole-map search on a 300 x 300 map finds ~160), then a breadth-first search bounded by ``reach``.
     """
     h, w = known.shape
-    has_ex = exclude.shape[0] == h
+    _grid_frontier_mask(known, exclude, view)
+    flat = view.reshape(-1)
     queue = np.empty(h * w, np.int32)
     n = 0
-    for r in range(h):
-        for c in range(w):
-            if known[r, c] != 1 or (has_ex and exclude[r, c]):
-                continue
-            if ((r > 0 and known[r - 1, c] == 0) or (r + 1 < h and known[r + 1, c] == 0)
-                    or (c > 0 and known[r, c - 1] == 0) or (c + 1 < w and known[r, c + 1] == 0)):
-                view[r, c] = True
-                queue[n] = r * w + c
-                n += 1
+    words = flat.shape[0] // 8
+    packed = flat[:8 * words].view(np.uint64)
+    for i in range(words):
+        if packed[i]:
+            for p in range(8 * i, 8 * i + 8):
+                if flat[p]:
+                    queue[n] = p
+                    n += 1
+    for p in range(8 * words, flat.shape[0]):
+        if flat[p]:
+            queue[n] = p
+            n += 1
     frontier = n
     head = 0
     for _ in range(reach):
@@ -309,3 +342,52 @@ def grid_view_cells(known: np.ndarray, exclude: np.ndarray, reach: int,
                 queue[n] = p + 1
                 n += 1
     return frontier
+
+
+@njit(cache=True)
+def grid_configuration_space(known: np.ndarray, unseen_ok: bool, row_offsets: np.ndarray, half_widths: np.ndarray,
+                             out: np.ndarray) -> None:  # pragma: no cover - compiled
+    """``out`` (uint8[H, W], 0/1) = passable cells whose rows ``r + row_offsets[k]`` are passable over
+    columns ``c - half_widths[k] .. c + half_widths[k]`` for every k, cells off the map counting as
+    blocked: the erosion of :func:`swarm.grid.configuration_space` (``row_offsets`` must include 0).
+
+    Row runs are built once per half width (``runs[j][r, c]``: row r passable over c-j..c+j, from
+    ``runs[j - 1]``), then each output row is the AND of the runs its offsets need; every inner loop is
+    branch-free over a row with constant offsets, so the compiler vectorises it."""
+    h, w = known.shape
+    jmax = 0
+    for k in range(half_widths.shape[0]):
+        jmax = max(jmax, half_widths[k])
+    runs = np.zeros((jmax + 1, h, w), np.uint8)
+    for r in range(h):
+        row = known[r]
+        base = runs[0, r]
+        if unseen_ok:
+            for c in range(w):
+                base[c] = row[c] != 2
+        else:
+            for c in range(w):
+                base[c] = row[c] == 1
+    for j in range(1, jmax + 1):  # only constant offsets in the inner loops: a variable one stops vectorising
+        for r in range(h):
+            prev = runs[j - 1, r]
+            cur = runs[j, r]
+            if j == 1:
+                for c in range(1, w - 1):
+                    cur[c] = prev[c - 1] & prev[c] & prev[c + 1]
+            else:  # [c-j, c+j-2] and [c-j+2, c+j] cover [c-j, c+j] once j >= 2
+                for c in range(j, w - j):
+                    cur[c] = prev[c - 1] & prev[c + 1]
+    for r in range(h):
+        o = out[r]
+        for c in range(w):
+            o[c] = 1
+        for k in range(row_offsets.shape[0]):
+            rr = r + row_offsets[k]
+            if rr < 0 or rr >= h:
+                for c in range(w):
+                    o[c] = 0
+                break
+            src = runs[half_widths[k], rr]
+            for c in range(w):
+                o[c] &= src[c]

@@ -34,6 +34,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..api import CELL_M, FREE, ROBOT_RADIUS_M, SOLID
+from ._kernels import grid_configuration_space
 from ._validate import check_cell, check_count, check_known, check_length, check_space
 
 DEFAULT_MARGIN_M: float = 0.05
@@ -82,45 +83,39 @@ def configuration_space(known: np.ndarray, radius_m: float = ROBOT_RADIUS_M, mar
     """Cells where the robot's centre may be (see the module docstring for the clearance rule).
 
     Computed as an erosion of the passable cells by the offsets of :func:`inflation_offsets` (cells off
-    the map count as blocked), decomposed into one horizontal run per width and one vertical shift per row
-    offset, all in-place ``&=`` on slices, so the cost is O(radius) whole-array operations, not O(radius^2).
+    the map count as blocked), decomposed into one centred row run per offset row
+    (:func:`swarm.grid._kernels.grid_configuration_space`), so the cost is O(radius) passes over the map,
+    not O(radius^2).
     """
     radius = check_length(radius_m, "radius_m")
     margin = check_length(margin_m, "margin_m")
     assert radius is not None and margin is not None
-    free = passable(known, unseen_traversable)
-    offsets = inflation_offsets(radius, margin)
-    if not offsets:
-        return free
-    half_width: dict[int, int] = {}  # each row of the offsets is a centred run [-j, j] (distance grows with |dc|)
-    for dr, dc in offsets:
+    return configuration_space_of(check_known(known), radius, margin, unseen_traversable)
+
+
+def configuration_space_of(known: np.ndarray, radius_m: float, margin_m: float, unseen_traversable: bool
+                           ) -> np.ndarray:
+    """:func:`configuration_space` of an already checked map and lengths (for callers that validated)."""
+    row_offsets, half_widths = _erosion_rows(radius_m, margin_m)
+    if not len(row_offsets):
+        return known != SOLID if unseen_traversable else known == FREE
+    out = np.empty(known.shape, dtype=np.uint8)
+    grid_configuration_space(known, bool(unseen_traversable), row_offsets, half_widths, out)
+    return out.view(np.bool_)
+
+
+@lru_cache(maxsize=64)
+def _erosion_rows(radius_m: float, margin_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`inflation_offsets` as one centred run per row offset: (row offsets, half widths). Each row of
+    the offsets is a run [-j, j], since the distance to a square grows with the column offset."""
+    half_width: dict[int, int] = {}
+    for dr, dc in inflation_offsets(radius_m, margin_m):
         half_width[dr] = max(half_width.get(dr, 0), abs(dc))
-    h, w = free.shape
-    flat_free = free.reshape(-1)
-    runs = [free]  # runs[j][r, c]: free on all of row r, columns c-j..c+j (and all on the map)
-    for j in range(1, max(half_width.values()) + 1):
-        run = runs[-1].copy()
-        if j < w:  # shifted on the flat array (one fast loop); what wraps across rows is cleared below
-            flat = run.reshape(-1)
-            flat[j:] &= flat_free[:-j]
-            flat[:-j] &= flat_free[j:]
-        run[:, :min(j, w)] = False
-        run[:, max(w - j, 0):] = False
-        runs.append(run)
-    space = runs[half_width.get(0, 0)].copy() if 0 in half_width else free.copy()
-    for dr, j in half_width.items():
-        if dr == 0:
-            continue
-        if abs(dr) >= h:
-            space[:] = False
-            break
-        if dr > 0:   # needs row r + dr: the last dr rows have none
-            space[:h - dr] &= runs[j][dr:]
-            space[h - dr:] = False
-        else:
-            space[-dr:] &= runs[j][:h + dr]
-            space[:-dr] = False
-    return space
+    rows = sorted(half_width)
+    row_offsets = np.array(rows, dtype=np.int64)
+    half_widths = np.array([half_width[r] for r in rows], dtype=np.int64)
+    row_offsets.flags.writeable = half_widths.flags.writeable = False  # shared by every call (cached)
+    return row_offsets, half_widths
 
 
 def nearest_in(space: np.ndarray, cell: tuple[int, int], max_radius_cells: int | None = None

@@ -118,12 +118,18 @@ def nearest_reachable(space: np.ndarray, start: tuple[int, int], targets: np.nda
     s = check_cell(start, sp.shape, "start")
     tg = check_space(targets, "targets")
     check_same_shape(tg, sp.shape, "targets")
-    if not sp[s]:
+    return nearest_reachable_in(sp, s, tg & sp)
+
+
+def nearest_reachable_in(space: np.ndarray, start: tuple[int, int], targets: np.ndarray
+                         ) -> tuple[tuple[int, int], float] | None:
+    """:func:`nearest_reachable` for checked inputs whose ``targets`` already lie in ``space``."""
+    if not space[start]:
         return None
-    free, wp = _padded(sp)
-    tflat, _ = _padded(tg & sp)
+    free, wp = _padded(space)
+    tflat, _ = _padded(targets)
     dist, ring = _WORK.get(free.shape[0])
-    best, best_d = grid_bucket_search(free, wp, _flat(np.array([s]), wp), -1, tflat, np.inf, dist, ring)
+    best, best_d = grid_bucket_search(free, wp, _flat(np.array([start]), wp), -1, tflat, np.inf, dist, ring)
     if best < 0:
         return None
     return (int(best // wp - 1), int(best % wp - 1)), float(best_d * CELL_M)

@@ -24,8 +24,8 @@ import numpy as np
 from ..api import CELL_M, ROBOT_RADIUS_M
 from ._kernels import grid_view_cells
 from ._validate import check_cell, check_count, check_known, check_length, check_same_shape, check_space
-from .cspace import DEFAULT_MARGIN_M, configuration_space, nearest_in
-from .search import nearest_reachable
+from .cspace import DEFAULT_MARGIN_M, configuration_space_of, nearest_in
+from .search import nearest_reachable_in
 
 _NO_EXCLUDE = np.zeros((0, 0), dtype=bool)
 
@@ -77,19 +77,8 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
     path stays inside the window), so the whole-map search runs only when the nearest unknown is far.
     ``local_first_m=None`` searches the whole map at once.
     """
-    k = check_known(known)
+    k = np.ascontiguousarray(check_known(known), dtype=np.uint8)  # values checked: 0..2 fit any dtype
     s = check_cell(start, k.shape, "start")
-    if local_first_m is not None:
-        w = int(local_first_m / CELL_M) + 1
-        r0, c0 = max(s[0] - w, 0), max(s[1] - w, 0)
-        r1, c1 = min(s[0] + w + 1, k.shape[0]), min(s[1] + w + 1, k.shape[1])
-        if (r1 - r0) * (c1 - c0) < k.size:
-            local = nearest_reachable_unseen(
-                k[r0:r1, c0:c1], (s[0] - r0, s[1] - c0), radius_m, unseen_traversable,
-                None if exclude is None else np.asarray(exclude)[r0:r1, c0:c1], margin_m=margin_m,
-                view_reach_cells=view_reach_cells, snap_radius_cells=snap_radius_cells, local_first_m=None)
-            if local is not None and local[1] <= local_first_m:
-                return (local[0][0] + r0, local[0][1] + c0), local[1]
     radius = check_length(radius_m, "radius_m")
     margin = check_length(margin_m, "margin_m")
     assert radius is not None and margin is not None
@@ -99,21 +88,50 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
     snap = check_count(snap_radius_cells, "snap_radius_cells", 0, allow_none=True)
     if snap is None:
         snap = reach + 1
-    view = view_cells(k, reach, exclude)
-    if not view.any():
-        return None
-    space = configuration_space(k, radius, margin, unseen_traversable)
-    view &= space
+    ex = None
     if exclude is not None:
-        view &= ~np.asarray(exclude)
-    if not view.any():
-        return None
-    snapped = nearest_in(space, s, snap)
-    if snapped is None:
-        return None
-    found = nearest_reachable(space, snapped, view)
-    if found is None:
-        return None
-    cell, dist = found
-    offset = CELL_M * math.hypot(snapped[0] - s[0], snapped[1] - s[1])
-    return (int(cell[0]), int(cell[1])), dist + offset
+        ex = check_space(exclude, "exclude")
+        check_same_shape(ex, k.shape, "exclude")
+    local = check_length(local_first_m, "local_first_m", allow_none=True)
+    search = _TargetSearch(radius, margin, bool(unseen_traversable), reach, snap)
+    if local is not None:
+        w = int(local / CELL_M) + 1
+        r0, c0 = max(s[0] - w, 0), max(s[1] - w, 0)
+        r1, c1 = min(s[0] + w + 1, k.shape[0]), min(s[1] + w + 1, k.shape[1])
+        if (r1 - r0) * (c1 - c0) < k.size:
+            found = search.run(np.ascontiguousarray(k[r0:r1, c0:c1]), (s[0] - r0, s[1] - c0),
+                               None if ex is None else ex[r0:r1, c0:c1])
+            if found is not None and found[1] <= local:
+                return (found[0][0] + r0, found[0][1] + c0), found[1]
+    return search.run(k, s, ex)
+
+
+class _TargetSearch:
+    """One :func:`nearest_reachable_unseen` search on checked inputs (run on the local window, then
+    possibly on the whole map, without validating the same map again each time)."""
+
+    def __init__(self, radius_m: float, margin_m: float, unseen_traversable: bool, reach: int, snap: int) -> None:
+        self.radius_m, self.margin_m, self.unseen_traversable = radius_m, margin_m, unseen_traversable
+        self.reach, self.snap = reach, snap
+
+    def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None
+            ) -> tuple[tuple[int, int], float] | None:
+        view = np.zeros(known.shape, dtype=bool)
+        ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude)
+        if grid_view_cells(known, ex, self.reach, view) == 0:  # no frontier: no view cell either
+            return None
+        space = configuration_space_of(known, self.radius_m, self.margin_m, self.unseen_traversable)
+        view &= space
+        if exclude is not None:
+            view &= ~exclude
+        if not view.any():
+            return None
+        snapped = nearest_in(space, start, self.snap)
+        if snapped is None:
+            return None
+        found = nearest_reachable_in(space, snapped, view)
+        if found is None:
+            return None
+        cell, dist = found
+        offset = CELL_M * math.hypot(snapped[0] - start[0], snapped[1] - start[1])
+        return (int(cell[0]), int(cell[1])), dist + offset
