@@ -26,8 +26,7 @@ from typing import ClassVar, Sequence
 
 import networkx as nx
 import numpy as np
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components
+from numba import njit
 
 from maps.errors import InvalidInput
 from maps.model import Map
@@ -78,10 +77,12 @@ class LinkState:
             raise InvalidInput("connectivity", connectivity, "'strong' | 'weak'")
         cached = self._groups.get(connectivity)
         if cached is None:
-            # scipy's components on the sender -> receiver adjacency: the same partition networkx gives
-            # (tested), ~50x faster, and this runs every recorded tick.
-            n, labels = connected_components(csr_matrix(self.link.T), directed=True, connection=connectivity)
-            cached = sorted((frozenset(np.flatnonzero(labels == k).tolist()) for k in range(n)), key=min)
+            # Components from the reachability closure of the sender -> receiver links: the partition
+            # networkx gives (tested); for swarm-sized groups a compiled closure takes microseconds where
+            # building a scipy sparse matrix took ~400 us, and this runs every recorded tick.
+            adjacency = self.link.T | self.link if connectivity == "weak" else self.link.T
+            labels = _component_labels(np.ascontiguousarray(adjacency, dtype=np.bool_))
+            cached = [frozenset(np.flatnonzero(labels == k).tolist()) for k in range(int(labels.max(initial=-1)) + 1)]
             self._groups[connectivity] = cached
         return list(cached)
 
@@ -346,3 +347,28 @@ def build_link_model(truth: Map, config: RadioConfig | None = None) -> LinkModel
     """The link model ``config.model`` for the map ``truth`` (resolves materials: unknown ones are errors)."""
     config = config or RadioConfig()
     return MODEL_CLASSES[config.model](truth, config)
+
+
+@njit(cache=True)
+def _component_labels(adjacency: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """Strongly connected components of the directed graph ``adjacency[a, b]`` (an edge a -> b), labelled
+    0, 1, ... in the order of their smallest member: the reachability closure (Warshall, O(n^3), fine for
+    the robot counts of a run), then each unlabelled robot with every robot it reaches and is reached by."""
+    n = adjacency.shape[0]
+    reach = adjacency.copy()
+    for i in range(n):
+        reach[i, i] = True
+    for k in range(n):
+        for i in range(n):
+            if reach[i, k]:
+                for j in range(n):
+                    reach[i, j] |= reach[k, j]
+    labels = np.full(n, -1, np.int64)
+    count = 0
+    for i in range(n):
+        if labels[i] < 0:
+            for j in range(i, n):
+                if reach[i, j] and reach[j, i]:
+                    labels[j] = count
+            count += 1
+    return labels

@@ -236,3 +236,22 @@ def test_groups_match_networkx_components():
         for mode, fn in (("strong", nx.strongly_connected_components), ("weak", nx.weakly_connected_components)):
             expected = sorted((frozenset(c) for c in fn(graph)), key=min)
             assert state.groups(mode) == expected
+
+
+@pytest.mark.parametrize("n", [1, 2, 5, 16, 40])
+def test_groups_are_the_components_networkx_finds(n):
+    import networkx as nx
+
+    rng = np.random.default_rng(n)
+    for density in (0.0, 0.05, 0.15, 0.4, 1.0):
+        link = rng.random((n, n)) < density
+        np.fill_diagonal(link, False)
+        z = np.zeros((n, n))
+        state = LinkState(z, z.astype(np.int32), np.zeros((n, n, 1), np.int32), ("air",), z, z, z, link)
+        graph = nx.DiGraph()
+        graph.add_nodes_from(range(n))
+        graph.add_edges_from((int(j), int(i)) for i, j in zip(*np.nonzero(link)))  # link[i, j]: i hears j
+        strong = sorted((frozenset(c) for c in nx.strongly_connected_components(graph)), key=min)
+        weak = sorted((frozenset(c) for c in nx.weakly_connected_components(graph)), key=min)
+        assert state.groups() == strong
+        assert state.groups("weak") == weak
