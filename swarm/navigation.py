@@ -42,6 +42,7 @@ class Navigator:
         self.ticks_since_progress = 0
         self.replans = 0
         self.plans = 0
+        self._status = NavStatus(goal=None, state="idle", path_length=0.0, ticks_since_progress=0)
 
     # ------------------------------------------------------------------------------------ control ----
     def set_goal(self, goal: tuple[float, float] | None) -> None:
@@ -73,8 +74,14 @@ class Navigator:
         return v, omega
 
     def status(self) -> NavStatus:
-        return NavStatus(goal=self.goal, state=self.state, path_length=self.path_length,
-                         ticks_since_progress=self.ticks_since_progress)
+        """The current status; the same (immutable) object while nothing in it changed, since the runtime
+        asks for every robot every tick and most ticks change nothing."""
+        s = self._status
+        if (s.state != self.state or s.goal != self.goal or s.path_length != self.path_length
+                or s.ticks_since_progress != self.ticks_since_progress):
+            s = self._status = NavStatus(goal=self.goal, state=self.state, path_length=self.path_length,
+                                         ticks_since_progress=self.ticks_since_progress)
+        return s
 
     # ----------------------------------------------------------------------------------- planning ----
     def _plan(self, pose: Pose, known: np.ndarray) -> None:
