@@ -189,6 +189,26 @@ def test_configuration_space_cell_centres_keep_the_disc_clear(radius: float, mar
         assert d.min() >= radius + margin - 1e-12
 
 
+@pytest.mark.parametrize("radius, margin", [(0.3, 0.05), (0.0, 0.0), (0.1, 0.0), (0.45, 0.05), (1.0, 0.3), (2.0, 0.0)])
+def test_configuration_space_is_exactly_the_erosion_by_the_inflation_offsets(radius: float, margin: float) -> None:
+    """Not only safe (above) but not over-cautious: a passable cell is in the space iff no offset of
+    inflation_offsets lands on a blocked or off-map cell. Tiny and thin maps included (runs wider than
+    the map)."""
+    rng = np.random.default_rng(5)
+    offsets = grid.inflation_offsets(radius, margin)
+    for _ in range(60):
+        h, w = (int(v) for v in rng.integers(1, 21, 2))
+        k = np.where(rng.random((h, w)) < rng.uniform(0.0, 0.3), SOLID, FREE).astype(np.uint8)  # open borders
+        k[rng.random(k.shape) < 0.05] = UNSEEN
+        for optimistic in (False, True):
+            free = grid.passable(k, optimistic)
+            expected = free.copy()
+            for r, c in np.argwhere(free):
+                expected[r, c] = all(0 <= r + dr < h and 0 <= c + dc < w and free[r + dr, c + dc]
+                                     for dr, dc in offsets)
+            assert np.array_equal(grid.configuration_space(k, radius, margin, optimistic), expected)
+
+
 @pytest.mark.parametrize("radius, margin", [(0.3, 0.05), (0.3, 0.0), (0.2, 0.05), (0.45, 0.05), (0.6, 0.05)])
 def test_segments_through_the_configuration_space_keep_the_disc_clear(radius: float, margin: float) -> None:
     """The waypoint follower drives straight between cell centres: every point of every segment that
