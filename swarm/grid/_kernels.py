@@ -391,3 +391,20 @@ def grid_configuration_space(known: np.ndarray, unseen_ok: bool, row_offsets: np
             src = runs[half_widths[k], rr]
             for c in range(w):
                 o[c] &= src[c]
+
+
+PATH_OK, PATH_OUTSIDE, PATH_GAP = 0, 1, 2
+
+
+@njit(cache=True)
+def grid_path_problem(path: np.ndarray, h: int, w: int) -> int:  # pragma: no cover - compiled
+    """PATH_OUTSIDE if a cell of ``path`` (int64[N, 2] rows and columns) is off an h x w grid (checked for
+    the whole path first), else PATH_GAP if two consecutive cells are not 8-adjacent (or equal), else
+    PATH_OK."""
+    for i in range(path.shape[0]):
+        if not (0 <= path[i, 0] < h and 0 <= path[i, 1] < w):
+            return PATH_OUTSIDE
+    for i in range(1, path.shape[0]):
+        if abs(path[i, 0] - path[i - 1, 0]) > 1 or abs(path[i, 1] - path[i - 1, 1]) > 1:
+            return PATH_GAP
+    return PATH_OK

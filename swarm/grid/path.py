@@ -15,7 +15,7 @@ import numpy as np
 from maps.errors import InvalidInput
 
 from ..api import CELL_M
-from ._kernels import grid_segment_clear, grid_shortcut
+from ._kernels import PATH_GAP, PATH_OUTSIDE, grid_path_problem, grid_segment_clear, grid_shortcut
 from ._validate import check_cell, check_space
 
 
@@ -25,9 +25,10 @@ def _check_path(path: Any, shape: tuple[int, int]) -> np.ndarray:
             np.issubdtype(arr.dtype, np.integer) and arr.dtype != np.bool_):
         raise InvalidInput("path", f"array {arr.dtype}{list(arr.shape)}", "a non-empty int[N, 2] array of (row, col)")
     arr = np.ascontiguousarray(arr, dtype=np.int64)
-    if (arr < 0).any() or (arr[:, 0] >= shape[0]).any() or (arr[:, 1] >= shape[1]).any():
+    problem = grid_path_problem(arr, shape[0], shape[1])  # one compiled pass: every plan is checked here
+    if problem == PATH_OUTSIDE:
         raise InvalidInput("path", arr.tolist(), f"cells with 0 <= row < {shape[0]} and 0 <= col < {shape[1]}")
-    if arr.shape[0] > 1 and np.abs(np.diff(arr, axis=0)).max() > 1:
+    if problem == PATH_GAP:
         raise InvalidInput("path", arr.tolist(), "consecutive cells 8-adjacent (a path from swarm.grid.plan)")
     return arr
 
@@ -35,7 +36,7 @@ def _check_path(path: Any, shape: tuple[int, int]) -> np.ndarray:
 def cells_to_metres(cells: np.ndarray) -> np.ndarray:
     """Cell centres (x, y) in metres for int[N, 2] (row, col) cells: float64[N, 2]."""
     cells = np.asarray(cells)
-    return np.column_stack(((cells[:, 1] + 0.5) * CELL_M, (cells[:, 0] + 0.5) * CELL_M)).astype(np.float64)
+    return ((cells[:, ::-1] + 0.5) * CELL_M).astype(np.float64, copy=False)
 
 
 def segment_clear(space: np.ndarray, a: tuple[int, int], b: tuple[int, int]) -> bool:
