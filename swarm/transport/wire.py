@@ -153,22 +153,29 @@ class PackedNeighbours(Neighbours):
 
 
 class _NeighbourTable:
-    """Every robot pair's NEIGHBOUR record for one tick, built once from the tick's matrices (all robots'
-    :class:`~swarm.api.Neighbours` share them); each robot's field is then one masked row. The cache is
-    one (near, records) tuple, read and replaced whole, so runs in parallel threads never mix ticks."""
+    """Every robot's ``neighbours`` field for one tick, packed at once from the tick's matrices (all robots'
+    :class:`~swarm.api.Neighbours` share them): one masked selection of all pairs' records, cut per robot.
+    The cache is one (near, fields) tuple, read and replaced whole, so runs in parallel threads never mix
+    ticks; holding ``near`` keeps its identity from being reused by a later tick's matrix."""
 
     def __init__(self) -> None:
-        self._cache: tuple[Any, np.ndarray] = (None, np.zeros((0, 0), NEIGHBOUR_DTYPE))
+        self._cache: tuple[Any, list[bytes]] = (None, [])
 
     def row(self, row: int, near: np.ndarray, distance: np.ndarray, bearing: np.ndarray, xy: np.ndarray) -> bytes:
         cache = self._cache
-        if cache[0] is not near:  # a new tick (holding `near` keeps its identity from being reused)
-            n = len(near)
-            rec = np.empty((n, n), NEIGHBOUR_DTYPE)
-            rec["id"], rec["distance"], rec["bearing"] = np.arange(n), distance, bearing
-            rec["x"], rec["y"] = xy[:, 0], xy[:, 1]
-            cache = self._cache = (near, rec)
-        return cache[1][row][near[row]].tobytes()
+        if cache[0] is not near:
+            cache = self._cache = (near, self._pack_all(near, distance, bearing, xy))
+        return cache[1][row]
+
+    @staticmethod
+    def _pack_all(near: np.ndarray, distance: np.ndarray, bearing: np.ndarray, xy: np.ndarray) -> list[bytes]:
+        n = len(near)
+        rec = np.empty((n, n), NEIGHBOUR_DTYPE)
+        rec["id"], rec["distance"], rec["bearing"] = np.arange(n), distance, bearing
+        rec["x"], rec["y"] = xy[:, 0], xy[:, 1]
+        packed = rec[near].tobytes()  # row-major: robot 0's neighbours first
+        ends = (np.cumsum(near.sum(axis=1)) * NEIGHBOUR.size).tolist()
+        return [packed[start:end] for start, end in zip([0, *ends[:-1]], ends)]
 
 
 _TABLE = _NeighbourTable()
@@ -184,11 +191,13 @@ def pack_neighbours(neighbours: Any) -> bytes:
 
 def pack_cells(changed_idx: np.ndarray, changed_val: np.ndarray) -> bytes:
     """The ``cells`` field: uint32 gaps then uint8 values, zlib-compressed only when that is shorter and
-    there are at least RAW_CELLS_BELOW cells; a decoder tells the two apart by the length (raw = 5 n)."""
-    idx = np.asarray(changed_idx, dtype=np.int64)
-    raw = gaps_u32(idx) + np.asarray(changed_val, dtype=np.uint8).tobytes()
-    if len(idx) < RAW_CELLS_BELOW:
-        return raw
+    there are at least RAW_CELLS_BELOW cells; a decoder tells the two apart by the length (raw = 5 n).
+    Small updates (most ticks change a handful of cells) are packed by struct: half numpy's cost there."""
+    n = len(changed_idx)
+    if n < RAW_CELLS_BELOW:
+        idx = changed_idx.tolist()
+        return struct.pack(f"<{n}I{n}B", *[b - a for a, b in zip([0, *idx], idx)], *changed_val.tolist())
+    raw = gaps_u32(np.asarray(changed_idx, dtype=np.int64)) + np.asarray(changed_val, dtype=np.uint8).tobytes()
     packed = zlib.compress(raw, 1)
     return packed if len(packed) < len(raw) else raw
 
@@ -212,21 +221,28 @@ def _cells(n: Any, cells: Any, map_cells: int) -> tuple[np.ndarray, np.ndarray]:
         raise WireError("obs: bad map cells")
     if not n:
         return _NO_CELLS, _NO_VALUES
-    raw = cells
-    if len(cells) != 5 * n:
-        try:
-            raw = zlib.decompress(cells, bufsize=5 * n + 16)
-        except zlib.error:
-            raise WireError("obs: corrupt map cells") from None
-        if len(raw) != 5 * n:
-            raise WireError("obs: wrong map cells length")
-    idx = np.cumsum(np.frombuffer(raw, dtype="<u4", count=n), dtype=np.int64)
-    val = np.frombuffer(raw, dtype=np.uint8, offset=4 * n)
-    if idx[-1] >= map_cells or (val > 2).any():
+    raw = cells if len(cells) == 5 * n else _inflate(cells, 5 * n)
+    if raw[4 * n:].translate(None, _CELL_STATES):
+        raise WireError("obs: map cell value other than unseen, free or solid")
+    idx = np.frombuffer(raw, dtype="<u4", count=n).cumsum(dtype=np.int64)
+    if idx[-1] >= map_cells:
         raise WireError("obs: map cells outside the map")
-    return idx, val
+    return idx, np.frombuffer(raw, dtype=np.uint8, offset=4 * n)
 
 
+def _inflate(data: bytes, size: int) -> bytes:
+    """zlib-decompress exactly ``size`` bytes; never inflates past that (a small packet cannot claim gigabytes)."""
+    d = zlib.decompressobj()
+    try:
+        raw = d.decompress(data, size + 1)
+    except zlib.error:
+        raise WireError("obs: corrupt map cells") from None
+    if len(raw) != size or not d.eof or d.unconsumed_tail or d.unused_data:
+        raise WireError("obs: wrong map cells length")
+    return raw
+
+
+_CELL_STATES = bytes((0, 1, 2))  # what translate() deletes: anything left is not a cell state
 _NO_CELLS, _NO_VALUES = np.zeros(0, np.int64), np.zeros(0, np.uint8)
 _NO_CELLS.flags.writeable = False
 _NO_VALUES.flags.writeable = False

@@ -12,17 +12,8 @@ import pytest
 from swarm.api import NavStatus, Neighbour, Neighbours, Pose, RobotInfo
 from swarm.messages import Heartbeat, encode
 from swarm.transport.agent import AgentRunner, InboxDecoder
-from swarm.transport.wire import (
-    NAV_STATES,
-    NEIGHBOUR,
-    OBS_STATE,
-    RAW_CELLS_BELOW,
-    WIRE_VERSION,
-    ResetPacket,
-    WireError,
-    decode_obs,
-    encode_obs,
-)
+from swarm.transport.wire import (NAV_STATES, NEIGHBOUR, OBS_STATE, RAW_CELLS_BELOW, WIRE_VERSION, ResetPacket,
+                                  WireError, decode_obs, encode_obs, pack_neighbours)
 
 MAP_CELLS = 40 * 40
 
@@ -143,3 +134,16 @@ def test_inbox_messages_are_decoded_once_per_payload_and_tick():
     assert a == b and a[0] is b[0], "one decoded message shared by the agents of a tick"
     c = shared.decode(13, (beat,))
     assert c == a and c[0] is not a[0], "the cache holds one tick only"
+
+
+def test_neighbours_packed_from_the_matrices_equal_the_tuples_for_every_robot():
+    rng = np.random.default_rng(3)
+    n = 7
+    near = rng.random((n, n)) < 0.5
+    np.fill_diagonal(near, False)
+    near[4] = False  # a robot with no neighbour
+    distance, bearing, xy = rng.random((n, n)) * 9, rng.random((n, n)) * 6 - 3, rng.random((n, 2)) * 50
+    for i in range(n):
+        lazy = Neighbours(i, near, distance, bearing, xy)
+        expected = tuple(Neighbours(i, near, distance, bearing, xy))
+        assert pack_neighbours(lazy) == pack_neighbours(expected) == b"".join(NEIGHBOUR.pack(*t) for t in expected)
