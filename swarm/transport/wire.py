@@ -4,9 +4,10 @@ Three packets, each a msgpack array whose first two items are the packet kind an
 
 * ``reset`` (runtime -> agent, key ``swarm/<run>/robot/<id>/reset``): robot facts, algorithm, parameters,
   the robot's seed (``SeedSequence`` entropy and spawn key) and the map shape.
-* ``obs`` (runtime -> agent, ``.../obs``): one tick's observation. The knowledge map travels as the cells
-  changed since the previous observation (flat indices as uint32 gaps + uint8 values, zlib), the inbox as
-  the messages' own wire bytes (:mod:`swarm.messages`).
+* ``obs`` (runtime -> agent, ``.../obs``): one tick's observation. Pose, navigation status and counters
+  travel as one binary struct (:data:`OBS_STATE`), neighbours as binary records (:data:`NEIGHBOUR`), the
+  knowledge map as the cells changed since the previous observation (flat indices as uint32 gaps + uint8
+  values, zlib-compressed when large), the inbox as the messages' own wire bytes (:mod:`swarm.messages`).
 * ``act`` (agent -> runtime, ``.../act``): the decision for that tick, messages as wire bytes.
 
 Decoding checks types and sizes and raises :class:`WireError`; the runtime drops and counts bad packets.
