@@ -86,18 +86,10 @@ class Neighbours(Sequence[Neighbour]):
             self._source = None
         return self._items
 
-    def rows(self) -> list[list[Any]]:
-        """``[[id, distance, bearing, x, y], ...]`` straight from the arrays (the wire format's layout),
-        without building the tuples."""
-        if self._items is not None:
-            return [list(n) for n in self._items]
-        assert self._source is not None
-        row, near, distance, bearing, xy = self._source
-        cols = np.flatnonzero(near[row])
-        if not len(cols):
-            return []
-        return [list(r) for r in zip(cols.tolist(), distance[row, cols].tolist(), bearing[row, cols].tolist(),
-                                     xy[cols, 0].tolist(), xy[cols, 1].tolist())]
+    def matrices(self) -> tuple[Any, ...] | None:
+        """``(row, near, distance, bearing, xy)``: this robot's row in the tick's matrices, shared by every
+        robot's Neighbours (the zenoh transport packs them once per tick), or None once the tuples are built."""
+        return self._source
 
     def __getitem__(self, index):  # type: ignore[override]
         return self._all()[index]

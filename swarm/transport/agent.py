@@ -7,17 +7,44 @@ its action. Used for agents in the runtime's process over zenoh and by ``swarm a
 
 from __future__ import annotations
 
+from typing import Any, Sequence
+
 import numpy as np
 
 from .. import registry
 from ..api import Observation
-from ..messages import decode
+from ..messages import MessageError, decode
 from .inprocess import check_action
-from .wire import ResetPacket, decode_obs, encode_act
+from .wire import ResetPacket, WireError, decode_obs, encode_act
+
+
+class InboxDecoder:
+    """Inbox messages decoded once per distinct payload and tick, however many agents of this process hear
+    them: a broadcast reaches up to n - 1 agents with the same bytes. The decoded messages are frozen and
+    shared, exactly as the in-process transport shares them."""
+
+    def __init__(self) -> None:
+        self._tick: int | None = None
+        self._seen: dict[bytes, Any] = {}
+
+    def decode(self, tick: int, blobs: Sequence[bytes]) -> tuple[Any, ...]:
+        if tick != self._tick:
+            self._tick = tick
+            self._seen.clear()
+        seen, out = self._seen, []
+        for b in blobs:
+            msg = seen.get(b)
+            if msg is None:
+                try:
+                    msg = seen[b] = decode(b)
+                except MessageError as exc:
+                    raise WireError(f"obs: bad inbox message ({exc})") from None
+            out.append(msg)
+        return tuple(out)
 
 
 class AgentRunner:
-    def __init__(self, reset: ResetPacket, algorithm: str | None = None) -> None:
+    def __init__(self, reset: ResetPacket, algorithm: str | None = None, inbox: InboxDecoder | None = None) -> None:
         self.robot = reset.robot
         name = algorithm or reset.algorithm
         params = reset.params if name == reset.algorithm else {}
@@ -27,12 +54,16 @@ class AgentRunner:
         self._flat = self.known.reshape(-1)
         self._view = self.known.view()
         self._view.flags.writeable = False
+        self._inbox = inbox or InboxDecoder()
 
     def handle(self, packet: bytes) -> bytes:
+        """The act packet answering an obs packet; raises WireError, leaving the map as it was, for a bad one."""
         p = decode_obs(packet, self.known.size)
-        self._flat[p.changed_idx] = p.changed_val
-        obs = Observation(tick=p.tick, robot_id=p.robot_id, pose=p.pose, known=self._view,
-                          inbox=tuple(decode(b) for b in p.inbox), neighbours=p.neighbours, collided=p.collided,
-                          nav=p.nav, distance_travelled=p.distance_travelled, energy_used=p.energy_used)
+        inbox = self._inbox.decode(p.tick, p.inbox)
+        if len(p.changed_idx):
+            self._flat[p.changed_idx] = p.changed_val
+        obs = Observation(tick=p.tick, robot_id=p.robot_id, pose=p.pose, known=self._view, inbox=inbox,
+                          neighbours=p.neighbours, collided=p.collided, nav=p.nav,
+                          distance_travelled=p.distance_travelled, energy_used=p.energy_used)
         action = check_action(self.algorithm.act(obs), p.robot_id)
         return encode_act(p.tick, p.robot_id, action)

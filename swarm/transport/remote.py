@@ -14,7 +14,7 @@ from typing import Callable
 import zenoh
 
 from .agent import AgentRunner
-from .wire import decode_reset
+from .wire import WireError, decode_reset
 from .zenoh_host import BLOCK, session_config
 
 
@@ -58,7 +58,10 @@ def run_agent(connect: str, run_id: str, robot: int, algorithm: str | None = Non
                 runner = AgentRunner(reset, algorithm)
                 log(f"swarm agent: robot {robot} of run {run_id}, algorithm {algorithm or reset.algorithm}")
             elif kind == "obs" and runner is not None:
-                act.put(runner.handle(data))
+                try:
+                    act.put(runner.handle(data))
+                except WireError as exc:  # dropped unanswered: the runtime's timeout decides what follows
+                    log(f"swarm agent: dropped a malformed obs packet ({exc})")
     finally:
         for d in reversed(declared):
             try:

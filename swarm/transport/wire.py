@@ -4,9 +4,10 @@ Three packets, each a msgpack array whose first two items are the packet kind an
 
 * ``reset`` (runtime -> agent, key ``swarm/<run>/robot/<id>/reset``): robot facts, algorithm, parameters,
   the robot's seed (``SeedSequence`` entropy and spawn key) and the map shape.
-* ``obs`` (runtime -> agent, ``.../obs``): one tick's observation. The knowledge map travels as the cells
-  changed since the previous observation (flat indices as uint32 gaps + uint8 values, zlib), the inbox as
-  the messages' own wire bytes (:mod:`swarm.messages`).
+* ``obs`` (runtime -> agent, ``.../obs``): one tick's observation. Pose, navigation status and counters
+  travel as one binary struct (:data:`OBS_STATE`), neighbours as binary records (:data:`NEIGHBOUR`), the
+  knowledge map as the cells changed since the previous observation (flat indices as uint32 gaps + uint8
+  values, zlib-compressed when large), the inbox as the messages' own wire bytes (:mod:`swarm.messages`).
 * ``act`` (agent -> runtime, ``.../act``): the decision for that tick, messages as wire bytes.
 
 Decoding checks types and sizes and raises :class:`WireError`; the runtime drops and counts bad packets.
@@ -14,9 +15,10 @@ Decoding checks types and sizes and raises :class:`WireError`; the runtime drops
 
 from __future__ import annotations
 
+import struct
 import zlib
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple, Sequence
 
 import msgpack
 import numpy as np
@@ -24,7 +26,7 @@ import numpy as np
 from ..api import Action, NavStatus, Neighbour, Neighbours, Pose, RobotInfo
 from ..messages import MessageError, decode, encode, gaps_u32
 
-WIRE_VERSION = 1
+WIRE_VERSION = 2
 MAX_PACKET_BYTES = 8 * 1024 * 1024
 NAV_STATES = ("idle", "planning", "moving", "reached", "unreachable", "blocked")
 
@@ -45,15 +47,16 @@ class ResetPacket:
         return np.random.default_rng(np.random.SeedSequence(self.seed_entropy, spawn_key=self.seed_spawn_key))
 
 
-@dataclass(frozen=True)
-class ObsPacket:
+class ObsPacket(NamedTuple):
+    """A decoded observation packet (a named tuple: built for every agent every tick, so it must be cheap)."""
+
     tick: int
     robot_id: int
     pose: Pose
     changed_idx: np.ndarray
     changed_val: np.ndarray
     inbox: tuple[bytes, ...]
-    neighbours: tuple[Neighbour, ...]
+    neighbours: Sequence[Neighbour]
     collided: bool
     nav: NavStatus
     distance_travelled: float
@@ -118,43 +121,154 @@ def decode_reset(data: bytes) -> ResetPacket:
 
 
 # ------------------------------------------------------------------------------------------ obs ----
+# The obs packet's fixed fields, one little-endian struct (docs/wire-format.md): x, y, theta, goal x, goal y,
+# path length, distance travelled, energy used (float64), ticks since progress (uint32), nav state (uint8,
+# an index into NAV_STATES), flags (uint8: bit 0 collided, bit 1 has a goal). Binary instead of msgpack
+# lists: packing and unpacking nested lists of floats was most of the obs packet's cost.
+OBS_STATE = struct.Struct("<8dIBB")
+NEIGHBOUR = struct.Struct("<I4d")          # id (uint32), distance, bearing, x, y (float64)
+NEIGHBOUR_DTYPE = np.dtype([("id", "<u4"), ("distance", "<f8"), ("bearing", "<f8"), ("x", "<f8"), ("y", "<f8")])
+COLLIDED, HAS_GOAL = 1, 2
+RAW_CELLS_BELOW = 64                       # fewer changed cells travel uncompressed (zlib costs more than it saves)
+_NAV_INDEX = {name: k for k, name in enumerate(NAV_STATES)}
+
+
+class PackedNeighbours(Neighbours):
+    """Neighbours as they arrive in an obs packet, turned into :class:`Neighbour` tuples only when first read,
+    like the in-process transport's :class:`~swarm.api.Neighbours` (most algorithms never look)."""
+
+    __slots__ = ("_raw",)
+
+    def __init__(self, raw: bytes) -> None:  # not super().__init__: that takes the runtime's arrays
+        self._source = None  # so matrices() is None: re-packing iterates the tuples
+        self._items = None
+        self._raw = raw
+
+    def _all(self) -> tuple[Neighbour, ...]:
+        if self._items is None:
+            self._items = tuple(Neighbour._make(r) for r in NEIGHBOUR.iter_unpack(self._raw))
+        return self._items
+
+    def __bool__(self) -> bool:
+        return True  # decode_obs gives () when there are none
+
+
+class _NeighbourTable:
+    """Every robot's ``neighbours`` field for one tick, packed at once from the tick's matrices (all robots'
+    :class:`~swarm.api.Neighbours` share them): one masked selection of all pairs' records, cut per robot.
+    The cache is one (near, fields) tuple, read and replaced whole, so runs in parallel threads never mix
+    ticks; holding ``near`` keeps its identity from being reused by a later tick's matrix."""
+
+    def __init__(self) -> None:
+        self._cache: tuple[Any, list[bytes]] = (None, [])
+
+    def row(self, row: int, near: np.ndarray, distance: np.ndarray, bearing: np.ndarray, xy: np.ndarray) -> bytes:
+        cache = self._cache
+        if cache[0] is not near:
+            cache = self._cache = (near, self._pack_all(near, distance, bearing, xy))
+        return cache[1][row]
+
+    @staticmethod
+    def _pack_all(near: np.ndarray, distance: np.ndarray, bearing: np.ndarray, xy: np.ndarray) -> list[bytes]:
+        n = len(near)
+        rec = np.empty((n, n), NEIGHBOUR_DTYPE)
+        rec["id"], rec["distance"], rec["bearing"] = np.arange(n), distance, bearing
+        rec["x"], rec["y"] = xy[:, 0], xy[:, 1]
+        packed = rec[near].tobytes()  # row-major: robot 0's neighbours first
+        ends = (np.cumsum(near.sum(axis=1)) * NEIGHBOUR.size).tolist()
+        return [packed[start:end] for start, end in zip([0, *ends[:-1]], ends)]
+
+
+_TABLE = _NeighbourTable()
+
+
+def pack_neighbours(neighbours: Any) -> bytes:
+    """The ``neighbours`` field: one NEIGHBOUR record per neighbour, from the runtime's matrices if it can."""
+    source = neighbours.matrices() if isinstance(neighbours, Neighbours) else None
+    if source is not None:
+        return _TABLE.row(*source)
+    return b"".join(NEIGHBOUR.pack(*n) for n in neighbours)
+
+
+def pack_cells(changed_idx: np.ndarray, changed_val: np.ndarray) -> bytes:
+    """The ``cells`` field: uint32 gaps then uint8 values, zlib-compressed only when that is shorter and
+    there are at least RAW_CELLS_BELOW cells; a decoder tells the two apart by the length (raw = 5 n).
+    Small updates (most ticks change a handful of cells) are packed by struct: half numpy's cost there."""
+    n = len(changed_idx)
+    if n < RAW_CELLS_BELOW:
+        idx = changed_idx.tolist()
+        return struct.pack(f"<{n}I{n}B", *[b - a for a, b in zip([0, *idx], idx)], *changed_val.tolist())
+    raw = gaps_u32(np.asarray(changed_idx, dtype=np.int64)) + np.asarray(changed_val, dtype=np.uint8).tobytes()
+    packed = zlib.compress(raw, 1)
+    return packed if len(packed) < len(raw) else raw
+
+
 def encode_obs(tick: int, robot_id: int, pose: Pose, changed_idx: np.ndarray, changed_val: np.ndarray,
-               inbox: tuple[bytes, ...], neighbours: tuple[Neighbour, ...], collided: bool, nav: NavStatus,
+               inbox: tuple[bytes, ...], neighbours: Any, collided: bool, nav: NavStatus,
                distance_travelled: float, energy_used: float) -> bytes:
-    idx = np.asarray(changed_idx, dtype=np.int64)
-    cells = zlib.compress(gaps_u32(idx) + np.asarray(changed_val, dtype=np.uint8).tobytes(), 1) if len(idx) else b""
-    rows = neighbours.rows() if isinstance(neighbours, Neighbours) else [list(n) for n in neighbours]
-    return _pack(["obs", WIRE_VERSION, tick, robot_id, list(pose), len(idx), cells, list(inbox), rows, collided,
-                  [list(nav.goal) if nav.goal is not None else None, nav.state, nav.path_length,
-                   nav.ticks_since_progress], distance_travelled, energy_used])
+    goal = nav.goal
+    flags = (COLLIDED if collided else 0) | (HAS_GOAL if goal is not None else 0)
+    gx, gy = goal if goal is not None else (0.0, 0.0)
+    state = OBS_STATE.pack(pose[0], pose[1], pose[2], gx, gy, nav.path_length, distance_travelled, energy_used,
+                           nav.ticks_since_progress, _NAV_INDEX[nav.state], flags)
+    return _pack(["obs", WIRE_VERSION, tick, robot_id, state, len(changed_idx), pack_cells(changed_idx, changed_val),
+                  list(inbox), pack_neighbours(neighbours)])
+
+
+def _cells(n: Any, cells: Any, map_cells: int) -> tuple[np.ndarray, np.ndarray]:
+    """Changed flat indices and values from the ``cells`` field, checked against the map size."""
+    n = _int(n, "changed cells")
+    if n < 0 or not isinstance(cells, bytes):
+        raise WireError("obs: bad map cells")
+    if not n:
+        return _NO_CELLS, _NO_VALUES
+    raw = cells if len(cells) == 5 * n else _inflate(cells, 5 * n)
+    if raw[4 * n:].translate(None, _CELL_STATES):
+        raise WireError("obs: map cell value other than unseen, free or solid")
+    idx = np.frombuffer(raw, dtype="<u4", count=n).cumsum(dtype=np.int64)
+    if idx[-1] >= map_cells:
+        raise WireError("obs: map cells outside the map")
+    return idx, np.frombuffer(raw, dtype=np.uint8, offset=4 * n)
+
+
+def _inflate(data: bytes, size: int) -> bytes:
+    """zlib-decompress exactly ``size`` bytes; never inflates past that (a small packet cannot claim gigabytes)."""
+    d = zlib.decompressobj()
+    try:
+        raw = d.decompress(data, size + 1)
+    except zlib.error:
+        raise WireError("obs: corrupt map cells") from None
+    if len(raw) != size or not d.eof or d.unconsumed_tail or d.unused_data:
+        raise WireError("obs: wrong map cells length")
+    return raw
+
+
+_CELL_STATES = bytes((0, 1, 2))  # what translate() deletes: anything left is not a cell state
+_NO_CELLS, _NO_VALUES = np.zeros(0, np.int64), np.zeros(0, np.uint8)
+_NO_CELLS.flags.writeable = False
+_NO_VALUES.flags.writeable = False
 
 
 def decode_obs(data: bytes, map_cells: int) -> ObsPacket:
+    """An observation packet, checked: field types and sizes, map cells inside the map, a known nav state."""
     f = _unpack(data, "obs")
-    if len(f) != 11:
+    if len(f) != 7:
         raise WireError("obs: wrong number of fields")
-    tick, robot, pose, n, cells, inbox, neighbours, collided, nav, dist, energy = f
-    n = _int(n, "changed cells")
-    if n:
-        try:
-            raw = zlib.decompress(cells, bufsize=5 * n + 16)
-        except (zlib.error, TypeError):
-            raise WireError("obs: corrupt map cells") from None
-        if len(raw) != 5 * n:
-            raise WireError("obs: wrong map cells length")
-        idx = np.cumsum(np.frombuffer(raw[: 4 * n], dtype="<u4").astype(np.int64))
-        val = np.frombuffer(raw[4 * n:], dtype=np.uint8)
-        if idx[-1] >= map_cells or (val > 2).any():
-            raise WireError("obs: map cells outside the map")
-    else:
-        idx, val = np.zeros(0, np.int64), np.zeros(0, np.uint8)
-    goal = None if nav[0] is None else (float(nav[0][0]), float(nav[0][1]))
-    return ObsPacket(tick=tick, robot_id=robot, pose=Pose(*(float(v) for v in pose)), changed_idx=idx, changed_val=val,
-                     inbox=tuple(bytes(b) for b in inbox),
-                     neighbours=tuple(Neighbour(int(a), float(b), float(c), float(d), float(e)) for a, b, c, d, e in neighbours),
-                     collided=bool(collided), nav=NavStatus(goal=goal, state=str(nav[1]), path_length=float(nav[2]),
-                                                            ticks_since_progress=int(nav[3])),
-                     distance_travelled=float(dist), energy_used=float(energy))
+    tick, robot, state, n, cells, inbox, neighbours = f
+    if not isinstance(state, bytes) or len(state) != OBS_STATE.size:
+        raise WireError(f"obs: state must be {OBS_STATE.size} bytes")
+    if not isinstance(inbox, list) or not all(isinstance(b, bytes) for b in inbox):
+        raise WireError("obs: inbox must be a list of byte strings")
+    if not isinstance(neighbours, bytes) or len(neighbours) % NEIGHBOUR.size:
+        raise WireError(f"obs: neighbours must be a multiple of {NEIGHBOUR.size} bytes")
+    x, y, theta, gx, gy, path_length, dist, energy, stalled, nav_state, flags = OBS_STATE.unpack(state)
+    if nav_state >= len(NAV_STATES) or flags > COLLIDED | HAS_GOAL:
+        raise WireError("obs: unknown nav state or flags")
+    idx, val = _cells(n, cells, map_cells)
+    nav = NavStatus(goal=(gx, gy) if flags & HAS_GOAL else None, state=NAV_STATES[nav_state],
+                    path_length=path_length, ticks_since_progress=stalled)
+    return ObsPacket(_int(tick, "tick"), _int(robot, "robot"), Pose(x, y, theta), idx, val, tuple(inbox),
+                     PackedNeighbours(neighbours) if neighbours else (), bool(flags & COLLIDED), nav, dist, energy)
 
 
 # ------------------------------------------------------------------------------------------ act ----

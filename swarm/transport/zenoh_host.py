@@ -27,7 +27,7 @@ from typing import Sequence
 import zenoh
 
 from ..api import Action
-from .agent import AgentRunner
+from .agent import AgentRunner, InboxDecoder
 from .base import HostStats, TickInput
 from .wire import ResetPacket, WireError, decode_act, encode_obs, encode_reset
 
@@ -78,20 +78,26 @@ class ZenohHost:
         self._runners: dict[int, AgentRunner] = {}
         self._publishers: dict[int, zenoh.Publisher] = {}
         self._declared: list = []
-        self._declared.append(self.session.declare_subscriber(
-            f"{self.prefix}/robot/*/act", zenoh.handlers.Callback(self._on_act, indirect=False)))
+        self._inbox = InboxDecoder()  # shared by the local agents: each broadcast decoded once per tick
         if self.remote:
             self._declared.append(self.session.liveliness().declare_subscriber(
                 f"{self.prefix}/robot/*/alive", zenoh.handlers.Callback(self._on_alive, indirect=False), history=True))
 
     # ---------------------------------------------------------------------------------- callbacks ----
-    def _on_act(self, sample: zenoh.Sample) -> None:
-        robot = robot_of(sample.key_expr)
-        if robot is None:
-            return
-        with self._cond:
-            self._replies[robot] = sample.payload.to_bytes()
-            self._cond.notify_all()
+    def _act_subscriber(self, robot: int) -> None:
+        """One subscriber per robot's act key, so a reply needs no key parsing; it wakes act() only when
+        remote agents are awaited (local agents answer synchronously inside the obs put)."""
+        notify = bool(self.remote)
+
+        def on_act(sample: zenoh.Sample) -> None:
+            data = sample.payload.to_bytes()
+            with self._cond:
+                self._replies[robot] = data
+                if notify:
+                    self._cond.notify_all()
+
+        self._declared.append(self.session.declare_subscriber(
+            f"{self.prefix}/robot/{robot}/act", zenoh.handlers.Callback(on_act, indirect=False)))
 
     def _on_alive(self, sample: zenoh.Sample) -> None:
         robot = robot_of(sample.key_expr)
@@ -118,9 +124,10 @@ class ZenohHost:
     def start(self, resets: Sequence[ResetPacket]) -> None:
         for reset in resets:
             i = reset.robot.id
+            self._act_subscriber(i)
             self._publishers[i] = self.session.declare_publisher(f"{self.prefix}/robot/{i}/obs", congestion_control=BLOCK)
             if i not in self.remote:
-                runner = AgentRunner(reset)
+                runner = AgentRunner(reset, inbox=self._inbox)
                 self._runners[i] = runner
                 self._local_agent(i, runner)
         if self.remote:

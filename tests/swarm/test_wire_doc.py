@@ -40,3 +40,25 @@ def test_documented_agent_drives_its_robot(tmp_path):
     assert agent.returncode == 0, agent.stderr.read()
     assert r.summary["failed_robots"] == [] and r.summary["messages"]["malformed_from_agents"] == 0
     assert r.summary["distance_m"][1] > 1.0, "the documented agent drove robot 1 forward"
+
+
+def test_documented_layouts_match_the_code():
+    """Version, struct layouts, sizes, offsets and nav states in the doc are the ones wire.py uses."""
+    from swarm.transport.wire import NAV_STATES, NEIGHBOUR, OBS_STATE, WIRE_VERSION
+
+    doc = DOC.read_text()
+    assert f"# The agent wire format (version {WIRE_VERSION})" in doc and f"`version = {WIRE_VERSION}`" in doc
+    for kind in ("reset", "obs", "act"):
+        assert f'`["{kind}", {WIRE_VERSION}, ' in doc
+    assert f"`state` is {OBS_STATE.size} bytes" in doc and f"format `{OBS_STATE.format}`" in doc
+    assert f"{NEIGHBOUR.size} bytes each" in doc and f"(`{NEIGHBOUR.format}`)" in doc
+    assert f"an index into `{' '.join(NAV_STATES)}`" in doc
+    rows = re.findall(r"^  \| (\d+) \| (\w+)(?: x (\d))? \|", doc, re.M)  # the state table: offset, type, count
+    codes, at, layout = {"float64": ("d", 8), "uint32": ("I", 4), "uint8": ("B", 1)}, 0, "<"
+    for offset, kind, count in rows:
+        assert int(offset) == at, f"documented offset {offset}, the fields before it take {at} bytes"
+        code, size = codes[kind]
+        layout += int(count or 1) * code
+        at += int(count or 1) * size
+    expand = lambda fmt: re.sub(r"(\d+)(\w)", lambda m: int(m.group(1)) * m.group(2), fmt)
+    assert layout == expand(OBS_STATE.format) and at == OBS_STATE.size

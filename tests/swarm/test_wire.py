@@ -1,0 +1,149 @@
+"""The obs packet (wire version 2): round trips exactly, and every malformed packet raises WireError."""
+
+from __future__ import annotations
+
+import struct
+import zlib
+
+import msgpack
+import numpy as np
+import pytest
+
+from swarm.api import NavStatus, Neighbour, Neighbours, Pose, RobotInfo
+from swarm.messages import Heartbeat, encode
+from swarm.transport.agent import AgentRunner, InboxDecoder
+from swarm.transport.wire import (NAV_STATES, NEIGHBOUR, OBS_STATE, RAW_CELLS_BELOW, WIRE_VERSION, ResetPacket,
+                                  WireError, decode_obs, encode_obs, pack_neighbours)
+
+MAP_CELLS = 40 * 40
+
+
+MOVING = NavStatus(goal=(1.5, -2.25), state="moving", path_length=7.5, ticks_since_progress=3)
+
+
+def obs_packet(idx=(3, 17, 900), val=(1, 2, 1), neighbours=(), nav=MOVING, inbox=(), collided=True) -> bytes:
+    return encode_obs(12, 2, Pose(1.25, 3.5, -0.75), np.array(idx, np.int64), np.array(val, np.uint8), inbox,
+                      neighbours, collided, nav, 10.5, 11.25)
+
+
+def fields(packet: bytes) -> list:
+    return msgpack.unpackb(packet, raw=False)
+
+
+def repack(f: list) -> bytes:
+    return msgpack.packb(f, use_bin_type=True)
+
+
+def test_round_trip_is_exact():
+    near = np.array([[False, True, True], [True, False, False], [True, False, False]])
+    distance = np.array([[0.0, 1.5, 2.5], [1.5, 0.0, 3.0], [2.5, 3.0, 0.0]])
+    bearing = np.array([[0.0, 0.1, -0.2], [3.0, 0.0, 0.3], [1.0, 0.4, 0.0]])
+    xy = np.array([[1.0, 2.0], [3.0, 4.0], [5.0, 6.0]])
+    lazy = Neighbours(0, near, distance, bearing, xy)
+    expected = (Neighbour(1, 1.5, 0.1, 3.0, 4.0), Neighbour(2, 2.5, -0.2, 5.0, 6.0))
+    for given in (lazy, expected):  # the runtime's arrays or plain tuples give the same bytes
+        p = decode_obs(obs_packet(neighbours=given, inbox=(b"a", b"bc")), MAP_CELLS)
+        assert (p.tick, p.robot_id, p.pose) == (12, 2, Pose(1.25, 3.5, -0.75))
+        assert p.changed_idx.tolist() == [3, 17, 900] and p.changed_val.tolist() == [1, 2, 1]
+        assert p.inbox == (b"a", b"bc") and p.collided is True
+        assert p.nav == MOVING
+        assert (p.distance_travelled, p.energy_used) == (10.5, 11.25)
+        assert bool(p.neighbours) and len(p.neighbours) == 2 and p.neighbours == expected
+        assert p.neighbours[1].id == 2 and isinstance(p.neighbours[1].id, int)
+    p = decode_obs(obs_packet(idx=(), val=(), nav=NavStatus(), collided=False), MAP_CELLS)
+    assert p.neighbours == () and not p.collided and p.nav == NavStatus() and len(p.changed_idx) == 0
+
+
+def test_large_updates_are_compressed_small_ones_are_not():
+    few = fields(obs_packet())
+    assert len(few[6]) == 5 * 3
+    idx = np.arange(0, 4 * RAW_CELLS_BELOW, 4)
+    many = obs_packet(idx=idx, val=np.ones(len(idx), np.uint8))
+    assert len(fields(many)[6]) < 5 * len(idx)
+    assert decode_obs(many, MAP_CELLS).changed_idx.tolist() == idx.tolist()
+
+
+def bad_packets() -> dict[str, bytes]:
+    good = fields(obs_packet(neighbours=(Neighbour(1, 1.0, 0.0, 2.0, 3.0),)))
+    state = bytearray(good[4])
+
+    def with_field(k: int, value) -> bytes:
+        f = list(good)
+        f[k] = value
+        return repack(f)
+
+    def with_state(offset: int, byte: int) -> bytes:
+        s = bytearray(state)
+        s[offset] = byte
+        return with_field(4, bytes(s))
+
+    raw_cells = struct.pack("<2I2B", 5, 7, 1, 1)
+    return {
+        "garbage": b"\x00garbage",
+        "version 1": repack(["obs", 1] + good[2:]),
+        "wrong kind": repack(["act"] + good[1:]),
+        "too few fields": repack(good[:-1]),
+        "tick not an integer": with_field(2, 1.5),
+        "robot not an integer": with_field(3, "2"),
+        "state too short": with_field(4, bytes(state[:-1])),
+        "state not bytes": with_field(4, [1.0, 2.0, 3.0]),
+        "unknown nav state": with_state(68, len(NAV_STATES)),
+        "unknown flag bits": with_state(69, 4),
+        "negative cell count": with_field(5, -1),
+        "cell count not an integer": with_field(5, "3"),
+        "cells not bytes": with_field(6, [1, 2]),
+        "cells shorter than the count": with_field(5, 4),
+        "corrupt compressed cells": with_field(6, b"\x78\x01garbage"),
+        "compressed cells of the wrong length": repack(good[:5] + [2, zlib.compress(raw_cells + b"\x00")] + good[7:]),
+        "cell outside the map": repack(good[:5] + [1, struct.pack("<IB", MAP_CELLS, 1)] + good[7:]),
+        "cell value above solid": repack(good[:5] + [2, struct.pack("<2I2B", 5, 7, 1, 3)] + good[7:]),
+        "inbox not a list": with_field(7, b"msg"),
+        "inbox item not bytes": with_field(7, ["msg"]),
+        "neighbours of a wrong length": with_field(8, good[8] + b"\x00"),
+        "neighbours as a list": with_field(8, [[1, 1.0, 0.0, 2.0, 3.0]]),
+    }
+
+
+@pytest.mark.parametrize("name", list(bad_packets()))
+def test_malformed_obs_raises_wire_error(name):
+    with pytest.raises(WireError):
+        decode_obs(bad_packets()[name], MAP_CELLS)
+
+
+def test_formats_are_the_documented_sizes():
+    assert OBS_STATE.size == 70 and NEIGHBOUR.size == 36 and WIRE_VERSION == 2
+
+
+def runner(inbox: InboxDecoder | None = None) -> AgentRunner:
+    robot = RobotInfo(id=2, n_robots=3, map_shape=(40, 40))
+    return AgentRunner(ResetPacket(robot, "frontier", {}, 1, (2,)), inbox=inbox)
+
+
+def test_agent_rejects_an_undecodable_inbox_message_and_keeps_its_map():
+    r = runner()
+    with pytest.raises(WireError):
+        r.handle(obs_packet(inbox=(b"\x93\xa3bad",)))
+    assert not r.known.any(), "a rejected packet writes no cell"
+
+
+def test_inbox_messages_are_decoded_once_per_payload_and_tick():
+    shared = InboxDecoder()
+    beat = encode(Heartbeat(sender=1, tick=11, x=1.0, y=2.0, theta=0.5))
+    a = shared.decode(12, (beat,))
+    b = shared.decode(12, (bytes(beat),))
+    assert a == b and a[0] is b[0], "one decoded message shared by the agents of a tick"
+    c = shared.decode(13, (beat,))
+    assert c == a and c[0] is not a[0], "the cache holds one tick only"
+
+
+def test_neighbours_packed_from_the_matrices_equal_the_tuples_for_every_robot():
+    rng = np.random.default_rng(3)
+    n = 7
+    near = rng.random((n, n)) < 0.5
+    np.fill_diagonal(near, False)
+    near[4] = False  # a robot with no neighbour
+    distance, bearing, xy = rng.random((n, n)) * 9, rng.random((n, n)) * 6 - 3, rng.random((n, 2)) * 50
+    for i in range(n):
+        lazy = Neighbours(i, near, distance, bearing, xy)
+        expected = tuple(Neighbours(i, near, distance, bearing, xy))
+        assert pack_neighbours(lazy) == pack_neighbours(expected) == b"".join(NEIGHBOUR.pack(*t) for t in expected)
