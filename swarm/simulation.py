@@ -346,10 +346,18 @@ class _Bearings:
         self._poses = poses.copy()
         self._matrix: np.ndarray | None = None
 
-    def __getitem__(self, key: Any) -> np.ndarray:
+    def matrix(self) -> np.ndarray:
         if self._matrix is None:
             p = self._poses
             dx = p[None, :, 0] - p[:, None, 0]
             dy = p[None, :, 1] - p[:, None, 1]
             self._matrix = (np.arctan2(dy, dx) - p[:, None, 2] + np.pi) % (2 * np.pi) - np.pi
-        return self._matrix[key]
+        return self._matrix
+
+    def __getitem__(self, key: Any) -> np.ndarray:
+        return self.matrix()[key]
+
+    def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
+        """So numpy code (the zenoh transport packs all robots' neighbours at once) reads it as the matrix."""
+        m = self.matrix()
+        return m if dtype is None else m.astype(dtype)
