@@ -18,6 +18,7 @@ from swarm.api import Action, Observation, RobotInfo, cell_centre, cell_of
 
 
 TARGET_REACH_CELLS = 3
+_STOP = Action(velocity=(0.0, 0.0), clear_goal=True)
 
 
 @dataclass(frozen=True)
@@ -40,6 +41,7 @@ class FrontierExplorer:
         self.target: tuple[int, int] | None = None
         self.chosen_at = -1
         self.excluded: dict[tuple[int, int], int] = {}
+        self._goal_action: tuple[tuple[int, int] | None, Action] = (None, _STOP)
 
     def act(self, obs: Observation) -> Action:
         if obs.nav.state in ("unreachable", "blocked") and self.target is not None:
@@ -49,8 +51,10 @@ class FrontierExplorer:
                 or obs.tick - self.chosen_at >= self.params.recheck_ticks):
             self._choose(obs)
         if self.target is None:
-            return Action(velocity=(0.0, 0.0), clear_goal=True)
-        return Action(goal=cell_centre(*self.target))
+            return _STOP
+        if self._goal_action[0] != self.target:  # the same immutable Action while the target stands
+            self._goal_action = (self.target, Action(goal=cell_centre(*self.target)))
+        return self._goal_action[1]
 
     def _still_frontier(self, known: np.ndarray) -> bool:
         """Unseen space still within reach of the target (targets sit up to 3 cells from it, see
