@@ -30,7 +30,7 @@ from radio import build_link_model, config_from_mapping
 
 from .api import Action, Neighbour, Neighbours, Observation, Pose, RobotInfo
 from .comm import CommSpec, Envelope, MapSharing, Medium
-from .knowledge import sync_changes, sync_region
+from .knowledge import sync_changes, sync_regions
 from .metrics import Metrics
 from .navigation import Navigator
 from .result import RunResult
@@ -254,6 +254,7 @@ class Simulation:
         energy = (self.world.distance + self.world.rotation).tolist()
         pose_rows = poses.tolist()
         neighbours = self._neighbours(poses, links)
+        changed = self._changed_cells(poses, merged) if needs_delta else None
         inputs: list[TickInput | None] = []
         for i in range(len(pose_rows)):
             if self.failed[i]:
@@ -263,27 +264,25 @@ class Simulation:
                               inbox=tuple(env.message for env in inboxes[i]), neighbours=neighbours[i],
                               collided=bool(collided[i]), nav=self.navigators[i].status(),
                               distance_travelled=distance[i], energy_used=energy[i])
-            if needs_delta:
-                inputs.append(TickInput(obs, self._changed_cells(i, pose_rows[i], merged[i]),
-                                        tuple(env.data for env in inboxes[i])))
+            if changed is not None:
+                inputs.append(TickInput(obs, changed[i], tuple(env.data for env in inboxes[i])))
             else:
                 inputs.append(TickInput(obs))
         return inputs
 
-    def _changed_cells(self, i: int, pose: list[float], merged: list[np.ndarray | None]) -> np.ndarray:
-        """Flat indices (ascending) of robot i's knowledge cells changed since its last observation: the
-        lidar only writes within range of the robot, delta merges report their cells, so only those places
-        are compared; after a full-map merge the whole map is."""
+    def _changed_cells(self, poses: np.ndarray, merged: list[list[np.ndarray | None]]) -> list[np.ndarray | None]:
+        """Per robot, flat indices (ascending) of its knowledge cells changed since its last observation (None
+        for failed robots): the lidar only writes within range of the robot, delta merges report their cells,
+        so only those places are compared, all robots in one compiled call; after a full-map merge the whole
+        map is."""
         assert self._mirror is not None
-        known, mirror = self.known[i], self._mirror[i]
-        if any(m is None for m in merged):
-            return sync_changes(known, mirror)
-        h, w = known.shape
+        full = [not self.failed[i] and any(m is None for m in cells) for i, cells in enumerate(merged)]
         reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2
-        r, c = int(pose[1] / CELL_M), int(pose[0] / CELL_M)
-        rows = (max(r - reach, 0), min(r + reach + 1, h))
-        cols = (max(c - reach, 0), min(c + reach + 1, w))
-        return sync_region(known, mirror, rows, cols, np.concatenate(merged) if merged else None)
+        centres = (poses[:, 1::-1] / CELL_M).astype(np.int64)  # (row, col); truncation, as int() did
+        changed = sync_regions(self.known, self._mirror, centres, reach, merged, ~self.failed & ~np.array(full))
+        for i in np.flatnonzero(full).tolist():
+            changed[i] = sync_changes(self.known[i], self._mirror[i])
+        return changed
 
     def _note_failures(self, tick: int, host: AgentHost) -> None:
         for i, (at, reason) in sorted(host.stats.failures.items()):
