@@ -15,7 +15,7 @@ from .. import registry
 from ..api import Observation
 from ..messages import MessageError, decode
 from .inprocess import check_action
-from .wire import ResetPacket, WireError, decode_obs, encode_act
+from .wire import ObsDecoder, ResetPacket, WireError, encode_act
 
 
 class InboxDecoder:
@@ -28,6 +28,8 @@ class InboxDecoder:
         self._seen: dict[bytes, Any] = {}
 
     def decode(self, tick: int, blobs: Sequence[bytes]) -> tuple[Any, ...]:
+        if not blobs:
+            return ()
         if tick != self._tick:
             self._tick = tick
             self._seen.clear()
@@ -55,10 +57,11 @@ class AgentRunner:
         self._view = self.known.view()
         self._view.flags.writeable = False
         self._inbox = inbox or InboxDecoder()
+        self._decode = ObsDecoder(self.known.size)
 
     def handle(self, packet: bytes) -> bytes:
         """The act packet answering an obs packet; raises WireError, leaving the map as it was, for a bad one."""
-        p = decode_obs(packet, self.known.size)
+        p = self._decode(packet)
         inbox = self._inbox.decode(p.tick, p.inbox)
         if len(p.changed_idx):
             self._flat[p.changed_idx] = p.changed_val
