@@ -23,6 +23,7 @@ from typing import Any, NamedTuple, Sequence
 
 import msgpack
 import numpy as np
+from numba import njit
 
 from ..api import Action, NavStatus, Neighbour, Neighbours, Pose, RobotInfo
 from ..messages import MessageError, decode, encode, gaps_u32
@@ -188,12 +189,32 @@ class _NeighbourTable:
     @staticmethod
     def _pack_all(near: np.ndarray, distance: np.ndarray, bearing: np.ndarray, xy: np.ndarray) -> list[bytes]:
         n = len(near)
-        rec = np.empty((n, n), NEIGHBOUR_DTYPE)
-        rec["id"], rec["distance"], rec["bearing"] = np.arange(n), distance, bearing
-        rec["x"], rec["y"] = xy[:, 0], xy[:, 1]
-        packed = rec[near].tobytes()  # row-major: robot 0's neighbours first
-        ends = (np.cumsum(near.sum(axis=1)) * NEIGHBOUR.size).tolist()
+        records = np.empty(n * n, NEIGHBOUR_DTYPE)
+        counts = np.empty(n, np.int64)
+        m = _neighbour_records(near, distance, np.asarray(bearing), xy, records, counts)
+        packed = records[:m].tobytes()  # row-major: robot 0's neighbours first
+        ends = (counts.cumsum() * NEIGHBOUR.size).tolist()
         return [packed[start:end] for start, end in zip([0, *ends[:-1]], ends)]
+
+
+@njit(cache=True)
+def _neighbour_records(near: np.ndarray, distance: np.ndarray, bearing: np.ndarray, xy: np.ndarray,
+                       records: np.ndarray, counts: np.ndarray) -> int:  # pragma: no cover - compiled
+    """NEIGHBOUR records of every robot's neighbours, row by row, into ``records``; ``counts[i]`` per robot.
+    Compiled: the numpy version (field assignments and a masked selection) cost 3x as much per tick."""
+    m = 0
+    for i in range(near.shape[0]):
+        start = m
+        for j in range(near.shape[1]):
+            if near[i, j]:
+                records[m]["id"] = j
+                records[m]["distance"] = distance[i, j]
+                records[m]["bearing"] = bearing[i, j]
+                records[m]["x"] = xy[j, 0]
+                records[m]["y"] = xy[j, 1]
+                m += 1
+        counts[i] = m - start
+    return m
 
 
 _TABLE = _NeighbourTable()
