@@ -265,7 +265,7 @@ def _cells(n: Any, cells: Any, map_cells: int) -> tuple[np.ndarray, np.ndarray]:
     raw = cells if len(cells) == 5 * n else _inflate(cells, 5 * n)
     if raw[4 * n:].translate(None, _CELL_STATES):
         raise WireError("obs: map cell value other than unseen, free or solid")
-    idx = np.frombuffer(raw, dtype="<u4", count=n).cumsum(dtype=np.int64)
+    idx = np.add.accumulate(np.frombuffer(raw, dtype="<u4", count=n), dtype=np.int64)  # cumsum without its wrapper
     if idx[-1] >= map_cells:
         raise WireError("obs: map cells outside the map")
     return idx, np.frombuffer(raw, dtype=np.uint8, offset=4 * n)
