@@ -210,19 +210,22 @@ def sync_regions(current: np.ndarray, last: np.ndarray, centres: np.ndarray, rea
         raise InvalidInput("last", getattr(last, "shape", None), f"a C-contiguous stack shaped like current {current.shape}")
     n = current.shape[0]
     act = active_flags(n, active)
+    flags = act.tolist()
     pieces: list[np.ndarray] = []
-    counts = np.zeros(n, dtype=np.int64)
-    for k in np.flatnonzero(act).tolist():
-        if cells[k]:  # most robots merged nothing this tick
+    ends = [0] * n  # where map k's extra cells end in ``extra``; the kernel overwrites them with out's ends
+    total = 0
+    for k in range(n):
+        if flags[k] and cells[k]:  # most robots merged nothing this tick
             pieces.extend(cells[k])
-            counts[k] = sum(len(a) for a in cells[k])
+            total += sum(len(a) for a in cells[k])
+        ends[k] = total
     extra = np.concatenate(pieces).astype(np.int64, copy=False) if pieces else _NO_CELLS
     side = 2 * reach + 1
-    out = np.empty(n * side * side + len(extra), dtype=np.int64)
-    ends = np.cumsum(counts)  # extra cells of map k end here; the kernel overwrites it with out's ends
-    _sync_windows_kernel(current, last, np.ascontiguousarray(centres, dtype=np.int64), reach, act, extra, ends, out)
-    bounds = ends.tolist()
-    return [out[start:end] if a else None for start, end, a in zip([0, *bounds[:-1]], bounds, act.tolist())]
+    out = np.empty(n * side * side + total, dtype=np.int64)
+    bounds = np.array(ends, dtype=np.int64)
+    _sync_windows_kernel(current, last, np.ascontiguousarray(centres, dtype=np.int64), reach, act, extra, bounds, out)
+    ends = bounds.tolist()
+    return [out[start:end] if a else None for start, end, a in zip([0, *ends[:-1]], ends, flags)]
 
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)

@@ -278,11 +278,13 @@ class Simulation:
         so only those places are compared, all robots in one compiled call; after a full-map merge the whole
         map is."""
         assert self._mirror is not None
-        full = [not self.failed[i] and any(m is None for m in cells) for i, cells in enumerate(merged)]
+        full = [i for i, cells in enumerate(merged) if cells and any(m is None for m in cells) and not self.failed[i]]
+        windowed = ~self.failed
+        windowed[full] = False
         reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2
         centres = (poses[:, 1::-1] / CELL_M).astype(np.int64)  # (row, col); truncation, as int() did
-        changed = sync_regions(self.known, self._mirror, centres, reach, merged, ~self.failed & ~np.array(full))
-        for i in np.flatnonzero(full).tolist():
+        changed = sync_regions(self.known, self._mirror, centres, reach, merged, windowed)
+        for i in full:
             changed[i] = sync_changes(self.known[i], self._mirror[i])
         return changed
 

@@ -243,7 +243,8 @@ _TABLE = _NeighbourTable()
 
 def pack_neighbours(neighbours: Any) -> bytes:
     """The ``neighbours`` field: one NEIGHBOUR record per neighbour, from the runtime's matrices if it can."""
-    source = neighbours.matrices() if isinstance(neighbours, Neighbours) else None
+    matrices = getattr(neighbours, "matrices", None)  # not isinstance: an ABC check per robot and tick
+    source = matrices() if matrices is not None else None
     if source is not None:
         return _TABLE.row(*source)
     return b"".join(NEIGHBOUR.pack(*n) for n in neighbours)
