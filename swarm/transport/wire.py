@@ -336,25 +336,22 @@ class ObsDecoder:
         x, y, theta, gx, gy, path_length, dist, energy, stalled, nav_state, flags = OBS_STATE.unpack(state)
         if nav_state >= len(NAV_STATES) or flags > COLLIDED | HAS_GOAL:
             raise WireError("obs: unknown nav state or flags")
-        idx, val = _cells(n, cells, self.map_cells)
-        # tuple.__new__: the named tuples' own __new__ is a Python function, half of their cost here
-        return _tuple_new(ObsPacket, (tick, robot, _tuple_new(Pose, (x, y, theta)), idx, val, tuple(inbox),
-                                      PackedNeighbours(neighbours) if neighbours else (), bool(flags & COLLIDED),
-                                      self._nav_status(state), dist, energy))
-
-    def _nav_status(self, state: bytes) -> NavStatus:
-        """The NavStatus in ``state`` (goal, path length, ticks since progress, nav state, goal flag)."""
+        if n == 0 and type(n) is int and type(cells) is bytes:  # most packets: no cell changed
+            idx, val = _NO_CELLS, _NO_VALUES
+        else:
+            idx, val = _cells(n, cells, self.map_cells)
         nav_bytes = state[24:48] + state[64:]  # the collided flag too: a rare miss, cheaper than masking it
         if nav_bytes != self._nav_bytes:
-            gx, gy, path_length = _NAV_FLOATS.unpack_from(state, 24)
-            stalled, nav_state, flags = _NAV_TAIL.unpack_from(state, 64)
             self._nav = _nav_status(goal=(gx, gy) if flags & HAS_GOAL else None, state=NAV_STATES[nav_state],
                                     path_length=path_length, ticks_since_progress=stalled)
             self._nav_bytes = nav_bytes
-        return self._nav
+        # tuple.__new__: the named tuples' own __new__ is a Python function, half of their cost here
+        pose = _tuple_new(Pose, (x, y, theta))
+        return _tuple_new(ObsPacket, (tick, robot, pose, idx, val, tuple(inbox) if inbox else (),
+                                      PackedNeighbours(neighbours) if neighbours else (), bool(flags & COLLIDED),
+                                      self._nav, dist, energy))
 
 
-_NAV_FLOATS, _NAV_TAIL = struct.Struct("<3d"), struct.Struct("<IBB")  # OBS_STATE's navigation fields
 _tuple_new = tuple.__new__
 _nav_status, _action = frozen_builder(NavStatus), frozen_builder(Action)
 
