@@ -203,7 +203,8 @@ def sync_regions(current: np.ndarray, last: np.ndarray, centres: np.ndarray, rea
                  cells: Sequence[Sequence[np.ndarray]], active: np.ndarray) -> list[np.ndarray | None]:
     """:func:`sync_region` for every map of a stack (``uint8[R, H, W]``) in one compiled call: map k's window
     is rows ``centres[k, 0] +- reach`` and cols ``centres[k, 1] +- reach`` (clipped to the map), plus its flat
-    ``cells[k]`` (arrays; repeats allowed). None for maps with ``active[k]`` False, which are left alone.
+    ``cells[k]`` (arrays; repeats allowed; read for active maps only). None for maps with ``active[k]`` False,
+    which are left alone.
     The runtime needs this for every robot every tick over zenoh: per-robot calls cost several times the
     scan itself in Python (bounds, concatenation, allocation)."""
     if current.shape != last.shape or current.ndim != 3 or not (current.flags.c_contiguous and last.flags.c_contiguous):
