@@ -15,7 +15,9 @@ from .. import registry
 from ..api import Observation
 from ..messages import MessageError, decode
 from .inprocess import check_action
-from .wire import ResetPacket, WireError, decode_obs, encode_act
+from .wire import ObsDecoder, ResetPacket, WireError, encode_act, frozen_builder
+
+_observation = frozen_builder(Observation)  # the same Observation, a third of the constructor's cost
 
 
 class InboxDecoder:
@@ -28,6 +30,8 @@ class InboxDecoder:
         self._seen: dict[bytes, Any] = {}
 
     def decode(self, tick: int, blobs: Sequence[bytes]) -> tuple[Any, ...]:
+        if not blobs:
+            return ()
         if tick != self._tick:
             self._tick = tick
             self._seen.clear()
@@ -55,15 +59,16 @@ class AgentRunner:
         self._view = self.known.view()
         self._view.flags.writeable = False
         self._inbox = inbox or InboxDecoder()
+        self._decode = ObsDecoder(self.known.size)
 
     def handle(self, packet: bytes) -> bytes:
         """The act packet answering an obs packet; raises WireError, leaving the map as it was, for a bad one."""
-        p = decode_obs(packet, self.known.size)
+        p = self._decode(packet)
         inbox = self._inbox.decode(p.tick, p.inbox)
         if len(p.changed_idx):
             self._flat[p.changed_idx] = p.changed_val
-        obs = Observation(tick=p.tick, robot_id=p.robot_id, pose=p.pose, known=self._view, inbox=inbox,
-                          neighbours=p.neighbours, collided=p.collided, nav=p.nav,
-                          distance_travelled=p.distance_travelled, energy_used=p.energy_used)
+        obs = _observation(tick=p.tick, robot_id=p.robot_id, pose=p.pose, known=self._view, inbox=inbox,
+                           neighbours=p.neighbours, collided=p.collided, nav=p.nav,
+                           distance_travelled=p.distance_travelled, energy_used=p.energy_used)
         action = check_action(self.algorithm.act(obs), p.robot_id)
         return encode_act(p.tick, p.robot_id, action)

@@ -24,6 +24,7 @@ import time
 import uuid
 from typing import Sequence
 
+import numpy as np
 import zenoh
 
 from ..api import Action
@@ -32,6 +33,7 @@ from .base import HostStats, TickInput
 from .wire import ResetPacket, WireError, decode_act, encode_obs, encode_reset
 
 BLOCK = zenoh.CongestionControl.BLOCK
+_NO_VALUES = np.zeros(0, dtype=np.uint8)
 
 
 def session_config(listen: Sequence[str] = (), connect: Sequence[str] = ()) -> zenoh.Config:
@@ -87,13 +89,17 @@ class ZenohHost:
     def _act_subscriber(self, robot: int) -> None:
         """One subscriber per robot's act key, so a reply needs no key parsing; it wakes act() only when
         remote agents are awaited (local agents answer synchronously inside the obs put)."""
-        notify = bool(self.remote)
-
-        def on_act(sample: zenoh.Sample) -> None:
-            data = sample.payload.to_bytes()
-            with self._cond:
-                self._replies[robot] = data
-                if notify:
+        replies = self._replies
+        if not self.remote:
+            def on_act(sample: zenoh.Sample) -> None:
+                # Local agents answer inside act()'s own put, in its thread: no lock needed (a stray publisher's
+                # reply from a zenoh thread is one dict store, atomic under the GIL, and fails the tick check).
+                replies[robot] = sample.payload.to_bytes()
+        else:
+            def on_act(sample: zenoh.Sample) -> None:
+                data = sample.payload.to_bytes()
+                with self._cond:
+                    replies[robot] = data
                     self._cond.notify_all()
 
         self._declared.append(self.session.declare_subscriber(
@@ -147,14 +153,14 @@ class ZenohHost:
         live = [i for i, inp in enumerate(inputs) if inp is not None and i not in self.stats.failures]
         with self._cond:
             self._replies.clear()
+        publishers = self._publishers
         for i in live:
             inp = inputs[i]
             assert inp is not None and inp.changed_idx is not None
-            o = inp.obs
-            flat = o.known.reshape(-1)
-            packet = encode_obs(tick, i, o.pose, inp.changed_idx, flat[inp.changed_idx], inp.inbox_bytes,
-                                o.neighbours, o.collided, o.nav, o.distance_travelled, o.energy_used)
-            self._publishers[i].put(packet)
+            o, idx = inp.obs, inp.changed_idx
+            values = o.known.reshape(-1)[idx] if len(idx) else _NO_VALUES  # most ticks change nothing
+            publishers[i].put(encode_obs(tick, i, o.pose, idx, values, inp.inbox_bytes, o.neighbours, o.collided,
+                                         o.nav, o.distance_travelled, o.energy_used))
         waiting = [i for i in live if i in self.remote]
         if waiting:
             deadline = time.monotonic() + self.timeout_s

@@ -9,7 +9,7 @@ from maps import InvalidInput, Map
 from swarm.api import FREE, SOLID, UNSEEN
 from swarm.knowledge import (
     ExplorationTracker, LogOddsGrid, active_flags, classify_logodds, count_cells, count_known, empty_knowledge,
-    merge, merge_cells, sync_changes, sync_region,
+    merge, merge_cells, sync_changes, sync_region, sync_regions,
 )
 
 
@@ -101,6 +101,24 @@ def test_sync_region_sees_the_window_and_the_listed_cells_only() -> None:
     others = np.setdiff1d(np.arange(current.size), expected)
     assert not last.reshape(-1)[others].any()  # nothing outside the window and the list was copied
     assert sync_region(current, last, (3, 7), (2, 6), listed).size == 0
+
+
+def test_sync_regions_equals_sync_region_per_map_and_skips_inactive_maps() -> None:
+    rng = np.random.default_rng(7)
+    current = rng.integers(0, 3, size=(4, 30, 25), dtype=np.uint8)
+    last, expected_last = np.zeros_like(current), np.zeros_like(current)
+    centres = np.array([[0, 0], [15, 12], [29, 24], [10, 3]])
+    cells = [[np.array([700, 3, 3])], [], [np.array([1, 2]), np.array([0, 749])], [np.array([5])]]
+    active = np.array([True, True, True, False])
+    got = sync_regions(current, last, centres, 4, cells, active)
+    for k in range(3):
+        r, c = centres[k]
+        extra = np.concatenate(cells[k]) if cells[k] else None
+        want = sync_region(current[k], expected_last[k], (max(r - 4, 0), min(r + 5, 30)), (max(c - 4, 0), min(c + 5, 25)), extra)
+        assert got[k].tolist() == want.tolist() and len(want) > 0
+    assert got[3] is None
+    assert np.array_equal(last, expected_last) and not last[3].any()
+    assert all(a.size == 0 for a in sync_regions(current, last, centres, 4, cells, active)[:3])
 
 
 def test_empty_knowledge_and_counts() -> None:

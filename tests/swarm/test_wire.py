@@ -1,7 +1,9 @@
-"""The obs packet (wire version 2): round trips exactly, and every malformed packet raises WireError."""
+"""The obs and act packets (wire version 2): round trips exactly, and every malformed packet raises WireError."""
 
 from __future__ import annotations
 
+import dataclasses
+import math
 import struct
 import zlib
 
@@ -9,11 +11,12 @@ import msgpack
 import numpy as np
 import pytest
 
-from swarm.api import NavStatus, Neighbour, Neighbours, Pose, RobotInfo
+from swarm.api import Action, NavStatus, Neighbour, Neighbours, Observation, Pose, RobotInfo
 from swarm.messages import Heartbeat, encode
 from swarm.transport.agent import AgentRunner, InboxDecoder
-from swarm.transport.wire import (NAV_STATES, NEIGHBOUR, OBS_STATE, RAW_CELLS_BELOW, WIRE_VERSION, ResetPacket,
-                                  WireError, decode_obs, encode_obs, pack_neighbours)
+from swarm.transport.wire import (NAV_STATES, NEIGHBOUR, OBS_STATE, RAW_CELLS_BELOW, WIRE_VERSION, ObsDecoder,
+                                  ResetPacket, WireError, decode_act, decode_obs, encode_act, encode_obs,
+                                  frozen_builder, pack_neighbours)
 
 MAP_CELLS = 40 * 40
 
@@ -147,3 +150,75 @@ def test_neighbours_packed_from_the_matrices_equal_the_tuples_for_every_robot():
         lazy = Neighbours(i, near, distance, bearing, xy)
         expected = tuple(Neighbours(i, near, distance, bearing, xy))
         assert pack_neighbours(lazy) == pack_neighbours(expected) == b"".join(NEIGHBOUR.pack(*t) for t in expected)
+
+
+# ------------------------------------------------------------------------------------------ act ----
+def act_fields(**change) -> list:
+    f = ["act", WIRE_VERSION, 12, 2, [1.5, -2.0], None, False, [], None]
+    names = ("kind", "version", "tick", "robot", "goal", "velocity", "clear_goal", "messages", "debug")
+    for name, value in change.items():
+        f[names.index(name)] = value
+    return f
+
+
+@pytest.mark.parametrize("action", [
+    Action(), Action(goal=(1.5, -2.0)), Action(goal=(-0.0, 0.0)), Action(velocity=(0.5, -1.0), clear_goal=True),
+    Action(goal=(3.0, 4.0), messages=(Heartbeat(sender=2, tick=11, x=1.0, y=2.0, theta=0.5),), debug={"k": [1, 2]}),
+])
+def test_act_round_trips_exactly(action):
+    p = decode_act(encode_act(12, 2, action))
+    assert (p.tick, p.robot_id) == (12, 2)
+    assert p.action == action and repr(p.action) == repr(action)
+    if action.goal is not None:  # the sign of a zero survives
+        assert [math.copysign(1, v) for v in p.action.goal] == [math.copysign(1, v) for v in action.goal]
+
+
+def test_act_numbers_may_be_integers_and_come_back_as_floats():
+    p = decode_act(repack(act_fields(goal=[3, 4], velocity=[1, 0])))
+    assert p.action.goal == (3.0, 4.0) and all(type(v) is float for v in (*p.action.goal, *p.action.velocity))
+
+
+@pytest.mark.parametrize("change", [
+    {"tick": 1.0}, {"tick": True}, {"robot": "2"}, {"goal": [1.0]}, {"goal": (1.0, 2.0, 3.0)}, {"goal": "xy"},
+    {"goal": [float("nan"), 1.0]}, {"goal": [1.0, float("inf")]}, {"goal": [True, 1.0]}, {"goal": [1.0, "2"]},
+    {"velocity": [float("-inf"), 0.0]}, {"velocity": {"v": 1}}, {"messages": b"m"}, {"messages": ["m"]},
+    {"messages": [b"\x93\xa3bad"]}, {"debug": [1]}, {"kind": "obs"}, {"version": 1},
+])
+def test_malformed_act_raises_wire_error(change):
+    with pytest.raises(WireError):
+        decode_act(repack(act_fields(**change)))
+    with pytest.raises(WireError):
+        decode_act(repack(act_fields()[:-1]))
+
+
+def test_agent_decoder_reuses_an_unchanged_nav_status_and_notices_every_change():
+    decoder = ObsDecoder(MAP_CELLS)
+    first = decoder(obs_packet(idx=(), val=()))
+    assert decoder(obs_packet(idx=(), val=())).nav is first.nav
+    for nav in (NavStatus(goal=(1.5, -2.25), state="moving", path_length=7.5, ticks_since_progress=4),
+                NavStatus(goal=(1.5, -2.25), state="blocked", path_length=7.5, ticks_since_progress=4),
+                NavStatus(goal=None, state="blocked", path_length=7.5, ticks_since_progress=4),
+                NavStatus(goal=(0.0, 0.0), state="blocked", path_length=7.5, ticks_since_progress=4),
+                NavStatus(goal=(-0.0, 0.0), state="blocked", path_length=7.5, ticks_since_progress=4)):
+        got = decoder(obs_packet(nav=nav)).nav
+        assert got == nav and repr(got) == repr(nav)
+
+
+def test_frozen_builder_builds_the_constructors_objects():
+    obs = dict(tick=1, robot_id=2, pose=Pose(1.0, 2.0, 3.0), known=np.zeros((2, 2), np.uint8), inbox=(),
+               neighbours=(), collided=False, nav=MOVING, distance_travelled=1.0, energy_used=2.0)
+    for cls, kw in ((Observation, obs), (NavStatus, dict(goal=None, state="idle", path_length=0.0, ticks_since_progress=0)),
+                    (Action, dict(goal=(1.0, 2.0), velocity=None, messages=(), debug=None, clear_goal=False))):
+        built = frozen_builder(cls)(**kw)
+        assert type(built) is cls and built == cls(**kw) and repr(built) == repr(cls(**kw))
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            built.tick = 5
+
+    @dataclasses.dataclass(frozen=True)
+    class Checked:
+        x: int
+
+        def __post_init__(self) -> None:
+            assert self.x > 0
+
+    assert frozen_builder(Checked) is Checked
