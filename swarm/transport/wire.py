@@ -212,7 +212,7 @@ class _NeighbourTable:
         n = len(near)
         records = np.empty(n * n, NEIGHBOUR_DTYPE)
         counts = np.empty(n, np.int64)
-        m = _neighbour_records(near, distance, np.asarray(bearing), xy, records, counts)
+        m = _neighbour_records(np.asarray(near), np.asarray(distance), np.asarray(bearing), xy, records, counts)
         packed = records[:m].tobytes()  # row-major: robot 0's neighbours first
         ends = (counts.cumsum() * NEIGHBOUR.size).tolist()
         return [packed[start:end] for start, end in zip([0, *ends[:-1]], ends)]
