@@ -4,7 +4,8 @@ One logic tick (0.1 s, DESIGN.md section 4):
 
 1. ``world.step``: pymunk moves the robots under last tick's commands (sub-stepped), reports collisions;
 2. ``lidar.scan``: every robot's lidar writes what it sees into its own knowledge map; truth tracker;
-3. the radio picture for this tick's positions (distances, walls, RSSI, links, groups);
+3. the radio picture for this tick's positions (distances, walls, RSSI, links, groups), evaluated when
+   first used (sending, metrics, neighbours, an observer): a pure function of the positions;
 4. inboxes: messages sent last tick arrive; map updates are merged into the receiver's map;
 5. the transport hands each live robot its observation and gets its action (goal or velocity, messages);
 6. this tick's broadcasts are judged by this tick's links and queued for next tick;
@@ -66,7 +67,8 @@ class TransportOptions:
 
 @dataclass
 class TickView:
-    """What per-tick observers (GIF renderer, recorder) get after each tick's decisions."""
+    """What per-tick observers (GIF renderer, recorder) get after each tick's decisions. ``links`` reads
+    like the tick's :class:`radio.LinkState` (its attributes and ``groups()``), evaluated on first use."""
 
     tick: int
     poses: np.ndarray
