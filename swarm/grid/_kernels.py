@@ -261,7 +261,7 @@ def grid_shortcut(space: np.ndarray, path: np.ndarray) -> np.ndarray:  # pragma:
 
 
 @njit(cache=True)
-def _grid_frontier_mask(known: np.ndarray, exclude: np.ndarray, view: np.ndarray) -> None:  # pragma: no cover
+def grid_frontier_mask(known: np.ndarray, exclude: np.ndarray, view: np.ndarray) -> None:  # pragma: no cover
     """``view`` = FREE cells with an UNSEEN 4-neighbour, minus ``exclude`` (or an empty array for none).
 
     Branch-free over each row's interior so the compiler vectorises it (about 10x the speed of testing
@@ -300,7 +300,7 @@ def grid_view_cells(known: np.ndarray, exclude: np.ndarray, reach: int,
     whole-map search on a 300 x 300 map finds ~160), then a breadth-first search bounded by ``reach``.
     """
     h, w = known.shape
-    _grid_frontier_mask(known, exclude, view)
+    grid_frontier_mask(known, exclude, view)
     flat = view.reshape(-1)
     queue = np.empty(h * w, np.int32)
     n = 0

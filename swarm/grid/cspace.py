@@ -43,8 +43,11 @@ DEFAULT_MARGIN_M: float = 0.05
 
 def passable(known: np.ndarray, unseen_traversable: bool = False) -> np.ndarray:
     """Cells the robot may enter: FREE, plus UNSEEN when planning optimistically."""
-    k = check_known(known)
-    return k != SOLID if unseen_traversable else k == FREE
+    return _passable_of(check_known(known), unseen_traversable)
+
+
+def _passable_of(known: np.ndarray, unseen_traversable: bool) -> np.ndarray:
+    return known != SOLID if unseen_traversable else known == FREE
 
 
 def _point_square_distance(dr: int, dc: int) -> float:
@@ -98,7 +101,7 @@ def configuration_space_of(known: np.ndarray, radius_m: float, margin_m: float, 
     """:func:`configuration_space` of an already checked map and lengths (for callers that validated)."""
     row_offsets, half_widths = _erosion_rows(radius_m, margin_m)
     if not len(row_offsets):
-        return known != SOLID if unseen_traversable else known == FREE
+        return _passable_of(known, unseen_traversable)
     out = np.empty(known.shape, dtype=np.uint8)
     grid_configuration_space(known, bool(unseen_traversable), row_offsets, half_widths, out)
     return out.view(np.bool_)

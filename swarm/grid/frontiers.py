@@ -15,22 +15,23 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from ..api import CELL_M, FREE, UNSEEN
+from ..api import CELL_M
+from ._kernels import grid_frontier_mask
 from ._validate import check_count, check_known
 
 _EIGHT = np.ones((3, 3), dtype=bool)
 
 
 def frontier_mask(known: np.ndarray) -> np.ndarray:
-    """FREE cells with at least one UNSEEN 4-neighbour: bool[H, W]."""
-    k = check_known(known)
-    unseen = k == UNSEEN
-    near = np.zeros_like(unseen)
-    near[1:] |= unseen[:-1]
-    near[:-1] |= unseen[1:]
-    near[:, 1:] |= unseen[:, :-1]
-    near[:, :-1] |= unseen[:, 1:]
-    return near & (k == FREE)
+    """FREE cells with at least one UNSEEN 4-neighbour: bool[H, W]. The compiled pass the target search
+    uses (:func:`swarm.grid.view_cells`), so both agree on what a frontier is."""
+    k = np.ascontiguousarray(check_known(known), dtype=np.uint8)  # values checked: 0..2 fit any dtype
+    out = np.zeros(k.shape, dtype=bool)
+    grid_frontier_mask(k, _NO_EXCLUDE, out)
+    return out
+
+
+_NO_EXCLUDE = np.zeros((0, 0), dtype=bool)
 
 
 @dataclass(frozen=True, eq=False)

@@ -38,14 +38,18 @@ def view_cells(known: np.ndarray, reach: int, exclude: np.ndarray | None = None)
     k = np.ascontiguousarray(check_known(known), dtype=np.uint8)
     steps = check_count(reach, "reach", 0)
     assert steps is not None
-    ex = _NO_EXCLUDE
+    ex = None
     if exclude is not None:
         ex = check_space(exclude, "exclude")
         check_same_shape(ex, k.shape, "exclude")
-        ex = np.ascontiguousarray(ex)
-    out = np.zeros(k.shape, dtype=bool)
-    grid_view_cells(k, ex, steps, out)
-    return out
+    return _view_cells_of(k, steps, ex)[0]
+
+
+def _view_cells_of(known: np.ndarray, reach: int, exclude: np.ndarray | None) -> tuple[np.ndarray, int]:
+    """:func:`view_cells` of a checked uint8 map, and the number of frontier cells (0: no view cell)."""
+    view = np.zeros(known.shape, dtype=bool)
+    ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude)
+    return view, grid_view_cells(np.ascontiguousarray(known), ex, reach, view)
 
 
 def default_view_reach_cells(radius_m: float, margin_m: float) -> int:
@@ -116,9 +120,8 @@ class _TargetSearch:
 
     def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None
             ) -> tuple[tuple[int, int], float] | None:
-        view = np.zeros(known.shape, dtype=bool)
-        ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude)
-        if grid_view_cells(known, ex, self.reach, view) == 0:  # no frontier: no view cell either
+        view, frontier = _view_cells_of(known, self.reach, exclude)
+        if frontier == 0:
             return None
         space = configuration_space_of(known, self.radius_m, self.margin_m, self.unseen_traversable)
         view &= space

@@ -509,6 +509,12 @@ def test_frontier_mask_uses_four_neighbours() -> None:
     mask = grid.frontier_mask(k)
     assert np.argwhere(mask).tolist() == [[1, 2], [2, 1], [2, 3], [3, 2]]   # not the diagonals
     assert not grid.frontier_mask(np.full((4, 4), FREE, dtype=np.uint8)).any()   # map edge is not unseen
+    rng = np.random.default_rng(4)
+    for _ in range(40):  # 1 x 1 to 19 x 19, thin maps included
+        h, w = (int(v) for v in rng.integers(1, 20, size=2))
+        k = rng.integers(0, 3, (h, w)).astype(np.uint8)
+        assert np.array_equal(grid.frontier_mask(k), frontier_brute(k))
+        assert np.array_equal(grid.frontier_mask(k.astype(np.int16)), frontier_brute(k))  # any integer dtype
 
 
 def test_frontier_clusters_on_a_hand_made_map() -> None:
@@ -532,9 +538,21 @@ def test_frontier_clusters_on_a_hand_made_map() -> None:
 
 
 # ---------------------------------------------------------------------------- nearest unseen (Greed) ----
+def frontier_brute(known: np.ndarray) -> np.ndarray:
+    """FREE cells with an UNSEEN 4-neighbour on the map, cell by cell."""
+    h, w = known.shape
+    out = np.zeros(known.shape, dtype=bool)
+    for r in range(h):
+        for c in range(w):
+            out[r, c] = known[r, c] == FREE and any(
+                0 <= r + dr < h and 0 <= c + dc < w and known[r + dr, c + dc] == UNSEEN
+                for dr, dc in ((1, 0), (-1, 0), (0, 1), (0, -1)))
+    return out
+
+
 def view_cells_brute(known: np.ndarray, space: np.ndarray, reach: int) -> np.ndarray:
     """Configuration-space cells within ``reach`` 4-steps of a frontier through FREE cells (plain BFS)."""
-    frontier = grid.frontier_mask(known)
+    frontier = frontier_brute(known)
     out = np.zeros_like(space)
     h, w = known.shape
     for f in map(tuple, np.argwhere(frontier)):
