@@ -27,8 +27,7 @@ from .api import CELL_M, FREE, SOLID, UNSEEN
 
 __all__ = [
     "FREE", "SOLID", "UNSEEN", "ExplorationTracker", "LogOddsGrid", "active_flags", "classify_logodds",
-    "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "sync_changes", "sync_region",
-    "sync_regions",
+    "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "sync_changes", "sync_regions",
 ]
 
 
@@ -138,40 +137,9 @@ def sync_changes(current: np.ndarray, last: np.ndarray) -> np.ndarray:
 
 
 @njit(cache=True)
-def _sync_window_kernel(current: np.ndarray, last: np.ndarray, w: int, r0: int, r1: int, c0: int, c1: int,
-                        idx: np.ndarray, out: np.ndarray) -> int:  # pragma: no cover - compiled
-    m = 0
-    for r in range(r0, r1):
-        for c in range(c0, c1):
-            i = r * w + c
-            if _copy_if_changed(current, last, i):
-                out[m] = i
-                m += 1
-    for k in range(idx.shape[0]):
-        if _copy_if_changed(current, last, idx[k]):
-            out[m] = idx[k]
-            m += 1
-    return m
-
-
-def sync_region(current: np.ndarray, last: np.ndarray, rows: tuple[int, int], cols: tuple[int, int],
-                cells: np.ndarray | None = None) -> np.ndarray:
-    """:func:`sync_changes` restricted to a window (``rows``/``cols`` half-open ranges) plus the given flat
-    ``cells`` (any order, repeats allowed): the changed ones among them, ascending, copied into ``last``.
-    The zenoh transport ships each robot only what changed where its lidar looked or a merge wrote."""
-    if current.shape != last.shape or not (current.flags.c_contiguous and last.flags.c_contiguous):
-        raise InvalidInput("last", getattr(last, "shape", None), f"a C-contiguous map shaped like current {current.shape}")
-    extra = np.zeros(0, np.int64) if cells is None else np.ascontiguousarray(cells, dtype=np.int64)
-    out = np.empty((rows[1] - rows[0]) * (cols[1] - cols[0]) + len(extra), dtype=np.int64)
-    m = _sync_window_kernel(current.reshape(-1), last.reshape(-1), current.shape[1], rows[0], rows[1], cols[0],
-                            cols[1], extra, out)
-    return np.sort(out[:m]) if len(extra) else out[:m].copy()
-
-
-@njit(cache=True)
 def _sync_windows_kernel(current: np.ndarray, last: np.ndarray, centres: np.ndarray, reach: int, active: np.ndarray,
                          extra: np.ndarray, ends: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover - compiled
-    """_sync_window_kernel for every active map of a stack. On entry ``ends[k]`` is where map k's extra cells
+    """The window scan plus listed cells of :func:`sync_regions` for every active map of a stack. On entry ``ends[k]`` is where map k's extra cells
     end in ``extra``; on return, where its changed cells end in ``out`` (sorted when it had extra cells: the
     window scan alone is ascending already). Fewer arguments: numba's dispatch costs ~0.5 us per array."""
     rows, cols = current.shape[1], current.shape[2]
@@ -201,12 +169,13 @@ def _sync_windows_kernel(current: np.ndarray, last: np.ndarray, centres: np.ndar
 
 def sync_regions(current: np.ndarray, last: np.ndarray, centres: np.ndarray, reach: int,
                  cells: Sequence[Sequence[np.ndarray]], active: np.ndarray) -> list[np.ndarray | None]:
-    """:func:`sync_region` for every map of a stack (``uint8[R, H, W]``) in one compiled call: map k's window
-    is rows ``centres[k, 0] +- reach`` and cols ``centres[k, 1] +- reach`` (clipped to the map), plus its flat
-    ``cells[k]`` (arrays; repeats allowed; read for active maps only). None for maps with ``active[k]`` False,
-    which are left alone.
-    The runtime needs this for every robot every tick over zenoh: per-robot calls cost several times the
-    scan itself in Python (bounds, concatenation, allocation)."""
+    """:func:`sync_changes` restricted, for every map of a stack (``uint8[R, H, W]``) in one compiled call, to
+    a window and a list: map k's window is rows ``centres[k, 0] +- reach`` and cols ``centres[k, 1] +- reach``
+    (clipped to the map), its list the flat ``cells[k]`` (arrays; repeats allowed; read for active maps only).
+    Per map: the changed cells among them, ascending, copied into ``last``. None for maps with ``active[k]``
+    False, which are left alone. The zenoh transport ships each robot only what changed where its lidar
+    looked or a merge wrote, every robot every tick: per-robot calls cost several times the scan itself in
+    Python (bounds, concatenation, allocation)."""
     if current.shape != last.shape or current.ndim != 3 or not (current.flags.c_contiguous and last.flags.c_contiguous):
         raise InvalidInput("last", getattr(last, "shape", None), f"a C-contiguous stack shaped like current {current.shape}")
     n = current.shape[0]

@@ -9,7 +9,7 @@ from maps import InvalidInput, Map
 from swarm.api import FREE, SOLID, UNSEEN
 from swarm.knowledge import (
     ExplorationTracker, LogOddsGrid, active_flags, classify_logodds, count_cells, count_known, empty_knowledge,
-    merge, merge_cells, sync_changes, sync_region, sync_regions,
+    merge, merge_cells, sync_changes, sync_regions,
 )
 
 
@@ -87,23 +87,36 @@ def test_sync_changes_reports_the_changed_cells_and_brings_last_up_to_date() -> 
     assert sync_changes(current, last).size == 0
 
 
-def test_sync_region_sees_the_window_and_the_listed_cells_only() -> None:
+def test_sync_regions_sees_the_window_and_the_listed_cells_only() -> None:
     rng = np.random.default_rng(6)
-    current = rng.integers(0, 3, size=(12, 10), dtype=np.uint8)
+    current = rng.integers(0, 3, size=(1, 12, 10), dtype=np.uint8)
     last = np.zeros_like(current)
     listed = np.array([5, 5, 113, 0, 47])
-    got = sync_region(current, last, (3, 7), (2, 6), listed)
-    window = np.zeros(current.shape, dtype=bool)
-    window[3:7, 2:6] = True
-    expected = np.union1d(np.flatnonzero(window & (current != 0)), listed[current.reshape(-1)[listed] != 0])
+    got = sync_regions(current, last, np.array([[5, 4]]), 2, [[listed]], np.array([True]))[0]
+    window = np.zeros(current.shape[1:], dtype=bool)
+    window[3:8, 2:7] = True                       # rows 5 +- 2, cols 4 +- 2
+    flat = current[0].reshape(-1)
+    expected = np.union1d(np.flatnonzero(window & (current[0] != 0)), listed[flat[listed] != 0])
     assert got.tolist() == expected.tolist()
-    assert np.array_equal(last.reshape(-1)[expected], current.reshape(-1)[expected])
-    others = np.setdiff1d(np.arange(current.size), expected)
-    assert not last.reshape(-1)[others].any()  # nothing outside the window and the list was copied
-    assert sync_region(current, last, (3, 7), (2, 6), listed).size == 0
+    assert np.array_equal(last[0].reshape(-1)[expected], flat[expected])
+    others = np.setdiff1d(np.arange(flat.size), expected)
+    assert not last[0].reshape(-1)[others].any()  # nothing outside the window and the list was copied
+    assert sync_regions(current, last, np.array([[5, 4]]), 2, [[listed]], np.array([True]))[0].size == 0
 
 
-def test_sync_regions_equals_sync_region_per_map_and_skips_inactive_maps() -> None:
+def _sync_reference(current: np.ndarray, last: np.ndarray, rows: tuple[int, int], cols: tuple[int, int],
+                    extra: np.ndarray | None) -> np.ndarray:
+    """The changed cells of a window plus listed cells, ascending, copied into ``last`` (plain numpy)."""
+    window = np.zeros(current.shape, dtype=bool)
+    window[rows[0]:rows[1], cols[0]:cols[1]] = True
+    if extra is not None:
+        window.reshape(-1)[extra] = True
+    changed = np.flatnonzero(window & (current != last))
+    last.reshape(-1)[changed] = current.reshape(-1)[changed]
+    return changed
+
+
+def test_sync_regions_equals_the_window_rule_per_map_and_skips_inactive_maps() -> None:
     rng = np.random.default_rng(7)
     current = rng.integers(0, 3, size=(4, 30, 25), dtype=np.uint8)
     last, expected_last = np.zeros_like(current), np.zeros_like(current)
@@ -114,7 +127,8 @@ def test_sync_regions_equals_sync_region_per_map_and_skips_inactive_maps() -> No
     for k in range(3):
         r, c = centres[k]
         extra = np.concatenate(cells[k]) if cells[k] else None
-        want = sync_region(current[k], expected_last[k], (max(r - 4, 0), min(r + 5, 30)), (max(c - 4, 0), min(c + 5, 25)), extra)
+        want = _sync_reference(current[k], expected_last[k], (max(r - 4, 0), min(r + 5, 30)),
+                               (max(c - 4, 0), min(c + 5, 25)), extra)
         assert got[k].tolist() == want.tolist() and len(want) > 0
     assert got[3] is None
     assert np.array_equal(last, expected_last) and not last[3].any()
