@@ -387,7 +387,9 @@ class _Lazy:
 
     def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
         m = self.value()
-        return m if dtype is None else m.astype(dtype)
+        if dtype is not None:
+            return m.astype(dtype)
+        return m.copy() if copy else m  # numpy asks for a copy when the caller may write to it
 
 
 def _near(distance: np.ndarray, walls: np.ndarray, neighbour_range: float) -> np.ndarray:
