@@ -21,9 +21,10 @@ covers ``x in [col*0.5, (col+1)*0.5)``, ``y in [row*0.5, (row+1)*0.5)``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar, Mapping, NamedTuple, Protocol, Sequence, runtime_checkable
+from typing import Any, Callable, ClassVar, Mapping, NamedTuple, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
@@ -166,6 +167,26 @@ class Action:
     messages: tuple[Any, ...] = ()
     debug: Mapping[str, Any] | None = None
     clear_goal: bool = False
+
+
+def frozen_builder(cls: type) -> Callable[..., Any]:
+    """``cls(**fields)`` for a frozen dataclass, called with every field by keyword, built without the
+    generated ``__init__``: that sets each field through ``object.__setattr__`` (frozen), 2.1 us for an
+    Observation against 0.7 us, and the runtime and transports build several per robot per tick. The
+    result is the same object (equal, same repr); callers must pass every field (tests compare with the
+    constructor). Gives the constructor itself if ``cls`` has slots or a ``__post_init__``."""
+    plain = (dataclasses.is_dataclass(cls) and "__slots__" not in cls.__dict__
+             and not hasattr(cls, "__post_init__"))
+    if not plain:
+        return cls
+    new = object.__new__
+
+    def build(**fields: Any) -> Any:
+        obj = new(cls)
+        obj.__dict__.update(fields)
+        return obj
+
+    return build
 
 
 @runtime_checkable

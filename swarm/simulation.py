@@ -29,7 +29,7 @@ from maps import CELL_M, Map, generate
 from maps.params import from_mapping
 from radio import build_link_model, config_from_mapping
 
-from .api import Action, Neighbour, Neighbours, Observation, Pose, RobotInfo
+from .api import Action, Neighbour, Neighbours, Observation, Pose, RobotInfo, frozen_builder
 from .comm import CommSpec, Envelope, MapSharing, Medium
 from .knowledge import sync_changes, sync_regions
 from .metrics import Metrics
@@ -39,7 +39,7 @@ from .sensing import ExplorationTracker, Lidar, LidarParams
 from .spawn import spawn
 from .spec import ROBOT_STREAM, RunSpec, planner_rng, seed_streams
 from .transport import AgentHost, TickInput, make_host
-from .transport.wire import ResetPacket, frozen_builder
+from .transport.wire import ResetPacket
 from .world import MotionParams, World
 
 _observation = frozen_builder(Observation)  # Observation(...) without the frozen __init__'s cost (16 a tick)

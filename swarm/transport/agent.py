@@ -12,10 +12,10 @@ from typing import Any, Sequence
 import numpy as np
 
 from .. import registry
-from ..api import Observation
+from ..api import Observation, frozen_builder
 from ..messages import MessageError, decode
 from .inprocess import check_action
-from .wire import ObsDecoder, ResetPacket, WireError, encode_act, frozen_builder
+from .wire import ObsDecoder, ResetPacket, WireError, encode_act
 
 _observation = frozen_builder(Observation)  # the same Observation, a third of the constructor's cost
 

@@ -11,12 +11,12 @@ import msgpack
 import numpy as np
 import pytest
 
-from swarm.api import Action, NavStatus, Neighbour, Neighbours, Observation, Pose, RobotInfo
+from swarm.api import Action, NavStatus, Neighbour, Neighbours, Observation, Pose, RobotInfo, frozen_builder
 from swarm.messages import Heartbeat, encode
 from swarm.transport.agent import AgentRunner, InboxDecoder
 from swarm.transport.wire import (NAV_STATES, NEIGHBOUR, OBS_STATE, RAW_CELLS_BELOW, WIRE_VERSION, ObsDecoder,
                                   ResetPacket, WireError, decode_act, decode_obs, encode_act, encode_obs,
-                                  frozen_builder, pack_neighbours)
+                                  pack_neighbours)
 
 MAP_CELLS = 40 * 40
 
