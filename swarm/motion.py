@@ -163,7 +163,7 @@ class Follower:
             raise InvalidInput("waypoints", getattr(pts, "shape", waypoints), "an array of shape (M, 2), M >= 1")
         if not np.isfinite(pts).all():
             raise InvalidInput("waypoints", "non-finite values", "finite coordinates in metres")
-        self._points = [(float(x), float(y)) for x, y in pts]
+        self._points = list(map(tuple, pts.tolist()))  # Python floats: the per-tick math stays in scalars
         m = len(self._points)
         seg = [math.dist(self._points[i], self._points[i + 1]) for i in range(m - 1)]
         self._suffix = [0.0] * m

@@ -17,6 +17,7 @@ from numba import njit
 
 from . import grid
 from .api import CELL_M, SOLID, NavStatus, Pose, cell_of
+from .grid.cspace import configuration_space_of, nearest_in_of
 from .motion import Follower
 from .planners import get_planner
 from .spec import NavigationSpec
@@ -57,7 +58,8 @@ class Navigator:
         self.state = "idle" if goal is None else "planning"
 
     def command(self, pose: Pose, known: np.ndarray) -> tuple[float, float]:
-        """The (v, omega) command for this tick."""
+        """The (v, omega) command for this tick. ``known`` is the robot's knowledge map as the runtime keeps
+        it (uint8[H, W], values 0..2); it is not scanned for bad values again on every plan."""
         if self.goal is None or self.state in ("reached", "unreachable", "blocked", "idle"):
             return 0.0, 0.0
         if self.state == "planning" or self._corridor_blocked(known):
@@ -87,10 +89,10 @@ class Navigator:
     def _plan(self, pose: Pose, known: np.ndarray) -> None:
         assert self.goal is not None
         self.plans += 1
-        space = grid.configuration_space(known, radius_m=self.motion.radius, margin_m=self.spec.margin_m,
-                                         unseen_traversable=self.spec.unseen == "traversable")
-        start = grid.nearest_in(space, _clip(cell_of(pose.x, pose.y), known.shape), SNAP_RADIUS_CELLS)
-        goal = grid.nearest_in(space, _clip(cell_of(*self.goal), known.shape), SNAP_RADIUS_CELLS)
+        # The runtime's own map (uint8, values 0..2 by construction): no value scan per plan.
+        space = configuration_space_of(known, self.motion.radius, self.spec.margin_m, self.spec.unseen == "traversable")
+        start = nearest_in_of(space, _clip(cell_of(pose.x, pose.y), known.shape), SNAP_RADIUS_CELLS)
+        goal = nearest_in_of(space, _clip(cell_of(*self.goal), known.shape), SNAP_RADIUS_CELLS)
         path = None if start is None or goal is None else self.planner.plan(space, start, goal, self.rng)
         if path is None:
             self.state = "unreachable"

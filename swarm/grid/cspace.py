@@ -133,16 +133,22 @@ def nearest_in(space: np.ndarray, cell: tuple[int, int], max_radius_cells: int |
     sp = check_space(space)
     r, c = check_cell(cell, sp.shape, "cell")
     limit = check_count(max_radius_cells, "max_radius_cells", 0, allow_none=True)
-    if sp[r, c]:
+    return nearest_in_of(sp, (r, c), limit)
+
+
+def nearest_in_of(space: np.ndarray, cell: tuple[int, int], limit: int | None) -> tuple[int, int] | None:
+    """:func:`nearest_in` for checked inputs (a bool space, a cell inside it, a radius >= 0 or None)."""
+    r, c = cell
+    if space[r, c]:
         return r, c
-    h, w = sp.shape
+    h, w = space.shape
     full = max(h, w)
     cap = full if limit is None else min(limit, full)
     size = 2
     while True:
         s = min(size, cap)
         r0, r1, c0, c1 = max(r - s, 0), min(r + s + 1, h), max(c - s, 0), min(c + s + 1, w)
-        rows, cols = np.nonzero(sp[r0:r1, c0:c1])
+        rows, cols = np.nonzero(space[r0:r1, c0:c1])
         if rows.size:
             d2 = (rows + r0 - r) ** 2 + (cols + c0 - c) ** 2
             i = int(np.argmin(d2))  # first minimum = lowest row, then lowest column

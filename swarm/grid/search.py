@@ -28,11 +28,14 @@ class _Workspace(threading.local):
     A 300 x 300 search needs ~2 MB of scratch. Allocating it per call lets the C allocator hand it back to
     the OS and fault it in again (with transparent huge pages that cost up to 5 ms a call, measured); one
     buffer per thread, grown when a larger grid comes, keeps every call at the cost of the search itself.
+    The two padded grids (passable cells and targets) are reused too: their one-cell border stays 0, only
+    the interior is rewritten per call.
     """
 
     def __init__(self) -> None:
         self.dist = np.empty(0, dtype=np.float64)
         self.ring = np.empty(0, dtype=np.int32)
+        self.pads: tuple[np.ndarray, np.ndarray] = (np.zeros((0, 0), np.uint8), np.zeros((0, 0), np.uint8))
 
     def get(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         if self.dist.shape[0] < n:
@@ -40,20 +43,29 @@ class _Workspace(threading.local):
             self.ring = np.empty(3 * n, dtype=np.int32)
         return self.dist[:n], self.ring
 
+    def padded(self, grid: np.ndarray, which: int = 0) -> tuple[np.ndarray, int]:
+        """``grid`` (bool[H, W]) as a flat uint8 array with a one-cell blocked border, and the padded row
+        length; ``which`` picks one of two buffers (a search needs the space and its targets at once).
+        Valid until the next call with the same ``which`` in this thread."""
+        h, w = grid.shape
+        pad = self.pads[which]
+        if pad.shape != (h + 2, w + 2):
+            pad = np.zeros((h + 2, w + 2), dtype=np.uint8)
+            self.pads = (pad, self.pads[1]) if which == 0 else (self.pads[0], pad)
+        pad[1:-1, 1:-1] = grid.view(np.uint8)  # a byte copy: bool and uint8 0/1 share their bytes
+        return pad.reshape(-1), w + 2
+
 
 _WORK = _Workspace()
 
 
-def _padded(space: np.ndarray) -> tuple[np.ndarray, int]:
-    """``space`` as a flat uint8 array with a one-cell blocked border, and the padded row length."""
-    h, w = space.shape
-    out = np.zeros((h + 2, w + 2), dtype=np.uint8)
-    out[1:-1, 1:-1] = space
-    return out.ravel(), w + 2
-
-
 def _flat(cells: np.ndarray, wp: int) -> np.ndarray:
     return (cells[:, 0] + 1) * wp + (cells[:, 1] + 1)
+
+
+def _seed(cell: tuple[int, int], wp: int) -> np.ndarray:
+    """One cell's padded flat index as the int64[1] seed array the search takes."""
+    return np.array([(cell[0] + 1) * wp + cell[1] + 1], dtype=np.int64)
 
 
 def plan(space: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> np.ndarray | None:
@@ -70,11 +82,10 @@ def plan(space: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> np
     g = check_cell(goal, sp.shape, "goal")
     if not (sp[s] and sp[g]):
         return None
-    free, wp = _padded(sp)
+    free, wp = _WORK.padded(sp)
     dist, ring = _WORK.get(free.shape[0])
-    seed = _flat(np.array([s]), wp)
-    gi = int(_flat(np.array([g]), wp)[0])
-    best, _ = grid_bucket_search(free, wp, seed, gi, _NO_TARGETS, np.inf, dist, ring)
+    gi = (g[0] + 1) * wp + g[1] + 1
+    best, _ = grid_bucket_search(free, wp, _seed(s, wp), gi, _NO_TARGETS, np.inf, dist, ring)
     if best < 0:
         return None
     path = grid_descend_path(free, wp, dist, best)
@@ -98,7 +109,7 @@ def distance_field(space: np.ndarray, sources: Any, max_dist_m: float | None = N
     if cells.shape[0] == 0:
         out.fill(np.inf)
         return out
-    free, wp = _padded(sp)
+    free, wp = _WORK.padded(sp)
     dist, ring = _WORK.get(free.shape[0])
     max_cells = np.inf if limit is None else limit / CELL_M
     grid_bucket_search(free, wp, _flat(cells, wp), -1, _NO_TARGETS, max_cells, dist, ring)
@@ -126,10 +137,10 @@ def nearest_reachable_in(space: np.ndarray, start: tuple[int, int], targets: np.
     """:func:`nearest_reachable` for checked inputs whose ``targets`` already lie in ``space``."""
     if not space[start]:
         return None
-    free, wp = _padded(space)
-    tflat, _ = _padded(targets)
+    free, wp = _WORK.padded(space, 0)
+    tflat, _ = _WORK.padded(targets, 1)
     dist, ring = _WORK.get(free.shape[0])
-    best, best_d = grid_bucket_search(free, wp, _flat(np.array([start]), wp), -1, tflat, np.inf, dist, ring)
+    best, best_d = grid_bucket_search(free, wp, _seed(start, wp), -1, tflat, np.inf, dist, ring)
     if best < 0:
         return None
     return (int(best // wp - 1), int(best % wp - 1)), float(best_d * CELL_M)

@@ -24,7 +24,7 @@ import numpy as np
 from ..api import CELL_M, ROBOT_RADIUS_M
 from ._kernels import grid_view_cells
 from ._validate import check_cell, check_count, check_known, check_length, check_same_shape, check_space
-from .cspace import DEFAULT_MARGIN_M, configuration_space_of, nearest_in
+from .cspace import DEFAULT_MARGIN_M, configuration_space_of, nearest_in_of
 from .search import nearest_reachable_in
 
 _NO_EXCLUDE = np.zeros((0, 0), dtype=bool)
@@ -129,7 +129,7 @@ class _TargetSearch:
             view &= ~exclude
         if not view.any():
             return None
-        snapped = nearest_in(space, start, self.snap)
+        snapped = nearest_in_of(space, start, self.snap)
         if snapped is None:
             return None
         found = nearest_reachable_in(space, snapped, view)
