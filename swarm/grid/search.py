@@ -35,7 +35,7 @@ class _Workspace(threading.local):
     def __init__(self) -> None:
         self.dist = np.empty(0, dtype=np.float64)
         self.ring = np.empty(0, dtype=np.int32)
-        self.pads: tuple[np.ndarray, np.ndarray] = (np.zeros((0, 0), np.uint8), np.zeros((0, 0), np.uint8))
+        self.pads: dict[tuple[int, int, int], np.ndarray] = {}
 
     def get(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         if self.dist.shape[0] < n:
@@ -46,12 +46,14 @@ class _Workspace(threading.local):
     def padded(self, grid: np.ndarray, which: int = 0) -> tuple[np.ndarray, int]:
         """``grid`` (bool[H, W]) as a flat uint8 array with a one-cell blocked border, and the padded row
         length; ``which`` picks one of two buffers (a search needs the space and its targets at once).
-        Valid until the next call with the same ``which`` in this thread."""
+        Valid until the next call with the same shape and ``which`` in this thread."""
         h, w = grid.shape
-        pad = self.pads[which]
-        if pad.shape != (h + 2, w + 2):
-            pad = np.zeros((h + 2, w + 2), dtype=np.uint8)
-            self.pads = (pad, self.pads[1]) if which == 0 else (self.pads[0], pad)
+        key = (h, w, which)
+        pad = self.pads.get(key)
+        if pad is None:  # a few shapes recur (the whole map, the local windows): keep the last 8
+            if len(self.pads) >= 8:
+                del self.pads[next(iter(self.pads))]
+            pad = self.pads[key] = np.zeros((h + 2, w + 2), dtype=np.uint8)
         pad[1:-1, 1:-1] = grid.view(np.uint8)  # a byte copy: bool and uint8 0/1 share their bytes
         return pad.reshape(-1), w + 2
 
