@@ -42,13 +42,14 @@ class FrontierExplorer:
         self.chosen_at = -1
         self.excluded: dict[tuple[int, int], int] = {}
         self._goal_action: tuple[tuple[int, int] | None, Action] = (None, _STOP)
+        self._window: tuple[slice, slice] = (slice(0, 0), slice(0, 0))  # the target's 7 x 7 neighbourhood
 
     def act(self, obs: Observation) -> Action:
         if obs.nav.state in ("unreachable", "blocked") and self.target is not None:
             self.excluded[self.target] = obs.tick + self.params.exclude_ticks
             self.target = None
-        if (self.target is None or obs.nav.state == "reached" or not self._still_frontier(obs.known)
-                or obs.tick - self.chosen_at >= self.params.recheck_ticks):
+        if (self.target is None or obs.nav.state == "reached" or obs.tick - self.chosen_at >= self.params.recheck_ticks
+                or not self._still_frontier(obs.known)):
             self._choose(obs)
         if self.target is None:
             return _STOP
@@ -59,9 +60,7 @@ class FrontierExplorer:
     def _still_frontier(self, known: np.ndarray) -> bool:
         """Unseen space still within reach of the target (targets sit up to 3 cells from it, see
         :func:`swarm.grid.nearest_reachable_unseen`)."""
-        r, c = self.target  # type: ignore[misc]
-        k = TARGET_REACH_CELLS
-        window = known[max(r - k, 0):r + k + 1, max(c - k, 0):c + k + 1]
+        window = known[self._window]
         if window.dtype.itemsize == 1:  # a zero byte is an UNSEEN cell; twice as fast as .all() on 7 x 7
             return b"\x00" in window.tobytes()
         return not window.all()  # UNSEEN == 0
@@ -74,5 +73,9 @@ class FrontierExplorer:
             cells = np.array(list(self.excluded))
             exclude[cells[:, 0], cells[:, 1]] = True
         found = grid.nearest_reachable_unseen(obs.known, cell_of(obs.pose.x, obs.pose.y), exclude=exclude)
-        self.target = None if found is None else tuple(int(v) for v in found[0])
+        self.target = None if found is None else (int(found[0][0]), int(found[0][1]))
         self.chosen_at = obs.tick
+        if self.target is not None:
+            r, c = self.target
+            k = TARGET_REACH_CELLS
+            self._window = (slice(max(r - k, 0), r + k + 1), slice(max(c - k, 0), c + k + 1))

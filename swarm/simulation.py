@@ -101,6 +101,7 @@ class Simulation:
         self.tracker = ExplorationTracker(self.truth)
         self.known = np.zeros((n, *self.truth.shape), dtype=np.uint8)
         self._views = [self._read_only(i) for i in range(n)]
+        self._maps = list(self.known)  # each robot's writable map, for its navigator (no view per tick)
         self.navigators = [Navigator(self.spec.navigation, self.motion, planner_rng(self.spec.seed, i))
                            for i in range(n)]
         self.links = build_link_model(self.truth, config_from_mapping(self.spec.radio))
@@ -182,16 +183,17 @@ class Simulation:
                 self._record(tick, explored, collisions, links)
             if stop_reason:
                 break
-            inputs = self._inputs(tick, poses, collided, inboxes, merged, links, host.needs_delta)
+            pose_tuples = [Pose(*row) for row in poses.tolist()]  # shared by observations and navigation
+            inputs = self._inputs(tick, poses, pose_tuples, collided, inboxes, merged, links, host.needs_delta)
             actions = host.act(tick, inputs)
             self._note_failures(tick, host)
             sent = self._send(tick, poses, actions, links)
             moving = False
-            pose_rows = poses.tolist()
+            rows: list[tuple[float, float]] = []
             for i, action in enumerate(actions):
                 nav = self.navigators[i]
                 if action is None:
-                    commands[i] = (0.0, 0.0)
+                    rows.append((0.0, 0.0))
                     continue
                 if action.clear_goal:
                     nav.set_goal(None)
@@ -200,9 +202,10 @@ class Simulation:
                 if action.velocity is not None:
                     v, w = action.velocity
                 else:
-                    v, w = nav.command(Pose(*pose_rows[i]), self.known[i])
-                commands[i] = (v, w)
+                    v, w = nav.command(pose_tuples[i], self._maps[i])
+                rows.append((v, w))
                 moving = moving or v != 0.0 or w != 0.0 or nav.state in ("moving", "planning")
+            commands = np.array(rows, dtype=np.float64)
             stalled_for = 0 if moving else stalled_for + 1
             for observer in self.observers:
                 observer(TickView(tick, poses, self.known, self.tracker, actions, links, sent))
@@ -251,21 +254,24 @@ class Simulation:
         xy = p[:, :2].copy()
         return [Neighbours(i, near, distance, bearing, xy) for i in range(n)]
 
-    def _inputs(self, tick: int, poses: np.ndarray, collided: np.ndarray, inboxes: list[list[Envelope]],
+    def _inputs(self, tick: int, pose_array: np.ndarray, poses: list[Pose], collided: np.ndarray,
+                inboxes: list[list[Envelope]],
                 merged: list[list[np.ndarray | None]], links: Any, needs_delta: bool) -> list[TickInput | None]:
         distance = self.world.distance.tolist()
         energy = (self.world.distance + self.world.rotation).tolist()
-        pose_rows = poses.tolist()
-        neighbours = self._neighbours(poses, links)
-        changed = self._changed_cells(poses, merged) if needs_delta else None
+        neighbours = self._neighbours(pose_array, links)
+        changed = self._changed_cells(pose_array, merged) if needs_delta else None
+        hit = collided.tolist()
+        failed = self.failed.tolist()
         inputs: list[TickInput | None] = []
-        for i in range(len(pose_rows)):
-            if self.failed[i]:
+        for i, pose in enumerate(poses):
+            if failed[i]:
                 inputs.append(None)
                 continue
-            obs = _observation(tick=tick, robot_id=i, pose=Pose(*pose_rows[i]), known=self._views[i],
-                               inbox=tuple(env.message for env in inboxes[i]), neighbours=neighbours[i],
-                               collided=bool(collided[i]), nav=self.navigators[i].status(),
+            inbox = inboxes[i]
+            obs = _observation(tick=tick, robot_id=i, pose=pose, known=self._views[i],
+                               inbox=tuple([env.message for env in inbox]) if inbox else (),
+                               neighbours=neighbours[i], collided=hit[i], nav=self.navigators[i].status(),
                                distance_travelled=distance[i], energy_used=energy[i])
             if changed is not None:
                 inputs.append(TickInput(obs, changed[i], tuple(env.data for env in inboxes[i])))
