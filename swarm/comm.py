@@ -22,9 +22,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from maps.errors import InvalidInput
 from maps.params import check_choice, check_float, check_int
 
-from .knowledge import merge_cells, sync_changes
+from .knowledge import merge_cells_unchecked, sync_changes
 from .messages import MapRequest, MapUpdate, MessageError, decode, encode, map_update
 
 SHARING_MODES = ("delta", "full", "off")
@@ -149,7 +150,7 @@ class MapSharing:
         self.enabled = spec.map_sharing != "off" and n > 1
         self.last_shared = np.zeros((n, *shape), dtype=np.uint8) if spec.map_sharing == "delta" else None
         self.seq = [0] * n
-        self.seen_seq = np.zeros((n, n), dtype=np.int64)     # [receiver, sender] last seq merged
+        self.seen_seq = [[0] * n for _ in range(n)]          # [receiver][sender] last seq merged
         self.full_requested = [False] * n
         self.requests: list[list[int]] = [[] for _ in range(n)]  # targets each robot will ask next tick
 
@@ -193,20 +194,26 @@ class MapSharing:
             elif isinstance(msg, MapRequest) and msg.target == receiver:
                 self.full_requested[receiver] = True
         touched: list[np.ndarray | None] = []
+        if not updates:
+            return touched
+        if not (known.flags.c_contiguous and known.flags.writeable):
+            raise InvalidInput("known", "a read-only or non-contiguous map", "a writable C-contiguous uint8 map")
         flat = known.reshape(-1)
+        seen = self.seen_seq[receiver]
+        delta_mode = self.spec.map_sharing == "delta"
         for msg in updates:
             if msg.full:
                 np.maximum(flat, msg.dense(), out=flat)
                 touched.append(None)
             else:
-                idx, values = msg.cells()
-                merge_cells(known, idx, values)
+                idx, values = msg.cells()  # int64 and uint8, in range: checked when decoded
+                merge_cells_unchecked(flat, idx, values)
                 touched.append(idx)
-            last = self.seen_seq[receiver, msg.sender]
-            if not msg.full and msg.seq != last + 1 and self.spec.map_sharing == "delta":
+            last = seen[msg.sender]
+            if not msg.full and msg.seq != last + 1 and delta_mode:
                 if msg.sender not in self.requests[receiver]:
                     self.requests[receiver].append(msg.sender)
-            self.seen_seq[receiver, msg.sender] = max(last, msg.seq) if not msg.full else msg.seq
+            seen[msg.sender] = max(last, msg.seq) if not msg.full else msg.seq
         return touched
 
 

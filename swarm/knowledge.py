@@ -89,7 +89,14 @@ def merge_cells(known: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
     received map updates runs for every receiver every sharing tick). Indices must be in range."""
     if not (known.flags.c_contiguous and known.flags.writeable):
         raise InvalidInput("known", "a read-only or non-contiguous map", "a writable C-contiguous uint8 map")
-    _merge_cells_kernel(known.reshape(-1), np.ascontiguousarray(idx, dtype=np.int64), np.ascontiguousarray(values, dtype=np.uint8))
+    merge_cells_unchecked(known.reshape(-1), np.ascontiguousarray(idx, dtype=np.int64),
+                          np.ascontiguousarray(values, dtype=np.uint8))
+
+
+def merge_cells_unchecked(flat: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
+    """:func:`merge_cells` on a flat writable map with int64 indices (in range) and uint8 values: for the
+    map-sharing service, whose decoded updates already are (it merges every update into every receiver)."""
+    _merge_cells_kernel(flat, idx, values)
 
 
 @njit(cache=True)
