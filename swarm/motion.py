@@ -148,9 +148,13 @@ class Follower:
         self._points: list[tuple[float, float]] = []
         self._corner_speed: list[float] = []     # speed allowed when passing waypoint i (last: 0)
         self._suffix: list[float] = []           # path length from waypoint i to the end
+        self._heading: list[float | None] = []   # direction of segment i -> i+1 (None: zero length)
         self._index = 0
         self._done = True
         self._remaining = 0.0
+        # Constants of the per-tick arithmetic, computed once with the same operations as in the formulas.
+        self._two_brake = 2.0 * (0.5 * params.max_accel)             # braking at half the acceleration
+        self._horizon = params.max_speed * params.max_speed / (2.0 * (0.5 * params.max_accel))
 
     # ------------------------------------------------------------------------------------------ path ----
     def set_path(self, waypoints: Any) -> None:
@@ -169,6 +173,10 @@ class Follower:
         self._suffix = [0.0] * m
         for i in range(m - 2, -1, -1):
             self._suffix[i] = self._suffix[i + 1] + seg[i]
+        self._heading = []
+        for i in range(m - 1):
+            bx, by = self._points[i + 1][0] - self._points[i][0], self._points[i + 1][1] - self._points[i][1]
+            self._heading.append(None if bx == 0.0 and by == 0.0 else math.atan2(by, bx))
         self._corner_speed = [self._bend_speed(i) for i in range(m)]
         self._index = 0
         self._done = False
@@ -202,31 +210,41 @@ class Follower:
 
     # --------------------------------------------------------------------------------------- control ----
     def command(self, pose: Sequence[float]) -> tuple[float, float]:
-        """The ``(v, omega)`` command for this tick from ``pose`` = (x, y, theta)."""
+        """The ``(v, omega)`` command for this tick from ``pose`` = (x, y, theta).
+
+        Runs for every moving robot every tick, so the helpers (heading error, bend speed, braking limit,
+        turn rate) are written out inline here: the same operations in the same order as
+        :meth:`_bend_speed`, :meth:`_speed_limit` and :meth:`_turn_rate`, at half the cost of the calls
+        (``tests/swarm/test_motion.py`` checks it against them bit for bit)."""
         if self._done:
             return 0.0, 0.0
         x, y, theta = float(pose[0]), float(pose[1]), float(pose[2])
         fp = self.follow
-        last = len(self._points) - 1
-        while self._index < last and math.dist((x, y), self._points[self._index]) < fp.switch_radius:
-            self._index += 1
-        tx, ty = self._points[self._index]
+        pts = self._points
+        last = len(pts) - 1
+        index = self._index
+        while index < last and math.dist((x, y), pts[index]) < fp.switch_radius:
+            index += 1
+        self._index = index
+        tx, ty = pts[index]
         d = math.hypot(tx - x, ty - y)
-        self._remaining = d + self._suffix[self._index]
-        if self._index == last and d <= fp.arrive_radius:
+        self._remaining = d + self._suffix[index]
+        if index == last and d <= fp.arrive_radius:
             self._done = True
             self._remaining = 0.0
             return 0.0, 0.0
-        err = wrap_angle(math.atan2(ty - y, tx - x) - theta)
-        speed = self._speed_limit(x, y, d)
+        err = math.pi - (math.pi - (math.atan2(ty - y, tx - x) - theta)) % _TWO_PI      # wrap_angle
         direction = 1.0
-        if self._index == last and d < fp.reverse_radius and abs(err) > math.pi / 2:
+        if index == last and d < fp.reverse_radius and abs(err) > _HALF_PI:
             direction = -1.0                      # small overshoot: back up rather than turn around
-            err = wrap_angle(err - math.pi)
-        omega = self._turn_rate(err)
-        if abs(err) > fp.rotate_above:
+            err = math.pi - (math.pi - (err - math.pi)) % _TWO_PI
+        p = self.params
+        mag = abs(err)                            # turn rate: see _turn_rate
+        rate = min(p.max_turn_rate, math.sqrt(p.max_turn_accel * mag), fp.gain * mag)
+        omega = math.copysign(min(max(rate, min(0.05, mag / TICK_S)), p.max_turn_rate), err)
+        if mag > fp.rotate_above:
             return 0.0, omega
-        return direction * speed * math.cos(err), omega
+        return direction * self._speed_limit(x, y, d) * math.cos(err), omega
 
     def turn_to(self, pose: Sequence[float], heading: float) -> tuple[float, float]:
         """A pure rotation toward ``heading`` (rad); (0, 0) once within ``heading_tolerance``."""
@@ -250,21 +268,19 @@ class Follower:
     def _speed_limit(self, x: float, y: float, d: float) -> float:
         """Highest speed from which the robot can still slow to every upcoming bend's speed (and stop at
         the end) at half its acceleration, looking ahead as far as braking from top speed takes."""
-        p = self.params
-        brake = 0.5 * p.max_accel
-        horizon = p.max_speed * p.max_speed / (2.0 * brake)
+        two_brake = self._two_brake
         last = len(self._points) - 1
-        limit = p.max_speed
+        limit = self.params.max_speed
         dist = d
         i = self._index
         while True:
-            vc = self._corner_speed[i] if i != self._index else self._bend_speed(i, (x, y))
             if i == last:
-                limit = min(limit, math.sqrt(2.0 * brake * dist),
+                limit = min(limit, math.sqrt(two_brake * dist),
                             max(self.follow.gain * dist, min(0.05, dist / TICK_S)))
                 break
-            limit = min(limit, math.sqrt(vc * vc + 2.0 * brake * dist))
-            if dist > horizon:
+            vc = self._corner_speed[i] if i != self._index else self._bend_speed(i, (x, y))
+            limit = min(limit, math.sqrt(vc * vc + two_brake * dist))
+            if dist > self._horizon:
                 break
             dist += self._suffix[i] - self._suffix[i + 1]
             i += 1
@@ -280,13 +296,17 @@ class Follower:
         if prev is None:
             return self.params.max_speed
         ax, ay = pts[i][0] - prev[0], pts[i][1] - prev[1]
-        bx, by = pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1]
-        if (ax == 0.0 and ay == 0.0) or (bx == 0.0 and by == 0.0):
+        out = self._heading[i]
+        if (ax == 0.0 and ay == 0.0) or out is None:
             return self.params.max_speed
-        bend = abs(wrap_angle(math.atan2(by, bx) - math.atan2(ay, ax)))
+        bend = abs(wrap_angle(out - math.atan2(ay, ax)))
         if bend > self.follow.rotate_above:
             return 0.0
         return self.params.max_speed * math.cos(bend)
+
+
+_TWO_PI = 2.0 * math.pi
+_HALF_PI = math.pi / 2
 
 
 __all__ = ["FollowParams", "Follower", "MAX_SUBSTEP_MOVE_M", "MOTION_PRESETS", "MotionParams", "TICK_S",

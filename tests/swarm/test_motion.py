@@ -204,3 +204,92 @@ def test_wrap_angle() -> None:
     for a in np.linspace(-20, 20, 401):
         w = wrap_angle(float(a))
         assert -math.pi < w <= math.pi and math.isclose(math.cos(w), math.cos(a), abs_tol=1e-12)
+
+
+# ------------------------------------------------------- the inlined command against its plain formulas ----
+class _PlainFollower(Follower):
+    """The follower's command as it was written before the helpers were inlined: one call per formula
+    (bend speed at the robot's position, braking limit, turn rate, ``wrap_angle``). The fast command must
+    give the same floats bit for bit, or every run would change."""
+
+    def command(self, pose):  # type: ignore[override]
+        if self._done:
+            return 0.0, 0.0
+        x, y, theta = float(pose[0]), float(pose[1]), float(pose[2])
+        fp = self.follow
+        last = len(self._points) - 1
+        while self._index < last and math.dist((x, y), self._points[self._index]) < fp.switch_radius:
+            self._index += 1
+        tx, ty = self._points[self._index]
+        d = math.hypot(tx - x, ty - y)
+        self._remaining = d + self._suffix[self._index]
+        if self._index == last and d <= fp.arrive_radius:
+            self._done = True
+            self._remaining = 0.0
+            return 0.0, 0.0
+        err = wrap_angle(math.atan2(ty - y, tx - x) - theta)
+        speed = self._plain_speed_limit(x, y, d)
+        direction = 1.0
+        if self._index == last and d < fp.reverse_radius and abs(err) > math.pi / 2:
+            direction = -1.0
+            err = wrap_angle(err - math.pi)
+        omega = self._turn_rate(err)
+        if abs(err) > fp.rotate_above:
+            return 0.0, omega
+        return direction * speed * math.cos(err), omega
+
+    def _plain_speed_limit(self, x: float, y: float, d: float) -> float:
+        p = self.params
+        brake = 0.5 * p.max_accel
+        horizon = p.max_speed * p.max_speed / (2.0 * brake)
+        last = len(self._points) - 1
+        limit = p.max_speed
+        dist = d
+        i = self._index
+        while True:
+            vc = self._corner_speed[i] if i != self._index else self._plain_bend_speed(i, (x, y))
+            if i == last:
+                limit = min(limit, math.sqrt(2.0 * brake * dist),
+                            max(self.follow.gain * dist, min(0.05, dist / 0.1)))
+                break
+            limit = min(limit, math.sqrt(vc * vc + 2.0 * brake * dist))
+            if dist > horizon:
+                break
+            dist += self._suffix[i] - self._suffix[i + 1]
+            i += 1
+        return limit
+
+    def _plain_bend_speed(self, i: int, prev: tuple[float, float]) -> float:
+        pts = self._points
+        if i == len(pts) - 1:
+            return 0.0
+        ax, ay = pts[i][0] - prev[0], pts[i][1] - prev[1]
+        bx, by = pts[i + 1][0] - pts[i][0], pts[i + 1][1] - pts[i][1]
+        if (ax == 0.0 and ay == 0.0) or (bx == 0.0 and by == 0.0):
+            return self.params.max_speed
+        bend = abs(wrap_angle(math.atan2(by, bx) - math.atan2(ay, ax)))
+        if bend > self.follow.rotate_above:
+            return 0.0
+        return self.params.max_speed * math.cos(bend)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_command_equals_the_plain_formulas_bit_for_bit(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    params = [MOTION_PRESETS["default"], MOTION_PRESETS["maes"]][seed % 2]
+    follow = FollowParams() if seed < 3 else FollowParams(rotate_above=float(rng.uniform(0.3, 1.5)),
+                                                          switch_radius=float(rng.uniform(0.05, 1.0)),
+                                                          gain=float(rng.uniform(0.5, 9.0)))
+    for _ in range(60):
+        m = int(rng.integers(1, 8))
+        pts = np.cumsum(rng.choice([0.0, 0.5, -0.5, 1.0, 3.0], size=(m, 2)), axis=0)  # repeats and sharp bends
+        fast, plain = Follower(params, follow), _PlainFollower(params, follow)
+        fast.set_path(pts)
+        plain.set_path(pts)
+        here = pts[0] + rng.normal(0.0, 0.3, 2)
+        for _ in range(40):
+            pose = (float(here[0]), float(here[1]), float(rng.uniform(-4.0, 4.0)))
+            assert fast.command(pose) == plain.command(pose)
+            assert (fast.index, fast.done, fast.remaining_m) == (plain.index, plain.done, plain.remaining_m)
+            target = pts[min(fast.index, m - 1)]
+            here = here + (target - here) * rng.uniform(0.0, 0.7) + rng.normal(0.0, 0.05, 2)
