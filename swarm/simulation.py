@@ -233,6 +233,9 @@ class Simulation:
                 outboxes.append([])
                 continue
             extra = action.messages if action is not None else ()
+            if not service[i] and not extra:  # most ticks: nothing to send
+                outboxes.append([])
+                continue
             outboxes.append([self.medium.envelope(i, m) for m in (*service[i], *extra)])
         if any(outboxes):
             link = links.link
