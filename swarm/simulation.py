@@ -5,7 +5,8 @@ One logic tick (0.1 s, DESIGN.md section 4):
 1. ``world.step``: pymunk moves the robots under last tick's commands (sub-stepped), reports collisions;
 2. ``lidar.scan``: every robot's lidar writes what it sees into its own knowledge map; truth tracker;
 3. the radio picture for this tick's positions (distances, walls, RSSI, links, groups), evaluated when
-   first used (sending, metrics, neighbours, an observer): a pure function of the positions;
+   first used (sending, metrics, an observer): a pure function of the positions. Neighbours (robots in
+   sensing range and line of sight) walk only the pairs within range (``LinkModel.in_sight``);
 4. inboxes: messages sent last tick arrive; map updates are merged into the receiver's map;
 5. the transport hands each live robot its observation and gets its action (goal or velocity, messages);
 6. this tick's broadcasts are judged by this tick's links and queued for next tick;
@@ -34,12 +35,13 @@ from .comm import CommSpec, Envelope, MapSharing, Medium
 from .knowledge import sync_changes, sync_regions
 from .metrics import Metrics
 from .navigation import Navigator
+from .neighbours import bearings
 from .result import RunResult
 from .sensing import ExplorationTracker, Lidar, LidarParams
 from .spawn import spawn
 from .spec import ROBOT_STREAM, RunSpec, planner_rng, seed_streams
 from .transport import AgentHost, TickInput, make_host
-from .transport.wire import ResetPacket
+from .transport.wire import ResetPacket, neighbour_table
 from .world import MotionParams, World
 
 _observation = frozen_builder(Observation)  # Observation(...) without the frozen __init__'s cost (16 a tick)
@@ -182,7 +184,7 @@ class Simulation:
                 self._record(tick, explored, collisions, links)
             if stop_reason:
                 break
-            inputs = self._inputs(tick, poses, collided, inboxes, merged, links, host.needs_delta)
+            inputs = self._inputs(tick, poses, collided, inboxes, merged, host.needs_delta)
             actions = host.act(tick, inputs)
             self._note_failures(tick, host)
             sent = self._send(tick, poses, actions, links)
@@ -239,25 +241,39 @@ class Simulation:
         return outboxes
 
     # ------------------------------------------------------------------------------- observations ----
-    def _neighbours(self, poses: np.ndarray, links: Any) -> list[Sequence[Neighbour]]:
+    def _neighbours(self, poses: np.ndarray) -> list[Sequence[Neighbour]]:
         """Robots within ``neighbour_range`` and in line of sight (no wall crossed), per robot (lazy)."""
         n = len(poses)
         if n == 1:
             return [()]
         p = poses.copy()
-        near = _Lazy(lambda: _near(links.distance, links.walls, self.neighbour_range))
-        distance = _Lazy(lambda: links.distance)
-        bearing = _Lazy(lambda: _bearings(p))
+        sight = _Lazy(lambda: self._sight(p))
+        near = _Lazy(lambda: sight.value()[1])
+        distance = _Lazy(lambda: sight.value()[0])
+        bearing = _Lazy(lambda: bearings(p))
         xy = p[:, :2].copy()
         return [Neighbours(i, near, distance, bearing, xy) for i in range(n)]
 
+    def _sight(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(distance, near)``: the radio's pair distances and who is within ``neighbour_range`` with no wall
+        crossed, walking only the pairs in range (the tick's all-pairs radio picture is not needed)."""
+        return self.links.in_sight(poses[:, :2], self.neighbour_range)
+
+    def _packed_neighbours(self, poses: np.ndarray) -> list[bytes]:
+        """Every robot's neighbour records for the zenoh transport, which sends them every tick."""
+        if len(poses) == 1:
+            return [b""]
+        distance, near = self._sight(poses)
+        return neighbour_table(near, distance, poses)
+
     def _inputs(self, tick: int, poses: np.ndarray, collided: np.ndarray, inboxes: list[list[Envelope]],
-                merged: list[list[np.ndarray | None]], links: Any, needs_delta: bool) -> list[TickInput | None]:
+                merged: list[list[np.ndarray | None]], needs_delta: bool) -> list[TickInput | None]:
         distance = self.world.distance.tolist()
         energy = (self.world.distance + self.world.rotation).tolist()
         pose_rows = poses.tolist()
-        neighbours = self._neighbours(poses, links)
+        neighbours = self._neighbours(poses)
         changed = self._changed_cells(poses, merged) if needs_delta else None
+        packed = self._packed_neighbours(poses) if needs_delta else None
         inputs: list[TickInput | None] = []
         for i in range(len(pose_rows)):
             if self.failed[i]:
@@ -268,7 +284,7 @@ class Simulation:
                                collided=bool(collided[i]), nav=self.navigators[i].status(),
                                distance_travelled=distance[i], energy_used=energy[i])
             if changed is not None:
-                inputs.append(TickInput(obs, changed[i], tuple(env.data for env in inboxes[i])))
+                inputs.append(TickInput(obs, changed[i], tuple(env.data for env in inboxes[i]), packed[i]))
             else:
                 inputs.append(TickInput(obs))
         return inputs
@@ -342,8 +358,8 @@ __all__ = ["Simulation", "TickView", "TransportOptions", "build_map", "run"]
 
 class _TickLinks:
     """The tick's :class:`radio.LinkState`, evaluated on first use. On most ticks nobody sends, no metrics
-    are recorded and no algorithm reads its neighbours (13 % of the benchmark's ticks carry messages), so
-    the all-pairs radio walk is skipped; it is a pure function of the positions, kept here, so evaluating
+    are recorded (13 % of the benchmark's ticks carry messages), so the all-pairs radio walk is skipped
+    (neighbours use the cheaper in-range walk); it is a pure function of the positions, kept here, so evaluating
     later gives the same state."""
 
     __slots__ = ("_model", "_xy", "_state")
@@ -390,17 +406,3 @@ class _Lazy:
         if dtype is not None:
             return m.astype(dtype)
         return m.copy() if copy else m  # numpy asks for a copy when the caller may write to it
-
-
-def _near(distance: np.ndarray, walls: np.ndarray, neighbour_range: float) -> np.ndarray:
-    """Robots within ``neighbour_range`` and in line of sight (no wall crossed), never oneself."""
-    near = (distance <= neighbour_range) & (walls == 0)
-    np.fill_diagonal(near, False)
-    return near
-
-
-def _bearings(poses: np.ndarray) -> np.ndarray:
-    """Bearing from each robot's heading to every other robot (rad, in [-pi, pi))."""
-    dx = poses[None, :, 0] - poses[:, None, 0]
-    dy = poses[None, :, 1] - poses[:, None, 1]
-    return (np.arctan2(dy, dx) - poses[:, None, 2] + np.pi) % (2 * np.pi) - np.pi

@@ -24,6 +24,7 @@ class TickInput:
     obs: Observation
     changed_idx: np.ndarray | None = None      # knowledge cells changed since the previous observation
     inbox_bytes: tuple[bytes, ...] = ()        # the inbox messages' wire bytes
+    neighbour_bytes: bytes | None = None       # the neighbours as wire records (None: pack obs.neighbours)
 
 
 @dataclass

@@ -159,7 +159,8 @@ class ZenohHost:
             assert inp is not None and inp.changed_idx is not None
             o, idx = inp.obs, inp.changed_idx
             values = o.known.reshape(-1)[idx] if len(idx) else _NO_VALUES  # most ticks change nothing
-            publishers[i].put(encode_obs(tick, i, o.pose, idx, values, inp.inbox_bytes, o.neighbours, o.collided,
+            neighbours = inp.neighbour_bytes if inp.neighbour_bytes is not None else o.neighbours
+            publishers[i].put(encode_obs(tick, i, o.pose, idx, values, inp.inbox_bytes, neighbours, o.collided,
                                          o.nav, o.distance_travelled, o.energy_used))
         waiting = [i for i in live if i in self.remote]
         if waiting:

@@ -16,7 +16,8 @@ from swarm.messages import Heartbeat, encode
 from swarm.transport.agent import AgentRunner, InboxDecoder
 from swarm.transport.wire import (NAV_STATES, NEIGHBOUR, OBS_STATE, RAW_CELLS_BELOW, WIRE_VERSION, ObsDecoder,
                                   ResetPacket, WireError, decode_act, decode_obs, encode_act, encode_obs,
-                                  pack_neighbours)
+                                  neighbour_table, pack_neighbours)
+from swarm.neighbours import bearings
 
 MAP_CELLS = 40 * 40
 
@@ -150,6 +151,37 @@ def test_neighbours_packed_from_the_matrices_equal_the_tuples_for_every_robot():
         lazy = Neighbours(i, near, distance, bearing, xy)
         expected = tuple(Neighbours(i, near, distance, bearing, xy))
         assert pack_neighbours(lazy) == pack_neighbours(expected) == b"".join(NEIGHBOUR.pack(*t) for t in expected)
+
+
+def reference_bearing(p, q) -> float:
+    """The plain definition: the direction to q, relative to p's heading, wrapped into [-pi, pi)."""
+    return (math.atan2(q[1] - p[1], q[0] - p[0]) - p[2] + math.pi) % (2 * math.pi) - math.pi
+
+
+def test_bearings_follow_the_plain_definition_bit_for_bit():
+    rng = np.random.default_rng(5)
+    for n in (1, 2, 9):
+        poses = np.column_stack((rng.random((n, 2)) * 30, rng.random(n) * 20 - 10))
+        poses[n // 2] = poses[0]  # a robot on top of another: atan2(0, 0)
+        b = bearings(poses)
+        assert b.shape == (n, n) and np.all((-math.pi <= b) & (b < math.pi))
+        expected = [[reference_bearing(p, q) for q in poses.tolist()] for p in poses.tolist()]
+        assert b.tolist() == expected
+
+
+def test_neighbour_table_packs_every_robot_as_pack_neighbours_does():
+    """Bearings computed per neighbour pair give the records the full bearing matrix gives."""
+    rng = np.random.default_rng(6)
+    for n in (1, 2, 7, 16):
+        near = rng.random((n, n)) < 0.4
+        np.fill_diagonal(near, False)
+        near[n // 2] = False  # a robot with no neighbour
+        distance = rng.random((n, n)) * 9
+        poses = np.column_stack((rng.random((n, 2)) * 50, rng.random(n) * 8 - 4))
+        table = neighbour_table(near, distance, poses)
+        b, xy = bearings(poses), poses[:, :2].copy()
+        assert table == [pack_neighbours(tuple(Neighbours(i, near, distance, b, xy))) for i in range(n)]
+        assert table[n // 2] == b""
 
 
 # ------------------------------------------------------------------------------------------ act ----
