@@ -32,7 +32,7 @@ from radio import build_link_model, config_from_mapping
 
 from .api import Action, Neighbour, Neighbours, Observation, Pose, RobotInfo, frozen_builder
 from .comm import CommSpec, Envelope, MapSharing, Medium
-from .knowledge import sync_changes, sync_regions
+from .knowledge import sync_changes, sync_regions_flat
 from .metrics import Metrics
 from .navigation import Navigator
 from .neighbours import bearings
@@ -40,8 +40,8 @@ from .result import RunResult
 from .sensing import ExplorationTracker, Lidar, LidarParams
 from .spawn import spawn
 from .spec import ROBOT_STREAM, RunSpec, planner_rng, seed_streams
-from .transport import AgentHost, TickInput, make_host
-from .transport.wire import ResetPacket, neighbour_table
+from .transport import AgentHost, TickBatch, TickInput, make_host
+from .transport.wire import ResetPacket
 from .world import MotionParams, World
 
 _observation = frozen_builder(Observation)  # Observation(...) without the frozen __init__'s cost (16 a tick)
@@ -143,7 +143,7 @@ class Simulation:
                          timeout_s=opts.timeout_s, run_id=opts.run_id)
         try:
             host.start(self.resets())
-            if host.needs_delta:
+            if host.batched:
                 self._mirror = np.zeros_like(self.known)
             return self._loop(host)
         finally:
@@ -184,8 +184,10 @@ class Simulation:
                 self._record(tick, explored, collisions, links)
             if stop_reason:
                 break
-            inputs = self._inputs(tick, poses, collided, inboxes, merged, host.needs_delta)
-            actions = host.act(tick, inputs)
+            if host.batched:
+                actions = host.act(tick, self._batch(poses, collided, inboxes, merged))
+            else:
+                actions = host.act(tick, self._inputs(tick, poses, collided, inboxes))
             self._note_failures(tick, host)
             sent = self._send(tick, poses, actions, links)
             moving = False
@@ -259,21 +261,12 @@ class Simulation:
         crossed, walking only the pairs in range (the tick's all-pairs radio picture is not needed)."""
         return self.links.in_sight(poses[:, :2], self.neighbour_range)
 
-    def _packed_neighbours(self, poses: np.ndarray) -> list[bytes]:
-        """Every robot's neighbour records for the zenoh transport, which sends them every tick."""
-        if len(poses) == 1:
-            return [b""]
-        distance, near = self._sight(poses)
-        return neighbour_table(near, distance, poses)
-
-    def _inputs(self, tick: int, poses: np.ndarray, collided: np.ndarray, inboxes: list[list[Envelope]],
-                merged: list[list[np.ndarray | None]], needs_delta: bool) -> list[TickInput | None]:
+    def _inputs(self, tick: int, poses: np.ndarray, collided: np.ndarray,
+                inboxes: list[list[Envelope]]) -> list[TickInput | None]:
         distance = self.world.distance.tolist()
         energy = (self.world.distance + self.world.rotation).tolist()
         pose_rows = poses.tolist()
         neighbours = self._neighbours(poses)
-        changed = self._changed_cells(poses, merged) if needs_delta else None
-        packed = self._packed_neighbours(poses) if needs_delta else None
         inputs: list[TickInput | None] = []
         for i in range(len(pose_rows)):
             if self.failed[i]:
@@ -283,27 +276,41 @@ class Simulation:
                                inbox=tuple(env.message for env in inboxes[i]), neighbours=neighbours[i],
                                collided=bool(collided[i]), nav=self.navigators[i].status(),
                                distance_travelled=distance[i], energy_used=energy[i])
-            if changed is not None:
-                inputs.append(TickInput(obs, changed[i], tuple(env.data for env in inboxes[i]), packed[i]))
-            else:
-                inputs.append(TickInput(obs))
+            inputs.append(TickInput(obs))
         return inputs
 
-    def _changed_cells(self, poses: np.ndarray, merged: list[list[np.ndarray | None]]) -> list[np.ndarray | None]:
-        """Per robot, flat indices (ascending) of its knowledge cells changed since its last observation (None
-        for failed robots): the lidar only writes within range of the robot, delta merges report their cells,
-        so only those places are compared, all robots in one compiled call; after a full-map merge the whole
-        map is."""
+    def _batch(self, poses: np.ndarray, collided: np.ndarray, inboxes: list[list[Envelope]],
+               merged: list[list[np.ndarray | None]]) -> TickBatch:
+        """The tick's observations as arrays for a batched host (zenoh): the same numbers as :meth:`_inputs`,
+        plus each robot's knowledge cells changed since its last observation, inboxes as wire bytes."""
+        live = ~self.failed
+        cells, ends = self._changed_cells(poses, merged)
+        distance, near = self._sight(poses)
+        navs = [nav.status() if ok else None for nav, ok in zip(self.navigators, live.tolist())]
+        return TickBatch(live=live, poses=poses, collided=collided, travelled=self.world.distance,
+                         energy=self.world.distance + self.world.rotation, navs=navs, known=self.known,
+                         cells=cells, ends=ends, inboxes=[tuple(env.data for env in inbox) for inbox in inboxes],
+                         near=near, distance=distance)
+
+    def _changed_cells(self, poses: np.ndarray, merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:
+        """``(cells, ends)``: per robot, flat indices (ascending) of its knowledge cells changed since its last
+        observation, robot i's at ``cells[ends[i-1]:ends[i]]`` (none for failed robots): the lidar only writes
+        within range of the robot, delta merges report their cells, so only those places are compared, all
+        robots in one compiled call; after a full-map merge the whole map is."""
         assert self._mirror is not None
         full = [i for i, cells in enumerate(merged) if cells and any(m is None for m in cells) and not self.failed[i]]
         windowed = ~self.failed
         windowed[full] = False
         reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2
         centres = (poses[:, 1::-1] / CELL_M).astype(np.int64)  # (row, col); truncation, as int() did
-        changed = sync_regions(self.known, self._mirror, centres, reach, merged, windowed)
+        cells, ends = sync_regions_flat(self.known, self._mirror, centres, reach, merged, windowed)
+        if not full:
+            return cells, ends
+        bounds = ends.tolist()
+        pieces = [cells[start:end] for start, end in zip([0, *bounds[:-1]], bounds)]
         for i in full:
-            changed[i] = sync_changes(self.known[i], self._mirror[i])
-        return changed
+            pieces[i] = sync_changes(self.known[i], self._mirror[i])
+        return np.concatenate(pieces), np.cumsum([len(piece) for piece in pieces], dtype=np.int64)
 
     def _note_failures(self, tick: int, host: AgentHost) -> None:
         for i, (at, reason) in sorted(host.stats.failures.items()):

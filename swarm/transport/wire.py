@@ -27,7 +27,6 @@ from numba import njit
 
 from ..api import Action, NavStatus, Neighbour, Neighbours, Pose, RobotInfo, frozen_builder
 from ..messages import MessageError, decode, encode, gaps_u32
-from ..neighbours import _bearing
 
 WIRE_VERSION = 2
 MAX_PACKET_BYTES = 8 * 1024 * 1024
@@ -213,38 +212,6 @@ def _neighbour_records(near: np.ndarray, distance: np.ndarray, bearing: np.ndarr
                 records[m]["bearing"] = bearing[i, j]
                 records[m]["x"] = xy[j, 0]
                 records[m]["y"] = xy[j, 1]
-                m += 1
-        counts[i] = m - start
-    return m
-
-
-def neighbour_table(near: np.ndarray, distance: np.ndarray, poses: np.ndarray) -> list[bytes]:
-    """Every robot's ``neighbours`` field at once, from the tick's ``near`` mask and ``distance`` matrix and
-    the poses (float64[R, 3]): bearings are computed for the neighbour pairs only (the same function as the
-    runtime's bearing matrix), so the runtime never builds the matrix for the zenoh transport."""
-    n = len(near)
-    records = np.empty(n * n, NEIGHBOUR_DTYPE)
-    counts = np.empty(n, np.int64)
-    m = _sighted_records(near, distance, np.ascontiguousarray(poses, dtype=np.float64), records, counts)
-    packed = records[:m].tobytes()  # row-major: robot 0's neighbours first
-    ends = (counts.cumsum() * NEIGHBOUR.size).tolist()
-    return [packed[start:end] for start, end in zip([0, *ends[:-1]], ends)]
-
-
-@njit(cache=True)
-def _sighted_records(near: np.ndarray, distance: np.ndarray, poses: np.ndarray, records: np.ndarray,
-                     counts: np.ndarray) -> int:  # pragma: no cover - compiled
-    """:func:`_neighbour_records` with each record's bearing computed from the poses."""
-    m = 0
-    for i in range(near.shape[0]):
-        start = m
-        for j in range(near.shape[1]):
-            if near[i, j]:
-                records[m]["id"] = j
-                records[m]["distance"] = distance[i, j]
-                records[m]["bearing"] = _bearing(poses[i, 0], poses[i, 1], poses[i, 2], poses[j, 0], poses[j, 1])
-                records[m]["x"] = poses[j, 0]
-                records[m]["y"] = poses[j, 1]
                 m += 1
         counts[i] = m - start
     return m

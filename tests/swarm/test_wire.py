@@ -16,8 +16,9 @@ from swarm.messages import Heartbeat, encode
 from swarm.transport.agent import AgentRunner, InboxDecoder
 from swarm.transport.wire import (NAV_STATES, NEIGHBOUR, OBS_STATE, RAW_CELLS_BELOW, WIRE_VERSION, ObsDecoder,
                                   ResetPacket, WireError, decode_act, decode_obs, encode_act, encode_obs,
-                                  neighbour_table, pack_neighbours)
+                                  pack_neighbours)
 from swarm.neighbours import bearings
+from swarm.transport.packing import ObsEncoder
 
 MAP_CELLS = 40 * 40
 
@@ -169,19 +170,48 @@ def test_bearings_follow_the_plain_definition_bit_for_bit():
         assert b.tolist() == expected
 
 
-def test_neighbour_table_packs_every_robot_as_pack_neighbours_does():
-    """Bearings computed per neighbour pair give the records the full bearing matrix gives."""
+def random_tick(rng: np.random.Generator, n: int) -> dict:
+    """One tick's arrays for ObsEncoder: every case of the packet (no / few / compressible cells, inboxes,
+    robots not live, goals and none, ticks and counters of every msgpack integer width)."""
+    rows, cols = 30, 40
+    pieces = [np.sort(rng.choice(rows * cols, int(rng.choice([0, 0, 3, RAW_CELLS_BELOW, 200])), replace=False))
+              for _ in range(n)]
+    near = rng.random((n, n)) < 0.4
+    np.fill_diagonal(near, False)
+    navs = [NavStatus(goal=None if rng.random() < 0.3 else (float(rng.random()), -2.5),
+                      state=str(rng.choice(NAV_STATES)), path_length=float(rng.random()),
+                      ticks_since_progress=int(rng.choice([0, 200, 70000]))) for _ in range(n)]
+    return dict(tick=int(rng.choice([0, 5, 200, 70000, 2 ** 33])), live=rng.random(n) < 0.8,
+                poses=np.column_stack((rng.random((n, 2)) * 60, rng.random(n) * 8 - 4)), collided=rng.random(n) < 0.3,
+                travelled=rng.random(n) * 100, energy=rng.random(n) * 200, navs=navs,
+                known=rng.integers(0, 3, (n, rows, cols)).astype(np.uint8),
+                cells=np.concatenate(pieces).astype(np.int64), ends=np.cumsum([len(p) for p in pieces]),
+                inboxes=[tuple(rng.bytes(int(rng.integers(1, 300))) for _ in range(int(rng.integers(0, 3))))
+                         for _ in range(n)],
+                near=near, distance=rng.random((n, n)) * 9)
+
+
+def test_obs_encoder_writes_encode_obs_bytes_for_every_robot():
+    """The batched packet writer against the one-robot encoder, neighbours from the full bearing matrix."""
     rng = np.random.default_rng(6)
-    for n in (1, 2, 7, 16):
-        near = rng.random((n, n)) < 0.4
-        np.fill_diagonal(near, False)
-        near[n // 2] = False  # a robot with no neighbour
-        distance = rng.random((n, n)) * 9
-        poses = np.column_stack((rng.random((n, 2)) * 50, rng.random(n) * 8 - 4))
-        table = neighbour_table(near, distance, poses)
-        b, xy = bearings(poses), poses[:, :2].copy()
-        assert table == [pack_neighbours(tuple(Neighbours(i, near, distance, b, xy))) for i in range(n)]
-        assert table[n // 2] == b""
+    for trial in range(60):
+        n = int(rng.integers(1, 18))
+        encoder = ObsEncoder(n)
+        for _ in range(2):  # the second tick reuses the encoder's nav cache
+            t = random_tick(rng, n)
+            t["navs"][0] = encoder._navs[0] or t["navs"][0]  # an unchanged status object
+            got = encoder(**t)
+            b, xy = bearings(t["poses"]), t["poses"][:, :2].copy()
+            for i in range(n):
+                if not t["live"][i]:
+                    assert got[i] is None
+                    continue
+                idx = t["cells"][(t["ends"][i - 1] if i else 0):t["ends"][i]]
+                expected = encode_obs(t["tick"], i, Pose(*t["poses"][i].tolist()), idx, t["known"][i].reshape(-1)[idx],
+                                      t["inboxes"][i], Neighbours(i, t["near"], t["distance"], b, xy),
+                                      bool(t["collided"][i]), t["navs"][i], float(t["travelled"][i]),
+                                      float(t["energy"][i]))
+                assert got[i] == expected, (trial, i)
 
 
 # ------------------------------------------------------------------------------------------ act ----
