@@ -5,8 +5,11 @@ the neighbour records and a msgpack list, about 5 us a robot, 16 robots a tick. 
 the same bytes for all robots from the tick's arrays (poses, counters, the changed cells of every map, the
 near mask and distances) straight into one buffer: msgpack framing, the state struct, uint32 gaps and
 values, and neighbour records with their bearings computed per neighbour pair. Python then only cuts the
-buffer and splices in the rare parts a kernel does not write: inbox messages (a list of byte strings) and
-zlib-compressed large map updates (those robots go through ``encode_obs`` itself).
+buffer and splices in the part a kernel does not write: inbox messages (a list of byte strings). Large map
+updates are zlib-compressed only for robots marked ``compress`` (agents across a network): those robots go
+through ``encode_obs`` itself. An agent in the runtime's own session gets them raw, which the format allows
+(compression is the sender's choice; a decoder tells the two apart by length) and which saves deflating
+and inflating bytes that never leave the process.
 """
 
 from __future__ import annotations
@@ -32,12 +35,15 @@ records' first byte, packet end."""
 
 
 class ObsEncoder:
-    """Packs a tick's obs packets for robots ``0..n-1``; byte for byte what ``encode_obs`` gives (tested).
+    """Packs a tick's obs packets for robots ``0..n-1``; byte for byte what ``encode_obs`` gives (tested), with
+    large map updates raw for robots not marked ``compress``.
 
     Keeps each robot's last :class:`NavStatus` with its numbers, so the Python side of a tick is an
     identity check per robot (the navigator returns the same object while nothing changed)."""
 
-    def __init__(self, n_robots: int) -> None:
+    def __init__(self, n_robots: int, compress: Sequence[int] = ()) -> None:
+        """``compress``: the robots whose large map updates are compressed (as ``encode_obs`` does)."""
+        self._compress = [i in set(compress) for i in range(n_robots)]
         self._navs: list[NavStatus | None] = [None] * n_robots
         self._nav_f = np.zeros((n_robots, 3))                 # goal x, goal y, path length
         self._nav_i = np.zeros((n_robots, 3), dtype=np.int64)  # ticks since progress, state index, flags
@@ -76,7 +82,7 @@ class ObsEncoder:
             last = int(ends[i])
             if start < 0:
                 out.append(None)
-            elif last - first >= RAW_CELLS_BELOW:  # large updates may be compressed: the reference path
+            elif last - first >= RAW_CELLS_BELOW and self._compress[i]:  # compressed: the reference path
                 idx = cells[first:last]
                 out.append(encode_obs(tick, i, Pose(*poses[i].tolist()), idx, known[i].reshape(-1)[idx],
                                       tuple(inboxes[i]), data[records_at:end], bool(collided[i]), navs[i],

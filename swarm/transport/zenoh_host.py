@@ -128,7 +128,7 @@ class ZenohHost:
 
     # ---------------------------------------------------------------------------------- interface ----
     def start(self, resets: Sequence[ResetPacket]) -> None:
-        self._encode = ObsEncoder(len(resets))
+        self._encode = ObsEncoder(len(resets), compress=self.remote)  # local agents: nothing to save
         for reset in resets:
             i = reset.robot.id
             self._act_subscriber(i)

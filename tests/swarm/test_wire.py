@@ -192,19 +192,20 @@ def random_tick(rng: np.random.Generator, n: int) -> dict:
 
 
 def test_obs_encoder_writes_encode_obs_bytes_for_every_robot():
-    """The batched packet writer against the one-robot encoder, neighbours from the full bearing matrix."""
+    """The batched packet writer against the one-robot encoder, neighbours from the full bearing matrix;
+    without ``compress`` large updates travel raw and decode to the same observation."""
     rng = np.random.default_rng(6)
     for trial in range(60):
         n = int(rng.integers(1, 18))
-        encoder = ObsEncoder(n)
-        for _ in range(2):  # the second tick reuses the encoder's nav cache
+        encoder, raw_encoder = ObsEncoder(n, compress=range(n)), ObsEncoder(n)
+        for _ in range(2):  # the second tick reuses the encoders' nav cache
             t = random_tick(rng, n)
             t["navs"][0] = encoder._navs[0] or t["navs"][0]  # an unchanged status object
-            got = encoder(**t)
+            got, raw = encoder(**t), raw_encoder(**t)
             b, xy = bearings(t["poses"]), t["poses"][:, :2].copy()
             for i in range(n):
                 if not t["live"][i]:
-                    assert got[i] is None
+                    assert got[i] is None and raw[i] is None
                     continue
                 idx = t["cells"][(t["ends"][i - 1] if i else 0):t["ends"][i]]
                 expected = encode_obs(t["tick"], i, Pose(*t["poses"][i].tolist()), idx, t["known"][i].reshape(-1)[idx],
@@ -212,6 +213,11 @@ def test_obs_encoder_writes_encode_obs_bytes_for_every_robot():
                                       bool(t["collided"][i]), t["navs"][i], float(t["travelled"][i]),
                                       float(t["energy"][i]))
                 assert got[i] == expected, (trial, i)
+                assert len(fields(raw[i])[6]) == 5 * len(idx)
+                a, e = decode_obs(raw[i], 30 * 40), decode_obs(expected, 30 * 40)
+                assert a.changed_idx.tolist() == e.changed_idx.tolist() == idx.tolist()
+                assert a.changed_val.tolist() == e.changed_val.tolist()
+                assert a._replace(changed_idx=None, changed_val=None) == e._replace(changed_idx=None, changed_val=None)
 
 
 # ------------------------------------------------------------------------------------------ act ----
