@@ -388,7 +388,7 @@ class _TickLinks:
 class _Lazy:
     """A tick's (R, R) matrix computed on first read and then shared by every robot's
     :class:`~swarm.api.Neighbours` (most algorithms never read their neighbours). Indexing reads the
-    matrix; numpy code (the zenoh transport packs all robots' neighbours at once) sees it through
+    matrix; numpy code (wire.pack_neighbours packs all robots' rows at once) sees it through
     ``__array__``."""
 
     __slots__ = ("_make", "_value")
