@@ -253,6 +253,35 @@ def _radio_all_pairs(blocks, cell, xy, tol, cross_db, metre_db, per_metre,
 
 
 @njit(cache=True)
+def _radio_clear_within(blocks, cell, xy, tol, n_mat, max_distance, distance, clear):  # pragma: no cover
+    """Fill ``distance`` (all pairs, as :func:`_radio_all_pairs` computes it) and ``clear[i, j]``: i != j, at
+    most ``max_distance`` apart and no wall crossed. Only pairs within range are walked (the same walk from
+    i to j > i), so a sensing-range question costs short walks instead of the all-pairs picture."""
+    n_robots = xy.shape[0]
+    rows = blocks.shape[1]
+    cols = blocks.shape[2]
+    cap = rows + cols + 2
+    run_start = np.empty(cap)
+    run_end = np.empty(cap)
+    run_len = np.empty((cap, n_mat))
+    for i in range(n_robots):
+        distance[i, i] = 0.0
+        clear[i, i] = False
+        for j in range(i + 1, n_robots):
+            ddx = xy[j, 0] - xy[i, 0]
+            ddy = xy[j, 1] - xy[i, 1]
+            d = math.sqrt(ddx * ddx + ddy * ddy)
+            seen = False
+            if d <= max_distance:
+                seen = _radio_walk_segment(blocks, cell, xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1], tol,
+                                           run_start, run_end, run_len) == 0
+            distance[i, j] = d
+            distance[j, i] = d
+            clear[i, j] = seen
+            clear[j, i] = seen
+
+
+@njit(cache=True)
 def _radio_one_to_many(blocks, cell, x0, y0, targets, tol, cross_db, metre_db, per_metre,
                        distance, walls, wall_db):  # pragma: no cover
     """Walk from one point to each target (the heatmap's inner loop)."""

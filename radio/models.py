@@ -32,7 +32,7 @@ from maps.errors import InvalidInput
 from maps.model import Map
 
 from .config import RadioConfig
-from .crossings import WallCrossing, WallRaster, _radio_price_runs
+from .crossings import WallCrossing, WallRaster, _radio_clear_within, _radio_price_runs
 from .evaluate import CHARGED, DISTANCE, PATH_LOSS, RSSI, _radio_evaluate, _radio_first_outside
 from .materials import resolve_table
 from .pathloss import GLOBAL, LOS, MAES, MULTIWALL, _radio_link_budget
@@ -216,6 +216,19 @@ class LinkModel:
         state = LinkState(out[DISTANCE], walls, counts, self.materials, out[PATH_LOSS], out[CHARGED], out[RSSI], link)
         self._last_key, self._last_state = key, state
         return state
+
+    def in_sight(self, positions: np.ndarray, max_distance: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(distance, clear)`` for robots at ``positions`` (float64[R, 2]): the pair distances (bit for bit
+        :meth:`evaluate`'s) and ``clear[i, j]``, i != j at most ``max_distance`` apart with no wall crossed
+        (``evaluate``'s ``walls == 0``). Walks only the pairs within range: what sensing neighbours needs,
+        without the all-pairs radio picture. Positions are not checked (callers pass robot poses)."""
+        xy = np.ascontiguousarray(positions, dtype=np.float64)
+        r = xy.shape[0]
+        distance = np.empty((r, r))
+        clear = np.empty((r, r), dtype=np.bool_)
+        _radio_clear_within(self.raster.blocks, self.raster.cell_m, xy, self.tol, self.cross_db.shape[0],
+                            float(max_distance), distance, clear)
+        return distance, clear
 
     def trace(self, p: Point, q: Point) -> list[WallCrossing]:
         """The walls crossed from ``p`` to ``q`` in order, each with its materials, lengths and dB charged."""

@@ -183,6 +183,16 @@ def sync_regions(current: np.ndarray, last: np.ndarray, centres: np.ndarray, rea
     False, which are left alone. The zenoh transport ships each robot only what changed where its lidar
     looked or a merge wrote, every robot every tick: per-robot calls cost several times the scan itself in
     Python (bounds, concatenation, allocation)."""
+    out, ends = sync_regions_flat(current, last, centres, reach, cells, active)
+    bounds = ends.tolist()
+    return [out[start:end] if a else None
+            for start, end, a in zip([0, *bounds[:-1]], bounds, active_flags(len(bounds), active).tolist())]
+
+
+def sync_regions_flat(current: np.ndarray, last: np.ndarray, centres: np.ndarray, reach: int,
+                      cells: Sequence[Sequence[np.ndarray]], active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`sync_regions` as one array: map k's changed cells are ``out[ends[k-1]:ends[k]]`` (empty for
+    inactive maps), the layout the zenoh transport's packet writer reads without cutting it per robot."""
     if current.shape != last.shape or current.ndim != 3 or not (current.flags.c_contiguous and last.flags.c_contiguous):
         raise InvalidInput("last", getattr(last, "shape", None), f"a C-contiguous stack shaped like current {current.shape}")
     n = current.shape[0]
@@ -201,8 +211,7 @@ def sync_regions(current: np.ndarray, last: np.ndarray, centres: np.ndarray, rea
     out = np.empty(n * side * side + total, dtype=np.int64)
     bounds = np.array(ends, dtype=np.int64)
     _sync_windows_kernel(current, last, np.ascontiguousarray(centres, dtype=np.int64), reach, act, extra, bounds, out)
-    ends = bounds.tolist()
-    return [out[start:end] if a else None for start, end, a in zip([0, *ends[:-1]], ends, flags)]
+    return out, bounds
 
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)

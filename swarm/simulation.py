@@ -5,7 +5,8 @@ One logic tick (0.1 s, DESIGN.md section 4):
 1. ``world.step``: pymunk moves the robots under last tick's commands (sub-stepped), reports collisions;
 2. ``lidar.scan``: every robot's lidar writes what it sees into its own knowledge map; truth tracker;
 3. the radio picture for this tick's positions (distances, walls, RSSI, links, groups), evaluated when
-   first used (sending, metrics, neighbours, an observer): a pure function of the positions;
+   first used (sending, metrics, an observer): a pure function of the positions. Neighbours (robots in
+   sensing range and line of sight) walk only the pairs within range (``LinkModel.in_sight``);
 4. inboxes: messages sent last tick arrive; map updates are merged into the receiver's map;
 5. the transport hands each live robot its observation and gets its action (goal or velocity, messages);
 6. this tick's broadcasts are judged by this tick's links and queued for next tick;
@@ -31,14 +32,15 @@ from radio import build_link_model, config_from_mapping
 
 from .api import Action, Neighbour, Neighbours, Observation, Pose, RobotInfo, frozen_builder
 from .comm import CommSpec, Envelope, MapSharing, Medium
-from .knowledge import sync_changes, sync_regions
+from .knowledge import sync_changes, sync_regions_flat
 from .metrics import Metrics
 from .navigation import Navigator
+from .neighbours import bearings
 from .result import RunResult
 from .sensing import ExplorationTracker, Lidar, LidarParams
 from .spawn import spawn
 from .spec import ROBOT_STREAM, RunSpec, planner_rng, seed_streams
-from .transport import AgentHost, TickInput, make_host
+from .transport import AgentHost, TickBatch, TickInput, make_host
 from .transport.wire import ResetPacket
 from .world import MotionParams, World
 
@@ -142,7 +144,7 @@ class Simulation:
                          timeout_s=opts.timeout_s, run_id=opts.run_id)
         try:
             host.start(self.resets())
-            if host.needs_delta:
+            if host.batched:
                 self._mirror = np.zeros_like(self.known)
             return self._loop(host)
         finally:
@@ -184,8 +186,10 @@ class Simulation:
             if stop_reason:
                 break
             pose_tuples = [Pose(*row) for row in poses.tolist()]  # shared by observations and navigation
-            inputs = self._inputs(tick, poses, pose_tuples, collided, inboxes, merged, links, host.needs_delta)
-            actions = host.act(tick, inputs)
+            if host.batched:
+                actions = host.act(tick, self._batch(poses, collided, inboxes, merged))
+            else:
+                actions = host.act(tick, self._inputs(tick, poses, pose_tuples, collided, inboxes))
             self._note_failures(tick, host)
             sent = self._send(tick, poses, actions, links)
             moving = False
@@ -245,25 +249,29 @@ class Simulation:
         return outboxes
 
     # ------------------------------------------------------------------------------- observations ----
-    def _neighbours(self, poses: np.ndarray, links: Any) -> list[Sequence[Neighbour]]:
+    def _neighbours(self, poses: np.ndarray) -> list[Sequence[Neighbour]]:
         """Robots within ``neighbour_range`` and in line of sight (no wall crossed), per robot (lazy)."""
         n = len(poses)
         if n == 1:
             return [()]
         p = poses.copy()
-        near = _Lazy(lambda: _near(links.distance, links.walls, self.neighbour_range))
-        distance = _Lazy(lambda: links.distance)
-        bearing = _Lazy(lambda: _bearings(p))
+        sight = _Lazy(lambda: self._sight(p))
+        near = _Lazy(lambda: sight.value()[1])
+        distance = _Lazy(lambda: sight.value()[0])
+        bearing = _Lazy(lambda: bearings(p))
         xy = p[:, :2].copy()
         return [Neighbours(i, near, distance, bearing, xy) for i in range(n)]
 
+    def _sight(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(distance, near)``: the radio's pair distances and who is within ``neighbour_range`` with no wall
+        crossed, walking only the pairs in range (the tick's all-pairs radio picture is not needed)."""
+        return self.links.in_sight(poses[:, :2], self.neighbour_range)
+
     def _inputs(self, tick: int, pose_array: np.ndarray, poses: list[Pose], collided: np.ndarray,
-                inboxes: list[list[Envelope]],
-                merged: list[list[np.ndarray | None]], links: Any, needs_delta: bool) -> list[TickInput | None]:
+                inboxes: list[list[Envelope]]) -> list[TickInput | None]:
         distance = self.world.distance.tolist()
         energy = (self.world.distance + self.world.rotation).tolist()
-        neighbours = self._neighbours(pose_array, links)
-        changed = self._changed_cells(pose_array, merged) if needs_delta else None
+        neighbours = self._neighbours(pose_array)
         hit = collided.tolist()
         failed = self.failed.tolist()
         inputs: list[TickInput | None] = []
@@ -276,27 +284,41 @@ class Simulation:
                                inbox=tuple([env.message for env in inbox]) if inbox else (),
                                neighbours=neighbours[i], collided=hit[i], nav=self.navigators[i].status(),
                                distance_travelled=distance[i], energy_used=energy[i])
-            if changed is not None:
-                inputs.append(TickInput(obs, changed[i], tuple(env.data for env in inboxes[i])))
-            else:
-                inputs.append(TickInput(obs))
+            inputs.append(TickInput(obs))
         return inputs
 
-    def _changed_cells(self, poses: np.ndarray, merged: list[list[np.ndarray | None]]) -> list[np.ndarray | None]:
-        """Per robot, flat indices (ascending) of its knowledge cells changed since its last observation (None
-        for failed robots): the lidar only writes within range of the robot, delta merges report their cells,
-        so only those places are compared, all robots in one compiled call; after a full-map merge the whole
-        map is."""
+    def _batch(self, poses: np.ndarray, collided: np.ndarray, inboxes: list[list[Envelope]],
+               merged: list[list[np.ndarray | None]]) -> TickBatch:
+        """The tick's observations as arrays for a batched host (zenoh): the same numbers as :meth:`_inputs`,
+        plus each robot's knowledge cells changed since its last observation, inboxes as wire bytes."""
+        live = ~self.failed
+        cells, ends = self._changed_cells(poses, merged)
+        distance, near = self._sight(poses)
+        navs = [nav.status() if ok else None for nav, ok in zip(self.navigators, live.tolist())]
+        return TickBatch(live=live, poses=poses, collided=collided, travelled=self.world.distance,
+                         energy=self.world.distance + self.world.rotation, navs=navs, known=self.known,
+                         cells=cells, ends=ends, inboxes=[tuple(env.data for env in inbox) for inbox in inboxes],
+                         near=near, distance=distance)
+
+    def _changed_cells(self, poses: np.ndarray, merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:
+        """``(cells, ends)``: per robot, flat indices (ascending) of its knowledge cells changed since its last
+        observation, robot i's at ``cells[ends[i-1]:ends[i]]`` (none for failed robots): the lidar only writes
+        within range of the robot, delta merges report their cells, so only those places are compared, all
+        robots in one compiled call; after a full-map merge the whole map is."""
         assert self._mirror is not None
         full = [i for i, cells in enumerate(merged) if cells and any(m is None for m in cells) and not self.failed[i]]
         windowed = ~self.failed
         windowed[full] = False
         reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2
         centres = (poses[:, 1::-1] / CELL_M).astype(np.int64)  # (row, col); truncation, as int() did
-        changed = sync_regions(self.known, self._mirror, centres, reach, merged, windowed)
+        cells, ends = sync_regions_flat(self.known, self._mirror, centres, reach, merged, windowed)
+        if not full:
+            return cells, ends
+        bounds = ends.tolist()
+        pieces = [cells[start:end] for start, end in zip([0, *bounds[:-1]], bounds)]
         for i in full:
-            changed[i] = sync_changes(self.known[i], self._mirror[i])
-        return changed
+            pieces[i] = sync_changes(self.known[i], self._mirror[i])
+        return np.concatenate(pieces), np.cumsum([len(piece) for piece in pieces], dtype=np.int64)
 
     def _note_failures(self, tick: int, host: AgentHost) -> None:
         for i, (at, reason) in sorted(host.stats.failures.items()):
@@ -351,8 +373,8 @@ __all__ = ["Simulation", "TickView", "TransportOptions", "build_map", "run"]
 
 class _TickLinks:
     """The tick's :class:`radio.LinkState`, evaluated on first use. On most ticks nobody sends, no metrics
-    are recorded and no algorithm reads its neighbours (13 % of the benchmark's ticks carry messages), so
-    the all-pairs radio walk is skipped; it is a pure function of the positions, kept here, so evaluating
+    are recorded (13 % of the benchmark's ticks carry messages), so the all-pairs radio walk is skipped
+    (neighbours use the cheaper in-range walk); it is a pure function of the positions, kept here, so evaluating
     later gives the same state."""
 
     __slots__ = ("_model", "_xy", "_state")
@@ -374,7 +396,7 @@ class _TickLinks:
 class _Lazy:
     """A tick's (R, R) matrix computed on first read and then shared by every robot's
     :class:`~swarm.api.Neighbours` (most algorithms never read their neighbours). Indexing reads the
-    matrix; numpy code (the zenoh transport packs all robots' neighbours at once) sees it through
+    matrix; numpy code (wire.pack_neighbours packs all robots' rows at once) sees it through
     ``__array__``."""
 
     __slots__ = ("_make", "_value")
@@ -399,17 +421,3 @@ class _Lazy:
         if dtype is not None:
             return m.astype(dtype)
         return m.copy() if copy else m  # numpy asks for a copy when the caller may write to it
-
-
-def _near(distance: np.ndarray, walls: np.ndarray, neighbour_range: float) -> np.ndarray:
-    """Robots within ``neighbour_range`` and in line of sight (no wall crossed), never oneself."""
-    near = (distance <= neighbour_range) & (walls == 0)
-    np.fill_diagonal(near, False)
-    return near
-
-
-def _bearings(poses: np.ndarray) -> np.ndarray:
-    """Bearing from each robot's heading to every other robot (rad, in [-pi, pi))."""
-    dx = poses[None, :, 0] - poses[:, None, 0]
-    dy = poses[None, :, 1] - poses[:, None, 1]
-    return (np.arctan2(dy, dx) - poses[:, None, 2] + np.pi) % (2 * np.pi) - np.pi

@@ -13,17 +13,34 @@ from typing import Protocol, Sequence
 
 import numpy as np
 
-from ..api import Action, Observation
+from ..api import Action, NavStatus, Observation
 from .wire import ResetPacket
 
 
 @dataclass
 class TickInput:
-    """One robot's observation for a tick, plus what a remote agent needs to rebuild it."""
+    """One robot's observation for a tick (hosts that call algorithms directly)."""
 
     obs: Observation
-    changed_idx: np.ndarray | None = None      # knowledge cells changed since the previous observation
-    inbox_bytes: tuple[bytes, ...] = ()        # the inbox messages' wire bytes
+
+
+@dataclass
+class TickBatch:
+    """Every robot's observation of a tick as the runtime's arrays, row i = robot i, for hosts that pack all
+    robots at once (zenoh): nothing per robot is built on the runtime's side. Read-only for the host."""
+
+    live: np.ndarray                          # bool[R]: robots to ask (not failed)
+    poses: np.ndarray                         # float64[R, 3]
+    collided: np.ndarray                      # bool[R]: touched something since the last observation
+    travelled: np.ndarray                     # float64[R]: metres travelled
+    energy: np.ndarray                        # float64[R]: energy used
+    navs: list[NavStatus | None]              # the navigators' status (None for robots not live)
+    known: np.ndarray                         # uint8[R, H, W]: the knowledge maps
+    cells: np.ndarray                         # int64: knowledge cells changed since the last observation,
+    ends: np.ndarray                          # robot after robot: robot i's are cells[ends[i-1]:ends[i]]
+    inboxes: list[tuple[bytes, ...]]          # the inbox messages' wire bytes
+    near: np.ndarray                          # bool[R, R]: sensed neighbours (in range, line of sight)
+    distance: np.ndarray                      # float64[R, R]: pair distances
 
 
 @dataclass
@@ -33,12 +50,12 @@ class HostStats:
 
 
 class AgentHost(Protocol):
-    needs_delta: bool
+    batched: bool  # act() takes a TickBatch instead of one TickInput per robot
     stats: HostStats
 
     def start(self, resets: Sequence[ResetPacket]) -> None: ...
 
-    def act(self, tick: int, inputs: Sequence[TickInput | None]) -> list[Action | None]:
+    def act(self, tick: int, inputs: Sequence[TickInput | None] | TickBatch) -> list[Action | None]:
         """Actions for the robots given inputs (None for failed robots); None where a robot failed now."""
         ...
 

@@ -11,7 +11,7 @@ from .wire import ResetPacket
 
 
 class InProcessHost:
-    needs_delta = False
+    batched = False
 
     def __init__(self) -> None:
         self.stats = HostStats()

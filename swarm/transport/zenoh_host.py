@@ -24,16 +24,15 @@ import time
 import uuid
 from typing import Sequence
 
-import numpy as np
 import zenoh
 
 from ..api import Action
 from .agent import AgentRunner, InboxDecoder
-from .base import HostStats, TickInput
-from .wire import ResetPacket, WireError, decode_act, encode_obs, encode_reset
+from .base import HostStats, TickBatch
+from .packing import ObsEncoder
+from .wire import ResetPacket, WireError, decode_act, encode_reset
 
 BLOCK = zenoh.CongestionControl.BLOCK
-_NO_VALUES = np.zeros(0, dtype=np.uint8)
 
 
 def session_config(listen: Sequence[str] = (), connect: Sequence[str] = ()) -> zenoh.Config:
@@ -62,7 +61,7 @@ def robot_of(key_expr: object) -> int | None:
 
 
 class ZenohHost:
-    needs_delta = True
+    batched = True
 
     def __init__(self, run_id: str, listen: Sequence[str] = (), remote: Sequence[int] = (),
                  timeout_s: float = 10.0, join_timeout_s: float = 60.0) -> None:
@@ -128,6 +127,7 @@ class ZenohHost:
 
     # ---------------------------------------------------------------------------------- interface ----
     def start(self, resets: Sequence[ResetPacket]) -> None:
+        self._encode = ObsEncoder(len(resets), compress=self.remote)  # local agents: nothing to save
         for reset in resets:
             i = reset.robot.id
             self._act_subscriber(i)
@@ -149,25 +149,28 @@ class ZenohHost:
                     self.session.put(f"{self.prefix}/robot/{reset.robot.id}/reset", encode_reset(reset),
                                      congestion_control=BLOCK)
 
-    def act(self, tick: int, inputs: Sequence[TickInput | None]) -> list[Action | None]:
-        live = [i for i, inp in enumerate(inputs) if inp is not None and i not in self.stats.failures]
+    def act(self, tick: int, batch: TickBatch) -> list[Action | None]:
+        asked = batch.live
+        if self.stats.failures:  # failed here, not yet in the runtime's live mask (e.g. never joined)
+            asked = asked.copy()
+            asked[list(self.stats.failures)] = False
         with self._cond:
             self._replies.clear()
+        packets = self._encode(tick, asked, batch.poses, batch.collided, batch.travelled, batch.energy, batch.navs,
+                               batch.known, batch.cells, batch.ends, batch.inboxes, batch.near, batch.distance)
         publishers = self._publishers
-        for i in live:
-            inp = inputs[i]
-            assert inp is not None and inp.changed_idx is not None
-            o, idx = inp.obs, inp.changed_idx
-            values = o.known.reshape(-1)[idx] if len(idx) else _NO_VALUES  # most ticks change nothing
-            publishers[i].put(encode_obs(tick, i, o.pose, idx, values, inp.inbox_bytes, o.neighbours, o.collided,
-                                         o.nav, o.distance_travelled, o.energy_used))
+        live = []
+        for i, packet in enumerate(packets):
+            if packet is not None:
+                live.append(i)
+                publishers[i].put(packet)
         waiting = [i for i in live if i in self.remote]
         if waiting:
             deadline = time.monotonic() + self.timeout_s
             with self._cond:
                 self._cond.wait_for(lambda: all(i in self._replies or i in self._lost for i in waiting)
                                     or time.monotonic() > deadline, timeout=self.timeout_s)
-        actions: list[Action | None] = [None] * len(inputs)
+        actions: list[Action | None] = [None] * len(packets)
         with self._cond:
             replies = dict(self._replies)
             lost = set(self._lost)

@@ -201,6 +201,27 @@ def test_evaluate_is_cached_and_read_only():
     assert model.evaluate(xy + 0.1) is not first
 
 
+@pytest.mark.parametrize("kind, seed", [("building", 4), ("cave", 5)])
+def test_in_sight_is_evaluate_restricted_to_pairs_in_range(kind, seed):
+    """The in-range walk gives evaluate's distances bit for bit and its ``walls == 0`` within the range."""
+    m = generate(kind, 40, seed)
+    model = build_link_model(m)
+    free = np.argwhere(~m.solid)
+    rng = np.random.default_rng(seed)
+    for trial in range(20):
+        n = int(rng.integers(1, 20))
+        xy = (free[rng.integers(0, len(free), n)][:, ::-1] + rng.random((n, 2))) * 0.5
+        if trial % 4 == 0:
+            xy[n // 2:] = xy[0]  # robots on the same spot
+        state = model.evaluate(xy)
+        for reach in (0.0, 3.0, 7.0, 12.5, math.inf):
+            distance, clear = model.in_sight(xy, reach)
+            assert distance.view(np.int64).tolist() == state.distance.view(np.int64).tolist()
+            expected = (state.distance <= reach) & (state.walls == 0)
+            np.fill_diagonal(expected, False)
+            assert np.array_equal(clear, expected)
+
+
 @pytest.mark.parametrize("positions, value", [
     ([[5.0, 10.0], [130.0, 10.0]], [130.0, 10.0]),
     ([[5.0, 10.0], [float("nan"), 10.0]], [float("nan"), 10.0]),

@@ -9,7 +9,7 @@ from maps import InvalidInput, Map
 from swarm.api import FREE, SOLID, UNSEEN
 from swarm.knowledge import (
     ExplorationTracker, LogOddsGrid, active_flags, classify_logodds, count_cells, count_known, empty_knowledge,
-    merge, merge_cells, sync_changes, sync_regions,
+    merge, merge_cells, sync_changes, sync_regions, sync_regions_flat,
 )
 
 
@@ -133,6 +133,22 @@ def test_sync_regions_equals_the_window_rule_per_map_and_skips_inactive_maps() -
     assert got[3] is None
     assert np.array_equal(last, expected_last) and not last[3].any()
     assert all(a.size == 0 for a in sync_regions(current, last, centres, 4, cells, active)[:3])
+
+
+def test_sync_regions_flat_is_sync_regions_robot_after_robot() -> None:
+    rng = np.random.default_rng(8)
+    current = rng.integers(0, 3, size=(4, 30, 25), dtype=np.uint8)
+    last_a, last_b = np.zeros_like(current), np.zeros_like(current)
+    centres = np.array([[3, 5], [15, 12], [29, 24], [10, 3]])
+    cells = [[np.array([700, 3])], [], [np.array([0, 749])], [np.array([5])]]
+    active = np.array([True, False, True, True])
+    per_map = sync_regions(current, last_a, centres, 3, cells, active)
+    flat, ends = sync_regions_flat(current, last_b, centres, 3, cells, active)
+    bounds = [0, *ends.tolist()]
+    for k in range(4):
+        got = flat[bounds[k]:bounds[k + 1]].tolist()
+        assert got == (per_map[k].tolist() if active[k] else [])
+    assert np.array_equal(last_a, last_b)
 
 
 def test_empty_knowledge_and_counts() -> None:

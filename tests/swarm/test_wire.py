@@ -17,6 +17,8 @@ from swarm.transport.agent import AgentRunner, InboxDecoder
 from swarm.transport.wire import (NAV_STATES, NEIGHBOUR, OBS_STATE, RAW_CELLS_BELOW, WIRE_VERSION, ObsDecoder,
                                   ResetPacket, WireError, decode_act, decode_obs, encode_act, encode_obs,
                                   pack_neighbours)
+from swarm.neighbours import bearings
+from swarm.transport.packing import ObsEncoder
 
 MAP_CELLS = 40 * 40
 
@@ -150,6 +152,72 @@ def test_neighbours_packed_from_the_matrices_equal_the_tuples_for_every_robot():
         lazy = Neighbours(i, near, distance, bearing, xy)
         expected = tuple(Neighbours(i, near, distance, bearing, xy))
         assert pack_neighbours(lazy) == pack_neighbours(expected) == b"".join(NEIGHBOUR.pack(*t) for t in expected)
+
+
+def reference_bearing(p, q) -> float:
+    """The plain definition: the direction to q, relative to p's heading, wrapped into [-pi, pi)."""
+    return (math.atan2(q[1] - p[1], q[0] - p[0]) - p[2] + math.pi) % (2 * math.pi) - math.pi
+
+
+def test_bearings_follow_the_plain_definition_bit_for_bit():
+    rng = np.random.default_rng(5)
+    for n in (1, 2, 9):
+        poses = np.column_stack((rng.random((n, 2)) * 30, rng.random(n) * 20 - 10))
+        poses[n // 2] = poses[0]  # a robot on top of another: atan2(0, 0)
+        b = bearings(poses)
+        assert b.shape == (n, n) and np.all((-math.pi <= b) & (b < math.pi))
+        expected = [[reference_bearing(p, q) for q in poses.tolist()] for p in poses.tolist()]
+        assert b.tolist() == expected
+
+
+def random_tick(rng: np.random.Generator, n: int) -> dict:
+    """One tick's arrays for ObsEncoder: every case of the packet (no / few / compressible cells, inboxes,
+    robots not live, goals and none, ticks and counters of every msgpack integer width)."""
+    rows, cols = 30, 40
+    pieces = [np.sort(rng.choice(rows * cols, int(rng.choice([0, 0, 3, RAW_CELLS_BELOW, 200])), replace=False))
+              for _ in range(n)]
+    near = rng.random((n, n)) < 0.4
+    np.fill_diagonal(near, False)
+    navs = [NavStatus(goal=None if rng.random() < 0.3 else (float(rng.random()), -2.5),
+                      state=str(rng.choice(NAV_STATES)), path_length=float(rng.random()),
+                      ticks_since_progress=int(rng.choice([0, 200, 70000]))) for _ in range(n)]
+    return dict(tick=int(rng.choice([0, 5, 200, 70000, 2 ** 33])), live=rng.random(n) < 0.8,
+                poses=np.column_stack((rng.random((n, 2)) * 60, rng.random(n) * 8 - 4)), collided=rng.random(n) < 0.3,
+                travelled=rng.random(n) * 100, energy=rng.random(n) * 200, navs=navs,
+                known=rng.integers(0, 3, (n, rows, cols)).astype(np.uint8),
+                cells=np.concatenate(pieces).astype(np.int64), ends=np.cumsum([len(p) for p in pieces]),
+                inboxes=[tuple(rng.bytes(int(rng.integers(1, 300))) for _ in range(int(rng.integers(0, 3))))
+                         for _ in range(n)],
+                near=near, distance=rng.random((n, n)) * 9)
+
+
+def test_obs_encoder_writes_encode_obs_bytes_for_every_robot():
+    """The batched packet writer against the one-robot encoder, neighbours from the full bearing matrix;
+    without ``compress`` large updates travel raw and decode to the same observation."""
+    rng = np.random.default_rng(6)
+    for trial in range(60):
+        n = int(rng.integers(1, 18))
+        encoder, raw_encoder = ObsEncoder(n, compress=range(n)), ObsEncoder(n)
+        for _ in range(2):  # the second tick reuses the encoders' nav cache
+            t = random_tick(rng, n)
+            t["navs"][0] = encoder._navs[0] or t["navs"][0]  # an unchanged status object
+            got, raw = encoder(**t), raw_encoder(**t)
+            b, xy = bearings(t["poses"]), t["poses"][:, :2].copy()
+            for i in range(n):
+                if not t["live"][i]:
+                    assert got[i] is None and raw[i] is None
+                    continue
+                idx = t["cells"][(t["ends"][i - 1] if i else 0):t["ends"][i]]
+                expected = encode_obs(t["tick"], i, Pose(*t["poses"][i].tolist()), idx, t["known"][i].reshape(-1)[idx],
+                                      t["inboxes"][i], Neighbours(i, t["near"], t["distance"], b, xy),
+                                      bool(t["collided"][i]), t["navs"][i], float(t["travelled"][i]),
+                                      float(t["energy"][i]))
+                assert got[i] == expected, (trial, i)
+                assert len(fields(raw[i])[6]) == 5 * len(idx)
+                a, e = decode_obs(raw[i], 30 * 40), decode_obs(expected, 30 * 40)
+                assert a.changed_idx.tolist() == e.changed_idx.tolist() == idx.tolist()
+                assert a.changed_val.tolist() == e.changed_val.tolist()
+                assert a._replace(changed_idx=None, changed_val=None) == e._replace(changed_idx=None, changed_val=None)
 
 
 # ------------------------------------------------------------------------------------------ act ----
