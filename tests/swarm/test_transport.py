@@ -156,7 +156,9 @@ def test_malformed_actions_are_dropped_and_counted():
             packet = decode_obs(sample.payload.to_bytes(), 80 * 80)
             k = len(answered)
             answered.append(packet.tick)
-            s.put(f"{prefix}/act", bad[k] if k < len(bad) else encode_act(packet.tick, 1, Action()))
+            # BLOCK as the real agent's publisher: zenoh's default (DROP) may lose the 9 MB reply on a busy machine
+            s.put(f"{prefix}/act", bad[k] if k < len(bad) else encode_act(packet.tick, 1, Action()),
+                  congestion_control=zenoh.CongestionControl.BLOCK)
 
         sub = s.declare_subscriber(f"{prefix}/obs", zenoh.handlers.Callback(on_obs, indirect=False))
         token = s.liveliness().declare_token(f"{prefix}/alive")
