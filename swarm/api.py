@@ -87,11 +87,6 @@ class Neighbours(Sequence[Neighbour]):
             self._source = None
         return self._items
 
-    def matrices(self) -> tuple[Any, ...] | None:
-        """``(row, near, distance, bearing, xy)``: this robot's row in the tick's matrices, shared by every
-        robot's Neighbours (wire.pack_neighbours packs them once per tick), or None once the tuples are built."""
-        return self._source
-
     def __getitem__(self, index):  # type: ignore[override]
         return self._all()[index]
 

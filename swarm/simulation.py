@@ -395,9 +395,7 @@ class _TickLinks:
 
 class _Lazy:
     """A tick's (R, R) matrix computed on first read and then shared by every robot's
-    :class:`~swarm.api.Neighbours` (most algorithms never read their neighbours). Indexing reads the
-    matrix; numpy code (wire.pack_neighbours packs all robots' rows at once) sees it through
-    ``__array__``."""
+    :class:`~swarm.api.Neighbours` (most algorithms never read their neighbours), which only index it."""
 
     __slots__ = ("_make", "_value")
 
@@ -412,12 +410,3 @@ class _Lazy:
 
     def __getitem__(self, key: Any) -> np.ndarray:
         return self.value()[key]
-
-    def __len__(self) -> int:
-        return len(self.value())
-
-    def __array__(self, dtype: Any = None, copy: Any = None) -> np.ndarray:
-        m = self.value()
-        if dtype is not None:
-            return m.astype(dtype)
-        return m.copy() if copy else m  # numpy asks for a copy when the caller may write to it

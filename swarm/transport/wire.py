@@ -158,7 +158,7 @@ class PackedNeighbours(Neighbours):
     __slots__ = ("_raw",)
 
     def __init__(self, raw: bytes) -> None:  # not super().__init__: that takes the runtime's arrays
-        self._source = None  # so matrices() is None: re-packing iterates the tuples
+        self._source = None
         self._items = None
         self._raw = raw
 
@@ -171,61 +171,9 @@ class PackedNeighbours(Neighbours):
         return True  # decode_obs gives () when there are none
 
 
-class _NeighbourTable:
-    """Every robot's ``neighbours`` field for one tick, packed at once from the tick's matrices (all robots'
-    :class:`~swarm.api.Neighbours` share them): one masked selection of all pairs' records, cut per robot.
-    The cache is one (near, fields) tuple, read and replaced whole, so runs in parallel threads never mix
-    ticks; holding ``near`` keeps its identity from being reused by a later tick's matrix."""
-
-    def __init__(self) -> None:
-        self._cache: tuple[Any, list[bytes]] = (None, [])
-
-    def row(self, row: int, near: np.ndarray, distance: np.ndarray, bearing: np.ndarray, xy: np.ndarray) -> bytes:
-        cache = self._cache
-        if cache[0] is not near:
-            cache = self._cache = (near, self._pack_all(near, distance, bearing, xy))
-        return cache[1][row]
-
-    @staticmethod
-    def _pack_all(near: np.ndarray, distance: np.ndarray, bearing: np.ndarray, xy: np.ndarray) -> list[bytes]:
-        n = len(near)
-        records = np.empty(n * n, NEIGHBOUR_DTYPE)
-        counts = np.empty(n, np.int64)
-        m = _neighbour_records(np.asarray(near), np.asarray(distance), np.asarray(bearing), xy, records, counts)
-        packed = records[:m].tobytes()  # row-major: robot 0's neighbours first
-        ends = (counts.cumsum() * NEIGHBOUR.size).tolist()
-        return [packed[start:end] for start, end in zip([0, *ends[:-1]], ends)]
-
-
-@njit(cache=True)
-def _neighbour_records(near: np.ndarray, distance: np.ndarray, bearing: np.ndarray, xy: np.ndarray,
-                       records: np.ndarray, counts: np.ndarray) -> int:  # pragma: no cover - compiled
-    """NEIGHBOUR records of every robot's neighbours, row by row, into ``records``; ``counts[i]`` per robot.
-    Compiled: the numpy version (field assignments and a masked selection) cost 3x as much per tick."""
-    m = 0
-    for i in range(near.shape[0]):
-        start = m
-        for j in range(near.shape[1]):
-            if near[i, j]:
-                records[m]["id"] = j
-                records[m]["distance"] = distance[i, j]
-                records[m]["bearing"] = bearing[i, j]
-                records[m]["x"] = xy[j, 0]
-                records[m]["y"] = xy[j, 1]
-                m += 1
-        counts[i] = m - start
-    return m
-
-
-_TABLE = _NeighbourTable()
-
-
 def pack_neighbours(neighbours: Any) -> bytes:
-    """The ``neighbours`` field: one NEIGHBOUR record per neighbour, from the runtime's matrices if it can."""
-    matrices = getattr(neighbours, "matrices", None)  # not isinstance: an ABC check per robot and tick
-    source = matrices() if matrices is not None else None
-    if source is not None:
-        return _TABLE.row(*source)
+    """The ``neighbours`` field: one NEIGHBOUR record per neighbour. (The zenoh host writes all robots'
+    records from the tick's arrays, :mod:`swarm.transport.packing`; this is the per-robot reference.)"""
     return b"".join(NEIGHBOUR.pack(*n) for n in neighbours)
 
 

@@ -141,7 +141,7 @@ def test_inbox_messages_are_decoded_once_per_payload_and_tick():
     assert c == a and c[0] is not a[0], "the cache holds one tick only"
 
 
-def test_neighbours_packed_from_the_matrices_equal_the_tuples_for_every_robot():
+def test_lazy_neighbours_pack_like_their_tuples_for_every_robot():
     rng = np.random.default_rng(3)
     n = 7
     near = rng.random((n, n)) < 0.5
