@@ -215,18 +215,29 @@ def _radio_price_runs(n, run_len, tol, cross_db, metre_db, per_metre, counts, i,
     return metres if per_metre else crossing
 
 
+@njit(cache=True, inline="always")
+def _run_buffers(blocks, n_mat):  # pragma: no cover - compiled
+    """Scratch for :func:`_radio_walk_segment`: run starts, ends and per-material lengths, enough for any
+    segment on this raster (it crosses at most rows + cols + 2 runs)."""
+    cap = blocks.shape[1] + blocks.shape[2] + 2
+    return np.empty(cap), np.empty(cap), np.empty((cap, n_mat))
+
+
+@njit(cache=True, inline="always")
+def _distance(x0, y0, x1, y1):  # pragma: no cover - compiled
+    """Euclidean distance; one definition, so every matrix and the in-range walk agree bit for bit."""
+    ddx = x1 - x0
+    ddy = y1 - y0
+    return math.sqrt(ddx * ddx + ddy * ddy)
+
+
 @njit(cache=True)
 def _radio_all_pairs(blocks, cell, xy, tol, cross_db, metre_db, per_metre,
                      distance, walls, wall_db, counts):  # pragma: no cover
     """Fill the symmetric all-pairs matrices (each unordered pair is walked once, from i to j > i)."""
     n_robots = xy.shape[0]
-    rows = blocks.shape[1]
-    cols = blocks.shape[2]
     n_mat = cross_db.shape[0]
-    cap = rows + cols + 2
-    run_start = np.empty(cap)
-    run_end = np.empty(cap)
-    run_len = np.empty((cap, n_mat))
+    run_start, run_end, run_len = _run_buffers(blocks, n_mat)
     for i in range(n_robots):
         distance[i, i] = 0.0
         walls[i, i] = 0
@@ -234,9 +245,7 @@ def _radio_all_pairs(blocks, cell, xy, tol, cross_db, metre_db, per_metre,
         for m in range(n_mat):
             counts[i, i, m] = 0
         for j in range(i + 1, n_robots):
-            ddx = xy[j, 0] - xy[i, 0]
-            ddy = xy[j, 1] - xy[i, 1]
-            d = math.sqrt(ddx * ddx + ddy * ddy)
+            d = _distance(xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1])
             n = _radio_walk_segment(blocks, cell, xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1], tol,
                                     run_start, run_end, run_len)
             for m in range(n_mat):
@@ -258,19 +267,12 @@ def _radio_clear_within(blocks, cell, xy, tol, n_mat, max_distance, distance, cl
     most ``max_distance`` apart and no wall crossed. Only pairs within range are walked (the same walk from
     i to j > i), so a sensing-range question costs short walks instead of the all-pairs picture."""
     n_robots = xy.shape[0]
-    rows = blocks.shape[1]
-    cols = blocks.shape[2]
-    cap = rows + cols + 2
-    run_start = np.empty(cap)
-    run_end = np.empty(cap)
-    run_len = np.empty((cap, n_mat))
+    run_start, run_end, run_len = _run_buffers(blocks, n_mat)
     for i in range(n_robots):
         distance[i, i] = 0.0
         clear[i, i] = False
         for j in range(i + 1, n_robots):
-            ddx = xy[j, 0] - xy[i, 0]
-            ddy = xy[j, 1] - xy[i, 1]
-            d = math.sqrt(ddx * ddx + ddy * ddy)
+            d = _distance(xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1])
             seen = False
             if d <= max_distance:
                 seen = _radio_walk_segment(blocks, cell, xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1], tol,
@@ -285,18 +287,11 @@ def _radio_clear_within(blocks, cell, xy, tol, n_mat, max_distance, distance, cl
 def _radio_one_to_many(blocks, cell, x0, y0, targets, tol, cross_db, metre_db, per_metre,
                        distance, walls, wall_db):  # pragma: no cover
     """Walk from one point to each target (the heatmap's inner loop)."""
-    rows = blocks.shape[1]
-    cols = blocks.shape[2]
     n_mat = cross_db.shape[0]
-    cap = rows + cols + 2
-    run_start = np.empty(cap)
-    run_end = np.empty(cap)
-    run_len = np.empty((cap, n_mat))
+    run_start, run_end, run_len = _run_buffers(blocks, n_mat)
     counts = np.zeros((1, 1, n_mat), dtype=np.int32)  # not reported: the heatmap needs dB only
     for i in range(targets.shape[0]):
-        ddx = targets[i, 0] - x0
-        ddy = targets[i, 1] - y0
-        distance[i] = math.sqrt(ddx * ddx + ddy * ddy)
+        distance[i] = _distance(x0, y0, targets[i, 0], targets[i, 1])
         n = _radio_walk_segment(blocks, cell, x0, y0, targets[i, 0], targets[i, 1], tol,
                                 run_start, run_end, run_len)
         walls[i] = n
