@@ -15,6 +15,23 @@ import numpy as np
 from numba import njit
 
 
+@njit(cache=True, inline="always")
+def put_u32(buf: np.ndarray, at: int, v: int) -> None:  # pragma: no cover - compiled
+    """Write ``v`` (0 <= v < 2**32) as a little-endian uint32 at ``buf[at:at + 4]``: the byte order of every
+    gap in the map-update and obs-packet layouts."""
+    buf[at] = v & 0xFF
+    buf[at + 1] = (v >> 8) & 0xFF
+    buf[at + 2] = (v >> 16) & 0xFF
+    buf[at + 3] = (v >> 24) & 0xFF
+
+
+@njit(cache=True, inline="always")
+def get_u32(raw: np.ndarray, at: int) -> np.int64:  # pragma: no cover - compiled
+    """The little-endian uint32 at ``raw[at:at + 4]`` as an int64."""
+    return (np.int64(raw[at]) | (np.int64(raw[at + 1]) << 8) | (np.int64(raw[at + 2]) << 16)
+            | (np.int64(raw[at + 3]) << 24))
+
+
 @njit(cache=True)
 def pack2(values: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
     """``values`` (uint8, each 0..3) packed four to a byte."""
@@ -32,10 +49,8 @@ def pack_delta(flat: np.ndarray, idx: np.ndarray) -> np.ndarray:  # pragma: no c
     out = np.zeros(4 * n + (n + 3) // 4, dtype=np.uint8)
     prev = 0
     for i in range(n):
-        gap = idx[i] - prev
+        put_u32(out, 4 * i, idx[i] - prev)
         prev = idx[i]
-        for b in range(4):
-            out[4 * i + b] = np.uint8((gap >> (8 * b)) & 0xFF)
         out[4 * n + (i >> 2)] |= np.uint8((flat[idx[i]] & 3) << (2 * (i & 3)))
     return out
 
@@ -62,8 +77,7 @@ def unpack_delta(raw: np.ndarray, n: int, size: int, idx: np.ndarray, values: np
     twice) or DELTA_OUTSIDE (an index >= ``size`` or a value above 2)."""
     at = 0
     for i in range(n):
-        gap = (np.int64(raw[4 * i]) | (np.int64(raw[4 * i + 1]) << 8) | (np.int64(raw[4 * i + 2]) << 16)
-               | (np.int64(raw[4 * i + 3]) << 24))
+        gap = get_u32(raw, 4 * i)
         if i > 0 and gap == 0:
             return DELTA_REPEATED
         at += gap

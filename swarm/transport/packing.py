@@ -19,6 +19,7 @@ from typing import Sequence
 import numpy as np
 from numba import njit
 
+from .._cellcodec import put_u32
 from ..api import NavStatus, Pose
 from ..neighbours import _bearing
 from .wire import (COLLIDED, HAS_GOAL, NEIGHBOUR, NEIGHBOUR_DTYPE, OBS_STATE, RAW_CELLS_BELOW, WIRE_VERSION,
@@ -183,12 +184,8 @@ def _obs_packets(tick, live, poses, collided, travelled, energy, nav_f, nav_i, k
             p = _put_bin_header(buf, p, 5 * m)
             prev = 0
             for k in range(first, last):
-                gap = cells[k] - prev
+                put_u32(buf, p, cells[k] - prev)
                 prev = cells[k]
-                buf[p] = gap & 0xFF
-                buf[p + 1] = (gap >> 8) & 0xFF
-                buf[p + 2] = (gap >> 16) & 0xFF
-                buf[p + 3] = (gap >> 24) & 0xFF
                 p += 4
             for k in range(first, last):
                 buf[p] = known[i, cells[k]]

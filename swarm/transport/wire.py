@@ -25,6 +25,7 @@ import msgpack
 import numpy as np
 from numba import njit
 
+from .._cellcodec import get_u32
 from ..api import Action, NavStatus, Neighbour, Neighbours, Pose, RobotInfo, frozen_builder
 from ..messages import MessageError, decode, encode, gaps_u32
 
@@ -232,8 +233,7 @@ def _read_cells(raw: np.ndarray, n: int, map_cells: int, idx: np.ndarray) -> int
             return 1
     at = 0
     for k in range(n):
-        at += (np.int64(raw[4 * k]) | (np.int64(raw[4 * k + 1]) << 8) | (np.int64(raw[4 * k + 2]) << 16)
-               | (np.int64(raw[4 * k + 3]) << 24))
+        at += get_u32(raw, 4 * k)
         if at >= map_cells:
             return 2
         idx[k] = at
