@@ -18,8 +18,9 @@ from numba import njit
 from . import grid
 from .api import CELL_M, SOLID, NavStatus, Pose, cell_of
 from .grid.cspace import configuration_space_of, nearest_in_of
+from .grid.local import plan_local_first
 from .motion import Follower
-from .planners import get_planner
+from .planners import AStar, get_planner
 from .spec import NavigationSpec
 from .world import MotionParams
 
@@ -89,17 +90,13 @@ class Navigator:
     def _plan(self, pose: Pose, known: np.ndarray) -> None:
         assert self.goal is not None
         self.plans += 1
-        # The runtime's own map (uint8, values 0..2 by construction): no value scan per plan.
-        space = configuration_space_of(known, self.motion.radius, self.spec.margin_m, self.spec.unseen == "traversable")
-        start = nearest_in_of(space, _clip(cell_of(pose.x, pose.y), known.shape), SNAP_RADIUS_CELLS)
-        goal = nearest_in_of(space, _clip(cell_of(*self.goal), known.shape), SNAP_RADIUS_CELLS)
-        path = None if start is None or goal is None else self.planner.plan(space, start, goal, self.rng)
-        if path is None:
+        found = self._waypoints(pose, known)
+        if found is None:
             self.state = "unreachable"
             self.corridor = None
             return
-        waypoints = grid.simplify(space, path)
-        if _inside(self.goal, known.shape) and space[cell_of(*self.goal)]:
+        waypoints, goal_fits = found
+        if goal_fits:
             waypoints[-1] = self.goal  # end exactly on the goal when the robot fits there
         self.follower.set_path(waypoints)
         self.path_length = grid.path_length_m(waypoints)
@@ -107,6 +104,29 @@ class Navigator:
         self.best_remaining = math.inf
         self.ticks_since_progress = 0
         self.state = "moving"
+
+    def _waypoints(self, pose: Pose, known: np.ndarray) -> tuple[np.ndarray, bool] | None:
+        """Shortcut waypoints of the plan to the goal, and whether the goal's own cell is drivable; None
+        when no path reaches the goal. The exact grid planner first tries the window around the robot
+        (:func:`swarm.grid.local.plan_local_first`, the same answer when it gives one)."""
+        assert self.goal is not None
+        unseen_ok = self.spec.unseen == "traversable"
+        start_cell = _clip(cell_of(pose.x, pose.y), known.shape)
+        goal_cell = _clip(cell_of(*self.goal), known.shape)
+        inside = _inside(self.goal, known.shape)
+        if type(self.planner) is AStar:  # exact grid planner only (a subclass may plan differently)
+            local = plan_local_first(known, start_cell, goal_cell, self.motion.radius, self.spec.margin_m,
+                                     unseen_ok, SNAP_RADIUS_CELLS)
+            if local is not None:
+                return local[0], inside and local[1]
+        # The runtime's own map (uint8, values 0..2 by construction): no value scan per plan.
+        space = configuration_space_of(known, self.motion.radius, self.spec.margin_m, unseen_ok)
+        start = nearest_in_of(space, start_cell, SNAP_RADIUS_CELLS)
+        goal = nearest_in_of(space, goal_cell, SNAP_RADIUS_CELLS)
+        path = None if start is None or goal is None else self.planner.plan(space, start, goal, self.rng)
+        if path is None:
+            return None
+        return grid.simplify(space, path), inside and bool(space[goal_cell])
 
     def _corridor_blocked(self, known: np.ndarray) -> bool:
         return self.corridor is not None and _any_solid(known.reshape(-1), self.corridor)

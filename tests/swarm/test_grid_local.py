@@ -1,0 +1,101 @@
+"""Local-first planning (:mod:`swarm.grid.local`): whenever the window decides a plan, it is the whole-map
+plan bit for bit; and it decides most short plans (else it saves nothing)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from maps import generate
+from swarm import grid
+from swarm.api import FREE, SOLID, UNSEEN
+from swarm.grid.local import PLAN_WINDOW_CELLS, erosion_depth, plan_local_first, snap_into
+from swarm.navigation import SNAP_RADIUS_CELLS
+
+
+def whole_map_plan(known: np.ndarray, start: tuple[int, int], goal: tuple[int, int], radius: float, margin: float,
+                   unseen_ok: bool) -> tuple[np.ndarray, bool, float] | None:
+    """What the navigator does without the window: plan on the whole map's configuration space. Also
+    returns the grid path's length in cells."""
+    space = grid.configuration_space(known, radius, margin, unseen_ok)
+    s = grid.nearest_in(space, start, SNAP_RADIUS_CELLS)
+    g = grid.nearest_in(space, goal, SNAP_RADIUS_CELLS)
+    path = None if s is None or g is None else grid.plan(space, s, g)
+    if path is None:
+        return None
+    steps = np.abs(np.diff(path, axis=0)).sum(axis=1)
+    cells = float(np.sum(steps == 1) + np.sqrt(2.0) * np.sum(steps == 2))
+    return grid.simplify(space, path), bool(space[goal]), cells
+
+
+def partly_known_building(seed: int) -> np.ndarray:
+    """A building seen in patches: walls, free space, scattered and large unknown regions."""
+    truth = generate("building", 60, seed)
+    rng = np.random.default_rng(seed)
+    known = np.where(truth.solid, SOLID, FREE).astype(np.uint8)
+    known[rng.random(known.shape) < 0.03] = UNSEEN
+    r, c = rng.integers(0, known.shape[0] - 30, size=2)
+    known[r:r + 30, c:c + 30] = UNSEEN
+    return known
+
+
+@pytest.mark.parametrize("radius, margin, unseen_ok", [(0.3, 0.05, False), (0.3, 0.05, True), (0.6, 0.05, False),
+                                                       (0.9, 0.1, True), (0.0, 0.0, False)])
+def test_a_local_plan_is_the_whole_map_plan(radius: float, margin: float, unseen_ok: bool) -> None:
+    must_decide = PLAN_WINDOW_CELLS - erosion_depth(radius, margin) - SNAP_RADIUS_CELLS - 2  # cells, with a margin
+    decided = 0
+    for seed in range(3):
+        known = partly_known_building(seed)
+        rng = np.random.default_rng(100 + seed)
+        for _ in range(60):
+            start = tuple(int(v) for v in rng.integers(0, known.shape[0], size=2))
+            goal = tuple(int(v) for v in np.clip(np.array(start) + rng.integers(-38, 39, size=2), 0,
+                                                 known.shape[0] - 1))
+            local = plan_local_first(known, start, goal, radius, margin, unseen_ok, SNAP_RADIUS_CELLS)
+            whole = whole_map_plan(known, start, goal, radius, margin, unseen_ok)
+            if local is None:  # only plans that may leave the window's exact region go to the whole map
+                assert whole is None or whole[2] > must_decide, (seed, start, goal)
+                continue
+            decided += 1
+            assert whole is not None, (seed, start, goal)
+            assert local[0].tobytes() == whole[0].tobytes(), (seed, start, goal)
+            assert local[1] == whole[1]
+    assert decided >= 10
+
+
+def test_a_path_that_leaves_the_window_goes_to_the_whole_map() -> None:
+    # A wall across the window with its gap far outside: the goal is near, its path is long.
+    known = np.full((200, 200), FREE, dtype=np.uint8)
+    known[100, :190] = SOLID
+    start, goal = (95, 50), (105, 50)
+    assert plan_local_first(known, start, goal, 0.3, 0.05, False, SNAP_RADIUS_CELLS) is None
+    whole = whole_map_plan(known, start, goal, 0.3, 0.05, False)
+    assert whole is not None and grid.path_length_m(whole[0]) > 60.0
+    known[100, 60:64] = FREE  # a door nearby: now the window decides, and agrees
+    local = plan_local_first(known, start, goal, 0.3, 0.05, False, SNAP_RADIUS_CELLS)
+    whole = whole_map_plan(known, start, goal, 0.3, 0.05, False)
+    assert local is not None and whole is not None
+    assert local[0].tobytes() == whole[0].tobytes()
+
+
+def test_a_window_covering_the_whole_map_is_left_to_the_whole_map_plan() -> None:
+    known = np.full((30, 30), FREE, dtype=np.uint8)
+    assert plan_local_first(known, (5, 5), (20, 20), 0.3, 0.05, False, SNAP_RADIUS_CELLS) is None
+
+
+def test_erosion_depth_follows_the_inflation_offsets() -> None:
+    assert erosion_depth(0.3, 0.05) == 1
+    assert erosion_depth(0.0, 0.0) == 0
+    assert erosion_depth(0.6, 0.05) == 2
+
+
+@pytest.mark.parametrize("limit", [0, 1, 3, 4, 9])
+def test_snap_into_is_nearest_in(limit: int) -> None:
+    rng = np.random.default_rng(limit)
+    for _ in range(200):
+        h, w = (int(v) for v in rng.integers(1, 25, size=2))
+        space = rng.random((h, w)) < rng.uniform(0.0, 0.2)
+        cell = (int(rng.integers(0, h)), int(rng.integers(0, w)))
+        expected = grid.nearest_in(space, cell, limit)
+        got = snap_into(space.view(np.uint8), cell[0], cell[1], limit)
+        assert (None if got[0] < 0 else got) == expected, (space.astype(int), cell)
