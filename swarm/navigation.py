@@ -17,6 +17,7 @@ from numba import njit
 
 from . import grid
 from .api import CELL_M, SOLID, NavStatus, Pose, cell_of
+from .grid import memo
 from .grid.cspace import configuration_space_of, nearest_in_of
 from .grid.local import plan_local_first
 from .motion import Follower
@@ -120,10 +121,15 @@ class Navigator:
             if local is not None:
                 return local[0], inside and local[1]
         # The runtime's own map (uint8, values 0..2 by construction): no value scan per plan.
-        space = configuration_space_of(known, self.motion.radius, self.spec.margin_m, unseen_ok)
+        params = (self.motion.radius, self.spec.margin_m, unseen_ok)
+        searched = memo.recall(known, params, start_cell, goal_cell) if type(self.planner) is AStar else None
+        space = searched.space if searched is not None else configuration_space_of(known, *params)
         start = nearest_in_of(space, start_cell, SNAP_RADIUS_CELLS)
         goal = nearest_in_of(space, goal_cell, SNAP_RADIUS_CELLS)
-        path = None if start is None or goal is None else self.planner.plan(space, start, goal, self.rng)
+        if searched is not None and (start, goal) == (searched.start, searched.goal):
+            path = searched.path  # the far target's search already found this plan (swarm.grid.memo)
+        else:
+            path = None if start is None or goal is None else self.planner.plan(space, start, goal, self.rng)
         if path is None:
             return None
         return grid.simplify(space, path), inside and bool(space[goal_cell])

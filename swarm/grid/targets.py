@@ -22,10 +22,11 @@ import math
 import numpy as np
 
 from ..api import CELL_M, ROBOT_RADIUS_M
+from . import memo
 from ._kernels import grid_view_cells
 from ._validate import check_cell, check_count, check_known, check_length, check_same_shape, check_space
 from .cspace import DEFAULT_MARGIN_M, configuration_space_of, nearest_in_of
-from .search import nearest_reachable_in
+from .search import nearest_reachable_path_in
 
 _NO_EXCLUDE = np.zeros((0, 0), dtype=bool)
 
@@ -107,7 +108,7 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
                                None if ex is None else ex[r0:r1, c0:c1])
             if found is not None and found[1] <= local:
                 return (found[0][0] + r0, found[0][1] + c0), found[1]
-    return search.run(k, s, ex)
+    return search.run(k, s, ex, remember=True)
 
 
 class _TargetSearch:
@@ -118,8 +119,10 @@ class _TargetSearch:
         self.radius_m, self.margin_m, self.unseen_traversable = radius_m, margin_m, unseen_traversable
         self.reach, self.snap = reach, snap
 
-    def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None
+    def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None, remember: bool = False
             ) -> tuple[tuple[int, int], float] | None:
+        """The search on ``known``; with ``remember`` (the whole map) the path to the target is kept for the
+        navigator's plan (:mod:`swarm.grid.memo`)."""
         view, frontier = _view_cells_of(known, self.reach, exclude)
         if frontier == 0:
             return None
@@ -132,9 +135,12 @@ class _TargetSearch:
         snapped = nearest_in_of(space, start, self.snap)
         if snapped is None:
             return None
-        found = nearest_reachable_in(space, snapped, view)
+        found = nearest_reachable_path_in(space, snapped, view, with_path=remember)
         if found is None:
             return None
-        cell, dist = found
+        cell, dist, path = found
+        if path is not None:
+            memo.remember(known, (self.radius_m, self.margin_m, self.unseen_traversable), start, space, snapped,
+                          cell, path)
         offset = CELL_M * math.hypot(snapped[0] - start[0], snapped[1] - start[1])
         return (int(cell[0]), int(cell[1])), dist + offset

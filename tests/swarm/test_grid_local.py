@@ -1,5 +1,6 @@
-"""Local-first planning (:mod:`swarm.grid.local`): whenever the window decides a plan, it is the whole-map
-plan bit for bit; and it decides most short plans (else it saves nothing)."""
+"""The navigator's shortcuts to the whole-map plan, each checked against it bit for bit: local-first
+planning (:mod:`swarm.grid.local`), which must also decide every short plan (else it saves nothing), and
+the far target search's remembered path (:mod:`swarm.grid.memo`)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import pytest
 from maps import generate
 from swarm import grid
 from swarm.api import FREE, SOLID, UNSEEN
+from swarm.grid import memo
 from swarm.grid.local import PLAN_WINDOW_CELLS, erosion_depth, plan_local_first, snap_into
 from swarm.navigation import SNAP_RADIUS_CELLS
 
@@ -99,3 +101,44 @@ def test_snap_into_is_nearest_in(limit: int) -> None:
         expected = grid.nearest_in(space, cell, limit)
         got = snap_into(space.view(np.uint8), cell[0], cell[1], limit)
         assert (None if got[0] < 0 else got) == expected, (space.astype(int), cell)
+
+
+@pytest.mark.parametrize("unseen_ok", [False, True])
+def test_a_far_target_search_remembers_the_plan_to_its_target(unseen_ok: bool) -> None:
+    params = (0.3, 0.05, unseen_ok)
+    recalled = 0
+    for seed in range(3):
+        known = partly_known_building(seed)
+        rng = np.random.default_rng(200 + seed)
+        memo.forget_all()
+        for cell in np.argwhere(known == FREE)[rng.choice(int(np.sum(known == FREE)), 25, replace=False)]:
+            start = (int(cell[0]), int(cell[1]))
+            found = grid.nearest_reachable_unseen(known, start, *params[:1], unseen_ok, margin_m=params[1],
+                                                  local_first_m=None)
+            entry = memo.recall(known, params, start, found[0]) if found is not None else None
+            if entry is None:
+                continue
+            recalled += 1
+            space = grid.configuration_space(known, *params)
+            assert np.array_equal(entry.space, space)
+            assert entry.start == grid.nearest_in(space, start, 3)
+            expected = grid.plan(space, entry.start, entry.goal)
+            assert expected is not None and entry.path.tobytes() == expected.tobytes(), (seed, start)
+    assert recalled >= 40
+
+
+def test_a_remembered_search_is_not_recalled_for_another_map_or_robot() -> None:
+    memo.forget_all()
+    known = partly_known_building(0)
+    start = tuple(int(v) for v in np.argwhere(known == FREE)[0])
+    found = grid.nearest_reachable_unseen(known, start, local_first_m=None)
+    assert found is not None
+    params = (0.3, 0.05, False)
+    assert memo.recall(known.copy(), params, start, found[0]) is not None
+    changed = known.copy()
+    changed[changed == UNSEEN] = FREE
+    assert memo.recall(changed, params, start, found[0]) is None            # the map has changed since
+    assert memo.recall(known, (0.35, 0.05, False), start, found[0]) is None  # another robot size
+    assert memo.recall(known, params, (start[0], start[1] + 1), found[0]) is None
+    with pytest.raises(ValueError):
+        memo.recall(known, params, start, found[0]).space[0, 0] = True      # shared with the navigator: read-only
