@@ -31,7 +31,8 @@ import numpy as np
 from numba import njit
 
 from ..api import CELL_M
-from ._kernels import grid_bucket_search, grid_configuration_space, grid_descend_path, grid_shortcut
+from ._kernels import (grid_bucket_search, grid_configuration_space, grid_descend_path, grid_shortcut,
+                       grid_view_cells)
 from .cspace import _erosion_rows, inflation_offsets
 from .search import _WORK
 
@@ -120,19 +121,8 @@ def _window_plan(known, r0, r1, c0, c1, unseen_ok, row_offsets, half_widths, ero
     call. Returns (waypoints float64[M, 2] metres in map coordinates, goal cell in the space); no
     waypoints when the window does not decide the plan."""
     h, w = r1 - r0, c1 - c0
-    pad = np.zeros((h + 2, w + 2), np.uint8)
+    pad = _window_space(np.ascontiguousarray(known[r0:r1, c0:c1]), unseen_ok, row_offsets, half_widths, eroded)
     space = pad[1:h + 1, 1:w + 1]
-    window = known[r0:r1, c0:c1]
-    if eroded:
-        grid_configuration_space(window, unseen_ok, row_offsets, half_widths, space)
-    elif unseen_ok:
-        for r in range(h):
-            for c in range(w):
-                space[r, c] = window[r, c] != 2
-    else:
-        for r in range(h):
-            for c in range(w):
-                space[r, c] = window[r, c] == 1
     none = np.empty((0, 2), np.float64)
     s = snap_into(space, sr - r0, sc - c0, snap)
     g = snap_into(space, gr - r0, gc - c0, snap)
@@ -153,3 +143,63 @@ def _window_plan(known, r0, r1, c0, c1, unseen_ok, row_offsets, half_widths, ero
         out[i, 0] = (float(path[keep[i], 1] + c0) + 0.5) * CELL_M
         out[i, 1] = (float(path[keep[i], 0] + r0) + 0.5) * CELL_M
     return out, space[gr - r0, gc - c0] != 0
+
+
+NO_TARGET, TARGET_FOUND = 0, 1
+
+
+@njit(cache=True)
+def window_target(known, r0, r1, c0, c1, exclude, reach, unseen_ok, row_offsets, half_widths, eroded, sr, sc, snap,
+                  dist, ring):  # pragma: no cover - compiled
+    """The target search of :func:`swarm.grid.nearest_reachable_unseen` on ``known[r0:r1, c0:c1]`` in one
+    call: view cells, configuration space, snapping ``(sr, sc)`` (map coordinates), nearest view cell.
+    ``exclude`` is the window of the exclusion mask or an empty array. Returns (TARGET_FOUND, row, col,
+    distance in cells, snapped row, snapped col) in window coordinates, or NO_TARGET first."""
+    h, w = r1 - r0, c1 - c0
+    window = np.ascontiguousarray(known[r0:r1, c0:c1])
+    view = np.zeros((h, w), np.bool_)
+    if grid_view_cells(window, exclude, reach, view) == 0:
+        return NO_TARGET, -1, -1, np.inf, -1, -1
+    space = _window_space(window, unseen_ok, row_offsets, half_widths, eroded)
+    targets = np.zeros((h + 2, w + 2), np.uint8)
+    excluded = exclude.shape[0] == h
+    count = 0
+    for r in range(h):
+        for c in range(w):
+            t = view[r, c] and space[r + 1, c + 1] != 0 and not (excluded and exclude[r, c])
+            targets[r + 1, c + 1] = t
+            count += t
+    if count == 0:
+        return NO_TARGET, -1, -1, np.inf, -1, -1
+    s = snap_into(space[1:h + 1, 1:w + 1], sr - r0, sc - c0, snap)
+    if s[0] < 0:
+        return NO_TARGET, -1, -1, np.inf, -1, -1
+    wp = w + 2
+    seeds = np.empty(1, np.int64)
+    seeds[0] = (s[0] + 1) * wp + s[1] + 1
+    free = space.reshape(-1)
+    best, best_d = grid_bucket_search(free, wp, seeds, -1, targets.reshape(-1), np.inf, dist[:free.shape[0]], ring)
+    if best < 0:
+        return NO_TARGET, -1, -1, np.inf, -1, -1
+    return TARGET_FOUND, best // wp - 1, best % wp - 1, best_d, s[0], s[1]
+
+
+@njit(cache=True)
+def _window_space(window, unseen_ok, row_offsets, half_widths, eroded):  # pragma: no cover - compiled
+    """The configuration space of a contiguous map window, padded with one blocked cell on every side
+    (uint8[h + 2, w + 2]): :func:`swarm.grid.cspace.configuration_space_of`, laid out for the search."""
+    h, w = window.shape
+    pad = np.zeros((h + 2, w + 2), np.uint8)
+    if eroded:
+        space = np.empty((h, w), np.uint8)
+        grid_configuration_space(window, unseen_ok, row_offsets, half_widths, space)
+        pad[1:h + 1, 1:w + 1] = space
+    elif unseen_ok:
+        for r in range(h):
+            for c in range(w):
+                pad[r + 1, c + 1] = window[r, c] != 2
+    else:
+        for r in range(h):
+            for c in range(w):
+                pad[r + 1, c + 1] = window[r, c] == 1
+    return pad

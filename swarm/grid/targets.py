@@ -25,8 +25,9 @@ from ..api import CELL_M, ROBOT_RADIUS_M
 from . import memo
 from ._kernels import grid_view_cells
 from ._validate import check_cell, check_count, check_known, check_length, check_same_shape, check_space
-from .cspace import DEFAULT_MARGIN_M, configuration_space_of, nearest_in_of
-from .search import nearest_reachable_path_in
+from .cspace import DEFAULT_MARGIN_M, _erosion_rows, configuration_space_of, nearest_in_of
+from .local import TARGET_FOUND, window_bounds, window_target
+from .search import _WORK, nearest_reachable_path_in
 
 _NO_EXCLUDE = np.zeros((0, 0), dtype=bool)
 
@@ -100,29 +101,41 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
     local = check_length(local_first_m, "local_first_m", allow_none=True)
     search = _TargetSearch(radius, margin, bool(unseen_traversable), reach, snap)
     if local is not None:
-        w = int(local / CELL_M) + 1
-        r0, c0 = max(s[0] - w, 0), max(s[1] - w, 0)
-        r1, c1 = min(s[0] + w + 1, k.shape[0]), min(s[1] + w + 1, k.shape[1])
+        r0, r1, c0, c1 = window_bounds(s, int(local / CELL_M) + 1, k.shape)
         if (r1 - r0) * (c1 - c0) < k.size:
-            found = search.run(np.ascontiguousarray(k[r0:r1, c0:c1]), (s[0] - r0, s[1] - c0),
-                               None if ex is None else ex[r0:r1, c0:c1])
+            found = search.run_window(k, (r0, r1, c0, c1), s, _NO_EXCLUDE if ex is None else ex[r0:r1, c0:c1])
             if found is not None and found[1] <= local:
-                return (found[0][0] + r0, found[0][1] + c0), found[1]
-    return search.run(k, s, ex, remember=True)
+                return found
+    return search.run(k, s, ex)
 
 
 class _TargetSearch:
-    """One :func:`nearest_reachable_unseen` search on checked inputs (run on the local window, then
-    possibly on the whole map, without validating the same map again each time)."""
+    """One :func:`nearest_reachable_unseen` search on checked inputs: on the local window (one compiled
+    call), then possibly on the whole map, without validating the same map again each time."""
 
     def __init__(self, radius_m: float, margin_m: float, unseen_traversable: bool, reach: int, snap: int) -> None:
         self.radius_m, self.margin_m, self.unseen_traversable = radius_m, margin_m, unseen_traversable
         self.reach, self.snap = reach, snap
 
-    def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None, remember: bool = False
+    def run_window(self, known: np.ndarray, bounds: tuple[int, int, int, int], start: tuple[int, int],
+                   exclude: np.ndarray) -> tuple[tuple[int, int], float] | None:
+        """:meth:`run` on the window ``known[r0:r1, c0:c1]`` (``exclude`` is that window of the mask, or
+        empty), compiled as one call (:func:`swarm.grid.local.window_target`); map coordinates."""
+        r0, r1, c0, c1 = bounds
+        rows, widths = _erosion_rows(self.radius_m, self.margin_m)
+        dist, ring = _WORK.get((r1 - r0 + 2) * (c1 - c0 + 2))
+        status, row, col, cells, sr, sc = window_target(known, r0, r1, c0, c1, exclude, self.reach,
+                                                        self.unseen_traversable, rows, widths, len(rows) > 0,
+                                                        start[0], start[1], self.snap, dist, ring)
+        if status != TARGET_FOUND:
+            return None
+        offset = CELL_M * math.hypot(sr + r0 - start[0], sc + c0 - start[1])
+        return (int(row) + r0, int(col) + c0), float(cells * CELL_M) + offset
+
+    def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None
             ) -> tuple[tuple[int, int], float] | None:
-        """The search on ``known``; with ``remember`` (the whole map) the path to the target is kept for the
-        navigator's plan (:mod:`swarm.grid.memo`)."""
+        """The search on the whole map ``known``. The path to the target is kept for the navigator's plan
+        (:mod:`swarm.grid.memo`)."""
         view, frontier = _view_cells_of(known, self.reach, exclude)
         if frontier == 0:
             return None
@@ -135,12 +148,11 @@ class _TargetSearch:
         snapped = nearest_in_of(space, start, self.snap)
         if snapped is None:
             return None
-        found = nearest_reachable_path_in(space, snapped, view, with_path=remember)
+        found = nearest_reachable_path_in(space, snapped, view)
         if found is None:
             return None
         cell, dist, path = found
-        if path is not None:
-            memo.remember(known, (self.radius_m, self.margin_m, self.unseen_traversable), start, space, snapped,
-                          cell, path)
+        assert path is not None
+        memo.remember(known, (self.radius_m, self.margin_m, self.unseen_traversable), start, space, snapped, cell, path)
         offset = CELL_M * math.hypot(snapped[0] - start[0], snapped[1] - start[1])
         return (int(cell[0]), int(cell[1])), dist + offset

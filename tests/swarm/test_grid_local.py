@@ -142,3 +142,21 @@ def test_a_remembered_search_is_not_recalled_for_another_map_or_robot() -> None:
     assert memo.recall(known, params, (start[0], start[1] + 1), found[0]) is None
     with pytest.raises(ValueError):
         memo.recall(known, params, start, found[0]).space[0, 0] = True      # shared with the navigator: read-only
+
+
+@pytest.mark.parametrize("radius, unseen_ok", [(0.3, False), (0.3, True), (0.6, False), (0.0, False)])
+def test_the_compiled_window_target_search_equals_the_whole_map_search(radius: float, unseen_ok: bool) -> None:
+    local_hits = 0
+    for seed in range(3):
+        known = partly_known_building(seed)
+        rng = np.random.default_rng(300 + seed)
+        exclude = rng.random(known.shape) < 0.01    # given-up targets and frontiers, as the explorers pass
+        free = np.argwhere(known == FREE)
+        for cell in free[rng.choice(len(free), 30, replace=False)]:
+            start = (int(cell[0]), int(cell[1]))
+            for ex in (None, exclude):
+                local = grid.nearest_reachable_unseen(known, start, radius, unseen_ok, ex)
+                whole = grid.nearest_reachable_unseen(known, start, radius, unseen_ok, ex, local_first_m=None)
+                assert local == whole, (seed, start)
+                local_hits += local is not None and local[1] <= 15.0
+    assert local_hits >= 20
