@@ -1,6 +1,6 @@
 """Local-first planning: the navigator's plan computed on a window around the robot, when that is exact.
 
-Most plans are short (on the 16-robot benchmark 78 % of them are under 17 m), yet a whole-map plan pays
+Most plans are short (on the 16-robot benchmark 78 % of them are at most 17 m), yet a whole-map plan pays
 for the whole map: the configuration space of all 90 000 cells, a padded copy and a distance array of the
 same size. :func:`plan_local_first` first plans on the window of half-width ``half_cells`` around the
 robot's cell and accepts the answer only when it is provably the whole-map answer, bit for bit:
@@ -21,6 +21,10 @@ robot's cell and accepts the answer only when it is provably the whole-map answe
 
 Otherwise (goal too far, no path in the window, or a longer one) the caller plans on the whole map.
 Only the exact grid planner (:func:`swarm.grid.plan`) may be windowed; other planners see the whole map.
+
+The same module holds the compiled window stage of the target search (:func:`window_target`, used by
+:func:`swarm.grid.nearest_reachable_unseen`, whose docstring gives its exactness condition): both are one
+call for what would otherwise be five numpy and kernel calls with map-sized padded copies.
 """
 
 from __future__ import annotations
