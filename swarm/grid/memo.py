@@ -23,7 +23,8 @@ from typing import NamedTuple
 import numpy as np
 
 MAX_ENTRIES = 32
-"""Searches remembered per thread: a few per robot of a large team (each holds two map-sized arrays)."""
+"""Searches remembered per thread: one or two per robot of a large team. Each holds two map-sized arrays
+(180 KB for a 150 m map), and all are of one map size (a new size clears them)."""
 
 Params = tuple[float, float, bool]
 """(radius_m, margin_m, unseen_traversable): what the configuration space was built with."""
@@ -52,6 +53,8 @@ def remember(known: np.ndarray, params: Params, start_cell: tuple[int, int], spa
     space.flags.writeable = False
     path.flags.writeable = False
     entries = _MEMO.entries
+    if entries and next(iter(entries.values())).known.shape != known.shape:
+        entries.clear()  # another run's map: its searches can never match again, so hold no memory for them
     key = (params, start_cell, goal)
     entries[key] = SearchPlan(known.copy(), space, start, goal, path)
     entries.move_to_end(key)

@@ -160,3 +160,15 @@ def test_the_compiled_window_target_search_equals_the_whole_map_search(radius: f
                 assert local == whole, (seed, start)
                 local_hits += local is not None and local[1] <= 15.0
     assert local_hits >= 20
+
+
+def test_the_memo_holds_one_map_size_at_a_time() -> None:
+    memo.forget_all()
+    small, big = partly_known_building(0), partly_known_building(1)
+    big = np.pad(big, 5, constant_values=SOLID)
+    for known in (small, big):
+        start = tuple(int(v) for v in np.argwhere(known == FREE)[0])
+        found = grid.nearest_reachable_unseen(known, start, local_first_m=None)
+        assert found is not None
+        assert memo.recall(known, (0.3, 0.05, False), start, found[0]) is not None
+    assert {entry.known.shape for entry in memo._MEMO.entries.values()} == {big.shape}
