@@ -40,7 +40,7 @@ from .result import RunResult
 from .sensing import ExplorationTracker, Lidar, LidarParams
 from .spawn import spawn
 from .spec import ROBOT_STREAM, RunSpec, planner_rng, seed_streams
-from .transport import AgentHost, TickBatch, TickInput, make_host
+from .transport import AgentHost, PhaseTimes, TickBatch, TickInput, make_host
 from .transport.wire import ResetPacket
 from .world import MotionParams, World
 
@@ -65,6 +65,7 @@ class TransportOptions:
     remote: tuple[int, ...] = ()
     timeout_s: float = 10.0
     run_id: str | None = None
+    times: PhaseTimes | None = field(default=None, compare=False)  # benchmarks: where the ticks go
 
 
 @dataclass
@@ -141,7 +142,9 @@ class Simulation:
     def run(self) -> RunResult:
         opts = self.transport
         host = make_host(self.spec.transport, self.spec.key, listen=opts.listen, remote=opts.remote,
-                         timeout_s=opts.timeout_s, run_id=opts.run_id)
+                         timeout_s=opts.timeout_s, run_id=opts.run_id, times=opts.times)
+        if opts.times is not None:
+            self._time_phases(opts.times)
         try:
             host.start(self.resets())
             if host.batched:
@@ -149,6 +152,13 @@ class Simulation:
             return self._loop(host)
         finally:
             host.close()
+
+    def _time_phases(self, times: PhaseTimes) -> None:
+        """Time the steps that build observations for the transport into ``times``: instance attributes
+        that shadow the methods, so an unmeasured run calls the methods directly."""
+        for name, phase in (("_inputs", "host: inputs"), ("_batch", "host: batch"),
+                            ("_changed_cells", "host: changed cells"), ("_sight", "host: neighbours")):
+            setattr(self, name, times.wrap(phase, getattr(self, name)))
 
     def _loop(self, host: AgentHost) -> RunResult:
         t0 = time.perf_counter()
