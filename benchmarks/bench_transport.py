@@ -9,8 +9,8 @@ runs twice and the faster run is reported (the machine may be shared).
 
 ``--split`` adds one run per transport with phase timers on (:mod:`swarm.transport.timing`; the timers
 slow those runs a little, so their ticks/s are printed apart) and splits the zenoh transport's extra time
-per tick into zenoh's own share (inside ``put``: delivery, callbacks, the agents' act ``put``; remote
-replies awaited), our encoding and decoding on both sides, and the algorithm's own difference.
+per tick into zenoh's own share (inside the obs and act ``put``: delivery and callbacks, minus the
+agents' decoding that runs inside the obs callbacks; remote replies awaited), our encoding and decoding on both sides, and the algorithm's own difference.
 """
 
 from __future__ import annotations
@@ -21,11 +21,9 @@ import time
 from swarm.simulation import Simulation, TransportOptions
 from swarm.transport import PhaseTimes
 
-ZENOH_OWN = ("zenoh: obs put", "zenoh: wait for remote replies")
-OURS = ("host: batch", "host: obs encode", "agent: handle", "host: act decode")
 SHOWN = ("host: inputs", "host: batch", "host: changed cells", "host: neighbours", "host: obs encode",
-         "zenoh: obs put", "agent: handle", "agent: obs decode", "agent: inbox decode", "agent: algorithm",
-         "agent: act encode", "host: act decode")
+         "zenoh: obs put", "agent: observe", "agent: obs decode", "agent: inbox decode", "agent: answer",
+         "agent: algorithm", "agent: act encode", "zenoh: act put", "host: act decode")
 
 
 def measure(spec: dict) -> tuple[float, float, dict]:
@@ -57,12 +55,14 @@ def split(base: dict) -> None:
         a, b = ti.seconds[phase] if ti.calls.get(phase) else None, tz.seconds[phase] if tz.calls.get(phase) else None
         print(f"  {phase:26s} {'' if a is None else f'{1e3 * a / ni:10.3f}':>10s} "
               f"{'' if b is None else f'{1e3 * b / nz:8.3f}':>8s}")
-    zenoh_own = tz.own("zenoh: obs put", "agent: handle") + tz.get("zenoh: wait for remote replies")
-    ours = (tz.get("host: batch") + tz.get("host: obs encode") + tz.own("agent: handle", "agent: algorithm")
-            + tz.get("host: act decode") - ti.get("host: inputs"))
+    zenoh_own = (tz.own("zenoh: obs put", "agent: observe") + tz.get("zenoh: act put")
+                 + tz.get("zenoh: wait for remote replies"))
+    ours = (tz.get("host: batch") + tz.get("host: obs encode") + tz.get("agent: observe")
+            + tz.own("agent: answer", "agent: algorithm") + tz.get("host: act decode") - ti.get("host: inputs"))
     algorithm = tz.get("agent: algorithm") / nz - ti.get("agent: algorithm") / ni
     total = sz - si
-    print(f"zenoh overhead {1e3 * total:.3f} ms/tick = zenoh's own (put and delivery, minus the agents' work) "
+    print(f"zenoh overhead {1e3 * total:.3f} ms/tick = zenoh's own (obs and act puts, deliveries, "
+          f"minus the agents' work inside them) "
           f"{1e3 * zenoh_own / nz:.3f} + our encoding/decoding (batch + obs encode + agent decode/encode "
           f"+ act decode - in-process inputs) {1e3 * ours / nz:.3f} + algorithm {1e3 * algorithm:+.3f} "
           f"+ rest of the loop {1e3 * (total - zenoh_own / nz - ours / nz - algorithm):+.3f}")

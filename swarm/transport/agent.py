@@ -65,14 +65,21 @@ class AgentRunner:
         self._act = timed(times, "agent: algorithm", self.algorithm.act)
         self._encode_act = timed(times, "agent: act encode", encode_act)
 
-    def handle(self, packet: bytes) -> bytes:
-        """The act packet answering an obs packet; raises WireError, leaving the map as it was, for a bad one."""
+    def observe(self, packet: bytes) -> Observation:
+        """The observation an obs packet carries, the map mirror updated; raises WireError, leaving the map
+        as it was, for a bad one."""
         p = self._decode(packet)
         inbox = self._inbox(p.tick, p.inbox)
         if len(p.changed_idx):
             self._flat[p.changed_idx] = p.changed_val
-        obs = _observation(tick=p.tick, robot_id=p.robot_id, pose=p.pose, known=self._view, inbox=inbox,
-                           neighbours=p.neighbours, collided=p.collided, nav=p.nav,
-                           distance_travelled=p.distance_travelled, energy_used=p.energy_used)
-        action = check_action(self._act(obs), p.robot_id)
-        return self._encode_act(p.tick, p.robot_id, action)
+        return _observation(tick=p.tick, robot_id=p.robot_id, pose=p.pose, known=self._view, inbox=inbox,
+                            neighbours=p.neighbours, collided=p.collided, nav=p.nav,
+                            distance_travelled=p.distance_travelled, energy_used=p.energy_used)
+
+    def answer(self, obs: Observation) -> bytes:
+        """The act packet carrying the algorithm's decision on ``obs``."""
+        return self._encode_act(obs.tick, obs.robot_id, check_action(self._act(obs), obs.robot_id))
+
+    def handle(self, packet: bytes) -> bytes:
+        """The act packet answering an obs packet; raises WireError, leaving the map as it was, for a bad one."""
+        return self.answer(self.observe(packet))

@@ -183,13 +183,14 @@ def test_phase_timers_see_each_step_and_change_no_result():
     assert strip(runs["zenoh"]) == strip(plain) == strip(runs["inprocess"])
     ticks, robots = plain.summary["ticks"], SPEC["robots"]["count"]
     z, i = times["zenoh"], times["inprocess"]
-    for phase in ("zenoh: obs put", "agent: handle", "agent: obs decode", "agent: algorithm", "agent: act encode",
-                  "host: act decode"):
+    for phase in ("zenoh: obs put", "agent: observe", "agent: obs decode", "agent: answer", "agent: algorithm",
+                  "agent: act encode", "zenoh: act put", "host: act decode"):
         assert z.calls[phase] == ticks * robots, phase
     for phase in ("host: batch", "host: changed cells", "host: neighbours", "host: obs encode"):
         assert z.calls[phase] == ticks, phase
     assert i.calls["agent: algorithm"] == ticks * robots and i.calls["host: inputs"] == ticks
-    assert z.get("zenoh: obs put") > z.get("agent: handle") > z.get("agent: algorithm") > 0
-    assert z.own("zenoh: obs put", "agent: handle") == z.get("zenoh: obs put") - z.get("agent: handle")
+    assert z.get("zenoh: obs put") > z.get("agent: observe") > z.get("agent: obs decode") > 0
+    assert z.get("agent: answer") > z.get("agent: algorithm") > 0
+    assert z.own("zenoh: obs put", "agent: observe") == z.get("zenoh: obs put") - z.get("agent: observe")
     fn = len
     assert timed(None, "x", fn) is fn
