@@ -220,7 +220,7 @@ def sync_regions_flat(current: np.ndarray, last: np.ndarray, centres: np.ndarray
     pieces: list[np.ndarray] = []
     ends = [0] * n  # where map k's extra cells end in ``extra``; the kernel overwrites them with out's ends
     total = 0
-    for k in range(n):
+    for k in range(n) if any(cells) else ():  # most ticks nothing merged at all
         if flags[k] and cells[k]:  # most robots merged nothing this tick
             pieces.extend(cells[k])
             total += sum(len(a) for a in cells[k])

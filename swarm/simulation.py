@@ -113,6 +113,7 @@ class Simulation:
         self.sharing = MapSharing(n, self.truth.shape, self.comm)
         self.inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         self.neighbour_range = self.comm.neighbour_range_m or self.lidar_params.range_m
+        self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         self.transport = transport or TransportOptions()
         self.observers = tuple(observers)
         self.metrics = Metrics(self.spec.record_every)
@@ -307,7 +308,8 @@ class Simulation:
         navs = [nav.status() if ok else None for nav, ok in zip(self.navigators, live.tolist())]
         return TickBatch(live=live, poses=poses, collided=collided, travelled=self.world.distance,
                          energy=self.world.distance + self.world.rotation, navs=navs, known=self.known,
-                         cells=cells, ends=ends, inboxes=[tuple(env.data for env in inbox) for inbox in inboxes],
+                         cells=cells, ends=ends,
+                         inboxes=[tuple([env.data for env in inbox]) if inbox else () for inbox in inboxes],
                          near=near, distance=distance)
 
     def _changed_cells(self, poses: np.ndarray, merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:
@@ -316,12 +318,13 @@ class Simulation:
         within range of the robot, delta merges report their cells, so only those places are compared, all
         robots in one compiled call; after a full-map merge the whole map is."""
         assert self._mirror is not None
-        full = [i for i, cells in enumerate(merged) if cells and any(m is None for m in cells) and not self.failed[i]]
         windowed = ~self.failed
-        windowed[full] = False
-        reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2
+        full = []
+        if any(merged):  # most ticks no map update arrives
+            full = [i for i, cells in enumerate(merged) if cells and any(m is None for m in cells) and windowed[i]]
+            windowed[full] = False
         centres = (poses[:, 1::-1] / CELL_M).astype(np.int64)  # (row, col); truncation, as int() did
-        cells, ends = sync_regions_flat(self.known, self._mirror, centres, reach, merged, windowed)
+        cells, ends = sync_regions_flat(self.known, self._mirror, centres, self._reach, merged, windowed)
         if not full:
             return cells, ends
         bounds = ends.tolist()
