@@ -40,7 +40,7 @@ from .result import RunResult
 from .sensing import ExplorationTracker, Lidar, LidarParams
 from .spawn import spawn
 from .spec import ROBOT_STREAM, RunSpec, planner_rng, seed_streams
-from .transport import AgentHost, TickBatch, TickInput, make_host
+from .transport import AgentHost, PhaseTimes, TickBatch, TickInput, make_host
 from .transport.wire import ResetPacket
 from .world import MotionParams, World
 
@@ -65,6 +65,7 @@ class TransportOptions:
     remote: tuple[int, ...] = ()
     timeout_s: float = 10.0
     run_id: str | None = None
+    times: PhaseTimes | None = field(default=None, compare=False)  # benchmarks: where the ticks go
 
 
 @dataclass
@@ -112,6 +113,7 @@ class Simulation:
         self.sharing = MapSharing(n, self.truth.shape, self.comm)
         self.inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         self.neighbour_range = self.comm.neighbour_range_m or self.lidar_params.range_m
+        self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         self.transport = transport or TransportOptions()
         self.observers = tuple(observers)
         self.metrics = Metrics(self.spec.record_every)
@@ -141,7 +143,9 @@ class Simulation:
     def run(self) -> RunResult:
         opts = self.transport
         host = make_host(self.spec.transport, self.spec.key, listen=opts.listen, remote=opts.remote,
-                         timeout_s=opts.timeout_s, run_id=opts.run_id)
+                         timeout_s=opts.timeout_s, run_id=opts.run_id, times=opts.times)
+        if opts.times is not None:
+            self._time_phases(opts.times)
         try:
             host.start(self.resets())
             if host.batched:
@@ -149,6 +153,13 @@ class Simulation:
             return self._loop(host)
         finally:
             host.close()
+
+    def _time_phases(self, times: PhaseTimes) -> None:
+        """Time the steps that build observations for the transport into ``times``: instance attributes
+        that shadow the methods, so an unmeasured run calls the methods directly."""
+        for name, phase in (("_inputs", "host: inputs"), ("_batch", "host: batch"),
+                            ("_changed_cells", "host: changed cells"), ("_sight", "host: neighbours")):
+            setattr(self, name, times.wrap(phase, getattr(self, name)))
 
     def _loop(self, host: AgentHost) -> RunResult:
         t0 = time.perf_counter()
@@ -297,7 +308,8 @@ class Simulation:
         navs = [nav.status() if ok else None for nav, ok in zip(self.navigators, live.tolist())]
         return TickBatch(live=live, poses=poses, collided=collided, travelled=self.world.distance,
                          energy=self.world.distance + self.world.rotation, navs=navs, known=self.known,
-                         cells=cells, ends=ends, inboxes=[tuple(env.data for env in inbox) for inbox in inboxes],
+                         cells=cells, ends=ends,
+                         inboxes=[tuple([env.data for env in inbox]) if inbox else () for inbox in inboxes],
                          near=near, distance=distance)
 
     def _changed_cells(self, poses: np.ndarray, merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:
@@ -306,12 +318,13 @@ class Simulation:
         within range of the robot, delta merges report their cells, so only those places are compared, all
         robots in one compiled call; after a full-map merge the whole map is."""
         assert self._mirror is not None
-        full = [i for i, cells in enumerate(merged) if cells and any(m is None for m in cells) and not self.failed[i]]
         windowed = ~self.failed
-        windowed[full] = False
-        reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2
+        full = []
+        if any(merged):  # most ticks no map update arrives
+            full = [i for i, cells in enumerate(merged) if cells and any(m is None for m in cells) and windowed[i]]
+            windowed[full] = False
         centres = (poses[:, 1::-1] / CELL_M).astype(np.int64)  # (row, col); truncation, as int() did
-        cells, ends = sync_regions_flat(self.known, self._mirror, centres, reach, merged, windowed)
+        cells, ends = sync_regions_flat(self.known, self._mirror, centres, self._reach, merged, windowed)
         if not full:
             return cells, ends
         bounds = ends.tolist()

@@ -6,20 +6,22 @@ from typing import Sequence
 
 from .base import AgentHost, HostStats, TickBatch, TickInput
 from .inprocess import InProcessHost
+from .timing import PhaseTimes
 
 TRANSPORTS = ("inprocess", "zenoh")
 
 
 def make_host(kind: str, run_key: str, listen: Sequence[str] = (), remote: Sequence[int] = (),
-              timeout_s: float = 10.0, run_id: str | None = None) -> AgentHost:
-    """The transport named in the run spec; ``listen``/``remote`` serve agents in other processes."""
+              timeout_s: float = 10.0, run_id: str | None = None, times: PhaseTimes | None = None) -> AgentHost:
+    """The transport named in the run spec; ``listen``/``remote`` serve agents in other processes; ``times``
+    (for benchmarks) collects where the host's ticks go."""
     if kind == "inprocess":
         if remote:
             raise ValueError("remote agents need transport = 'zenoh'")
-        return InProcessHost()
+        return InProcessHost(times)
     from .zenoh_host import ZenohHost, new_run_id
 
-    return ZenohHost(run_id or new_run_id(run_key), listen=listen, remote=remote, timeout_s=timeout_s)
+    return ZenohHost(run_id or new_run_id(run_key), listen=listen, remote=remote, timeout_s=timeout_s, times=times)
 
 
-__all__ = ["AgentHost", "HostStats", "InProcessHost", "TRANSPORTS", "TickBatch", "TickInput", "make_host"]
+__all__ = ["AgentHost", "HostStats", "InProcessHost", "PhaseTimes", "TRANSPORTS", "TickBatch", "TickInput", "make_host"]

@@ -15,6 +15,7 @@ from .. import registry
 from ..api import Observation, frozen_builder
 from ..messages import MessageError, decode
 from .inprocess import check_action
+from .timing import PhaseTimes, timed
 from .wire import ObsDecoder, ResetPacket, WireError, encode_act
 
 _observation = frozen_builder(Observation)  # the same Observation, a third of the constructor's cost
@@ -48,7 +49,8 @@ class InboxDecoder:
 
 
 class AgentRunner:
-    def __init__(self, reset: ResetPacket, algorithm: str | None = None, inbox: InboxDecoder | None = None) -> None:
+    def __init__(self, reset: ResetPacket, algorithm: str | None = None, inbox: InboxDecoder | None = None,
+                 times: PhaseTimes | None = None) -> None:
         self.robot = reset.robot
         name = algorithm or reset.algorithm
         params = reset.params if name == reset.algorithm else {}
@@ -58,17 +60,26 @@ class AgentRunner:
         self._flat = self.known.reshape(-1)
         self._view = self.known.view()
         self._view.flags.writeable = False
-        self._inbox = inbox or InboxDecoder()
-        self._decode = ObsDecoder(self.known.size)
+        self._inbox = timed(times, "agent: inbox decode", (inbox or InboxDecoder()).decode)
+        self._decode = timed(times, "agent: obs decode", ObsDecoder(self.known.size))
+        self._act = timed(times, "agent: algorithm", self.algorithm.act)
+        self._encode_act = timed(times, "agent: act encode", encode_act)
+
+    def observe(self, packet: bytes) -> Observation:
+        """The observation an obs packet carries, the map mirror updated; raises WireError, leaving the map
+        as it was, for a bad one."""
+        p = self._decode(packet)
+        inbox = self._inbox(p.tick, p.inbox)
+        if len(p.changed_idx):
+            self._flat[p.changed_idx] = p.changed_val
+        return _observation(tick=p.tick, robot_id=p.robot_id, pose=p.pose, known=self._view, inbox=inbox,
+                            neighbours=p.neighbours, collided=p.collided, nav=p.nav,
+                            distance_travelled=p.distance_travelled, energy_used=p.energy_used)
+
+    def answer(self, obs: Observation) -> bytes:
+        """The act packet carrying the algorithm's decision on ``obs``."""
+        return self._encode_act(obs.tick, obs.robot_id, check_action(self._act(obs), obs.robot_id))
 
     def handle(self, packet: bytes) -> bytes:
         """The act packet answering an obs packet; raises WireError, leaving the map as it was, for a bad one."""
-        p = self._decode(packet)
-        inbox = self._inbox.decode(p.tick, p.inbox)
-        if len(p.changed_idx):
-            self._flat[p.changed_idx] = p.changed_val
-        obs = _observation(tick=p.tick, robot_id=p.robot_id, pose=p.pose, known=self._view, inbox=inbox,
-                           neighbours=p.neighbours, collided=p.collided, nav=p.nav,
-                           distance_travelled=p.distance_travelled, energy_used=p.energy_used)
-        action = check_action(self.algorithm.act(obs), p.robot_id)
-        return encode_act(p.tick, p.robot_id, action)
+        return self.answer(self.observe(packet))

@@ -7,28 +7,33 @@ from typing import Sequence
 from .. import registry
 from ..api import Action
 from .base import HostStats, TickInput
+from .timing import PhaseTimes, timed
 from .wire import ResetPacket
 
 
 class InProcessHost:
     batched = False
 
-    def __init__(self) -> None:
+    def __init__(self, times: PhaseTimes | None = None) -> None:
         self.stats = HostStats()
         self.agents: list = []
+        self._acts: list = []
+        self._times = times
 
     def start(self, resets: Sequence[ResetPacket]) -> None:
         for reset in resets:
             agent = registry.create(reset.algorithm)
             agent.reset(reset.robot, registry.build_params(reset.algorithm, reset.params), reset.rng())
             self.agents.append(agent)
+            self._acts.append(timed(self._times, "agent: algorithm", agent.act))
 
     def act(self, tick: int, inputs: Sequence[TickInput | None]) -> list[Action | None]:
-        return [None if inp is None else check_action(self.agents[i].act(inp.obs), i)
-                for i, inp in enumerate(inputs)]
+        acts = self._acts
+        return [None if inp is None else check_action(acts[i](inp.obs), i) for i, inp in enumerate(inputs)]
 
     def close(self) -> None:
         self.agents = []
+        self._acts = []
 
 
 def check_action(action: object, robot: int) -> Action:

@@ -50,6 +50,7 @@ class ObsEncoder:
         self._nav_i = np.zeros((n_robots, 3), dtype=np.int64)  # ticks since progress, state index, flags
         self._states = np.zeros(n_robots, OBS_STATE_DTYPE)
         self._record = np.zeros(1, NEIGHBOUR_DTYPE)
+        self._state_bytes, self._record_bytes = self._states.view(np.uint8), self._record.view(np.uint8)  # once
         self._spans = np.zeros((n_robots, 4), dtype=np.int64)
 
     def _note_navs(self, navs: Sequence[NavStatus | None]) -> None:
@@ -74,13 +75,14 @@ class ObsEncoder:
         spans = self._spans
         total = _obs_packets(tick, live, poses, collided, travelled, energy, self._nav_f, self._nav_i,
                              known.reshape(n, -1), cells, ends, near, distance, self._states,
-                             self._states.view(np.uint8), self._record, self._record.view(np.uint8), buf, spans)
+                             self._state_bytes, self._record, self._record_bytes, buf, spans)
         data = buf[:total].tobytes()
         rows = spans.tolist()
+        lasts = ends.tolist()
         first = 0
         out: list[bytes | None] = []
         for i, (start, inbox_at, records_at, end) in enumerate(rows):
-            last = int(ends[i])
+            last = lasts[i]
             if start < 0:
                 out.append(None)
             elif last - first >= RAW_CELLS_BELOW and self._compress[i]:  # compressed: the reference path

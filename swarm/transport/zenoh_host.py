@@ -22,14 +22,15 @@ import json
 import threading
 import time
 import uuid
-from typing import Sequence
+from typing import Callable, Sequence
 
 import zenoh
 
-from ..api import Action
+from ..api import Action, Observation
 from .agent import AgentRunner, InboxDecoder
 from .base import HostStats, TickBatch
 from .packing import ObsEncoder
+from .timing import PhaseTimes, timed
 from .wire import ResetPacket, WireError, decode_act, encode_reset
 
 BLOCK = zenoh.CongestionControl.BLOCK
@@ -64,8 +65,11 @@ class ZenohHost:
     batched = True
 
     def __init__(self, run_id: str, listen: Sequence[str] = (), remote: Sequence[int] = (),
-                 timeout_s: float = 10.0, join_timeout_s: float = 60.0) -> None:
+                 timeout_s: float = 10.0, join_timeout_s: float = 60.0, times: PhaseTimes | None = None) -> None:
+        """``times`` (for benchmarks): where the ticks go, see :mod:`swarm.transport.timing`."""
         self.stats = HostStats()
+        self._times = times
+        self._decode_act = timed(times, "host: act decode", decode_act)
         self.run_id = run_id
         self.prefix = f"swarm/{run_id}"
         self.remote = set(remote)
@@ -78,7 +82,9 @@ class ZenohHost:
         self._lost: set[int] = set()
         self._runners: dict[int, AgentRunner] = {}
         self._publishers: dict[int, zenoh.Publisher] = {}
+        self._puts: dict[int, Callable[[bytes], None]] = {}  # the obs publishers' put, timed when asked
         self._declared: list = []
+        self._pending: list[tuple[Callable, Callable, Observation]] = []  # local agents' observations to answer
         self._inbox = InboxDecoder()  # shared by the local agents: each broadcast decoded once per tick
         if self.remote:
             self._declared.append(self.session.liveliness().declare_subscriber(
@@ -116,24 +122,42 @@ class ZenohHost:
             self._cond.notify_all()
 
     def _local_agent(self, robot: int, runner: AgentRunner) -> None:
+        """An agent in this session. Its obs callback only decodes the packet; the agent answers in
+        :meth:`_answer_local`, after every robot's obs has been delivered. Decoding all packets in a row,
+        then running the algorithms, then sending all actions keeps each step's code and data in cache
+        (interleaved, each step ran cold after an algorithm: twice the decoding's cost)."""
         publisher = self.session.declare_publisher(f"{self.prefix}/robot/{robot}/act", congestion_control=BLOCK)
         self._declared.append(publisher)
+        put = timed(self._times, "zenoh: act put", publisher.put)
+        answer = timed(self._times, "agent: answer", runner.answer)
+        observe = timed(self._times, "agent: observe", runner.observe)
+        pending = self._pending
 
         def on_obs(sample: zenoh.Sample) -> None:
-            publisher.put(runner.handle(sample.payload.to_bytes()))
+            pending.append((put, answer, observe(sample.payload.to_bytes())))
 
         self._declared.append(self.session.declare_subscriber(
             f"{self.prefix}/robot/{robot}/obs", zenoh.handlers.Callback(on_obs, indirect=False)))
 
+    def _answer_local(self) -> None:
+        """Every local agent's action for the observations delivered since the last call, in robot order."""
+        pending = self._pending
+        for put, answer, obs in pending:
+            put(answer(obs))
+        pending.clear()
+
     # ---------------------------------------------------------------------------------- interface ----
     def start(self, resets: Sequence[ResetPacket]) -> None:
-        self._encode = ObsEncoder(len(resets), compress=self.remote)  # local agents: nothing to save
+        # local agents: nothing to save by compressing
+        self._encode = timed(self._times, "host: obs encode", ObsEncoder(len(resets), compress=self.remote))
         for reset in resets:
             i = reset.robot.id
             self._act_subscriber(i)
-            self._publishers[i] = self.session.declare_publisher(f"{self.prefix}/robot/{i}/obs", congestion_control=BLOCK)
+            publisher = self.session.declare_publisher(f"{self.prefix}/robot/{i}/obs", congestion_control=BLOCK)
+            self._publishers[i] = publisher
+            self._puts[i] = timed(self._times, "zenoh: obs put", publisher.put)
             if i not in self.remote:
-                runner = AgentRunner(reset, inbox=self._inbox)
+                runner = AgentRunner(reset, inbox=self._inbox, times=self._times)
                 self._runners[i] = runner
                 self._local_agent(i, runner)
         if self.remote:
@@ -158,29 +182,28 @@ class ZenohHost:
             self._replies.clear()
         packets = self._encode(tick, asked, batch.poses, batch.collided, batch.travelled, batch.energy, batch.navs,
                                batch.known, batch.cells, batch.ends, batch.inboxes, batch.near, batch.distance)
-        publishers = self._publishers
+        puts = self._puts
         live = []
         for i, packet in enumerate(packets):
             if packet is not None:
                 live.append(i)
-                publishers[i].put(packet)
+                puts[i](packet)
+        self._answer_local()
         waiting = [i for i in live if i in self.remote]
         if waiting:
-            deadline = time.monotonic() + self.timeout_s
-            with self._cond:
-                self._cond.wait_for(lambda: all(i in self._replies or i in self._lost for i in waiting)
-                                    or time.monotonic() > deadline, timeout=self.timeout_s)
+            self._wait(waiting)
         actions: list[Action | None] = [None] * len(packets)
         with self._cond:
             replies = dict(self._replies)
             lost = set(self._lost)
+        decode = self._decode_act
         for i in live:
             data = replies.get(i)
             if data is None:
                 self.stats.failures[i] = (tick, "agent lost" if i in lost else f"no action within {self.timeout_s:g} s")
                 continue
             try:
-                packet = decode_act(data)
+                packet = decode(data)
             except WireError:
                 self.stats.malformed += 1
                 actions[i] = Action()
@@ -191,6 +214,16 @@ class ZenohHost:
                 continue
             actions[i] = packet.action
         return actions
+
+    def _wait(self, waiting: list[int]) -> None:
+        """Until every robot in ``waiting`` has replied or is lost, or ``timeout_s`` has passed."""
+        t0 = time.perf_counter()
+        deadline = time.monotonic() + self.timeout_s
+        with self._cond:
+            self._cond.wait_for(lambda: all(i in self._replies or i in self._lost for i in waiting)
+                                or time.monotonic() > deadline, timeout=self.timeout_s)
+        if self._times is not None:
+            self._times.add("zenoh: wait for remote replies", time.perf_counter() - t0)
 
     def close(self) -> None:
         try:
