@@ -408,3 +408,34 @@ def grid_path_problem(path: np.ndarray, h: int, w: int) -> int:  # pragma: no co
         if abs(path[i, 0] - path[i - 1, 0]) > 1 or abs(path[i, 1] - path[i - 1, 1]) > 1:
             return PATH_GAP
     return PATH_OK
+
+
+@njit(cache=True)
+def grid_snap(space: np.ndarray, r: int, c: int, limit: int) -> tuple[int, int]:  # pragma: no cover - compiled
+    """The True cell of ``space`` whose centre is nearest ``(r, c)`` within ``limit`` cells, ties to the
+    lowest row then column; (-1, -1) when there is none (:func:`swarm.grid.nearest_in`).
+
+    Looks in growing square windows: a window of half-size ``s`` is conclusive once its best cell is within
+    ``s`` (every cell outside it is farther), or once it covers the grid."""
+    if space[r, c]:
+        return r, c
+    h, w = space.shape
+    full = max(h, w)
+    cap = min(limit, full)
+    size = 2
+    while True:
+        s = min(size, cap)
+        best, br, bc = -1, -1, -1
+        for rr in range(max(r - s, 0), min(r + s + 1, h)):
+            for cc in range(max(c - s, 0), min(c + s + 1, w)):
+                if space[rr, cc]:
+                    d2 = (rr - r) * (rr - r) + (cc - c) * (cc - c)
+                    if best < 0 or d2 < best:
+                        best, br, bc = d2, rr, cc
+        if best >= 0 and (best <= s * s or s >= full):
+            if best > limit * limit:
+                return -1, -1
+            return br, bc
+        if s >= cap:
+            return -1, -1
+        size *= 2

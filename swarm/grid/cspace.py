@@ -34,7 +34,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..api import CELL_M, FREE, ROBOT_RADIUS_M, SOLID
-from ._kernels import grid_configuration_space
+from ._kernels import grid_configuration_space, grid_snap
 from ._validate import check_cell, check_count, check_known, check_length, check_space
 
 DEFAULT_MARGIN_M: float = 0.05
@@ -100,8 +100,6 @@ def configuration_space_of(known: np.ndarray, radius_m: float, margin_m: float, 
                            ) -> np.ndarray:
     """:func:`configuration_space` of an already checked map and lengths (for callers that validated)."""
     row_offsets, half_widths = _erosion_rows(radius_m, margin_m)
-    if not len(row_offsets):
-        return _passable_of(known, unseen_traversable)
     out = np.empty(known.shape, dtype=np.uint8)
     grid_configuration_space(known, bool(unseen_traversable), row_offsets, half_widths, out)
     return out.view(np.bool_)
@@ -110,8 +108,10 @@ def configuration_space_of(known: np.ndarray, radius_m: float, margin_m: float, 
 @lru_cache(maxsize=64)
 def _erosion_rows(radius_m: float, margin_m: float) -> tuple[np.ndarray, np.ndarray]:
     """:func:`inflation_offsets` as one centred run per row offset: (row offsets, half widths). Each row of
-    the offsets is a run [-j, j], since the distance to a square grows with the column offset."""
-    half_width: dict[int, int] = {}
+    the offsets is a run [-j, j], since the distance to a square grows with the column offset. Without
+    offsets (no clearance) it is the single run of the cell itself, the erosion that keeps every passable
+    cell, so the compiled kernel serves that case too."""
+    half_width: dict[int, int] = {0: 0}
     for dr, dc in inflation_offsets(radius_m, margin_m):
         half_width[dr] = max(half_width.get(dr, 0), abs(dc))
     rows = sorted(half_width)
@@ -139,23 +139,8 @@ def nearest_in(space: np.ndarray, cell: tuple[int, int], max_radius_cells: int |
 def nearest_in_of(space: np.ndarray, cell: tuple[int, int], limit: int | None) -> tuple[int, int] | None:
     """:func:`nearest_in` for checked inputs (a bool space, a cell inside it, a radius >= 0 or None)."""
     r, c = cell
-    if space[r, c]:
+    if space[r, c]:  # the usual case, without a call into compiled code
         return r, c
     h, w = space.shape
-    full = max(h, w)
-    cap = full if limit is None else min(limit, full)
-    size = 2
-    while True:
-        s = min(size, cap)
-        r0, r1, c0, c1 = max(r - s, 0), min(r + s + 1, h), max(c - s, 0), min(c + s + 1, w)
-        rows, cols = np.nonzero(space[r0:r1, c0:c1])
-        if rows.size:
-            d2 = (rows + r0 - r) ** 2 + (cols + c0 - c) ** 2
-            i = int(np.argmin(d2))  # first minimum = lowest row, then lowest column
-            if d2[i] <= s * s or s >= full:
-                if limit is not None and d2[i] > limit * limit:
-                    return None
-                return int(rows[i] + r0), int(cols[i] + c0)
-        if s >= cap:
-            return None
-        size *= 2
+    found = grid_snap(space, r, c, h + w if limit is None else min(limit, h + w))  # h + w: beyond every cell
+    return None if found[0] < 0 else (int(found[0]), int(found[1]))

@@ -35,9 +35,9 @@ import numpy as np
 from numba import njit
 
 from ..api import CELL_M
-from ._kernels import (grid_bucket_search, grid_configuration_space, grid_descend_path, grid_shortcut,
+from ._kernels import (grid_bucket_search, grid_configuration_space, grid_descend_path, grid_shortcut, grid_snap,
                        grid_view_cells)
-from .cspace import _erosion_rows, inflation_offsets
+from .cspace import _erosion_rows
 from .search import _WORK
 
 PLAN_WINDOW_CELLS = 40
@@ -50,8 +50,9 @@ _NO_TARGETS = np.zeros(0, dtype=np.uint8)
 @lru_cache(maxsize=64)
 def erosion_depth(radius_m: float, margin_m: float) -> int:
     """How many rings of cells beside a blocked one can leave the configuration space: the largest
-    Chebyshev offset of :func:`swarm.grid.inflation_offsets`."""
-    return max((max(abs(dr), abs(dc)) for dr, dc in inflation_offsets(radius_m, margin_m)), default=0)
+    Chebyshev offset of :func:`swarm.grid.inflation_offsets` (the erosion's rows and their half widths)."""
+    rows, widths = _erosion_rows(radius_m, margin_m)
+    return int(max(np.abs(rows).max(), widths.max()))
 
 
 def window_bounds(cell: tuple[int, int], half: int, shape: tuple[int, int]) -> tuple[int, int, int, int]:
@@ -82,7 +83,7 @@ def plan_local_first(known: np.ndarray, start: tuple[int, int], goal: tuple[int,
         return None  # the window is the whole map: nothing to save
     rows, widths = _erosion_rows(radius_m, margin_m)
     dist, ring = _WORK.get((r1 - r0 + 2) * (c1 - c0 + 2))
-    waypoints, goal_fits = _window_plan(known, r0, r1, c0, c1, bool(unseen_traversable), rows, widths, len(rows) > 0,
+    waypoints, goal_fits = _window_plan(known, r0, r1, c0, c1, bool(unseen_traversable), rows, widths,
                                         start[0], start[1], goal[0], goal[1], snap, float(budget), dist, ring)
     if waypoints.shape[0] == 0:
         return None
@@ -90,46 +91,17 @@ def plan_local_first(known: np.ndarray, start: tuple[int, int], goal: tuple[int,
 
 
 @njit(cache=True)
-def snap_into(space: np.ndarray, r: int, c: int, limit: int) -> tuple[int, int]:  # pragma: no cover - compiled
-    """:func:`swarm.grid.cspace.nearest_in_of` with a radius ``limit``, compiled: the True cell of
-    ``space`` nearest ``(r, c)`` within ``limit``, ties to the lowest row then column, found in the same
-    growing square windows (so the same cell); (-1, -1) when there is none."""
-    if space[r, c]:
-        return r, c
-    h, w = space.shape
-    full = max(h, w)
-    cap = min(limit, full)
-    size = 2
-    while True:
-        s = min(size, cap)
-        best, br, bc = -1, -1, -1
-        for rr in range(max(r - s, 0), min(r + s + 1, h)):
-            for cc in range(max(c - s, 0), min(c + s + 1, w)):
-                if space[rr, cc]:
-                    d2 = (rr - r) * (rr - r) + (cc - c) * (cc - c)
-                    if best < 0 or d2 < best:
-                        best, br, bc = d2, rr, cc
-        if best >= 0 and (best <= s * s or s >= full):
-            if best > limit * limit:
-                return -1, -1
-            return br, bc
-        if s >= cap:
-            return -1, -1
-        size *= 2
-
-
-@njit(cache=True)
-def _window_plan(known, r0, r1, c0, c1, unseen_ok, row_offsets, half_widths, eroded, sr, sc, gr, gc, snap, budget,
+def _window_plan(known, r0, r1, c0, c1, unseen_ok, row_offsets, half_widths, sr, sc, gr, gc, snap, budget,
                  dist, ring):  # pragma: no cover - compiled
     """Configuration space of ``known[r0:r1, c0:c1]``, snapping, search, read-back and shortcut in one
     call. Returns (waypoints float64[M, 2] metres in map coordinates, goal cell in the space); no
     waypoints when the window does not decide the plan."""
     h, w = r1 - r0, c1 - c0
-    pad = _window_space(np.ascontiguousarray(known[r0:r1, c0:c1]), unseen_ok, row_offsets, half_widths, eroded)
+    pad = _window_space(np.ascontiguousarray(known[r0:r1, c0:c1]), unseen_ok, row_offsets, half_widths)
     space = pad[1:h + 1, 1:w + 1]
     none = np.empty((0, 2), np.float64)
-    s = snap_into(space, sr - r0, sc - c0, snap)
-    g = snap_into(space, gr - r0, gc - c0, snap)
+    s = grid_snap(space, sr - r0, sc - c0, snap)
+    g = grid_snap(space, gr - r0, gc - c0, snap)
     if s[0] < 0 or g[0] < 0:
         return none, False
     wp = w + 2
@@ -153,7 +125,7 @@ NO_TARGET, TARGET_FOUND = 0, 1
 
 
 @njit(cache=True)
-def window_target(known, r0, r1, c0, c1, exclude, reach, unseen_ok, row_offsets, half_widths, eroded, sr, sc, snap,
+def window_target(known, r0, r1, c0, c1, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap,
                   dist, ring):  # pragma: no cover - compiled
     """The target search of :func:`swarm.grid.nearest_reachable_unseen` on ``known[r0:r1, c0:c1]`` in one
     call: view cells, configuration space, snapping ``(sr, sc)`` (map coordinates), nearest view cell.
@@ -164,7 +136,7 @@ def window_target(known, r0, r1, c0, c1, exclude, reach, unseen_ok, row_offsets,
     view = np.zeros((h, w), np.bool_)
     if grid_view_cells(window, exclude, reach, view) == 0:
         return NO_TARGET, -1, -1, np.inf, -1, -1
-    space = _window_space(window, unseen_ok, row_offsets, half_widths, eroded)
+    space = _window_space(window, unseen_ok, row_offsets, half_widths)
     targets = np.zeros((h + 2, w + 2), np.uint8)
     excluded = exclude.shape[0] == h
     count = 0
@@ -175,7 +147,7 @@ def window_target(known, r0, r1, c0, c1, exclude, reach, unseen_ok, row_offsets,
             count += t
     if count == 0:
         return NO_TARGET, -1, -1, np.inf, -1, -1
-    s = snap_into(space[1:h + 1, 1:w + 1], sr - r0, sc - c0, snap)
+    s = grid_snap(space[1:h + 1, 1:w + 1], sr - r0, sc - c0, snap)
     if s[0] < 0:
         return NO_TARGET, -1, -1, np.inf, -1, -1
     wp = w + 2
@@ -189,21 +161,12 @@ def window_target(known, r0, r1, c0, c1, exclude, reach, unseen_ok, row_offsets,
 
 
 @njit(cache=True)
-def _window_space(window, unseen_ok, row_offsets, half_widths, eroded):  # pragma: no cover - compiled
+def _window_space(window, unseen_ok, row_offsets, half_widths):  # pragma: no cover - compiled
     """The configuration space of a contiguous map window, padded with one blocked cell on every side
     (uint8[h + 2, w + 2]): :func:`swarm.grid.cspace.configuration_space_of`, laid out for the search."""
     h, w = window.shape
     pad = np.zeros((h + 2, w + 2), np.uint8)
-    if eroded:
-        space = np.empty((h, w), np.uint8)
-        grid_configuration_space(window, unseen_ok, row_offsets, half_widths, space)
-        pad[1:h + 1, 1:w + 1] = space
-    elif unseen_ok:
-        for r in range(h):
-            for c in range(w):
-                pad[r + 1, c + 1] = window[r, c] != 2
-    else:
-        for r in range(h):
-            for c in range(w):
-                pad[r + 1, c + 1] = window[r, c] == 1
+    space = np.empty((h, w), np.uint8)
+    grid_configuration_space(window, unseen_ok, row_offsets, half_widths, space)
+    pad[1:h + 1, 1:w + 1] = space
     return pad

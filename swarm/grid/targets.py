@@ -125,7 +125,7 @@ class _TargetSearch:
         rows, widths = _erosion_rows(self.radius_m, self.margin_m)
         dist, ring = _WORK.get((r1 - r0 + 2) * (c1 - c0 + 2))
         status, row, col, cells, sr, sc = window_target(known, r0, r1, c0, c1, exclude, self.reach,
-                                                        self.unseen_traversable, rows, widths, len(rows) > 0,
+                                                        self.unseen_traversable, rows, widths,
                                                         start[0], start[1], self.snap, dist, ring)
         if status != TARGET_FOUND:
             return None

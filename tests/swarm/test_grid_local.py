@@ -11,7 +11,7 @@ from maps import generate
 from swarm import grid
 from swarm.api import FREE, SOLID, UNSEEN
 from swarm.grid import memo
-from swarm.grid.local import PLAN_WINDOW_CELLS, erosion_depth, plan_local_first, snap_into
+from swarm.grid.local import PLAN_WINDOW_CELLS, erosion_depth, plan_local_first
 from swarm.navigation import SNAP_RADIUS_CELLS
 
 
@@ -91,16 +91,27 @@ def test_erosion_depth_follows_the_inflation_offsets() -> None:
     assert erosion_depth(0.6, 0.05) == 2
 
 
-@pytest.mark.parametrize("limit", [0, 1, 3, 4, 9])
-def test_snap_into_is_nearest_in(limit: int) -> None:
-    rng = np.random.default_rng(limit)
+def brute_force_nearest(space: np.ndarray, cell: tuple[int, int], limit: int | None) -> tuple[int, int] | None:
+    """The True cell nearest ``cell`` (squared distance, ties to the lowest row, then column), if within
+    ``limit``."""
+    rows, cols = np.nonzero(space)  # row-major: the first minimum is the lowest row, then column
+    if rows.size == 0:
+        return None
+    d2 = (rows - cell[0]) ** 2 + (cols - cell[1]) ** 2
+    i = int(np.argmin(d2))
+    return None if limit is not None and d2[i] > limit * limit else (int(rows[i]), int(cols[i]))
+
+
+@pytest.mark.parametrize("limit", [0, 1, 3, 4, 9, None, 10**12])
+def test_nearest_in_is_the_nearest_cell_within_the_radius(limit: int | None) -> None:
+    # nearest_in's compiled window search (grid_snap) serves the navigator, the target search and the
+    # window kernels alike
+    rng = np.random.default_rng(0 if limit is None else min(limit, 99))
     for _ in range(200):
         h, w = (int(v) for v in rng.integers(1, 25, size=2))
         space = rng.random((h, w)) < rng.uniform(0.0, 0.2)
         cell = (int(rng.integers(0, h)), int(rng.integers(0, w)))
-        expected = grid.nearest_in(space, cell, limit)
-        got = snap_into(space.view(np.uint8), cell[0], cell[1], limit)
-        assert (None if got[0] < 0 else got) == expected, (space.astype(int), cell)
+        assert grid.nearest_in(space, cell, limit) == brute_force_nearest(space, cell, limit), (space.astype(int), cell)
 
 
 @pytest.mark.parametrize("unseen_ok", [False, True])
