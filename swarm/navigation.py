@@ -111,18 +111,17 @@ class Navigator:
         when no path reaches the goal. The exact grid planner first tries the window around the robot
         (:func:`swarm.grid.local.plan_local_first`, the same answer when it gives one)."""
         assert self.goal is not None
-        unseen_ok = self.spec.unseen == "traversable"
+        params = (self.motion.radius, self.spec.margin_m, self.spec.unseen == "traversable")
         start_cell = _clip(cell_of(pose.x, pose.y), known.shape)
         goal_cell = _clip(cell_of(*self.goal), known.shape)
         inside = _inside(self.goal, known.shape)
-        if type(self.planner) is AStar:  # exact grid planner only (a subclass may plan differently)
-            local = plan_local_first(known, start_cell, goal_cell, self.motion.radius, self.spec.margin_m,
-                                     unseen_ok, SNAP_RADIUS_CELLS)
+        exact = type(self.planner) is AStar  # the exact grid planner only (a subclass may plan differently)
+        if exact:
+            local = plan_local_first(known, start_cell, goal_cell, *params, SNAP_RADIUS_CELLS)
             if local is not None:
                 return local[0], inside and local[1]
         # The runtime's own map (uint8, values 0..2 by construction): no value scan per plan.
-        params = (self.motion.radius, self.spec.margin_m, unseen_ok)
-        searched = memo.recall(known, params, start_cell, goal_cell) if type(self.planner) is AStar else None
+        searched = memo.recall(known, params, start_cell, goal_cell) if exact else None
         space = searched.space if searched is not None else configuration_space_of(known, *params)
         start = nearest_in_of(space, start_cell, SNAP_RADIUS_CELLS)
         goal = nearest_in_of(space, goal_cell, SNAP_RADIUS_CELLS)
