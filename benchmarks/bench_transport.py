@@ -76,13 +76,14 @@ def split(base: dict) -> None:
             + tz.own("agent: answer", "agent: algorithm") + tz.get("host: act decode") - ti.get("host: inputs"))
     algorithm = tz.get("agent: algorithm") / nz - ti.get("agent: algorithm") / ni
     total = sz - si
-    timers = timer_cost() * (sum(tz.calls.values()) / nz - sum(ti.calls.values()) / ni)
+    per_call = timer_cost()
+    timers = per_call * (sum(tz.calls.values()) / nz - sum(ti.calls.values()) / ni)
     print(f"zenoh overhead {1e3 * total:.3f} ms/tick = zenoh's own (obs and act puts, deliveries, "
           f"minus the agents' work inside them) "
           f"{1e3 * zenoh_own / nz:.3f} + our encoding/decoding (batch + obs encode + agent decode/encode "
           f"+ act decode - in-process inputs) {1e3 * ours / nz:.3f} + algorithm {1e3 * algorithm:+.3f} "
           f"+ rest of the loop {1e3 * (total - zenoh_own / nz - ours / nz - algorithm):+.3f} (of which the "
-          f"extra phase timers, {1e6 * timer_cost():.2f} us a call, about {1e3 * timers:.3f})")
+          f"extra phase timers, {1e6 * per_call:.2f} us a call, about {1e3 * timers:.3f})")
 
 
 def main() -> None:
