@@ -58,7 +58,7 @@ def _radio_close_run(n: int, solid_len: float, tol: float) -> int:
     return n + 1 if solid_len > tol else n
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _radio_walk_segment(blocks, cell, x0, y0, x1, y1, tol, run_start, run_end, run_len):  # pragma: no cover
     """Walk the segment (x0, y0) -> (x1, y1) over the raster described by ``blocks`` (:mod:`radio.blocks`).
 
@@ -185,7 +185,7 @@ def _radio_walk_segment(blocks, cell, x0, y0, x1, y1, tol, run_start, run_end, r
     return n
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _radio_price_runs(n, run_len, tol, cross_db, metre_db, per_metre, counts, i, j):  # pragma: no cover
     """dB charged for ``n`` kept runs; adds one to ``counts[i, j, m]`` for every material crossing charged.
 

@@ -179,7 +179,7 @@ _FOOTPRINT_DR = np.array([0, -1, 1, 0, 0])
 _FOOTPRINT_DC = np.array([0, 0, 0, -1, 1])
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _mark_footprint(x: float, y: float, known: np.ndarray, cell: float, seen: np.ndarray,
                     out: np.ndarray, m: int) -> int:  # pragma: no cover - compiled
     """Append the not yet seen, non-SOLID cells of the footprint of point (x, y) (clipped to the map) to

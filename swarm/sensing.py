@@ -183,7 +183,7 @@ def _lidar_ray_start(x: float, y: float, dx: float, dy: float,
     return row, col, step_r, step_c, t_x, t_y, d_x, d_y
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _lidar_walk_visible(solid: np.ndarray, known: np.ndarray, robot: int, write_known: bool,
                         seen: np.ndarray, x: float, y: float, dx: float, dy: float, range_m: float,
                         cell: float) -> tuple[float, int]:
@@ -253,7 +253,7 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     return new
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _lidar_walk_votes(solid: np.ndarray, x: float, y: float, dx: float, dy: float, z: float,
                       t_hit: float, range_m: float, cell: float, votes: np.ndarray, mark: np.ndarray,
                       touched: np.ndarray, n_touched: int) -> int:

@@ -164,13 +164,13 @@ def path_free(blocked: np.ndarray, points: list[tuple[int, int]]) -> bool:
 
 
 # ---------------------------------------------------------------- any-angle (visibility graph)
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _free_cell(blocked: np.ndarray, r: int, c: int) -> bool:
     H, W = blocked.shape
     return 0 <= r < H and 0 <= c < W and not blocked[r, c]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _quad_ok(blocked: np.ndarray, vx: int, vy: int, qa: int, qb: int) -> bool:
     """At grid vertex (vx, vy) (cell units), are quadrants qa and qb (0 BL, 1 BR, 2 TR, 3 TL) connected
     through free quadrants around the vertex (a 4-cycle)?"""
@@ -193,7 +193,7 @@ def _quadrant(x: float, y: float, vx: int, vy: int) -> int:
     return 3 if x < vx else 2
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _crossings(a0: int, a1: int, out: np.ndarray, m: int) -> int:
     """Append the parameters t in (0, 1) where coordinate a0 + t (a1 - a0) crosses an even value."""
     d = a1 - a0
@@ -208,7 +208,7 @@ def _crossings(a0: int, a1: int, out: np.ndarray, m: int) -> int:
     return m
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _los_touch(blocked: np.ndarray, X0: int, Y0: int, X1: int, Y1: int) -> bool:
     """Line of sight between two points in doubled coordinates (cell centres odd, grid vertices even):
     the segment stays in the closure of the free cells and never squeezes between blocked cells that

@@ -48,7 +48,7 @@ _CAP = 4096
 _MAX_DEPTH = 4
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _face(k: np.ndarray, r: int, c: int, step: int, s: int, n: int) -> bool:
     """A wall face continues in line from (r, c) for ``n`` cells in direction ``step``, FREE in front on s."""
     h, w = k.shape
@@ -62,7 +62,7 @@ def _face(k: np.ndarray, r: int, c: int, step: int, s: int, n: int) -> bool:
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _perpendicular(k: np.ndarray, r: int, c: int, inner: int, s: int, n: int) -> bool:
     """A wall runs from the jamb (r, c) into side s for ``n`` cells, its face towards the gap (column
     ``inner``) FREE: the second wall of the two-wall case."""
@@ -74,7 +74,7 @@ def _perpendicular(k: np.ndarray, r: int, c: int, inner: int, s: int, n: int) ->
     return True
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _accept(k: np.ndarray, r: int, c0: int, c1: int, s: int, face: int) -> bool:
     h = k.shape[0]
     if r + s < 0 or r + s >= h or r - 2 * s < 0 or r - 2 * s >= h:
@@ -95,7 +95,7 @@ def _accept(k: np.ndarray, r: int, c0: int, c1: int, s: int, face: int) -> bool:
     return face_right and _perpendicular(k, r, c0 - 1, c0, s, face)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _depth(k: np.ndarray, r: int, c0: int, c1: int, s: int, cap: int) -> int:
     """Rows of wall the gap runs through, from the face row r away from side s (at most ``cap``)."""
     h, w = k.shape

@@ -194,7 +194,7 @@ def grid_descend_path(free: np.ndarray, wp: int, dist: np.ndarray,
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def grid_segment_clear(space: np.ndarray, r0: int, c0: int, r1: int, c1: int) -> bool:  # pragma: no cover
     """True when every cell touched by the segment between the two cell centres is True in ``space``.
 

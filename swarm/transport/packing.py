@@ -98,7 +98,7 @@ class ObsEncoder:
         return out
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _put_uint(buf: np.ndarray, p: int, v: int) -> int:  # pragma: no cover - compiled
     """A non-negative msgpack integer in its shortest form (as msgpack's Packer writes it); the next offset."""
     if v < 128:
@@ -122,7 +122,7 @@ def _put_uint(buf: np.ndarray, p: int, v: int) -> int:  # pragma: no cover - com
     return p + 1 + width
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _put_bin_header(buf: np.ndarray, p: int, n: int) -> int:  # pragma: no cover - compiled
     """A msgpack bin header for ``n`` bytes in its shortest form; the payload's offset."""
     if n < 256:
