@@ -22,9 +22,11 @@ robot's cell and accepts the answer only when it is provably the whole-map answe
 Otherwise (goal too far, no path in the window, or a longer one) the caller plans on the whole map.
 Only the exact grid planner (:func:`swarm.grid.plan`) may be windowed; other planners see the whole map.
 
-The same module holds the compiled window stage of the target search (:func:`window_target`, used by
-:func:`swarm.grid.nearest_reachable_unseen`, whose docstring gives its exactness condition): both are one
-call for what would otherwise be five numpy and kernel calls with map-sized padded copies.
+The same module holds the compiled stages of the target search used by
+:func:`swarm.grid.nearest_reachable_unseen` (whose docstring gives the window's exactness condition): the
+window stage (:func:`window_target`) and the whole-map stage (:func:`map_target`, which also returns the
+space and the path for :mod:`swarm.grid.memo`) share one body, one call for what would otherwise be five
+numpy and kernel calls with padded copies.
 """
 
 from __future__ import annotations
@@ -122,6 +124,7 @@ def _window_plan(known, r0, r1, c0, c1, unseen_ok, row_offsets, half_widths, sr,
 
 
 NO_TARGET, TARGET_FOUND = 0, 1
+_NO_PATH = np.empty((0, 2), np.int64)
 
 
 @njit(cache=True)
@@ -131,42 +134,90 @@ def window_target(known, r0, r1, c0, c1, exclude, reach, unseen_ok, row_offsets,
     call: view cells, configuration space, snapping ``(sr, sc)`` (map coordinates), nearest view cell.
     ``exclude`` is the window of the exclusion mask or an empty array. Returns (TARGET_FOUND, row, col,
     distance in cells, snapped row, snapped col) in window coordinates, or NO_TARGET first."""
-    h, w = r1 - r0, c1 - c0
     window = np.ascontiguousarray(known[r0:r1, c0:c1])
+    status, row, col, best_d, s_r, s_c, _, _ = _target_search(window, exclude, reach, unseen_ok, row_offsets,
+                                                              half_widths, sr - r0, sc - c0, snap, False,
+                                                              dist, ring)
+    return status, row, col, best_d, s_r, s_c
+
+
+@njit(cache=True)
+def map_target(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap, dist,
+               ring):  # pragma: no cover - compiled
+    """:func:`window_target` on the whole (contiguous) map, also returning the configuration space
+    (uint8[H, W], 0/1) and the path to the target read off the search's distances (int64[N, 2] from the
+    snapped start, the path :func:`swarm.grid.plan` returns): what :mod:`swarm.grid.memo` keeps for
+    the navigator. One call instead of a chain of numpy passes and map-sized padded copies."""
+    return _target_search(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap, True,
+                          dist, ring)
+
+
+@njit(cache=True)
+def _target_search(window, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap, with_path,
+                   dist, ring):  # pragma: no cover - compiled
+    """The shared body of :func:`window_target` and :func:`map_target` on a contiguous ``window``
+    (coordinates relative to it): (status, row, col, distance in cells, snapped row, snapped col, space,
+    path); the path only ``with_path``."""
+    h, w = window.shape
     view = np.zeros((h, w), np.bool_)
+    no_space = np.empty((0, 0), np.uint8)
     if grid_view_cells(window, exclude, reach, view) == 0:
-        return NO_TARGET, -1, -1, np.inf, -1, -1
-    space = _window_space(window, unseen_ok, row_offsets, half_widths)
+        return NO_TARGET, -1, -1, np.inf, -1, -1, no_space, _NO_PATH
+    space, pad = _space_and_pad(window, unseen_ok, row_offsets, half_widths)
     targets = np.zeros((h + 2, w + 2), np.uint8)
-    excluded = exclude.shape[0] == h
-    count = 0
-    for r in range(h):
-        for c in range(w):
-            t = view[r, c] and space[r + 1, c + 1] != 0 and not (excluded and exclude[r, c])
-            targets[r + 1, c + 1] = t
-            count += t
-    if count == 0:
-        return NO_TARGET, -1, -1, np.inf, -1, -1
-    s = grid_snap(space[1:h + 1, 1:w + 1], sr - r0, sc - c0, snap)
+    if _mark_targets(view, pad, exclude, targets) == 0:
+        return NO_TARGET, -1, -1, np.inf, -1, -1, no_space, _NO_PATH
+    s = grid_snap(space, sr, sc, snap)
     if s[0] < 0:
-        return NO_TARGET, -1, -1, np.inf, -1, -1
+        return NO_TARGET, -1, -1, np.inf, -1, -1, no_space, _NO_PATH
     wp = w + 2
     seeds = np.empty(1, np.int64)
     seeds[0] = (s[0] + 1) * wp + s[1] + 1
-    free = space.reshape(-1)
+    free = pad.reshape(-1)
     best, best_d = grid_bucket_search(free, wp, seeds, -1, targets.reshape(-1), np.inf, dist[:free.shape[0]], ring)
     if best < 0:
-        return NO_TARGET, -1, -1, np.inf, -1, -1
-    return TARGET_FOUND, best // wp - 1, best % wp - 1, best_d, s[0], s[1]
+        return NO_TARGET, -1, -1, np.inf, -1, -1, no_space, _NO_PATH
+    path = grid_descend_path(free, wp, dist, best) if with_path else _NO_PATH
+    return TARGET_FOUND, best // wp - 1, best % wp - 1, best_d, s[0], s[1], space, path
+
+
+@njit(cache=True)
+def _mark_targets(view, pad, exclude, targets):  # pragma: no cover - compiled
+    """``targets`` (padded like ``pad``, zero border) = view cells in the space (``pad``'s interior) and not
+    in ``exclude`` (same shape as ``view``, or empty for none); returns how many. Branch-free rows, so the
+    compiler vectorises them (a short-circuit test per cell cost more than the whole-map search's numpy
+    passes)."""
+    h, w = view.shape
+    excluded = exclude.shape[0] == h
+    count = 0
+    for r in range(h):
+        v = view[r].view(np.uint8)
+        sp = pad[r + 1]
+        t = targets[r + 1]
+        for c in range(w):
+            t[c + 1] = v[c] & sp[c + 1]
+        if excluded:
+            ex = exclude[r].view(np.uint8)
+            for c in range(w):
+                t[c + 1] = t[c + 1] > ex[c]  # a and not b
+        for c in range(w):
+            count += t[c + 1]
+    return count
 
 
 @njit(cache=True)
 def _window_space(window, unseen_ok, row_offsets, half_widths):  # pragma: no cover - compiled
     """The configuration space of a contiguous map window, padded with one blocked cell on every side
     (uint8[h + 2, w + 2]): :func:`swarm.grid.cspace.configuration_space_of`, laid out for the search."""
+    return _space_and_pad(window, unseen_ok, row_offsets, half_widths)[1]
+
+
+@njit(cache=True)
+def _space_and_pad(window, unseen_ok, row_offsets, half_widths):  # pragma: no cover - compiled
+    """The configuration space of a contiguous map window (uint8[h, w], 0/1) and its padded copy."""
     h, w = window.shape
     pad = np.zeros((h + 2, w + 2), np.uint8)
     space = np.empty((h, w), np.uint8)
     grid_configuration_space(window, unseen_ok, row_offsets, half_widths, space)
     pad[1:h + 1, 1:w + 1] = space
-    return pad
+    return space, pad

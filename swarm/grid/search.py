@@ -137,15 +137,6 @@ def nearest_reachable(space: np.ndarray, start: tuple[int, int], targets: np.nda
 def nearest_reachable_in(space: np.ndarray, start: tuple[int, int], targets: np.ndarray
                          ) -> tuple[tuple[int, int], float] | None:
     """:func:`nearest_reachable` for checked inputs whose ``targets`` already lie in ``space``."""
-    found = nearest_reachable_path_in(space, start, targets, with_path=False)
-    return None if found is None else (found[0], found[1])
-
-
-def nearest_reachable_path_in(space: np.ndarray, start: tuple[int, int], targets: np.ndarray, with_path: bool = True
-                              ) -> tuple[tuple[int, int], float, np.ndarray | None] | None:
-    """:func:`nearest_reachable_in` and, with ``with_path``, the path to the target read off the same
-    distances: int64[N, 2] from ``start``, the path :func:`plan` returns from ``start`` to that target
-    (both searches stop at the start of the target's distance bucket, so their fields are equal)."""
     if not space[start]:
         return None
     free, wp = _WORK.padded(space, 0)
@@ -154,5 +145,4 @@ def nearest_reachable_path_in(space: np.ndarray, start: tuple[int, int], targets
     best, best_d = grid_bucket_search(free, wp, _seed(start, wp), -1, tflat, np.inf, dist, ring)
     if best < 0:
         return None
-    path = grid_descend_path(free, wp, dist, best) if with_path else None
-    return (int(best // wp - 1), int(best % wp - 1)), float(best_d * CELL_M), path
+    return (int(best // wp - 1), int(best % wp - 1)), float(best_d * CELL_M)

@@ -25,9 +25,9 @@ from ..api import CELL_M, ROBOT_RADIUS_M
 from . import memo
 from ._kernels import grid_view_cells
 from ._validate import check_cell, check_count, check_known, check_length, check_same_shape, check_space
-from .cspace import DEFAULT_MARGIN_M, _erosion_rows, configuration_space_of, nearest_in_of
-from .local import TARGET_FOUND, window_bounds, window_target
-from .search import _WORK, nearest_reachable_path_in
+from .cspace import DEFAULT_MARGIN_M, _erosion_rows
+from .local import TARGET_FOUND, map_target, window_bounds, window_target
+from .search import _WORK
 
 _NO_EXCLUDE = np.zeros((0, 0), dtype=bool)
 
@@ -134,25 +134,19 @@ class _TargetSearch:
 
     def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None
             ) -> tuple[tuple[int, int], float] | None:
-        """The search on the whole map ``known``. The path to the target is kept for the navigator's plan
-        (:mod:`swarm.grid.memo`)."""
-        view, frontier = _view_cells_of(known, self.reach, exclude)
-        if frontier == 0:
+        """The search on the whole map ``known``, one compiled call (:func:`swarm.grid.local.map_target`).
+        The path to the target is kept for the navigator's plan (:mod:`swarm.grid.memo`)."""
+        rows, widths = _erosion_rows(self.radius_m, self.margin_m)
+        h, w = known.shape
+        dist, ring = _WORK.get((h + 2) * (w + 2))
+        ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude)
+        status, row, col, cells, sr, sc, space, path = map_target(known, ex, self.reach, self.unseen_traversable,
+                                                                  rows, widths, start[0], start[1], self.snap,
+                                                                  dist, ring)
+        if status != TARGET_FOUND:
             return None
-        space = configuration_space_of(known, self.radius_m, self.margin_m, self.unseen_traversable)
-        view &= space
-        if exclude is not None:
-            view &= ~exclude
-        if not view.any():
-            return None
-        snapped = nearest_in_of(space, start, self.snap)
-        if snapped is None:
-            return None
-        found = nearest_reachable_path_in(space, snapped, view)
-        if found is None:
-            return None
-        cell, dist, path = found
-        assert path is not None
-        memo.remember(known, (self.radius_m, self.margin_m, self.unseen_traversable), start, space, snapped, cell, path)
+        cell, snapped = (int(row), int(col)), (int(sr), int(sc))
+        memo.remember(known, (self.radius_m, self.margin_m, self.unseen_traversable), start, space.view(np.bool_),
+                      snapped, cell, path)
         offset = CELL_M * math.hypot(snapped[0] - start[0], snapped[1] - start[1])
-        return (int(cell[0]), int(cell[1])), dist + offset
+        return cell, float(cells * CELL_M) + offset
