@@ -30,6 +30,7 @@ import msgpack
 import numpy as np
 
 from . import _cellcodec
+from .api import frozen_builder
 
 T = TypeVar("T")
 
@@ -243,17 +244,30 @@ def gaps_u32(idx: np.ndarray) -> bytes:
 def map_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
                changed: np.ndarray | None) -> MapUpdate:
     """Build a MapUpdate: ``changed`` = flat indices changed since the last update, or None for the full map."""
+    pose = tuple(float(v) for v in pose)  # type: ignore[assignment]
     if changed is None:
-        payload = zlib.compress(_cellcodec.pack2(known.reshape(-1)), 6)
-        count = int(np.count_nonzero(known))
-        full = True
-    else:
-        changed = np.sort(np.asarray(changed, dtype=np.int64))
-        payload = zlib.compress(_cellcodec.pack_delta(known.reshape(-1), changed), 6)
-        count = int(len(changed))
-        full = False
-    return MapUpdate(sender=sender, seq=seq, tick=tick, full=full, shape=(int(known.shape[0]), int(known.shape[1])),
-                     count=count, payload=payload, pose=tuple(float(v) for v in pose))
+        return full_update(sender, seq, tick, known, pose)
+    return delta_update(sender, seq, tick, known, pose, np.sort(np.asarray(changed, dtype=np.int64)))
+
+
+def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float]) -> MapUpdate:
+    """The full-map MapUpdate of ``known`` (``pose``: three Python floats)."""
+    payload = zlib.compress(_cellcodec.pack2(known.reshape(-1)), 6)
+    return _new_update(sender=sender, seq=seq, tick=tick, full=True, shape=(int(known.shape[0]), int(known.shape[1])),
+                       count=int(np.count_nonzero(known)), payload=payload, pose=pose)
+
+
+def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
+                 changed: np.ndarray) -> MapUpdate:
+    """The delta MapUpdate of cells ``changed`` of ``known``: distinct ascending int64 flat indices, as
+    :func:`swarm.knowledge.sync_changes` gives them, and ``pose`` three Python floats, so nothing is sorted
+    or converted again (the map-sharing service builds one per robot per sharing tick)."""
+    payload = zlib.compress(_cellcodec.pack_delta(known.reshape(-1), changed), 6)
+    return _new_update(sender=sender, seq=seq, tick=tick, full=False, shape=(int(known.shape[0]), int(known.shape[1])),
+                       count=len(changed), payload=payload, pose=pose)
+
+
+_new_update = frozen_builder(MapUpdate)
 
 
 @message("swarm.map_request", version=1)
