@@ -190,6 +190,18 @@ def _reference_payload(known: np.ndarray, changed: np.ndarray | None) -> bytes:
     return np.diff(changed, prepend=0).astype("<u4").tobytes() + packed
 
 
+def test_pack2_writes_four_values_a_byte_low_bits_first_for_every_tail_length():
+    from swarm._cellcodec import pack2
+
+    rng = np.random.default_rng(4)
+    for n in [*range(10), 4097]:
+        values = rng.integers(0, 4, n).astype(np.uint8)
+        padded = np.zeros((n + 3) // 4 * 4, dtype=np.uint8)
+        padded[:n] = values
+        q = padded.reshape(-1, 4)
+        assert pack2(values).tobytes() == (q[:, 0] | (q[:, 1] << 2) | (q[:, 2] << 4) | (q[:, 3] << 6)).astype(np.uint8).tobytes()
+
+
 @pytest.mark.parametrize("shape", [(1, 1), (7, 13), (30, 41)])
 def test_map_update_payload_layout_and_round_trip(shape):
     import zlib
