@@ -202,6 +202,23 @@ def test_pack2_writes_four_values_a_byte_low_bits_first_for_every_tail_length():
         assert pack2(values).tobytes() == (q[:, 0] | (q[:, 1] << 2) | (q[:, 2] << 4) | (q[:, 3] << 6)).astype(np.uint8).tobytes()
 
 
+def test_unpack2_splits_every_byte_and_reports_the_largest_value():
+    from swarm._cellcodec import unpack2
+
+    rng = np.random.default_rng(5)
+    for n in [*range(13), 4099]:
+        for top in range(4):
+            packed = rng.integers(0, 256, (n + 3) // 4).astype(np.uint8)
+            if top < 3:  # only values 0..top in the first n fields, whatever the padding bits after them
+                fields = np.minimum((packed[:, None] >> np.array([0, 2, 4, 6])) & 3, top).reshape(-1)
+                fields[n:] = 3
+                packed = (fields.reshape(-1, 4) << np.array([0, 2, 4, 6])).sum(axis=1).astype(np.uint8)
+            want = ((packed[np.arange(n) >> 2] >> (2 * (np.arange(n) & 3))) & 3).astype(np.uint8)
+            out = np.empty(n, dtype=np.uint8)
+            assert unpack2(packed, n, out) == (int(want.max()) if n else 0)
+            assert np.array_equal(out, want)
+
+
 @pytest.mark.parametrize("shape", [(1, 1), (7, 13), (30, 41)])
 def test_map_update_payload_layout_and_round_trip(shape):
     import zlib
