@@ -37,6 +37,7 @@ T = TypeVar("T")
 MAX_MESSAGE_BYTES = 4 * 1024 * 1024
 _REGISTRY: dict[str, type] = {}
 _NAMES: dict[type, str] = {}
+_FIELDS: dict[type, tuple[str, ...]] = {}  # field names in declaration order: encode reads them per message
 
 
 class MessageError(ValueError):
@@ -59,6 +60,7 @@ def message(type_name: str, version: int = 1) -> Callable[[type[T]], type[T]]:
         cls.message_version = version  # type: ignore[attr-defined]
         _REGISTRY[type_name] = cls
         _NAMES[cls] = type_name
+        _FIELDS[cls] = tuple(names)
         return cls
 
     return register
@@ -94,7 +96,7 @@ def encode(msg: Any) -> bytes:
     name = _NAMES.get(cls)
     if name is None:
         raise MessageError(f"{cls.__name__} is not a registered message type (use @message)")
-    values = [getattr(msg, f.name) for f in dataclasses.fields(msg)]
+    values = [getattr(msg, field) for field in _FIELDS[cls]]
     return msgpack.packb([name, cls.message_version, *values], default=_default, use_bin_type=True)
 
 
