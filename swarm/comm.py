@@ -109,36 +109,49 @@ class Medium:
     def deliver(self, tick: int, outboxes: Sequence[Sequence[Envelope]], link: np.ndarray) -> list[list[Envelope]]:
         """Inboxes for tick+1. ``link[i, j]``: a message from j reaches i (judged at send time)."""
         n = self.n
+        stats = self.stats
         inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         budget = np.full((n, n), self.spec.bandwidth, dtype=np.int64) if self.spec.bandwidth else None
-        reach = [np.flatnonzero(link[:, j]) for j in range(n)]
         for j in range(n):
+            if not outboxes[j]:
+                continue
+            in_reach = np.flatnonzero(link[:, j])
+            others = [i for i in in_reach.tolist() if i != j]  # every receiver when nothing is lost
             for env in outboxes[j]:
                 size = len(env.data)
-                self.stats.sent += 1
-                self.stats.bytes_sent += size
+                stats.sent += 1
+                stats.bytes_sent += size
                 if isinstance(env.message, MapUpdate):
-                    self.stats.map_bytes_sent += size
-                receivers = reach[j]
-                self.stats.dropped_link += (n - 1) - len(receivers)
+                    stats.map_bytes_sent += size
+                receivers = in_reach
+                stats.dropped_link += (n - 1) - len(receivers)
+                targets = others
                 if self.spec.loss > 0.0 and len(receivers):
                     keep = self.rng.random(len(receivers)) >= self.spec.loss
-                    self.stats.dropped_loss += int((~keep).sum())
-                    receivers = receivers[keep]
-                for i in receivers.tolist():
-                    if i == j:
-                        continue
-                    if budget is not None:
-                        if budget[i, j] < size:
-                            self.stats.dropped_bandwidth += 1
-                            continue
-                        budget[i, j] -= size
+                    stats.dropped_loss += int((~keep).sum())
+                    targets = [i for i in receivers[keep].tolist() if i != j]
+                if budget is not None:
+                    targets = self._within_budget(budget, targets, j, size)
+                for i in targets:
                     inboxes[i].append(env)
-                    env.delivered_to.append(i)
-                    self.stats.delivered += 1
-                    self.stats.bytes_delivered += size
-                    self.stats.last_contact[i] = tick + 1
+                env.delivered_to.extend(targets)
+                stats.delivered += len(targets)
+                stats.bytes_delivered += size * len(targets)
+                for i in targets:
+                    stats.last_contact[i] = tick + 1
         return inboxes
+
+    def _within_budget(self, budget: np.ndarray, targets: list[int], sender: int, size: int) -> list[int]:
+        """The receivers whose link from ``sender`` still carries ``size`` bytes this tick (charged); the
+        others count as dropped for bandwidth."""
+        kept = []
+        for i in targets:
+            if budget[i, sender] < size:
+                self.stats.dropped_bandwidth += 1
+                continue
+            budget[i, sender] -= size
+            kept.append(i)
+        return kept
 
 
 class MapSharing:

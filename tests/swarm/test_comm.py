@@ -257,3 +257,58 @@ def test_corrupt_map_update_payloads_are_rejected(raw, n, full, error):
                     pose=(0.0, 0.0, 0.0))
     with pytest.raises(MessageError, match=error):
         decode(encode(msg)).cells()
+
+
+def _deliver_reference(medium: Medium, tick: int, outboxes, link: np.ndarray):
+    """Medium.deliver receiver by receiver, as first written: the semantics the faster loop must keep."""
+    n, spec, stats = medium.n, medium.spec, medium.stats
+    inboxes = [[] for _ in range(n)]
+    budget = np.full((n, n), spec.bandwidth, dtype=np.int64) if spec.bandwidth else None
+    for j in range(n):
+        for env in outboxes[j]:
+            size = len(env.data)
+            stats.sent += 1
+            stats.bytes_sent += size
+            if isinstance(env.message, MapUpdate):
+                stats.map_bytes_sent += size
+            receivers = np.flatnonzero(link[:, j])
+            stats.dropped_link += (n - 1) - len(receivers)
+            if spec.loss > 0.0 and len(receivers):
+                keep = medium.rng.random(len(receivers)) >= spec.loss
+                stats.dropped_loss += int((~keep).sum())
+                receivers = receivers[keep]
+            for i in receivers.tolist():
+                if i == j:
+                    continue
+                if budget is not None:
+                    if budget[i, j] < size:
+                        stats.dropped_bandwidth += 1
+                        continue
+                    budget[i, j] -= size
+                inboxes[i].append(env)
+                env.delivered_to.append(i)
+                stats.delivered += 1
+                stats.bytes_delivered += size
+                stats.last_contact[i] = tick + 1
+    return inboxes
+
+
+@pytest.mark.parametrize("loss,bandwidth", [(0.0, 0), (0.3, 0), (0.0, 40), (0.4, 30)])
+def test_medium_delivers_as_the_receiver_by_receiver_reference(loss, bandwidth):
+    from swarm.comm import Envelope
+
+    rng = np.random.default_rng(int(loss * 10) + bandwidth)
+    n = 6
+    spec = CommSpec(loss=loss, bandwidth=bandwidth)
+    fast, slow = Medium(n, spec, np.random.default_rng(1)), Medium(n, spec, np.random.default_rng(1))
+    for tick in range(20):
+        link = rng.random((n, n)) < 0.6
+        sizes = [[int(s) for s in rng.integers(1, 25, rng.integers(0, 4))] for _ in range(n)]
+        boxes_fast = [[Envelope(j, k, bytes(s), Ping(sender=j, tick=tick)) for k, s in enumerate(row)] for j, row in enumerate(sizes)]
+        boxes_slow = [[Envelope(j, k, bytes(s), Ping(sender=j, tick=tick)) for k, s in enumerate(row)] for j, row in enumerate(sizes)]
+        got = fast.deliver(tick, boxes_fast, link)
+        want = _deliver_reference(slow, tick, boxes_slow, link)
+        assert [[(e.sender, e.seq) for e in inbox] for inbox in got] == [[(e.sender, e.seq) for e in inbox] for inbox in want]
+        assert [[e.delivered_to for e in row] for row in boxes_fast] == [[e.delivered_to for e in row] for row in boxes_slow]
+        assert fast.stats.as_dict() == slow.stats.as_dict()
+    assert fast.stats.delivered > 0 and (fast.stats.dropped_bandwidth > 0) == (bandwidth > 0)
