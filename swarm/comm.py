@@ -26,7 +26,7 @@ from maps.errors import InvalidInput
 from maps.params import check_choice, check_float, check_int
 
 from .knowledge import merge_cells_unchecked, sync_changes
-from .messages import MapRequest, MapUpdate, MessageError, decode, encode, map_update
+from .messages import MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
 
 SHARING_MODES = ("delta", "full", "off")
 
@@ -173,6 +173,9 @@ class MapSharing:
         if not self.enabled:
             return out
         due = tick % self.spec.share_every == 0
+        if not (due or any(self.full_requested) or any(self.requests)):  # most ticks
+            return out
+        pose_rows = poses.tolist()
         for i in range(self.n):
             for target in self.requests[i]:
                 out[i].append(MapRequest(sender=i, target=target))
@@ -182,16 +185,16 @@ class MapSharing:
                 continue
             self.full_requested[i] = False
             if full:
-                changed = None
-            else:
-                assert self.last_shared is not None
-                changed = sync_changes(known[i], self.last_shared[i])
-                if not len(changed):
-                    continue
-            if self.last_shared is not None and changed is None:
-                self.last_shared[i] = known[i]
-            self.seq[i] += 1
-            out[i].append(map_update(i, self.seq[i], tick, known[i], tuple(poses[i]), changed))
+                if self.last_shared is not None:
+                    self.last_shared[i] = known[i]
+                self.seq[i] += 1
+                out[i].append(full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i])))
+                continue
+            assert self.last_shared is not None
+            changed = sync_changes(known[i], self.last_shared[i])  # ascending, as delta_update wants them
+            if len(changed):
+                self.seq[i] += 1
+                out[i].append(delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed))
         return out
 
     def receive(self, receiver: int, messages: Sequence[Any], known: np.ndarray) -> list[np.ndarray | None]:
