@@ -134,11 +134,10 @@ class Medium:
                     targets = self._within_budget(budget, targets, j, size)
                 for i in targets:
                     inboxes[i].append(env)
+                    stats.last_contact[i] = tick + 1
                 env.delivered_to.extend(targets)
                 stats.delivered += len(targets)
                 stats.bytes_delivered += size * len(targets)
-                for i in targets:
-                    stats.last_contact[i] = tick + 1
         return inboxes
 
     def _within_budget(self, budget: np.ndarray, targets: list[int], sender: int, size: int) -> list[int]:

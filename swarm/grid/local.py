@@ -98,9 +98,8 @@ def _window_plan(known, r0, r1, c0, c1, unseen_ok, row_offsets, half_widths, sr,
     """Configuration space of ``known[r0:r1, c0:c1]``, snapping, search, read-back and shortcut in one
     call. Returns (waypoints float64[M, 2] metres in map coordinates, goal cell in the space); no
     waypoints when the window does not decide the plan."""
-    h, w = r1 - r0, c1 - c0
-    pad = _window_space(np.ascontiguousarray(known[r0:r1, c0:c1]), unseen_ok, row_offsets, half_widths)
-    space = pad[1:h + 1, 1:w + 1]
+    w = c1 - c0
+    space, pad = _space_and_pad(np.ascontiguousarray(known[r0:r1, c0:c1]), unseen_ok, row_offsets, half_widths)
     none = np.empty((0, 2), np.float64)
     s = grid_snap(space, sr - r0, sc - c0, snap)
     g = grid_snap(space, gr - r0, gc - c0, snap)
@@ -206,15 +205,10 @@ def _mark_targets(view, pad, exclude, targets):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _window_space(window, unseen_ok, row_offsets, half_widths):  # pragma: no cover - compiled
-    """The configuration space of a contiguous map window, padded with one blocked cell on every side
-    (uint8[h + 2, w + 2]): :func:`swarm.grid.cspace.configuration_space_of`, laid out for the search."""
-    return _space_and_pad(window, unseen_ok, row_offsets, half_widths)[1]
-
-
-@njit(cache=True)
 def _space_and_pad(window, unseen_ok, row_offsets, half_widths):  # pragma: no cover - compiled
-    """The configuration space of a contiguous map window (uint8[h, w], 0/1) and its padded copy."""
+    """The configuration space of a contiguous map window (uint8[h, w], 0/1,
+    :func:`swarm.grid.cspace.configuration_space_of`) and its copy padded with one blocked cell on every
+    side (uint8[h + 2, w + 2]), laid out for the search."""
     h, w = window.shape
     pad = np.zeros((h + 2, w + 2), np.uint8)
     space = np.empty((h, w), np.uint8)
