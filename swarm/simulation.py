@@ -32,6 +32,7 @@ from radio import build_link_model, config_from_mapping
 
 from .api import Action, Neighbour, Neighbours, Observation, Pose, RobotInfo, frozen_builder
 from .comm import CommSpec, Envelope, MapSharing, Medium
+from .grid._validate import vouch_known
 from .knowledge import sync_changes, sync_regions_flat
 from .metrics import Metrics
 from .navigation import Navigator
@@ -123,9 +124,11 @@ class Simulation:
         self.setup_time_s = time.perf_counter() - t0
 
     def _read_only(self, i: int) -> np.ndarray:
+        """Robot i's map as its algorithm sees it: read-only, and vouched for (values 0..2 by construction),
+        so the grid helpers the algorithm calls on it every few ticks do not rescan it."""
         view = self.known[i].view()
         view.flags.writeable = False
-        return view
+        return vouch_known(view)
 
     def robot_info(self, i: int) -> RobotInfo:
         return RobotInfo(id=i, n_robots=self.spec.robots.count, map_shape=self.truth.shape,
@@ -176,10 +179,11 @@ class Simulation:
                 self.world.step(commands)
             poses = self.world.poses
             collided = self.world.collided.copy()
-            collisions += int((collided & ~was_colliding).sum())
+            collisions += int(np.count_nonzero(collided > was_colliding))  # contacts that began this tick
             was_colliding = collided
-            self.lidar.scan(poses, self.known, self.streams.sensor, active=~self.failed, tracker=self.tracker)
-            self.tracker.update_coverage(poses[:, :2], active=~self.failed)
+            active = ~self.failed
+            self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker)
+            self.tracker.update_coverage(poses[:, :2], active=active)
             links = _TickLinks(self.links, poses[:, :2])
             inboxes, merged = self._receive()
             explored = self.tracker.explored
@@ -190,7 +194,7 @@ class Simulation:
                 stop_reason = "max_ticks"
             elif stalled_for >= spec.stop.stall_ticks:
                 stop_reason = "stalled"
-            elif self.failed.all():
+            elif not active.any():
                 stop_reason = "all_failed"
             if stop_reason or self.metrics.due(tick):
                 self._record(tick, explored, collisions, links)

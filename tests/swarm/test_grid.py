@@ -249,6 +249,30 @@ def test_bad_knowledge_maps_are_rejected(known: np.ndarray) -> None:
         grid.configuration_space(known)
 
 
+def test_vouched_runtime_view_is_not_rescanned_but_nothing_else_is_trusted() -> None:
+    from swarm.grid._validate import check_known, vouch_known
+
+    base = room(6, 6)
+    view = base.view()
+    view.flags.writeable = False
+    assert vouch_known(view) is view
+    base[2, 2] = 7  # only the owner can write behind the view; the mark means "not scanned again"
+    assert check_known(view) is view
+    for other in (view.copy(), base, base.view()):  # a copy or another view of the same memory is checked
+        with pytest.raises(InvalidInput):
+            check_known(other)
+    view.flags.writeable = True  # a view made writable again is no longer vouched for
+    with pytest.raises(InvalidInput):
+        check_known(view)
+    writable = room(4, 4)
+    with pytest.raises(InvalidInput, match="read-only"):
+        vouch_known(writable)
+    bad = np.full((3, 3), 3, dtype=np.uint8)
+    bad.flags.writeable = False
+    with pytest.raises(InvalidInput):
+        vouch_known(bad)
+
+
 # -------------------------------------------------------------------------------------------- plan ----
 def test_plan_in_open_space_has_the_octile_length() -> None:
     space = np.ones((20, 30), dtype=bool)

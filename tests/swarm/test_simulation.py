@@ -113,6 +113,8 @@ def test_observation_contract():
     first = Pacer.seen[0]
     assert first.tick == 0 and first.robot_id == 0
     assert not first.known.flags.writeable
+    from swarm.grid._validate import _VOUCHED
+    assert _VOUCHED.get(id(first.known)) is first.known, "the runtime vouches for its maps' values"
     with pytest.raises(ValueError):
         first.known[0, 0] = 2
     assert (first.known > 0).any(), "the robot has sensed before its first decision"
