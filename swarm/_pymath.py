@@ -7,8 +7,10 @@ compensated sums, and one differential correction of the square root. The two di
 for some inputs (``hypot(2.4, 5.76)``: 6.24 against 6.239999999999999), which is enough to change a run,
 so compiled code uses the port below in their place. ``atan2``, ``sqrt``, ``cos`` and ``copysign`` need
 no port: numba and CPython both call the C library for them (``sqrt`` is exact by IEEE 754).
-``tests/swarm/test_pymath.py`` checks the port against the running interpreter's ``math.hypot`` on
-random and special inputs (CPython 3.12 changed ``vector_norm``; the test would say so).
+``tests/swarm/test_pymath.py`` checks the port against ``math.hypot`` bit for bit on random and special
+inputs under CPython 3.10 / 3.11 (this project's interpreter), and that it is correctly rounded on any.
+CPython 3.12 rewrote ``vector_norm`` (fused multiply-add, two accumulators); there the port keeps 3.11's
+bits, so the follower computes the same on every interpreter.
 """
 
 from __future__ import annotations
