@@ -189,9 +189,12 @@ class Follower:
             bx, by = self._points[i + 1][0] - self._points[i][0], self._points[i + 1][1] - self._points[i][1]
             self._heading.append(None if bx == 0.0 and by == 0.0 else math.atan2(by, bx))
         self._corner_speed = [self._bend_speed(i) for i in range(m)]
-        self._path = np.array([(*self._points[i], self._suffix[i],
-                                math.nan if i == m - 1 or self._heading[i] is None else self._heading[i],
-                                self._corner_speed[i]) for i in range(m)], dtype=np.float64)
+        path = np.empty((m, 5), dtype=np.float64)
+        path[:, :2] = pts
+        path[:, 2] = self._suffix
+        path[:, 3] = [math.nan if h is None else h for h in self._heading] + [math.nan]
+        path[:, 4] = self._corner_speed
+        self._path = path
         self._index = 0
         self._done = False
         self._remaining = self._suffix[0]
