@@ -6,9 +6,9 @@ whether the pose comes from ground truth or from an estimate. It knows the drive
 early enough for the world's acceleration limit to stop the robot where it should stop, and it never
 asks for more than the world will deliver. The per-tick command is one compiled call on scalars (it
 runs once per robot per tick: 3.2 us as Python, ~0.8 us compiled) that performs the same float
-operations in the same order as the Python formulas (:meth:`Follower._bend_speed`,
-:meth:`Follower._turn_rate`, :func:`wrap_angle`), with CPython's own ``hypot`` (:mod:`swarm._pymath`),
-so runs are bit for bit what they were.
+operations in the same order as the Python formulas it replaced (bend speed, braking limit, turn rate,
+:func:`wrap_angle`), with CPython's own ``hypot`` (:mod:`swarm._pymath`), so runs are bit for bit what they
+were; ``tests/swarm/test_motion.py`` keeps those formulas in Python as the reference.
 """
 
 from __future__ import annotations
@@ -151,14 +151,10 @@ class Follower:
     def __init__(self, params: MotionParams, follow: FollowParams | None = None) -> None:
         self.params = params
         self.follow = follow if follow is not None else FollowParams()
-        self._points: list[tuple[float, float]] = []
-        self._corner_speed: list[float] = []     # speed allowed when passing waypoint i (last: 0)
-        self._suffix: list[float] = []           # path length from waypoint i to the end
-        self._heading: list[float | None] = []   # direction of segment i -> i+1 (None: zero length)
+        self._path = _NO_PATH    # per waypoint: x, y, suffix, heading (NaN: None), corner speed (_path_table)
         self._index = 0
         self._done = True
         self._remaining = 0.0
-        self._path = np.zeros((0, 5), dtype=np.float64)  # per waypoint: x, y, suffix, heading (NaN: None), corner speed
         # Constants of the per-tick arithmetic, computed once with the same operations as in the formulas
         # (braking at half the acceleration); the parameters are frozen, so they hold for the follower's life.
         two_brake = 2.0 * (0.5 * params.max_accel)
@@ -178,30 +174,14 @@ class Follower:
             raise InvalidInput("waypoints", getattr(pts, "shape", waypoints), "an array of shape (M, 2), M >= 1")
         if not np.isfinite(pts).all():
             raise InvalidInput("waypoints", "non-finite values", "finite coordinates in metres")
-        self._points = list(map(tuple, pts.tolist()))  # Python floats: the per-tick math stays in scalars
-        m = len(self._points)
-        seg = [math.dist(self._points[i], self._points[i + 1]) for i in range(m - 1)]
-        self._suffix = [0.0] * m
-        for i in range(m - 2, -1, -1):
-            self._suffix[i] = self._suffix[i + 1] + seg[i]
-        self._heading = []
-        for i in range(m - 1):
-            bx, by = self._points[i + 1][0] - self._points[i][0], self._points[i + 1][1] - self._points[i][1]
-            self._heading.append(None if bx == 0.0 and by == 0.0 else math.atan2(by, bx))
-        self._corner_speed = [self._bend_speed(i) for i in range(m)]
-        path = np.empty((m, 5), dtype=np.float64)
-        path[:, :2] = pts
-        path[:, 2] = self._suffix
-        path[:, 3] = [math.nan if h is None else h for h in self._heading] + [math.nan]
-        path[:, 4] = self._corner_speed
-        self._path = path
+        self._path = _path_table(np.ascontiguousarray(pts), self._consts)
         self._index = 0
         self._done = False
-        self._remaining = self._suffix[0]
+        self._remaining = float(self._path[0, 2])
 
     def clear(self) -> None:
         """Forget the path; :meth:`command` returns (0, 0) until the next :meth:`set_path`."""
-        self._points = []
+        self._path = _NO_PATH
         self._done = True
         self._remaining = 0.0
 
@@ -223,7 +203,7 @@ class Follower:
 
     @property
     def waypoints(self) -> tuple[tuple[float, float], ...]:
-        return tuple(self._points)
+        return tuple(map(tuple, self._path[:, :2].tolist()))
 
     # --------------------------------------------------------------------------------------- control ----
     def command(self, pose: Sequence[float]) -> tuple[float, float]:
@@ -242,41 +222,66 @@ class Follower:
         err = wrap_angle(float(heading) - float(pose[2]))
         if abs(err) <= self.follow.heading_tolerance:
             return 0.0, 0.0
-        return 0.0, self._turn_rate(err)
-
-    # ----------------------------------------------------------------------------------- internals ----
-    def _turn_rate(self, err: float) -> float:
-        """Angular rate that brakes at half the angular acceleration and lands on the target: the
-        proportional term takes over near zero, with a floor of ``min(0.05 rad/s, err/tick)`` so the last
-        fraction of a degree does not take seconds (and small enough that stopping from it turns less than
-        the tolerance)."""
-        p = self.params
-        mag = abs(err)
-        rate = min(p.max_turn_rate, math.sqrt(p.max_turn_accel * mag), self.follow.gain * mag)
-        rate = min(max(rate, min(0.05, mag / TICK_S)), p.max_turn_rate)
-        return math.copysign(rate, err)
-
-    def _bend_speed(self, i: int, came_from: tuple[float, float] | None = None) -> float:
-        """Speed allowed when passing waypoint ``i``: ``max_speed * cos(bend)``, zero for the last
-        waypoint and for bends the robot must take by turning in place."""
-        pts = self._points
-        if i == len(pts) - 1:
-            return 0.0
-        prev = came_from if came_from is not None else (pts[i - 1] if i > 0 else None)
-        if prev is None:
-            return self.params.max_speed
-        ax, ay = pts[i][0] - prev[0], pts[i][1] - prev[1]
-        out = self._heading[i]
-        if (ax == 0.0 and ay == 0.0) or out is None:
-            return self.params.max_speed
-        bend = abs(wrap_angle(out - math.atan2(ay, ax)))
-        if bend > self.follow.rotate_above:
-            return 0.0
-        return self.params.max_speed * math.cos(bend)
+        return 0.0, _turn_rate(err, self._consts)
 
 
 _TWO_PI = 2.0 * math.pi
 _HALF_PI = math.pi / 2
+_NO_PATH = np.zeros((0, 5), dtype=np.float64)
+
+
+@njit(cache=True, inline="always")
+def _wrap(angle: float) -> float:  # pragma: no cover - compiled
+    """:func:`wrap_angle` in compiled code (the same operations)."""
+    return math.pi - (math.pi - angle) % _TWO_PI
+
+
+@njit(cache=True, inline="always")
+def _turn_rate(err: float, consts: np.ndarray) -> float:  # pragma: no cover - compiled
+    """Angular rate toward a heading error ``err`` that brakes at half the angular acceleration and lands
+    on the target: the proportional term takes over near zero, with a floor of ``min(0.05 rad/s,
+    err/tick)`` so the last fraction of a degree does not take seconds (and small enough that stopping
+    from it turns less than the tolerance)."""
+    max_turn_rate, max_turn_accel, gain = consts[1], consts[2], consts[9]
+    mag = abs(err)
+    rate = min(max_turn_rate, math.sqrt(max_turn_accel * mag), gain * mag)
+    return math.copysign(min(max(rate, min(0.05, mag / TICK_S)), max_turn_rate), err)
+
+
+@njit(cache=True, inline="always")
+def _bend_speed(path: np.ndarray, i: int, px: float, py: float, consts: np.ndarray) -> float:  # pragma: no cover
+    """Speed allowed when passing waypoint ``i`` (not the last) coming from (px, py): ``max_speed *
+    cos(bend)``, zero for bends the robot must take by turning in place."""
+    max_speed, rotate_above = consts[0], consts[8]
+    ax = path[i, 0] - px
+    ay = path[i, 1] - py
+    out = path[i, 3]
+    if (ax == 0.0 and ay == 0.0) or math.isnan(out):  # no bend at a zero-length segment
+        return max_speed
+    bend = abs(_wrap(out - math.atan2(ay, ax)))
+    return 0.0 if bend > rotate_above else max_speed * math.cos(bend)
+
+
+@njit(cache=True)
+def _path_table(pts: np.ndarray, consts: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """The follower's table of ``pts`` (float64[M, 2], M >= 1): per waypoint x, y, the path length from it
+    to the end (``math.dist`` summed from the end), the heading of the segment leaving it (NaN for the last
+    and for zero-length segments) and its corner speed (the first: top speed, the last: 0)."""
+    m = pts.shape[0]
+    path = np.empty((m, 5), dtype=np.float64)
+    path[:, :2] = pts
+    path[m - 1, 2] = 0.0
+    for i in range(m - 2, -1, -1):
+        path[i, 2] = path[i + 1, 2] + py_hypot(pts[i, 0] - pts[i + 1, 0], pts[i, 1] - pts[i + 1, 1])
+    for i in range(m):
+        bx = pts[i + 1, 0] - pts[i, 0] if i < m - 1 else 0.0
+        by = pts[i + 1, 1] - pts[i, 1] if i < m - 1 else 0.0
+        path[i, 3] = math.nan if bx == 0.0 and by == 0.0 else math.atan2(by, bx)
+    path[0, 4] = consts[0]
+    for i in range(1, m - 1):
+        path[i, 4] = _bend_speed(path, i, pts[i - 1, 0], pts[i - 1, 1], consts)
+    path[m - 1, 4] = 0.0
+    return path
 
 
 @njit(cache=True)
@@ -284,12 +289,10 @@ def _follow_step(path: np.ndarray, consts: np.ndarray, index: int, x: float, y: 
                  theta: float) -> tuple[float, float, int, float, bool]:  # pragma: no cover - compiled
     """One tick of :meth:`Follower.command`: ``(v, omega, index, remaining, done)``. ``path`` rows are
     (x, y, suffix length, heading of the segment leaving the waypoint or NaN, corner speed); ``consts``
-    as built in :class:`Follower`. The operations and their order are those of :func:`wrap_angle`,
-    :meth:`Follower._bend_speed` (at the robot's position for the waypoint it heads for) and
-    :meth:`Follower._turn_rate`, with the braking limit looking ahead as far as braking from top speed
-    takes; ``math.dist`` / ``math.hypot`` are CPython's (:func:`swarm._pymath.py_hypot`)."""
-    max_speed, max_turn_rate, max_turn_accel = consts[0], consts[1], consts[2]
-    two_brake, horizon, switch_radius, arrive_radius = consts[3], consts[4], consts[5], consts[6]
+    as built in :class:`Follower`. The braking limit looks ahead as far as braking from top speed takes,
+    with the bend at the waypoint the robot heads for measured from the robot's position;
+    ``math.dist`` / ``math.hypot`` are CPython's (:func:`swarm._pymath.py_hypot`)."""
+    max_speed, two_brake, horizon, switch_radius, arrive_radius = consts[0], consts[3], consts[4], consts[5], consts[6]
     reverse_radius, rotate_above, gain = consts[7], consts[8], consts[9]
     last = path.shape[0] - 1
     while index < last and py_hypot(x - path[index, 0], y - path[index, 1]) < switch_radius:
@@ -300,15 +303,13 @@ def _follow_step(path: np.ndarray, consts: np.ndarray, index: int, x: float, y: 
     remaining = d + path[index, 2]
     if index == last and d <= arrive_radius:
         return 0.0, 0.0, index, 0.0, True
-    err = math.pi - (math.pi - (math.atan2(ty - y, tx - x) - theta)) % _TWO_PI      # wrap_angle
+    err = _wrap(math.atan2(ty - y, tx - x) - theta)
     direction = 1.0
     if index == last and d < reverse_radius and abs(err) > _HALF_PI:
         direction = -1.0                      # small overshoot: back up rather than turn around
-        err = math.pi - (math.pi - (err - math.pi)) % _TWO_PI
-    mag = abs(err)                            # turn rate: see Follower._turn_rate
-    rate = min(max_turn_rate, math.sqrt(max_turn_accel * mag), gain * mag)
-    omega = math.copysign(min(max(rate, min(0.05, mag / TICK_S)), max_turn_rate), err)
-    if mag > rotate_above:
+        err = _wrap(err - math.pi)
+    omega = _turn_rate(err, consts)
+    if abs(err) > rotate_above:
         return 0.0, omega, index, remaining, False
     limit = max_speed                         # braking limit for every bend within the horizon
     dist = d
@@ -317,17 +318,7 @@ def _follow_step(path: np.ndarray, consts: np.ndarray, index: int, x: float, y: 
         if i == last:
             limit = min(limit, math.sqrt(two_brake * dist), max(gain * dist, min(0.05, dist / TICK_S)))
             break
-        if i != index:
-            vc = path[i, 4]
-        else:                                 # Follower._bend_speed(i, came_from=(x, y))
-            ax = path[i, 0] - x
-            ay = path[i, 1] - y
-            out = path[i, 3]
-            if (ax == 0.0 and ay == 0.0) or math.isnan(out):
-                vc = max_speed
-            else:
-                bend = abs(math.pi - (math.pi - (out - math.atan2(ay, ax))) % (2.0 * math.pi))
-                vc = 0.0 if bend > rotate_above else max_speed * math.cos(bend)
+        vc = path[i, 4] if i != index else _bend_speed(path, i, x, y, consts)  # the next bend: from here
         limit = min(limit, math.sqrt(vc * vc + two_brake * dist))
         if dist > horizon:
             break

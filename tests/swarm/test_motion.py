@@ -10,7 +10,7 @@ import pytest
 
 from maps import Map
 from maps.errors import InvalidInput
-from swarm.motion import MOTION_PRESETS, FollowParams, Follower, MotionParams, wrap_angle
+from swarm.motion import MOTION_PRESETS, TICK_S, FollowParams, Follower, MotionParams, wrap_angle
 from swarm.world import World, disc_hits_solid
 
 PRESETS = [pytest.param(MOTION_PRESETS["default"], id="default"), pytest.param(MOTION_PRESETS["maes"], id="maes")]
@@ -208,9 +208,22 @@ def test_wrap_angle() -> None:
 
 # ------------------------------------------------------- the inlined command against its plain formulas ----
 class _PlainFollower(Follower):
-    """The follower's command as it was written before the helpers were inlined: one call per formula
-    (bend speed at the robot's position, braking limit, turn rate, ``wrap_angle``). The fast command must
-    give the same floats bit for bit, or every run would change."""
+    """The follower as it was written in Python before it was compiled: the path table built with
+    ``math.dist`` and the bend speeds, and one call per formula each tick (bend speed at the robot's
+    position, braking limit, turn rate, ``wrap_angle``). The compiled follower must give the same floats
+    bit for bit, or every run would change."""
+
+    def set_path(self, waypoints):  # type: ignore[override]
+        super().set_path(waypoints)  # validation and the index / done / remaining state
+        self._points = list(map(tuple, np.asarray(waypoints, dtype=np.float64).tolist()))
+        m = len(self._points)
+        seg = [math.dist(self._points[i], self._points[i + 1]) for i in range(m - 1)]
+        self._suffix = [0.0] * m
+        for i in range(m - 2, -1, -1):
+            self._suffix[i] = self._suffix[i + 1] + seg[i]
+        self._corner_speed = [self._plain_bend_speed(i, self._points[i - 1]) if i > 0 else
+                              (0.0 if m == 1 else self.params.max_speed) for i in range(m)]
+        self._remaining = self._suffix[0]
 
     def command(self, pose):  # type: ignore[override]
         if self._done:
@@ -233,7 +246,7 @@ class _PlainFollower(Follower):
         if self._index == last and d < fp.reverse_radius and abs(err) > math.pi / 2:
             direction = -1.0
             err = wrap_angle(err - math.pi)
-        omega = self._turn_rate(err)
+        omega = self._plain_turn_rate(err)
         if abs(err) > fp.rotate_above:
             return 0.0, omega
         return direction * speed * math.cos(err), omega
@@ -258,6 +271,13 @@ class _PlainFollower(Follower):
             dist += self._suffix[i] - self._suffix[i + 1]
             i += 1
         return limit
+
+    def _plain_turn_rate(self, err: float) -> float:
+        p = self.params
+        mag = abs(err)
+        rate = min(p.max_turn_rate, math.sqrt(p.max_turn_accel * mag), self.follow.gain * mag)
+        rate = min(max(rate, min(0.05, mag / TICK_S)), p.max_turn_rate)
+        return math.copysign(rate, err)
 
     def _plain_bend_speed(self, i: int, prev: tuple[float, float]) -> float:
         pts = self._points
@@ -286,6 +306,8 @@ def test_command_equals_the_plain_formulas_bit_for_bit(seed: int) -> None:
         fast, plain = Follower(params, follow), _PlainFollower(params, follow)
         fast.set_path(pts)
         plain.set_path(pts)
+        # the compiled path table: lengths to the end and corner speeds as the Python formulas give them
+        assert fast._path[:, 2].tolist() == plain._suffix and fast._path[:, 4].tolist() == plain._corner_speed
         here = pts[0] + rng.normal(0.0, 0.3, 2)
         for _ in range(40):
             pose = (float(here[0]), float(here[1]), float(rng.uniform(-4.0, 4.0)))
