@@ -43,11 +43,8 @@ DEFAULT_MARGIN_M: float = 0.05
 
 def passable(known: np.ndarray, unseen_traversable: bool = False) -> np.ndarray:
     """Cells the robot may enter: FREE, plus UNSEEN when planning optimistically."""
-    return _passable_of(check_known(known), unseen_traversable)
-
-
-def _passable_of(known: np.ndarray, unseen_traversable: bool) -> np.ndarray:
-    return known != SOLID if unseen_traversable else known == FREE
+    k = check_known(known)
+    return k != SOLID if unseen_traversable else k == FREE
 
 
 def _point_square_distance(dr: int, dc: int) -> float:

@@ -40,18 +40,13 @@ def view_cells(known: np.ndarray, reach: int, exclude: np.ndarray | None = None)
     k = np.ascontiguousarray(check_known(known), dtype=np.uint8)
     steps = check_count(reach, "reach", 0)
     assert steps is not None
-    ex = None
+    ex = _NO_EXCLUDE
     if exclude is not None:
-        ex = check_space(exclude, "exclude")
+        ex = np.ascontiguousarray(check_space(exclude, "exclude"))
         check_same_shape(ex, k.shape, "exclude")
-    return _view_cells_of(k, steps, ex)[0]
-
-
-def _view_cells_of(known: np.ndarray, reach: int, exclude: np.ndarray | None) -> tuple[np.ndarray, int]:
-    """:func:`view_cells` of a checked uint8 map, and the number of frontier cells (0: no view cell)."""
-    view = np.zeros(known.shape, dtype=bool)
-    ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude)
-    return view, grid_view_cells(np.ascontiguousarray(known), ex, reach, view)
+    view = np.zeros(k.shape, dtype=bool)
+    grid_view_cells(k, ex, steps, view)
+    return view
 
 
 def default_view_reach_cells(radius_m: float, margin_m: float) -> int:
