@@ -124,8 +124,7 @@ class _TargetSearch:
                                                         start[0], start[1], self.snap, dist, ring)
         if status != TARGET_FOUND:
             return None
-        offset = CELL_M * math.hypot(sr + r0 - start[0], sc + c0 - start[1])
-        return (int(row) + r0, int(col) + c0), float(cells * CELL_M) + offset
+        return (int(row) + r0, int(col) + c0), _distance_m(cells, (int(sr) + r0, int(sc) + c0), start)
 
     def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None
             ) -> tuple[tuple[int, int], float] | None:
@@ -143,5 +142,10 @@ class _TargetSearch:
         cell, snapped = (int(row), int(col)), (int(sr), int(sc))
         memo.remember(known, (self.radius_m, self.margin_m, self.unseen_traversable), start, space.view(np.bool_),
                       snapped, cell, path)
-        offset = CELL_M * math.hypot(snapped[0] - start[0], snapped[1] - start[1])
-        return cell, float(cells * CELL_M) + offset
+        return cell, _distance_m(cells, snapped, start)
+
+
+def _distance_m(cells: float, snapped: tuple[int, int], start: tuple[int, int]) -> float:
+    """The returned distance: the search's path length (cells) from the snapped start, in metres, plus the
+    straight snapping distance from the robot's cell."""
+    return float(cells * CELL_M) + CELL_M * math.hypot(snapped[0] - start[0], snapped[1] - start[1])
