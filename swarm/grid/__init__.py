@@ -16,8 +16,9 @@ Module map: :mod:`.cspace` (passable, configuration_space, nearest_in), :mod:`.s
 distance_field, nearest_reachable), :mod:`.path` (simplify, path_length_m, segment_clear),
 :mod:`.frontiers` (frontier_mask, frontier_clusters), :mod:`.targets` (nearest_reachable_unseen, view_cells),
 :mod:`.local` (the navigator's exact local-first plan, the target search's compiled window stage),
-:mod:`.memo` (a far target search's path, reused by the plan that follows it), :mod:`._kernels` (the numba
-search and line kernels).
+:mod:`.memo` (a far target search's path, reused by the plan that follows it), :mod:`.kept` (the whole-map
+target search's inputs, kept per map and updated where it changed), :mod:`._kernels` (the numba search and
+line kernels).
 """
 
 from .cspace import DEFAULT_MARGIN_M, configuration_space, inflation_offsets, nearest_in, passable

@@ -22,11 +22,11 @@ robot's cell and accepts the answer only when it is provably the whole-map answe
 Otherwise (goal too far, no path in the window, or a longer one) the caller plans on the whole map.
 Only the exact grid planner (:func:`swarm.grid.plan`) may be windowed; other planners see the whole map.
 
-The same module holds the compiled stages of the target search used by
-:func:`swarm.grid.nearest_reachable_unseen` (whose docstring gives the window's exactness condition): the
-window stage (:func:`window_target`) and the whole-map stage (:func:`map_target`, which also returns the
-space and the path for :mod:`swarm.grid.memo`) share one body, one call for what would otherwise be five
-numpy and kernel calls with padded copies.
+The same module holds the compiled window stage of the target search used by
+:func:`swarm.grid.nearest_reachable_unseen` (whose docstring gives the window's exactness condition),
+:func:`window_target`: one call for what would otherwise be five numpy and kernel calls with padded
+copies. Its snapping and search, :func:`search_targets`, also end the whole-map stage
+(:func:`swarm.grid.kept.map_target`), whose inputs are kept between searches.
 """
 
 from __future__ import annotations
@@ -124,6 +124,7 @@ def _window_plan(known, r0, r1, c0, c1, unseen_ok, row_offsets, half_widths, sr,
 
 NO_TARGET, TARGET_FOUND = 0, 1
 _NO_PATH = np.empty((0, 2), np.int64)
+_NO_SPACE = np.empty((0, 0), np.uint8)
 
 
 @njit(cache=True)
@@ -135,53 +136,49 @@ def window_target(known, r0, r1, c0, c1, exclude, reach, unseen_ok, row_offsets,
     distance in cells, snapped row, snapped col) in window coordinates, or NO_TARGET first."""
     window = np.ascontiguousarray(known[r0:r1, c0:c1])
     status, row, col, best_d, s_r, s_c, _, _ = _target_search(window, exclude, reach, unseen_ok, row_offsets,
-                                                              half_widths, sr - r0, sc - c0, snap, False,
-                                                              dist, ring)
+                                                              half_widths, sr - r0, sc - c0, snap, dist, ring)
     return status, row, col, best_d, s_r, s_c
 
 
 @njit(cache=True)
-def map_target(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap, dist,
-               ring):  # pragma: no cover - compiled
-    """:func:`window_target` on the whole (contiguous) map, also returning the configuration space
-    (uint8[H, W], 0/1) and the path to the target read off the search's distances (int64[N, 2] from the
-    snapped start, the path :func:`swarm.grid.plan` returns): what :mod:`swarm.grid.memo` keeps for
-    the navigator. One call instead of a chain of numpy passes and map-sized padded copies."""
-    return _target_search(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap, True,
-                          dist, ring)
+def _target_search(window, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap, dist,
+                   ring):  # pragma: no cover - compiled
+    """The body of :func:`window_target` on a contiguous ``window`` (coordinates relative to it): view
+    cells, configuration space, targets, then :func:`search_targets`."""
+    h, w = window.shape
+    view = np.zeros((h, w), np.bool_)
+    if grid_view_cells(window, exclude, reach, view) == 0:
+        return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_SPACE, _NO_PATH
+    space, pad = _space_and_pad(window, unseen_ok, row_offsets, half_widths)
+    targets = np.zeros((h + 2, w + 2), np.uint8)
+    if mark_targets(view, pad, exclude, targets) == 0:
+        return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_SPACE, _NO_PATH
+    return search_targets(space, pad, targets, sr, sc, snap, False, dist, ring)
 
 
 @njit(cache=True)
-def _target_search(window, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap, with_path,
-                   dist, ring):  # pragma: no cover - compiled
-    """The shared body of :func:`window_target` and :func:`map_target` on a contiguous ``window``
-    (coordinates relative to it): (status, row, col, distance in cells, snapped row, snapped col, space,
-    path); the path only ``with_path``."""
-    h, w = window.shape
-    view = np.zeros((h, w), np.bool_)
-    no_space = np.empty((0, 0), np.uint8)
-    if grid_view_cells(window, exclude, reach, view) == 0:
-        return NO_TARGET, -1, -1, np.inf, -1, -1, no_space, _NO_PATH
-    space, pad = _space_and_pad(window, unseen_ok, row_offsets, half_widths)
-    targets = np.zeros((h + 2, w + 2), np.uint8)
-    if _mark_targets(view, pad, exclude, targets) == 0:
-        return NO_TARGET, -1, -1, np.inf, -1, -1, no_space, _NO_PATH
+def search_targets(space, pad, targets, sr, sc, snap, with_path, dist, ring):  # pragma: no cover - compiled
+    """Snap ``(sr, sc)`` into ``space`` and find the nearest cell of ``targets`` (both padded like ``pad``,
+    the space with a blocked border): (status, row, col, distance in cells, snapped row, snapped col,
+    space, path), the path read off the search's distances only ``with_path``. Shared by the window
+    stage and the whole-map stage (:func:`swarm.grid.kept.map_target`)."""
+    w = space.shape[1]
     s = grid_snap(space, sr, sc, snap)
     if s[0] < 0:
-        return NO_TARGET, -1, -1, np.inf, -1, -1, no_space, _NO_PATH
+        return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_SPACE, _NO_PATH
     wp = w + 2
     seeds = np.empty(1, np.int64)
     seeds[0] = (s[0] + 1) * wp + s[1] + 1
     free = pad.reshape(-1)
     best, best_d = grid_bucket_search(free, wp, seeds, -1, targets.reshape(-1), np.inf, dist[:free.shape[0]], ring)
     if best < 0:
-        return NO_TARGET, -1, -1, np.inf, -1, -1, no_space, _NO_PATH
+        return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_SPACE, _NO_PATH
     path = grid_descend_path(free, wp, dist, best) if with_path else _NO_PATH
     return TARGET_FOUND, best // wp - 1, best % wp - 1, best_d, s[0], s[1], space, path
 
 
 @njit(cache=True)
-def _mark_targets(view, pad, exclude, targets):  # pragma: no cover - compiled
+def mark_targets(view, pad, exclude, targets):  # pragma: no cover - compiled
     """``targets`` (padded like ``pad``, zero border) = view cells in the space (``pad``'s interior) and not
     in ``exclude`` (same shape as ``view``, or empty for none); returns how many. Branch-free rows, so the
     compiler vectorises them (a short-circuit test per cell cost more than the whole-map search's numpy

@@ -12,6 +12,10 @@ distance fields are identical, and the path read back from the target search's f
 The target search therefore remembers, per thread, its map, configuration space, snapped start, target and
 that path; the navigator takes the path when its own map is equal byte for byte, its snapped start and
 goal are the same cells and it plans with the exact grid planner. Anything else plans afresh.
+
+The map and the space are not copied: they are the search's kept inputs (:mod:`swarm.grid.kept`), which
+the next search on that map brings up to date in place. An entry therefore also remembers the inputs'
+``version`` and is recalled only while it is unchanged.
 """
 
 from __future__ import annotations
@@ -23,19 +27,21 @@ from typing import NamedTuple
 import numpy as np
 
 MAX_ENTRIES = 32
-"""Searches remembered per thread: one or two per robot of a large team. Each holds two map-sized arrays
-(180 KB for a 150 m map), and all are of one map size (a new size clears them)."""
+"""Searches remembered per thread: one or two per robot of a large team. Each refers to its search's kept
+map and space (no copies of its own), and all are of one map size (a new size clears them)."""
 
 Params = tuple[float, float, bool]
 """(radius_m, margin_m, unseen_traversable): what the configuration space was built with."""
 
 
 class SearchPlan(NamedTuple):
-    known: np.ndarray        # a copy of the map searched
-    space: np.ndarray        # its configuration space (read-only)
+    known: np.ndarray        # the map searched: the kept copy (swarm.grid.kept), valid while version holds
+    space: np.ndarray        # its configuration space (a read-only view of the kept space)
     start: tuple[int, int]   # the snapped start the search ran from
     goal: tuple[int, int]    # the target it found
     path: np.ndarray         # int64[N, 2] from start to goal, as swarm.grid.plan gives it
+    version: np.ndarray      # the kept inputs' version counter (int64[1])
+    seen: int                # its value when the search ran
 
 
 class _Memo(threading.local):
@@ -46,17 +52,19 @@ class _Memo(threading.local):
 _MEMO = _Memo()
 
 
-def remember(known: np.ndarray, params: Params, start_cell: tuple[int, int], space: np.ndarray,
-             start: tuple[int, int], goal: tuple[int, int], path: np.ndarray) -> None:
+def remember(known: np.ndarray, version: np.ndarray, params: Params, start_cell: tuple[int, int],
+             space: np.ndarray, start: tuple[int, int], goal: tuple[int, int], path: np.ndarray) -> None:
     """Keep a whole-map target search: from the robot's cell ``start_cell`` (snapped to ``start``) to
-    ``goal`` on ``known`` with configuration space ``space``, and the path read off its distances."""
-    space.flags.writeable = False
+    ``goal`` on the kept map copy ``known`` with configuration space ``space`` (both valid while the
+    counter ``version`` keeps its present value), and the path read off its distances."""
+    space = space.view()
+    space.flags.writeable = False  # this view only: the kept space itself stays writable for its updates
     path.flags.writeable = False
     entries = _MEMO.entries
     if entries and next(iter(entries.values())).known.shape != known.shape:
         entries.clear()  # another run's map: its searches can never match again, so hold no memory for them
     key = (params, start_cell, goal)
-    entries[key] = SearchPlan(known.copy(), space, start, goal, path)
+    entries[key] = SearchPlan(known, space, start, goal, path, version, int(version[0]))
     entries.move_to_end(key)
     while len(entries) > MAX_ENTRIES:
         entries.popitem(last=False)
@@ -67,8 +75,8 @@ def recall(known: np.ndarray, params: Params, start_cell: tuple[int, int], goal:
     """The remembered search from ``start_cell`` to ``goal`` with these parameters, if it ran on a map
     equal to ``known``."""
     entry = _MEMO.entries.get((params, start_cell, goal))
-    if entry is None or not np.array_equal(entry.known, known):  # unequal shapes are unequal too
-        return None
+    if entry is None or entry.version[0] != entry.seen or not np.array_equal(entry.known, known):
+        return None  # (unequal shapes are unequal too)
     return entry
 
 

@@ -22,11 +22,11 @@ import math
 import numpy as np
 
 from ..api import CELL_M, ROBOT_RADIUS_M
-from . import memo
+from . import kept, memo
 from ._kernels import grid_view_cells
 from ._validate import check_cell, check_count, check_known, check_length, check_same_shape, check_space
 from .cspace import DEFAULT_MARGIN_M, _erosion_rows
-from .local import TARGET_FOUND, map_target, window_bounds, window_target
+from .local import TARGET_FOUND, erosion_depth, window_bounds, window_target
 from .search import _WORK
 
 _NO_EXCLUDE = np.zeros((0, 0), dtype=bool)
@@ -128,20 +128,23 @@ class _TargetSearch:
 
     def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None
             ) -> tuple[tuple[int, int], float] | None:
-        """The search on the whole map ``known``, one compiled call (:func:`swarm.grid.local.map_target`).
-        The path to the target is kept for the navigator's plan (:mod:`swarm.grid.memo`)."""
+        """The search on the whole map ``known``, one compiled call (:func:`swarm.grid.kept.map_target`) on
+        inputs kept from this map's previous search and brought up to date. The path to the target is kept
+        for the navigator's plan (:mod:`swarm.grid.memo`)."""
         rows, widths = _erosion_rows(self.radius_m, self.margin_m)
         h, w = known.shape
         dist, ring = _WORK.get((h + 2) * (w + 2))
         ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude)
-        status, row, col, cells, sr, sc, space, path = map_target(known, ex, self.reach, self.unseen_traversable,
-                                                                  rows, widths, start[0], start[1], self.snap,
-                                                                  dist, ring)
+        inputs = kept.inputs_for(known, self.radius_m, self.margin_m, self.unseen_traversable, self.reach)
+        margin = max(erosion_depth(self.radius_m, self.margin_m), self.reach + 1)
+        status, row, col, cells, sr, sc, space, path = kept.map_target(known, ex, self.reach, self.unseen_traversable,
+                                                                       rows, widths, start[0], start[1], self.snap,
+                                                                       dist, ring, *inputs, margin)
         if status != TARGET_FOUND:
             return None
         cell, snapped = (int(row), int(col)), (int(sr), int(sc))
-        memo.remember(known, (self.radius_m, self.margin_m, self.unseen_traversable), start, space.view(np.bool_),
-                      snapped, cell, path)
+        memo.remember(inputs.copy, inputs.version, (self.radius_m, self.margin_m, self.unseen_traversable), start,
+                      space.view(np.bool_), snapped, cell, path)
         return cell, _distance_m(cells, snapped, start)
 
 

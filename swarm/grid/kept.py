@@ -1,0 +1,184 @@
+"""The whole-map target search's inputs, kept per map and brought up to date row band by row band.
+
+A whole-map search (:func:`swarm.grid.nearest_reachable_unseen` when the nearest unknown is far) needs the
+map's configuration space, its view cells and the mask of targets (view cells in the space). Built from
+scratch they cost ~105 us of a ~330 us search on a 300 x 300 map, yet a robot's map changes little between
+two of its searches: on the 16-robot benchmark 9 % of the rows and 0.4 % of the cells differ between a
+robot's consecutive whole-map searches.
+
+So each map keeps :class:`KeptInputs`: a copy of the map the arrays describe, the space (also padded as the
+search reads it), the view cells and the targets. :func:`refresh` compares the map with the copy row by row
+and recomputes only the rows within ``margin`` of a changed row, where ``margin`` covers everything a row
+depends on (the erosion's row offsets for the space; ``reach`` steps plus the frontier test's neighbour
+for the view cells). It runs the same kernels on a slice of the map that extends ``margin`` rows beyond the
+band and keeps the band's rows, which the slice's edges cannot reach, so every kept row is what a
+whole-map computation gives, bit for bit (``tests/swarm/test_grid_kept.py`` checks it on growing maps).
+
+Entries are found by the map's buffer (a robot's knowledge map is one array for a whole run), but an entry
+is never trusted: any map is compared with the copy, so a reused buffer or a different map only means more
+rows to recompute. The view cells and targets kept are those without an exclusion mask; a search with one
+computes its own (the space is kept either way). :mod:`swarm.grid.memo` holds on to the copy and the space
+instead of copying them, and trusts them only while the entry's ``version`` is the one it saw.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections import OrderedDict
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from ._kernels import grid_configuration_space, grid_view_cells
+from .local import NO_TARGET, mark_targets, search_targets
+
+MAX_ENTRIES = 32
+"""Maps kept per thread: one per robot of a large team. Each entry holds four map-sized byte arrays (360
+KB for a 150 m map); the least recently searched map is dropped first, and all of them when a map of
+another size comes (as :mod:`swarm.grid.memo` does)."""
+
+_NEVER = 255
+"""Fills a new entry's copy: no knowledge map holds it, so the first refresh recomputes every row."""
+
+
+class KeptInputs(NamedTuple):
+    copy: np.ndarray      # uint8[H, W]: the map the other arrays describe
+    space: np.ndarray     # uint8[H, W]: its configuration space (0/1)
+    pad: np.ndarray       # uint8[H + 2, W + 2]: the space with a blocked one-cell border, as the search reads it
+    view: np.ndarray      # bool[H, W]: its view cells (no exclusion)
+    targets: np.ndarray   # uint8[H + 2, W + 2]: view cells in the space, padded like ``pad``
+    row_targets: np.ndarray  # int64[H]: targets per row, so the total costs H additions
+    version: np.ndarray   # int64[1]: counts the refreshes that changed something (see swarm.grid.memo)
+
+
+Key = tuple[int, tuple[int, int], float, float, bool, int]
+
+
+class _Kept(threading.local):
+    def __init__(self) -> None:
+        self.entries: OrderedDict[Key, KeptInputs] = OrderedDict()
+
+
+_KEPT = _Kept()
+
+
+def inputs_for(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: bool, reach: int) -> KeptInputs:
+    """The kept inputs for the map in ``known``'s buffer with these search parameters (a new entry when
+    there is none); call :func:`refresh` before using them."""
+    h, w = known.shape
+    key = (known.__array_interface__["data"][0], (h, w), radius_m, margin_m, unseen_ok, reach)
+    entries = _KEPT.entries
+    entry = entries.get(key)
+    if entry is None:
+        if entries and next(iter(entries.values())).copy.shape != (h, w):
+            entries.clear()  # another run's map size: those entries can never be found again
+        entry = entries[key] = KeptInputs(np.full((h, w), _NEVER, np.uint8), np.zeros((h, w), np.uint8),
+                                          np.zeros((h + 2, w + 2), np.uint8), np.zeros((h, w), np.bool_),
+                                          np.zeros((h + 2, w + 2), np.uint8), np.zeros(h, np.int64),
+                                          np.zeros(1, np.int64))
+        while len(entries) > MAX_ENTRIES:
+            entries.popitem(last=False)
+    entries.move_to_end(key)
+    return entry
+
+
+def forget_all() -> None:
+    """Drop every kept entry of this thread (for tests)."""
+    _KEPT.entries.clear()
+
+
+@njit(cache=True)
+def refresh(known, copy, space, pad, view, targets, row_targets, version, unseen_ok, row_offsets, half_widths,
+            reach, margin):  # pragma: no cover - compiled
+    """Bring the arrays of :class:`KeptInputs` up to date with ``known`` (``version`` counts up when
+    anything changed); ``margin`` >= the erosion depth and >= ``reach + 1``. Returns the number of
+    targets."""
+    h, w = known.shape
+    changed = np.zeros(h, np.bool_)
+    any_change = False
+    for r in range(h):
+        a = known[r]
+        b = copy[r]
+        diff = 0
+        for c in range(w):  # branch-free, so the comparison vectorises
+            diff |= a[c] ^ b[c]
+        if diff != 0:
+            any_change = True
+            for c in range(w):
+                b[c] = a[c]
+            lo = max(r - margin, 0)
+            hi = min(r + margin + 1, h)
+            for rr in range(lo, hi):
+                changed[rr] = True
+    r = 0
+    while r < h:
+        if not changed[r]:
+            r += 1
+            continue
+        a = r
+        while r < h and changed[r]:
+            r += 1
+        _recompute_band(known, a, r, space, pad, view, targets, row_targets, unseen_ok, row_offsets,
+                        half_widths, reach, margin)
+    if any_change:
+        version[0] += 1
+    total = 0
+    for r in range(h):
+        total += row_targets[r]
+    return total
+
+
+@njit(cache=True, inline="always")
+def _recompute_band(known, a, b, space, pad, view, targets, row_targets, unseen_ok, row_offsets, half_widths,
+                    reach, margin):  # pragma: no cover - compiled
+    """Rows ``a:b`` of the space, view cells and targets, from the slice of ``known`` that extends
+    ``margin`` rows beyond them (clipped to the map, whose edge the kernels treat as the map's edge)."""
+    h, w = known.shape
+    lo = max(a - margin, 0)
+    hi = min(b + margin, h)
+    part = known[lo:hi]
+    part_space = np.empty((hi - lo, w), np.uint8)
+    grid_configuration_space(part, unseen_ok, row_offsets, half_widths, part_space)
+    seen = np.zeros((hi - lo, w), np.bool_)
+    grid_view_cells(part, np.zeros((0, 0), np.bool_), reach, seen)
+    for r in range(a, b):
+        sp = part_space[r - lo]
+        vw = seen[r - lo]
+        krow = space[r]
+        prow = pad[r + 1]
+        trow = targets[r + 1]
+        out = view[r]
+        count = 0
+        for c in range(w):
+            krow[c] = sp[c]
+            prow[c + 1] = sp[c]
+            out[c] = vw[c]
+            t = vw[c] & (sp[c] != 0)
+            trow[c + 1] = t
+            count += t
+        row_targets[r] = count
+
+
+@njit(cache=True)
+def map_target(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap, dist, ring, copy, space,
+               pad, view, targets, row_targets, version, margin):  # pragma: no cover - compiled
+    """The whole-map stage of :func:`swarm.grid.nearest_reachable_unseen` in one call: :func:`refresh` the
+    kept inputs (``copy`` .. ``version``, see :class:`KeptInputs`), then snap and search
+    (:func:`swarm.grid.local.search_targets`). With an exclusion mask (``exclude`` bool[H, W], or empty
+    for none) the view cells and targets are computed afresh from the kept space. Returns what
+    ``search_targets`` returns, with the path to the target (for :mod:`swarm.grid.memo`) and the kept
+    space."""
+    h, w = known.shape
+    total = refresh(known, copy, space, pad, view, targets, row_targets, version, unseen_ok, row_offsets,
+                    half_widths, reach, margin)
+    marks = targets
+    if exclude.shape[0] == h:
+        seen = np.zeros((h, w), np.bool_)
+        marks = np.zeros((h + 2, w + 2), np.uint8)
+        total = 0
+        if grid_view_cells(known, exclude, reach, seen) > 0:
+            total = mark_targets(seen, pad, exclude, marks)
+    if total == 0:
+        return NO_TARGET, -1, -1, np.inf, -1, -1, np.empty((0, 0), np.uint8), np.empty((0, 2), np.int64)
+    return search_targets(space, pad, marks, sr, sc, snap, True, dist, ring)

@@ -1,0 +1,163 @@
+"""The whole-map target search's kept inputs (:mod:`swarm.grid.kept`): after any sequence of map changes
+they equal a fresh computation bit for bit, and so the search's answers equal the uncached search's."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from maps import generate
+from swarm import grid
+from swarm.api import FREE, SOLID, UNSEEN
+from swarm.grid import kept, memo
+from swarm.grid.cspace import _erosion_rows
+from swarm.grid.local import TARGET_FOUND, erosion_depth, window_target
+from swarm.grid.search import _WORK
+from swarm.grid.targets import default_view_reach_cells
+
+
+def growing_maps(seed: int, steps: int) -> tuple[np.ndarray, list[np.ndarray]]:
+    """A building revealed step by step, as a robot's map grows: a disc around a wandering point (the
+    lidar), scattered cells in random rows (merged updates from others) and now and then a FREE cell that
+    turns SOLID (noisy sensing). Returns the truth and the map after each step."""
+    truth = generate("building", 60, seed)
+    rng = np.random.default_rng(seed)
+    h, w = truth.solid.shape
+    known = np.zeros((h, w), np.uint8)
+    rows, cols = np.indices((h, w))
+    centre = rng.integers(0, (h, w))
+    out = []
+    for _ in range(steps):
+        centre = np.clip(centre + rng.integers(-6, 7, size=2), 0, (h - 1, w - 1))
+        radius = rng.integers(3, 15)
+        seen = (rows - centre[0]) ** 2 + (cols - centre[1]) ** 2 <= radius ** 2
+        seen |= rng.random((h, w)) < rng.choice([0.0, 0.001, 0.01])
+        known = np.maximum(known, np.where(seen, np.where(truth.solid, SOLID, FREE), UNSEEN).astype(np.uint8))
+        if rng.random() < 0.2:
+            free = np.flatnonzero(known == FREE)
+            known.flat[rng.choice(free, min(3, free.size), replace=False)] = SOLID
+        out.append(known.copy())
+    return truth.solid, out
+
+
+@pytest.mark.parametrize("radius, margin, unseen_ok", [(0.3, 0.05, False), (0.3, 0.05, True), (0.9, 0.1, False),
+                                                       (0.0, 0.0, False)])
+def test_kept_inputs_equal_a_fresh_computation_after_every_change(radius: float, margin: float,
+                                                                  unseen_ok: bool) -> None:
+    kept.forget_all()
+    reach = default_view_reach_cells(radius, margin)
+    rows, widths = _erosion_rows(radius, margin)
+    band = max(erosion_depth(radius, margin), reach + 1)
+    partial = 0
+    for seed in range(2):
+        _, maps = growing_maps(seed, 40)
+        robot_map = np.zeros_like(maps[0])  # one buffer for the whole run, as a robot's knowledge map
+        for known in maps:
+            before = robot_map.copy()
+            robot_map[:] = known
+            inputs = kept.inputs_for(robot_map, radius, margin, unseen_ok, reach)
+            total = kept.refresh(robot_map, *inputs, unseen_ok, rows, widths, reach, band)
+            space = grid.configuration_space(robot_map, radius, margin, unseen_ok).view(np.uint8)
+            view = grid.view_cells(robot_map, reach)
+            assert np.array_equal(inputs.copy, robot_map)
+            assert np.array_equal(inputs.pad[1:-1, 1:-1], space)
+            assert not inputs.pad[[0, -1]].any() and not inputs.pad[:, [0, -1]].any()
+            assert np.array_equal(inputs.view, view)
+            assert np.array_equal(inputs.targets[1:-1, 1:-1], (view & (space != 0)).view(np.uint8))
+            assert not inputs.targets[[0, -1]].any() and not inputs.targets[:, [0, -1]].any()
+            assert total == int(np.count_nonzero(view & (space != 0)))
+            partial += 0 < np.count_nonzero((before != robot_map).any(axis=1)) < robot_map.shape[0] // 2
+    assert partial >= 20  # most steps changed some rows only: the band updates were exercised
+
+
+def test_the_kept_search_finds_what_the_fresh_search_finds() -> None:
+    kept.forget_all()
+    rng = np.random.default_rng(7)
+    rows, widths = _erosion_rows(0.3, 0.05)
+    found = 0
+    for seed in range(2):
+        _, maps = growing_maps(seed, 30)
+        robot_map = np.zeros_like(maps[0])
+        for known in maps:
+            robot_map[:] = known
+            free = np.argwhere(known == FREE)
+            if free.size == 0:
+                continue
+            start = tuple(int(v) for v in free[rng.integers(len(free))])
+            exclude = rng.random(known.shape) < 0.01 if rng.random() < 0.3 else None
+            got = grid.nearest_reachable_unseen(robot_map, start, exclude=exclude, local_first_m=None)
+            # the reference: the same search on the whole map as one window, computed from scratch
+            h, w = known.shape
+            dist, ring = _WORK.get((h + 2) * (w + 2))
+            ex = np.zeros((0, 0), bool) if exclude is None else exclude
+            status, row, col, cells, sr, sc = window_target(known, 0, h, 0, w, ex, 2, False, rows, widths,
+                                                            start[0], start[1], 3, dist, ring)
+            if status != TARGET_FOUND:
+                assert got is None
+                continue
+            found += 1
+            assert got is not None and got[0] == (int(row), int(col))
+            assert got[1] == float(cells * 0.5) + 0.5 * math.hypot(int(sr) - start[0], int(sc) - start[1])
+            entry = memo.recall(known, (0.3, 0.05, False), start, got[0])
+            assert entry is not None
+            assert np.array_equal(entry.space, grid.configuration_space(known))
+            assert entry.path.tobytes() == grid.plan(entry.space, entry.start, entry.goal).tobytes()
+    assert found >= 30
+
+
+def test_a_different_map_in_a_kept_buffer_is_recomputed() -> None:
+    kept.forget_all()
+    a = generate("building", 60, 1).solid
+    b = generate("cave", 60, 2).solid
+    buffer = np.where(a, SOLID, FREE).astype(np.uint8)
+    buffer[:40] = UNSEEN
+    start = tuple(int(v) for v in np.argwhere(buffer == FREE)[-1])
+    first = grid.nearest_reachable_unseen(buffer, start, local_first_m=None)
+    buffer[:] = np.where(b, SOLID, FREE)
+    buffer[-40:] = UNSEEN
+    start = tuple(int(v) for v in np.argwhere(buffer == FREE)[0])
+    second = grid.nearest_reachable_unseen(buffer, start, local_first_m=None)
+    kept.forget_all()
+    assert second == grid.nearest_reachable_unseen(buffer, start, local_first_m=None)
+    assert first is not None and second is not None and first != second
+
+
+def test_kept_entries_are_bounded() -> None:
+    kept.forget_all()
+    maps = [np.zeros((20, 20), np.uint8) for _ in range(kept.MAX_ENTRIES + 5)]
+    for m in maps:
+        m[5:15, 5:15] = FREE
+        grid.nearest_reachable_unseen(m, (10, 10), local_first_m=None)
+    assert len(kept._KEPT.entries) == kept.MAX_ENTRIES
+    memo.forget_all()
+
+
+def test_kept_entries_hold_one_map_size_at_a_time() -> None:
+    kept.forget_all()
+    small, big = np.zeros((20, 20), np.uint8), np.zeros((30, 20), np.uint8)
+    for m in (small, big):
+        m[5:15, 5:15] = FREE
+        grid.nearest_reachable_unseen(m, (10, 10), local_first_m=None)
+    assert [entry.copy.shape for entry in kept._KEPT.entries.values()] == [big.shape]
+
+
+def test_a_remembered_search_is_not_recalled_once_its_kept_inputs_moved_on() -> None:
+    # the memo shares the kept copy and space: after a later search on a changed map in the same buffer,
+    # the copy equals the new map, but the remembered path belongs to the old one
+    kept.forget_all()
+    memo.forget_all()
+    _, maps = growing_maps(3, 25)
+    robot_map = maps[-2].copy()
+    free = [tuple(int(v) for v in cell) for cell in np.argwhere(robot_map == FREE)]
+    start = next(cell for cell in free if grid.nearest_reachable_unseen(robot_map, cell, local_first_m=None))
+    found = grid.nearest_reachable_unseen(robot_map, start, local_first_m=None)
+    params = (0.3, 0.05, False)
+    assert memo.recall(robot_map, params, start, found[0]) is not None
+    robot_map[:] = maps[-1]
+    assert not np.array_equal(maps[-1], maps[-2])
+    other = free[-1]
+    grid.nearest_reachable_unseen(robot_map, other, local_first_m=None)   # refreshes the kept inputs in place
+    assert np.array_equal(kept.inputs_for(robot_map, 0.3, 0.05, False, 2).copy, robot_map)
+    assert memo.recall(robot_map, params, start, found[0]) is None
