@@ -262,6 +262,35 @@ def _radio_all_pairs(blocks, cell, xy, tol, cross_db, metre_db, per_metre,
 
 
 @njit(cache=True)
+def _radio_pairs_with(blocks, cell, xy, tol, cross_db, metre_db, per_metre, senders, distance, walls,
+                      wall_db):  # pragma: no cover
+    """Columns of :func:`_radio_all_pairs`' matrices for the robots ``senders`` only: ``distance[i, k]``,
+    ``walls[i, k]`` and ``wall_db[i, k]`` for the pair (i, senders[k]), each walked as the all-pairs walk
+    does (from the lower index to the higher), so the numbers are its numbers bit for bit."""
+    n_robots = xy.shape[0]
+    n_mat = cross_db.shape[0]
+    run_start, run_end, run_len = _run_buffers(blocks, n_mat)
+    counts = np.zeros((1, 1, n_mat), np.int32)
+    for k in range(senders.shape[0]):
+        j = senders[k]
+        for i in range(n_robots):
+            if i == j:
+                distance[i, k] = 0.0
+                walls[i, k] = 0
+                wall_db[i, k] = 0.0
+                continue
+            a = min(i, j)
+            b = max(i, j)
+            distance[i, k] = _distance(xy[a, 0], xy[a, 1], xy[b, 0], xy[b, 1])
+            n = _radio_walk_segment(blocks, cell, xy[a, 0], xy[a, 1], xy[b, 0], xy[b, 1], tol, run_start, run_end,
+                                    run_len)
+            for m in range(n_mat):
+                counts[0, 0, m] = 0
+            wall_db[i, k] = _radio_price_runs(n, run_len, tol, cross_db, metre_db, per_metre, counts, 0, 0)
+            walls[i, k] = n
+
+
+@njit(cache=True)
 def _radio_clear_within(blocks, cell, xy, tol, n_mat, max_distance, distance, clear):  # pragma: no cover
     """Fill ``distance`` (all pairs, as :func:`_radio_all_pairs` computes it) and ``clear[i, j]``: i != j, at
     most ``max_distance`` apart and no wall crossed. Only pairs within range are walked (the same walk from

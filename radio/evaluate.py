@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from .crossings import _radio_all_pairs
+from .crossings import _radio_all_pairs, _radio_pairs_with
 from .pathloss import _radio_link_budget
 
 
@@ -47,4 +47,34 @@ def _radio_evaluate(blocks, xy, params, cross_db, metre_db, per_metre, code, tx,
     for i in range(xy.shape[0]):
         out[RSSI, i, i] = np.nan
         link[i, i] = False
+    return -1
+
+
+@njit(cache=True)
+def _radio_link_columns(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, senders,
+                        link):  # pragma: no cover
+    """``link[i, k]``: the message of robot ``senders[k]`` reaches robot i, exactly as
+    :func:`_radio_evaluate` judges it, walking only the pairs with a sender. Returns the first bad row
+    (nothing filled) or -1."""
+    bad = _radio_first_outside(xy, params[WIDTH], params[HEIGHT])
+    if bad >= 0:
+        return bad
+    n = xy.shape[0]
+    m = senders.shape[0]
+    distance = np.empty((n, m))
+    walls = np.empty((n, m), np.int32)
+    wall_db = np.empty((n, m))
+    _radio_pairs_with(blocks, params[CELL], xy, params[TOL], cross_db, metre_db, per_metre, senders, distance,
+                      walls, wall_db)
+    path_loss = np.empty((n, 1))
+    charged = np.empty((n, 1))
+    rssi = np.empty((n, 1))
+    ok = np.empty((n, 1), np.bool_)
+    for k in range(m):
+        j = senders[k]
+        _radio_link_budget(code, distance[:, k:k + 1], walls[:, k:k + 1], wall_db[:, k:k + 1], tx[j:j + 1], sens,
+                           params[ALPHA], params[BETA], params[FREQ_TERM], params[MAX_RANGE], False, path_loss,
+                           charged, rssi, ok)
+        for i in range(n):
+            link[i, k] = ok[i, 0] and i != j
     return -1

@@ -257,7 +257,7 @@ class Simulation:
                 continue
             outboxes.append([self.medium.envelope(i, m) for m in (*service[i], *extra)])
         if any(outboxes):
-            link = links.link
+            link = links.senders_link([i for i, out in enumerate(outboxes) if out])
             if self.failed.any():
                 link = link & ~self.failed[:, None]
             self.inboxes = self.medium.deliver(tick, outboxes, link)
@@ -392,7 +392,7 @@ class _TickLinks:
     """The tick's :class:`radio.LinkState`, evaluated on first use. On most ticks nobody sends, no metrics
     are recorded (13 % of the benchmark's ticks carry messages), so the all-pairs radio walk is skipped
     (neighbours use the cheaper in-range walk); it is a pure function of the positions, kept here, so evaluating
-    later gives the same state."""
+    later gives the same state. Delivery alone needs only the senders' columns (:meth:`senders_link`)."""
 
     __slots__ = ("_model", "_xy", "_state")
 
@@ -405,6 +405,17 @@ class _TickLinks:
         if self._state is None:
             self._state = self._model.evaluate(self._xy)
         return self._state
+
+    def senders_link(self, senders: list[int]) -> np.ndarray:
+        """A (R, R) link matrix whose columns ``senders`` are the tick's (who hears each sender), for
+        :meth:`swarm.comm.Medium.deliver`, which reads no other column. Unless the whole state is already
+        known, only the pairs with a sender are walked (:meth:`radio.LinkModel.link_columns`): off the
+        recording ticks only a robot or two send (a map request, a full map)."""
+        if self._state is not None:
+            return self._state.link
+        link = np.zeros((len(self._xy), len(self._xy)), dtype=np.bool_)
+        link[:, senders] = self._model.link_columns(self._xy, senders)
+        return link
 
     def __getattr__(self, name: str) -> Any:  # only for names not in __slots__: the LinkState's fields
         return getattr(self.state(), name)

@@ -276,3 +276,36 @@ def test_groups_are_the_components_networkx_finds(n):
         weak = sorted((frozenset(c) for c in nx.weakly_connected_components(graph)), key=min)
         assert state.groups() == strong
         assert state.groups("weak") == weak
+
+
+@pytest.mark.parametrize("config", [
+    {}, {"wall_mode": "per_metre"}, {"model": "maes"}, {"model": "los", "max_range_m": 25.0}, {"model": "global"},
+    {"tx_power_dbm": -5.0, "tx_power_overrides": {"2": 20.0}, "sensitivity_overrides": {"5": -95.0}},
+])
+def test_link_columns_are_the_evaluated_columns(config):
+    # the runtime asks only for the senders' columns on ticks that need nothing else of the radio
+    m = generate("building", 60, 3)
+    rng = np.random.default_rng(11)
+    free = np.argwhere(~m.solid)
+    differs = 0
+    for _ in range(25):
+        n = int(rng.integers(2, 12))
+        cells = free[rng.choice(len(free), n, replace=False)]
+        xy = (cells[:, ::-1] + rng.random((n, 2))) * 0.5
+        senders = rng.choice(n, int(rng.integers(1, n + 1)), replace=False)
+        fresh = build_link_model(m, RadioConfig(**config))
+        got = fresh.link_columns(xy, senders)                  # walked pair by pair
+        state = fresh.evaluate(xy)
+        assert got.dtype == bool and np.array_equal(got, state.link[:, senders])
+        assert np.array_equal(fresh.link_columns(xy, senders), got)  # from the evaluated state now
+        differs += int(not state.link.all() and state.link.any())
+    assert differs >= 5 or config.get("model") == "global"
+
+
+def test_link_columns_reject_bad_senders_and_positions():
+    model = build_link_model(generate("building", 30, 1))
+    xy = np.array([[5.0, 5.0], [10.0, 10.0]])
+    with pytest.raises(InvalidInput, match="senders"):
+        model.link_columns(xy, [2])
+    with pytest.raises(InvalidInput, match="positions"):
+        model.link_columns(np.array([[5.0, 5.0], [-1.0, 3.0]]), [0])
