@@ -34,7 +34,7 @@ from ._kernels import grid_configuration_space, grid_view_cells
 from .local import NO_TARGET, mark_targets, search_targets
 
 MAX_ENTRIES = 32
-"""Maps kept per thread: one per robot of a large team. Each entry holds four map-sized byte arrays (360
+"""Maps kept per thread: one per robot of a large team. Each entry holds five map-sized byte arrays (450
 KB for a 150 m map); the least recently searched map is dropped first, and all of them when a map of
 another size comes (as :mod:`swarm.grid.memo` does)."""
 
@@ -63,24 +63,31 @@ class _Kept(threading.local):
 _KEPT = _Kept()
 
 
-def inputs_for(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: bool, reach: int) -> KeptInputs:
+def inputs_for(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: bool, reach: int, *,
+               keep: bool = True) -> KeptInputs:
     """The kept inputs for the map in ``known``'s buffer with these search parameters (a new entry when
-    there is none); call :func:`refresh` before using them."""
+    there is none); call :func:`refresh` before using them. ``keep=False`` gives new inputs that are not
+    kept: for a map converted for this one search (another dtype or layout), whose buffer is gone after it."""
     h, w = known.shape
+    if not keep:
+        return _new_inputs(h, w)
     key = (known.__array_interface__["data"][0], (h, w), radius_m, margin_m, unseen_ok, reach)
     entries = _KEPT.entries
     entry = entries.get(key)
     if entry is None:
         if entries and next(iter(entries.values())).copy.shape != (h, w):
             entries.clear()  # another run's map size: those entries can never be found again
-        entry = entries[key] = KeptInputs(np.full((h, w), _NEVER, np.uint8), np.zeros((h, w), np.uint8),
-                                          np.zeros((h + 2, w + 2), np.uint8), np.zeros((h, w), np.bool_),
-                                          np.zeros((h + 2, w + 2), np.uint8), np.zeros(h, np.int64),
-                                          np.zeros(1, np.int64))
+        entry = entries[key] = _new_inputs(h, w)
         while len(entries) > MAX_ENTRIES:
             entries.popitem(last=False)
     entries.move_to_end(key)
     return entry
+
+
+def _new_inputs(h: int, w: int) -> KeptInputs:
+    return KeptInputs(np.full((h, w), _NEVER, np.uint8), np.zeros((h, w), np.uint8), np.zeros((h + 2, w + 2), np.uint8),
+                      np.zeros((h, w), np.bool_), np.zeros((h + 2, w + 2), np.uint8), np.zeros(h, np.int64),
+                      np.zeros(1, np.int64))
 
 
 def forget_all() -> None:

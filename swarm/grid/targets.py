@@ -101,7 +101,7 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
             found = search.run_window(k, (r0, r1, c0, c1), s, _NO_EXCLUDE if ex is None else ex[r0:r1, c0:c1])
             if found is not None and found[1] <= local:
                 return found
-    return search.run(k, s, ex)
+    return search.run(k, s, ex, keep=k is known)
 
 
 class _TargetSearch:
@@ -126,16 +126,17 @@ class _TargetSearch:
             return None
         return (int(row) + r0, int(col) + c0), _distance_m(cells, (int(sr) + r0, int(sc) + c0), start)
 
-    def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None
+    def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None, keep: bool = True
             ) -> tuple[tuple[int, int], float] | None:
         """The search on the whole map ``known``, one compiled call (:func:`swarm.grid.kept.map_target`) on
-        inputs kept from this map's previous search and brought up to date. The path to the target is kept
-        for the navigator's plan (:mod:`swarm.grid.memo`)."""
+        inputs kept from this map's previous search and brought up to date (``keep=False``: a map converted
+        for this call, whose inputs are not worth keeping). The path to the target is kept for the
+        navigator's plan (:mod:`swarm.grid.memo`)."""
         rows, widths = _erosion_rows(self.radius_m, self.margin_m)
         h, w = known.shape
         dist, ring = _WORK.get((h + 2) * (w + 2))
         ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude)
-        inputs = kept.inputs_for(known, self.radius_m, self.margin_m, self.unseen_traversable, self.reach)
+        inputs = kept.inputs_for(known, self.radius_m, self.margin_m, self.unseen_traversable, self.reach, keep=keep)
         margin = max(erosion_depth(self.radius_m, self.margin_m), self.reach + 1)
         status, row, col, cells, sr, sc, space, path = kept.map_target(known, ex, self.reach, self.unseen_traversable,
                                                                        rows, widths, start[0], start[1], self.snap,

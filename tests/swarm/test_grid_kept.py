@@ -161,3 +161,13 @@ def test_a_remembered_search_is_not_recalled_once_its_kept_inputs_moved_on() -> 
     grid.nearest_reachable_unseen(robot_map, other, local_first_m=None)   # refreshes the kept inputs in place
     assert np.array_equal(kept.inputs_for(robot_map, 0.3, 0.05, False, 2).copy, robot_map)
     assert memo.recall(robot_map, params, start, found[0]) is None
+
+
+def test_a_map_converted_for_one_search_is_not_kept() -> None:
+    kept.forget_all()
+    known = np.zeros((20, 20), np.int64)  # converted to uint8 for the search: a buffer of its own each call
+    known[5:15, 5:15] = FREE
+    first = grid.nearest_reachable_unseen(known, (10, 10), local_first_m=None)
+    assert not kept._KEPT.entries
+    assert first == grid.nearest_reachable_unseen(known.astype(np.uint8), (10, 10), local_first_m=None)
+    assert len(kept._KEPT.entries) == 1
