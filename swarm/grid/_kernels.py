@@ -28,6 +28,7 @@ from ..api import CELL_M
 
 SQRT2 = 1.4142135623730951
 EPS = 1e-9
+NO_TOUCHED = np.zeros(0, dtype=np.int32)
 
 
 @njit(cache=True, inline="always")
@@ -53,7 +54,8 @@ def _grid_relax(q, nd, fk, dist, ring, count, n, s1, s2):  # pragma: no cover - 
 
 @njit(cache=True)
 def grid_bucket_search(free: np.ndarray, wp: int, seeds: np.ndarray, goal: int, targets: np.ndarray,
-                       max_d: float, dist: np.ndarray, ring: np.ndarray):  # pragma: no cover - compiled
+                       max_d: float, dist: np.ndarray, ring: np.ndarray,
+                       touched: np.ndarray):  # pragma: no cover - compiled
     """Exact octile Dijkstra from ``seeds`` over cells with ``free[p] != 0``.
 
     free: uint8[n] padded flat grid. seeds: int64[K] flat indices of free cells. goal: a flat index to
@@ -62,9 +64,17 @@ def grid_bucket_search(free: np.ndarray, wp: int, seeds: np.ndarray, goal: int, 
     int32 workspace of at least 3 n entries. Returns (best target index or -1, its distance). When the
     search stops early, cells beyond the last settled bucket hold tentative distances larger than every
     settled one; the callers only read settled cells.
+
+    touched: an empty array (:data:`NO_TOUCHED`), or an int32 array of at least 4 n entries; then ``dist`` must be all inf
+    on entry (it is not filled: for a whole map that fill is 730 KB) and every cell given a distance is
+    listed in ``touched`` (some more than once), their count returned, so the caller can set them back to
+    inf. Returns (best target index or -1, its distance, number of touched entries).
     """
     n = free.shape[0]
-    dist[:] = np.inf
+    record = touched.shape[0] > 0
+    if not record:
+        dist[:] = np.inf
+    nt = 0
     count = np.zeros(3, dtype=np.int64)
     has_targets = targets.shape[0] == n
     for i in range(seeds.shape[0]):
@@ -73,6 +83,9 @@ def grid_bucket_search(free: np.ndarray, wp: int, seeds: np.ndarray, goal: int, 
             dist[s] = 0.0
             ring[count[0]] = s
             count[0] += 1
+            if record:
+                touched[nt] = s
+                nt += 1
     best = -1
     best_d = np.inf
     k = 0
@@ -104,6 +117,9 @@ def grid_bucket_search(free: np.ndarray, wp: int, seeds: np.ndarray, goal: int, 
             dp = dist[p]
             if dp < fk:  # stale: settled earlier from a lower bucket
                 continue
+            if record:
+                touched[nt] = p
+                nt += 1
             e = free[p + 1] != 0
             w = free[p - 1] != 0
             nn = free[p + wp] != 0
@@ -130,7 +146,12 @@ def grid_bucket_search(free: np.ndarray, wp: int, seeds: np.ndarray, goal: int, 
         count[slot] = 0
         k += 1
         slot = s1
-    return best, best_d
+    if record:  # cells still queued (tentative, or settled when the search stopped at their bucket)
+        for sl in range(3):
+            for i in range(count[sl]):
+                touched[nt] = ring[sl * n + i]
+                nt += 1
+    return best, best_d, nt
 
 
 @njit(cache=True)

@@ -109,8 +109,8 @@ def _window_plan(known, r0, r1, c0, c1, unseen_ok, row_offsets, half_widths, sr,
     seeds = np.empty(1, np.int64)
     seeds[0] = (s[0] + 1) * wp + s[1] + 1
     free = pad.reshape(-1)
-    best, best_d = grid_bucket_search(free, wp, seeds, (g[0] + 1) * wp + g[1] + 1, _NO_TARGETS, budget,
-                                      dist[:free.shape[0]], ring)
+    best, best_d, _ = grid_bucket_search(free, wp, seeds, (g[0] + 1) * wp + g[1] + 1, _NO_TARGETS, budget,
+                                         dist[:free.shape[0]], ring, np.empty(0, np.int32))
     if best < 0 or not best_d <= budget:
         return none, False
     path = grid_descend_path(free, wp, dist, best)
@@ -153,15 +153,18 @@ def _target_search(window, exclude, reach, unseen_ok, row_offsets, half_widths, 
     targets = np.zeros((h + 2, w + 2), np.uint8)
     if mark_targets(view, pad, exclude, targets) == 0:
         return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_SPACE, _NO_PATH
-    return search_targets(space, pad, targets, sr, sc, snap, False, dist, ring)
+    return search_targets(space, pad, targets, sr, sc, snap, False, dist, ring, np.empty(0, np.int32))
 
 
 @njit(cache=True)
-def search_targets(space, pad, targets, sr, sc, snap, with_path, dist, ring):  # pragma: no cover - compiled
+def search_targets(space, pad, targets, sr, sc, snap, with_path, dist, ring,
+                   touched):  # pragma: no cover - compiled
     """Snap ``(sr, sc)`` into ``space`` and find the nearest cell of ``targets`` (both padded like ``pad``,
     the space with a blocked border): (status, row, col, distance in cells, snapped row, snapped col,
     space, path), the path read off the search's distances only ``with_path``. Shared by the window
-    stage and the whole-map stage (:func:`swarm.grid.kept.map_target`)."""
+    stage and the whole-map stage (:func:`swarm.grid.kept.map_target`). ``touched``: empty, or (with an
+    all-inf ``dist``) where the search lists the cells it gave a distance, which are set back to inf
+    before returning (see :func:`swarm.grid._kernels.grid_bucket_search`)."""
     w = space.shape[1]
     s = grid_snap(space, sr, sc, snap)
     if s[0] < 0:
@@ -170,10 +173,15 @@ def search_targets(space, pad, targets, sr, sc, snap, with_path, dist, ring):  #
     seeds = np.empty(1, np.int64)
     seeds[0] = (s[0] + 1) * wp + s[1] + 1
     free = pad.reshape(-1)
-    best, best_d = grid_bucket_search(free, wp, seeds, -1, targets.reshape(-1), np.inf, dist[:free.shape[0]], ring)
+    field = dist[:free.shape[0]]
+    best, best_d, nt = grid_bucket_search(free, wp, seeds, -1, targets.reshape(-1), np.inf, field, ring, touched)
+    path = _NO_PATH
+    if best >= 0 and with_path:
+        path = grid_descend_path(free, wp, field, best)
+    for i in range(nt):
+        field[touched[i]] = np.inf
     if best < 0:
         return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_SPACE, _NO_PATH
-    path = grid_descend_path(free, wp, dist, best) if with_path else _NO_PATH
     return TARGET_FOUND, best // wp - 1, best % wp - 1, best_d, s[0], s[1], space, path
 
 

@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 
 from ..api import CELL_M
-from ._kernels import grid_bucket_search, grid_descend_path, grid_field_metres
+from ._kernels import NO_TOUCHED, grid_bucket_search, grid_descend_path, grid_field_metres
 from ._validate import check_cell, check_cells, check_length, check_same_shape, check_space
 
 _NO_TARGETS = np.zeros(0, dtype=np.uint8)
@@ -87,7 +87,7 @@ def plan(space: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> np
     free, wp = _WORK.padded(sp)
     dist, ring = _WORK.get(free.shape[0])
     gi = (g[0] + 1) * wp + g[1] + 1
-    best, _ = grid_bucket_search(free, wp, _seed(s, wp), gi, _NO_TARGETS, np.inf, dist, ring)
+    best, _, _ = grid_bucket_search(free, wp, _seed(s, wp), gi, _NO_TARGETS, np.inf, dist, ring, NO_TOUCHED)
     if best < 0:
         return None
     path = grid_descend_path(free, wp, dist, best)
@@ -114,7 +114,7 @@ def distance_field(space: np.ndarray, sources: Any, max_dist_m: float | None = N
     free, wp = _WORK.padded(sp)
     dist, ring = _WORK.get(free.shape[0])
     max_cells = np.inf if limit is None else limit / CELL_M
-    grid_bucket_search(free, wp, _flat(cells, wp), -1, _NO_TARGETS, max_cells, dist, ring)
+    grid_bucket_search(free, wp, _flat(cells, wp), -1, _NO_TARGETS, max_cells, dist, ring, NO_TOUCHED)
     grid_field_metres(dist, wp, max_cells, out)
     return out
 
@@ -142,7 +142,7 @@ def nearest_reachable_in(space: np.ndarray, start: tuple[int, int], targets: np.
     free, wp = _WORK.padded(space, 0)
     tflat, _ = _WORK.padded(targets, 1)
     dist, ring = _WORK.get(free.shape[0])
-    best, best_d = grid_bucket_search(free, wp, _seed(start, wp), -1, tflat, np.inf, dist, ring)
+    best, best_d, _ = grid_bucket_search(free, wp, _seed(start, wp), -1, tflat, np.inf, dist, ring, NO_TOUCHED)
     if best < 0:
         return None
     return (int(best // wp - 1), int(best % wp - 1)), float(best_d * CELL_M)

@@ -134,13 +134,14 @@ class _TargetSearch:
         navigator's plan (:mod:`swarm.grid.memo`)."""
         rows, widths = _erosion_rows(self.radius_m, self.margin_m)
         h, w = known.shape
-        dist, ring = _WORK.get((h + 2) * (w + 2))
+        _, ring = _WORK.get((h + 2) * (w + 2))
+        dist, touched = kept.clean_workspace((h + 2) * (w + 2))
         ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude)
         inputs = kept.inputs_for(known, self.radius_m, self.margin_m, self.unseen_traversable, self.reach, keep=keep)
         margin = max(erosion_depth(self.radius_m, self.margin_m), self.reach + 1)
         status, row, col, cells, sr, sc, space, path = kept.map_target(known, ex, self.reach, self.unseen_traversable,
                                                                        rows, widths, start[0], start[1], self.snap,
-                                                                       dist, ring, *inputs, margin)
+                                                                       dist, ring, touched, *inputs, margin)
         if status != TARGET_FOUND:
             return None
         cell, snapped = (int(row), int(col)), (int(sr), int(sc))

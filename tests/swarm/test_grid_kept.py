@@ -171,3 +171,43 @@ def test_a_map_converted_for_one_search_is_not_kept() -> None:
     assert not kept._KEPT.entries
     assert first == grid.nearest_reachable_unseen(known.astype(np.uint8), (10, 10), local_first_m=None)
     assert len(kept._KEPT.entries) == 1
+
+
+def test_a_recording_search_lists_every_cell_it_gave_a_distance() -> None:
+    # the whole-map search skips filling its distance array: it relies on the search listing every cell
+    # it wrote, so they can be set back to inf
+    from swarm.grid._kernels import NO_TOUCHED, grid_bucket_search
+
+    rng = np.random.default_rng(3)
+    for seed in range(2):
+        _, maps = growing_maps(seed, 12)
+        for known in maps[::3]:
+            space = grid.configuration_space(known)
+            h, w = space.shape
+            pad = np.zeros((h + 2, w + 2), np.uint8)
+            pad[1:-1, 1:-1] = space
+            free = np.flatnonzero(pad)
+            if free.size == 0:
+                continue
+            seeds = rng.choice(free, min(2, free.size), replace=False).astype(np.int64)
+            targets = (rng.random(pad.size) < 0.002).astype(np.uint8)
+            for max_d in (np.inf, 12.0):
+                plain, ring = np.empty(pad.size), np.empty(3 * pad.size, np.int32)
+                a = grid_bucket_search(pad.reshape(-1), w + 2, seeds, -1, targets, max_d, plain, ring, NO_TOUCHED)
+                clean, touched = np.full(pad.size, np.inf), np.empty(4 * pad.size, np.int32)
+                b = grid_bucket_search(pad.reshape(-1), w + 2, seeds, -1, targets, max_d, clean, ring, touched)
+                assert a[:2] == b[:2] and np.array_equal(plain.view(np.int64), clean.view(np.int64))
+                assert set(touched[:b[2]].tolist()) == set(np.flatnonzero(np.isfinite(clean)).tolist())
+
+
+def test_the_whole_map_search_leaves_its_workspace_clean() -> None:
+    kept.forget_all()
+    _, maps = growing_maps(1, 20)
+    found = 0
+    for known in maps[5:]:
+        free = np.argwhere(known == FREE)
+        for cell in free[::max(1, len(free) // 4)]:
+            found += grid.nearest_reachable_unseen(known, (int(cell[0]), int(cell[1])), local_first_m=None) is not None
+            dist, _ = kept.clean_workspace((known.shape[0] + 2) * (known.shape[1] + 2))
+            assert np.isinf(dist).all()
+    assert found >= 10
