@@ -61,14 +61,14 @@ def grid_bucket_search(free: np.ndarray, wp: int, seeds: np.ndarray, goal: int, 
     free: uint8[n] padded flat grid. seeds: int64[K] flat indices of free cells. goal: a flat index to
     stop at, or -1. targets: uint8[n] to stop at the nearest of, or an empty array. max_d: stop once the
     settled distance passes this (cells). dist: float64[n] workspace, overwritten with the result; ring:
-    int32 workspace of at least 3 n entries. Returns (best target index or -1, its distance). When the
+    int32 workspace of at least 3 n entries. touched: an empty array (:data:`NO_TOUCHED`), or an int32
+    array of at least 4 n entries; then ``dist`` must be all inf on entry (it is not filled: for a whole
+    map that fill is 730 KB) and every cell given a distance is listed in ``touched`` (some more than
+    once), so the caller can set them back to inf.
+
+    Returns (best target index or -1, its distance, number of ``touched`` entries written). When the
     search stops early, cells beyond the last settled bucket hold tentative distances larger than every
     settled one; the callers only read settled cells.
-
-    touched: an empty array (:data:`NO_TOUCHED`), or an int32 array of at least 4 n entries; then ``dist`` must be all inf
-    on entry (it is not filled: for a whole map that fill is 730 KB) and every cell given a distance is
-    listed in ``touched`` (some more than once), their count returned, so the caller can set them back to
-    inf. Returns (best target index or -1, its distance, number of touched entries).
     """
     n = free.shape[0]
     record = touched.shape[0] > 0
