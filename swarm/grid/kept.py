@@ -7,17 +7,18 @@ two of its searches: on the 16-robot benchmark 9 % of the rows and 0.4 % of the 
 robot's consecutive whole-map searches.
 
 So each map keeps :class:`KeptInputs`: a copy of the map the arrays describe, the space (also padded as the
-search reads it), the view cells and the targets. :func:`refresh` compares the map with the copy row by row
-and recomputes only the rows within ``margin`` of a changed row, where ``margin`` covers everything a row
-depends on (the erosion's row offsets for the space; ``reach`` steps plus the frontier test's neighbour
-for the view cells). It runs the same kernels on a slice of the map that extends ``margin`` rows beyond the
-band and keeps the band's rows, which the slice's edges cannot reach, so every kept row is what a
-whole-map computation gives, bit for bit (``tests/swarm/test_grid_kept.py`` checks it on growing maps).
+search reads it) and the targets (its view cells in the space). :func:`refresh` compares the map with the
+copy row by row and recomputes only the rows within ``margin`` of a changed row, where ``margin`` covers
+everything a row depends on (the erosion's row offsets for the space; ``reach`` steps plus the frontier
+test's neighbour for the view cells). It runs the same kernels on a slice of the map that extends
+``margin`` rows beyond the band and keeps the band's rows, which the slice's edges cannot reach, so every
+kept row is what a whole-map computation gives, bit for bit (``tests/swarm/test_grid_kept.py`` checks it
+on growing maps).
 
 Entries are found by the map's buffer (a robot's knowledge map is one array for a whole run), but an entry
 is never trusted: any map is compared with the copy, so a reused buffer or a different map only means more
-rows to recompute. The view cells and targets kept are those without an exclusion mask; a search with one
-computes its own (the space is kept either way). :mod:`swarm.grid.memo` holds on to the copy and the space
+rows to recompute. The targets kept are those without an exclusion mask; a search with one computes its
+own (the space is kept either way). :mod:`swarm.grid.memo` holds on to the copy and the space
 instead of copying them, and trusts them only while the entry's ``version`` is the one it saw.
 """
 
@@ -34,7 +35,7 @@ from ._kernels import grid_configuration_space, grid_view_cells
 from .local import NO_TARGET, mark_targets, search_targets
 
 MAX_ENTRIES = 32
-"""Maps kept per thread: one per robot of a large team. Each entry holds five map-sized byte arrays (450
+"""Maps kept per thread: one per robot of a large team. Each entry holds four map-sized byte arrays (360
 KB for a 150 m map); the least recently searched map is dropped first, and all of them when a map of
 another size comes (as :mod:`swarm.grid.memo` does)."""
 
@@ -46,8 +47,7 @@ class KeptInputs(NamedTuple):
     copy: np.ndarray      # uint8[H, W]: the map the other arrays describe
     space: np.ndarray     # uint8[H, W]: its configuration space (0/1)
     pad: np.ndarray       # uint8[H + 2, W + 2]: the space with a blocked one-cell border, as the search reads it
-    view: np.ndarray      # bool[H, W]: its view cells (no exclusion)
-    targets: np.ndarray   # uint8[H + 2, W + 2]: view cells in the space, padded like ``pad``
+    targets: np.ndarray   # uint8[H + 2, W + 2]: view cells (no exclusion) in the space, padded like ``pad``
     row_targets: np.ndarray  # int64[H]: targets per row, so the total costs H additions
     version: np.ndarray   # int64[1]: counts the refreshes that changed something (see swarm.grid.memo)
 
@@ -88,8 +88,7 @@ def inputs_for(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: b
 
 def _new_inputs(h: int, w: int) -> KeptInputs:
     return KeptInputs(np.full((h, w), _NEVER, np.uint8), np.zeros((h, w), np.uint8), np.zeros((h + 2, w + 2), np.uint8),
-                      np.zeros((h, w), np.bool_), np.zeros((h + 2, w + 2), np.uint8), np.zeros(h, np.int64),
-                      np.zeros(1, np.int64))
+                      np.zeros((h + 2, w + 2), np.uint8), np.zeros(h, np.int64), np.zeros(1, np.int64))
 
 
 def clean_workspace(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -109,7 +108,7 @@ def forget_all() -> None:
 
 
 @njit(cache=True)
-def refresh(known, copy, space, pad, view, targets, row_targets, version, unseen_ok, row_offsets, half_widths,
+def refresh(known, copy, space, pad, targets, row_targets, version, unseen_ok, row_offsets, half_widths,
             reach, margin):  # pragma: no cover - compiled
     """Bring the arrays of :class:`KeptInputs` up to date with ``known`` (``version`` counts up when
     anything changed); ``margin`` >= the erosion depth and >= ``reach + 1``. Returns the number of
@@ -139,7 +138,7 @@ def refresh(known, copy, space, pad, view, targets, row_targets, version, unseen
         a = r
         while r < h and changed[r]:
             r += 1
-        _recompute_band(known, a, r, space, pad, view, targets, row_targets, unseen_ok, row_offsets,
+        _recompute_band(known, a, r, space, pad, targets, row_targets, unseen_ok, row_offsets,
                         half_widths, reach, margin)
     if any_change:
         version[0] += 1
@@ -150,9 +149,9 @@ def refresh(known, copy, space, pad, view, targets, row_targets, version, unseen
 
 
 @njit(cache=True, inline="always")
-def _recompute_band(known, a, b, space, pad, view, targets, row_targets, unseen_ok, row_offsets, half_widths,
+def _recompute_band(known, a, b, space, pad, targets, row_targets, unseen_ok, row_offsets, half_widths,
                     reach, margin):  # pragma: no cover - compiled
-    """Rows ``a:b`` of the space, view cells and targets, from the slice of ``known`` that extends
+    """Rows ``a:b`` of the space and targets, from the slice of ``known`` that extends
     ``margin`` rows beyond them (clipped to the map, whose edge the kernels treat as the map's edge)."""
     h, w = known.shape
     lo = max(a - margin, 0)
@@ -168,12 +167,10 @@ def _recompute_band(known, a, b, space, pad, view, targets, row_targets, unseen_
         krow = space[r]
         prow = pad[r + 1]
         trow = targets[r + 1]
-        out = view[r]
         count = 0
         for c in range(w):
             krow[c] = sp[c]
             prow[c + 1] = sp[c]
-            out[c] = vw[c]
             t = vw[c] & (sp[c] != 0)
             trow[c + 1] = t
             count += t
@@ -182,16 +179,16 @@ def _recompute_band(known, a, b, space, pad, view, targets, row_targets, unseen_
 
 @njit(cache=True)
 def map_target(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap, dist, ring, touched, copy,
-               space, pad, view, targets, row_targets, version, margin):  # pragma: no cover - compiled
+               space, pad, targets, row_targets, version, margin):  # pragma: no cover - compiled
     """The whole-map stage of :func:`swarm.grid.nearest_reachable_unseen` in one call: :func:`refresh` the
     kept inputs (``copy`` .. ``version``, see :class:`KeptInputs`), then snap and search
     (:func:`swarm.grid.local.search_targets`, on the all-inf ``dist`` of :func:`clean_workspace`, which it
     leaves all inf). With an exclusion mask (``exclude`` bool[H, W], or empty
-    for none) the view cells and targets are computed afresh from the kept space. Returns what
+    for none) the targets are computed afresh from the kept space. Returns what
     ``search_targets`` returns, with the path to the target (for :mod:`swarm.grid.memo`) and the kept
     space."""
     h, w = known.shape
-    total = refresh(known, copy, space, pad, view, targets, row_targets, version, unseen_ok, row_offsets,
+    total = refresh(known, copy, space, pad, targets, row_targets, version, unseen_ok, row_offsets,
                     half_widths, reach, margin)
     marks = targets
     if exclude.shape[0] == h:
