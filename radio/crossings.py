@@ -231,6 +231,18 @@ def _distance(x0, y0, x1, y1):  # pragma: no cover - compiled
     return math.sqrt(ddx * ddx + ddy * ddy)
 
 
+@njit(cache=True, inline="always")
+def _radio_pair(blocks, cell, xy, a, b, tol, cross_db, metre_db, per_metre, run_start, run_end, run_len, counts, i,
+                j):  # pragma: no cover - compiled
+    """One robot pair as every matrix computes it: (distance, walls crossed, dB charged) of the walk from
+    robot ``a`` to robot ``b`` (``a < b``), with ``counts[i, j]`` set to its material crossings."""
+    n = _radio_walk_segment(blocks, cell, xy[a, 0], xy[a, 1], xy[b, 0], xy[b, 1], tol, run_start, run_end, run_len)
+    for m in range(counts.shape[2]):
+        counts[i, j, m] = 0
+    db = _radio_price_runs(n, run_len, tol, cross_db, metre_db, per_metre, counts, i, j)
+    return _distance(xy[a, 0], xy[a, 1], xy[b, 0], xy[b, 1]), n, db
+
+
 @njit(cache=True)
 def _radio_all_pairs(blocks, cell, xy, tol, cross_db, metre_db, per_metre,
                      distance, walls, wall_db, counts):  # pragma: no cover
@@ -245,12 +257,8 @@ def _radio_all_pairs(blocks, cell, xy, tol, cross_db, metre_db, per_metre,
         for m in range(n_mat):
             counts[i, i, m] = 0
         for j in range(i + 1, n_robots):
-            d = _distance(xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1])
-            n = _radio_walk_segment(blocks, cell, xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1], tol,
-                                    run_start, run_end, run_len)
-            for m in range(n_mat):
-                counts[i, j, m] = 0
-            db = _radio_price_runs(n, run_len, tol, cross_db, metre_db, per_metre, counts, i, j)
+            d, n, db = _radio_pair(blocks, cell, xy, i, j, tol, cross_db, metre_db, per_metre, run_start, run_end,
+                                   run_len, counts, i, j)
             for m in range(n_mat):
                 counts[j, i, m] = counts[i, j, m]
             distance[i, j] = d
@@ -265,8 +273,8 @@ def _radio_all_pairs(blocks, cell, xy, tol, cross_db, metre_db, per_metre,
 def _radio_pairs_with(blocks, cell, xy, tol, cross_db, metre_db, per_metre, senders, distance, walls,
                       wall_db):  # pragma: no cover
     """Columns of :func:`_radio_all_pairs`' matrices for the robots ``senders`` only: ``distance[i, k]``,
-    ``walls[i, k]`` and ``wall_db[i, k]`` for the pair (i, senders[k]), each walked as the all-pairs walk
-    does (from the lower index to the higher), so the numbers are its numbers bit for bit."""
+    ``walls[i, k]`` and ``wall_db[i, k]`` for the pair (i, senders[k]), by the same :func:`_radio_pair`
+    from the lower index to the higher, so the numbers are its numbers bit for bit."""
     n_robots = xy.shape[0]
     n_mat = cross_db.shape[0]
     run_start, run_end, run_len = _run_buffers(blocks, n_mat)
@@ -279,15 +287,11 @@ def _radio_pairs_with(blocks, cell, xy, tol, cross_db, metre_db, per_metre, send
                 walls[i, k] = 0
                 wall_db[i, k] = 0.0
                 continue
-            a = min(i, j)
-            b = max(i, j)
-            distance[i, k] = _distance(xy[a, 0], xy[a, 1], xy[b, 0], xy[b, 1])
-            n = _radio_walk_segment(blocks, cell, xy[a, 0], xy[a, 1], xy[b, 0], xy[b, 1], tol, run_start, run_end,
-                                    run_len)
-            for m in range(n_mat):
-                counts[0, 0, m] = 0
-            wall_db[i, k] = _radio_price_runs(n, run_len, tol, cross_db, metre_db, per_metre, counts, 0, 0)
+            d, n, db = _radio_pair(blocks, cell, xy, min(i, j), max(i, j), tol, cross_db, metre_db, per_metre,
+                                   run_start, run_end, run_len, counts, 0, 0)
+            distance[i, k] = d
             walls[i, k] = n
+            wall_db[i, k] = db
 
 
 @njit(cache=True)
