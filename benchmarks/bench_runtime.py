@@ -4,31 +4,29 @@ The issue-3 workload: 16 robots spawned together on a seeded 150 x 150 building,
 until 99 % explored (or ``--max-ticks``). Prints simulated ticks per wall second (run loop only, set-up
 reported separately), peak RSS, and with ``--profile`` where the time goes (cProfile, top functions).
 Pin to one core for the reference figure: ``taskset -c 0 python benchmarks/bench_runtime.py``.
+
+``--repeat N`` runs the workload N times, each in a fresh process (so every run pays the same imports and
+kernel loads), and reports each run, the best and the median: the project's shared virtual machine
+changes speed by up to 2x within seconds (a fixed pure-Python loop took 37-80 us over one minute), so one
+run says little and the best of several is the closest to what the code itself costs.
 """
 
 from __future__ import annotations
 
 import argparse
 import cProfile
+import json
 import pstats
 import resource
+import statistics
+import subprocess
+import sys
 import time
 
 from swarm.simulation import Simulation
 
 
-def main() -> None:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--robots", type=int, default=16)
-    ap.add_argument("--size", type=int, default=150)
-    ap.add_argument("--kind", default="building")
-    ap.add_argument("--seed", type=int, default=1)
-    ap.add_argument("--algorithm", default="frontier")
-    ap.add_argument("--max-ticks", type=int, default=36000)
-    ap.add_argument("--transport", default="inprocess")
-    ap.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE")
-    ap.add_argument("--profile", action="store_true")
-    args = ap.parse_args()
+def run_once(args: argparse.Namespace) -> dict:
     spec = {"seed": args.seed, "map": {"kind": args.kind, "size": args.size},
             "robots": {"count": args.robots, "spawn": "together"}, "algorithm": {"name": args.algorithm},
             "stop": {"max_ticks": args.max_ticks}, "transport": args.transport}
@@ -48,14 +46,71 @@ def main() -> None:
     cpu = time.process_time() - cpu0
     if profiler:
         profiler.disable()
-    s = result.summary
-    rss_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    print(result.one_line())
-    print(f"ticks {s['ticks']}  run {s['wall_time_s']:.2f} s wall, {cpu:.2f} s CPU -> "
-          f"{s['ticks'] / s['wall_time_s']:.0f} ticks/s wall, {s['ticks'] / cpu:.0f} ticks per CPU-second"
-          f"  (set-up {setup:.2f} s)  peak RSS {rss_mb:.0f} MB  plans {sum(s['plans'])}")
-    if profiler:
         pstats.Stats(profiler).sort_stats("tottime").print_stats(25)
+    s = result.summary
+    return {"line": result.one_line(), "ticks": s["ticks"], "wall": s["wall_time_s"], "cpu": cpu, "setup": setup,
+            "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "plans": sum(s["plans"])}
+
+
+def report(r: dict) -> str:
+    return (f"ticks {r['ticks']}  run {r['wall']:.2f} s wall, {r['cpu']:.2f} s CPU -> "
+            f"{r['ticks'] / r['wall']:.0f} ticks/s wall, {r['ticks'] / r['cpu']:.0f} ticks per CPU-second"
+            f"  (set-up {r['setup']:.2f} s)  peak RSS {r['rss_mb']:.0f} MB  plans {r['plans']}")
+
+
+def repeat(n: int, argv: list[str]) -> None:
+    """Run this script ``n`` times in fresh processes with ``argv`` (without ``--repeat``); summarise."""
+    runs = []
+    for i in range(n):
+        out = subprocess.run([sys.executable, __file__, *argv, "--emit-json"], check=True, capture_output=True,
+                             text=True).stdout
+        r = json.loads(out.strip().splitlines()[-1])
+        runs.append(r)
+        if i == 0:
+            print(r["line"])
+        print(f"run {i + 1}: {report(r)}", flush=True)
+    rates = sorted(r["ticks"] / r["wall"] for r in runs)
+    print(f"{n} runs: best {rates[-1]:.0f} ticks/s, median {statistics.median(rates):.0f}, worst {rates[0]:.0f}; "
+          f"peak RSS up to {max(r['rss_mb'] for r in runs):.0f} MB")
+
+
+def child_argv(args: argparse.Namespace) -> list[str]:
+    """The command line of one run of ``args`` (everything but ``--repeat``)."""
+    argv = ["--robots", str(args.robots), "--size", str(args.size), "--kind", args.kind, "--seed", str(args.seed),
+            "--algorithm", args.algorithm, "--max-ticks", str(args.max_ticks), "--transport", args.transport]
+    for item in args.set:
+        argv += ["--set", item]
+    return argv
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--robots", type=int, default=16)
+    ap.add_argument("--size", type=int, default=150)
+    ap.add_argument("--kind", default="building")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--algorithm", default="frontier")
+    ap.add_argument("--max-ticks", type=int, default=36000)
+    ap.add_argument("--transport", default="inprocess")
+    ap.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE")
+    ap.add_argument("--profile", action="store_true")
+    ap.add_argument("--repeat", type=int, default=1, metavar="N",
+                    help="run N times, each in a fresh process, and report the best and the median")
+    ap.add_argument("--emit-json", action="store_true", help=argparse.SUPPRESS)  # one run for --repeat
+    args = ap.parse_args()
+    if args.repeat < 1:
+        ap.error(f"--repeat: {args.repeat} is not allowed; give a whole number >= 1")
+    if args.repeat > 1:
+        if args.profile:
+            ap.error("--repeat: profile one run at a time (drop --repeat or --profile)")
+        repeat(args.repeat, child_argv(args))
+        return
+    r = run_once(args)
+    if args.emit_json:
+        print(json.dumps(r))
+        return
+    print(r["line"])
+    print(report(r))
 
 
 if __name__ == "__main__":
