@@ -27,6 +27,7 @@ from swarm.simulation import Simulation
 
 
 def run_once(args: argparse.Namespace) -> dict:
+    """Build and run the workload once in this process; its figures (run loop timed apart from set-up)."""
     spec = {"seed": args.seed, "map": {"kind": args.kind, "size": args.size},
             "robots": {"count": args.robots, "spawn": "together"}, "algorithm": {"name": args.algorithm},
             "stop": {"max_ticks": args.max_ticks}, "transport": args.transport}
@@ -53,6 +54,7 @@ def run_once(args: argparse.Namespace) -> dict:
 
 
 def report(r: dict) -> str:
+    """One run's figures on one line."""
     return (f"ticks {r['ticks']}  run {r['wall']:.2f} s wall, {r['cpu']:.2f} s CPU -> "
             f"{r['ticks'] / r['wall']:.0f} ticks/s wall, {r['ticks'] / r['cpu']:.0f} ticks per CPU-second"
             f"  (set-up {r['setup']:.2f} s)  peak RSS {r['rss_mb']:.0f} MB  plans {r['plans']}")
@@ -62,9 +64,11 @@ def repeat(n: int, argv: list[str]) -> None:
     """Run this script ``n`` times in fresh processes with ``argv`` (without ``--repeat``); summarise."""
     runs = []
     for i in range(n):
-        out = subprocess.run([sys.executable, __file__, *argv, "--emit-json"], check=True, capture_output=True,
-                             text=True).stdout
-        r = json.loads(out.strip().splitlines()[-1])
+        child = subprocess.run([sys.executable, __file__, *argv, "--emit-json"], capture_output=True, text=True)
+        if child.returncode != 0:  # a bad --set, say: the run's own error, not a traceback of this one
+            sys.stderr.write(child.stderr)
+            raise SystemExit(child.returncode)
+        r = json.loads(child.stdout.strip().splitlines()[-1])
         runs.append(r)
         if i == 0:
             print(r["line"])
