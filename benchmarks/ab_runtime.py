@@ -26,8 +26,12 @@ LINE = re.compile(r"run ([0-9.]+) s wall")
 def run(checkout: Path, args: list[str]) -> float:
     """Run-loop wall seconds of one bench_runtime.py run from ``checkout``."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(checkout), os.environ.get("PYTHONPATH")])))
-    out = subprocess.run([sys.executable, str(checkout / "benchmarks" / "bench_runtime.py"), *args], cwd=checkout,
-                         env=env, check=True, capture_output=True, text=True).stdout
+    child = subprocess.run([sys.executable, str(checkout / "benchmarks" / "bench_runtime.py"), *args], cwd=checkout,
+                           env=env, capture_output=True, text=True)
+    if child.returncode != 0:  # the run's own error (a bad argument, say), as bench_runtime.py --repeat shows it
+        sys.stderr.write(child.stderr)
+        raise SystemExit(child.returncode)
+    out = child.stdout
     m = LINE.search(out)
     if m is None:
         raise SystemExit(f"{checkout}: bench_runtime.py printed no run time:\n{out}")

@@ -61,7 +61,7 @@ def report(r: dict) -> str:
 
 
 def repeat(n: int, argv: list[str]) -> None:
-    """Run this script ``n`` times in fresh processes with ``argv`` (without ``--repeat``); summarise."""
+    """Run this script ``n`` times in fresh processes with ``argv`` (which asks for one run); summarise."""
     runs = []
     for i in range(n):
         child = subprocess.run([sys.executable, __file__, *argv, "--emit-json"], capture_output=True, text=True)
@@ -76,15 +76,6 @@ def repeat(n: int, argv: list[str]) -> None:
     rates = sorted(r["ticks"] / r["wall"] for r in runs)
     print(f"{n} runs: best {rates[-1]:.0f} ticks/s, median {statistics.median(rates):.0f}, worst {rates[0]:.0f}; "
           f"peak RSS up to {max(r['rss_mb'] for r in runs):.0f} MB")
-
-
-def child_argv(args: argparse.Namespace) -> list[str]:
-    """The command line of one run of ``args`` (everything but ``--repeat``)."""
-    argv = ["--robots", str(args.robots), "--size", str(args.size), "--kind", args.kind, "--seed", str(args.seed),
-            "--algorithm", args.algorithm, "--max-ticks", str(args.max_ticks), "--transport", args.transport]
-    for item in args.set:
-        argv += ["--set", item]
-    return argv
 
 
 def main() -> None:
@@ -107,7 +98,7 @@ def main() -> None:
     if args.repeat > 1:
         if args.profile:
             ap.error("--repeat: profile one run at a time (drop --repeat or --profile)")
-        repeat(args.repeat, child_argv(args))
+        repeat(args.repeat, [*sys.argv[1:], "--repeat", "1"])  # the last --repeat wins: each child runs once
         return
     r = run_once(args)
     if args.emit_json:

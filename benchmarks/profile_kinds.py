@@ -6,9 +6,10 @@
     python benchmarks/profile_kinds.py prof.txt
 
 Only samples inside ``Simulation._loop`` count (set-up and imports are left out). Each is classed by its
-leaf frame: numba's compiled kernels (frames without symbols, ``?`` in py-spy, are nearly all JIT code), the Python interpreter,
-numpy, the C library, zlib, numba's dispatch and cache loading, chipmunk with pymunk's cffi calls. The
-split says how much a restructure that moves Python steps into compiled code could gain at most.
+leaf frame: numba's compiled kernels (frames without symbols, ``?`` in py-spy, are nearly all JIT code),
+the Python interpreter, numpy, the C library, zlib, numba's dispatch and cache loading, chipmunk with
+pymunk's cffi calls. The split says how much a restructure that moves Python steps into compiled code
+could gain at most.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ import argparse
 import collections
 import re
 
-KINDS = (  # first match wins: zlib's module file names contain "libm"
+KINDS = (  # first match wins: a frame in numpy's or numba's own .py files is interpreter work
     ("numba kernels (JIT code)", lambda w: w == "?"),
     ("zlib", lambda w: "libz" in w or "zlib" in w),
     ("Python interpreter", lambda w: ".py:" in w or w.startswith(("<string>", "<frozen", "libpython"))
