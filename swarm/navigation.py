@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from . import grid
-from .api import CELL_M, SOLID, NavStatus, Pose, cell_of
+from .api import CELL_M, SOLID, NavStatus, Pose, cell_of, frozen_builder
 from .grid import memo
 from .grid.cspace import configuration_space_of, nearest_in_of
 from .grid.local import plan_local_first
@@ -28,6 +28,8 @@ from .world import MotionParams
 SNAP_RADIUS_CELLS = 4
 """A start or goal inside inflated space snaps to the nearest drivable cell within 2 m."""
 PROGRESS_M = 0.05
+
+_nav_status = frozen_builder(NavStatus)  # about half the runtime's status() calls build a new one
 
 
 class Navigator:
@@ -83,8 +85,8 @@ class Navigator:
         s = self._status
         if (s.state != self.state or s.goal != self.goal or s.path_length != self.path_length
                 or s.ticks_since_progress != self.ticks_since_progress):
-            s = self._status = NavStatus(goal=self.goal, state=self.state, path_length=self.path_length,
-                                         ticks_since_progress=self.ticks_since_progress)
+            s = self._status = _nav_status(goal=self.goal, state=self.state, path_length=self.path_length,
+                                           ticks_since_progress=self.ticks_since_progress)
         return s
 
     # ----------------------------------------------------------------------------------- planning ----
