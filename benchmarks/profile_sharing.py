@@ -1,0 +1,75 @@
+"""Where map sharing's time goes: ``python benchmarks/profile_sharing.py [--robots 16 --size 150 --seed 1]``.
+
+Runs the issue-3 workload (as ``bench_runtime.py``) with the map-sharing steps wrapped in timers and
+prints, per step, the calls, the time per call and the share of the run: finding each robot's changed
+cells for its delta (``sync_changes``), building deltas and full maps (most of it zlib), encoding
+envelopes, delivering, decoding (zlib, cells, dense maps) and merging. The timers add about 1 us per call,
+so the run itself is a little slower than in ``bench_runtime.py``; the shares are what matters.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from collections import Counter
+from typing import Any, Callable
+
+import swarm.comm as comm
+import swarm.messages as messages
+from swarm.simulation import Simulation
+
+TIMED: list[tuple[Any, str, str]] = [
+    (comm, "sync_changes", "changed cells for a delta (sync_changes)"),
+    (comm, "delta_update", "build a delta (pack + zlib)"),
+    (comm, "full_update", "build a full map (pack + zlib)"),
+    (messages.zlib, "compress", "  of which zlib.compress"),
+    (comm.Medium, "envelope", "encode an envelope"),
+    (comm.Medium, "deliver", "deliver a tick's envelopes"),
+    (messages.zlib, "decompress", "zlib.decompress (once per message)"),
+    (comm.MapUpdate, "cells", "a delta's cells (per receiver, decoded once)"),
+    (comm.MapUpdate, "dense", "a full map's cells (per receiver, decoded once)"),
+    (comm, "merge_cells_unchecked", "merge a delta into a receiver"),
+]
+
+
+def wrap(owner: Any, name: str, label: str, spent: Counter, calls: Counter) -> None:
+    """Replace ``owner.name`` by a version that adds its wall time to ``spent[label]``."""
+    inner: Callable[..., Any] = getattr(owner, name)
+
+    def timed(*args: Any, **kwargs: Any) -> Any:
+        t0 = time.perf_counter()
+        try:
+            return inner(*args, **kwargs)
+        finally:
+            spent[label] += time.perf_counter() - t0
+            calls[label] += 1
+
+    setattr(owner, name, timed)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--robots", type=int, default=16)
+    parser.add_argument("--size", type=int, default=150)
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--max-ticks", type=int, default=36000)
+    args = parser.parse_args()
+    spent: Counter = Counter()
+    calls: Counter = Counter()
+    for owner, name, label in TIMED:
+        wrap(owner, name, label, spent, calls)
+    sim = Simulation({"seed": args.seed, "map": {"kind": "building", "size": args.size},
+                      "robots": {"count": args.robots, "spawn": "together"}, "algorithm": {"name": "frontier"},
+                      "stop": {"max_ticks": args.max_ticks}})
+    result = sim.run()
+    wall = result.summary["wall_time_s"]
+    print(result.one_line())
+    print(f"run {wall:.2f} s wall")
+    for _, _, label in TIMED:
+        if calls[label]:
+            print(f"{label:48s} {calls[label]:7d} calls {1e6 * spent[label] / calls[label]:8.1f} us "
+                  f"{spent[label]:7.3f} s {100 * spent[label] / wall:5.1f} %")
+
+
+if __name__ == "__main__":
+    main()
