@@ -2,7 +2,7 @@
 
 Runs the issue-3 workload (as ``bench_runtime.py``) with the map-sharing steps wrapped in timers and
 prints, per step, the calls, the time per call and the share of the run: finding each robot's changed
-cells for its delta (``sync_changes``), building deltas and full maps (most of it zlib), encoding
+cells for its delta (``sync_box``, or ``sync_changes`` after a full map was merged), building deltas and full maps (most of it zlib), encoding
 envelopes, delivering, decoding (zlib, cells, dense maps) and merging. The timers add about 1 us per call,
 so the run itself is a little slower than in ``bench_runtime.py``; the shares are what matters.
 """
@@ -19,7 +19,8 @@ import swarm.messages as messages
 from swarm.simulation import Simulation
 
 TIMED: list[tuple[Any, str, str]] = [
-    (comm, "sync_changes", "changed cells for a delta (sync_changes)"),
+    (comm, "sync_box_unchecked", "changed cells for a delta (sync_box)"),
+    (comm, "sync_changes", "  the same after a full map (sync_changes)"),
     (comm, "delta_update", "build a delta (pack + zlib)"),
     (comm, "full_update", "build a full map (pack + zlib)"),
     (messages.zlib, "compress", "  of which zlib.compress"),

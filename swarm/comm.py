@@ -12,7 +12,9 @@ maps the same way and comparisons are fair: every ``share_every`` ticks each rob
 whole map (``full``). Receivers merge updates into their own map (elementwise max) before they act. A
 receiver that notices a gap in a sender's sequence numbers asks for its full map
 (:class:`~swarm.messages.MapRequest`); the sender broadcasts it next tick, so deltas converge to what full
-maps would give even over lossy links.
+maps would give even over lossy links. A delta's cells are found by comparing the robot's map with a copy
+of what its last update said, only where something was written since (its lidar windows, merged cells)
+when the runtime reports its scans (``lidar_reach``), else over the whole map: the same cells either way.
 """
 
 from __future__ import annotations
@@ -21,11 +23,13 @@ from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 import numpy as np
+from numba import njit
 
 from maps.errors import InvalidInput
 from maps.params import check_choice, check_float, check_int
 
-from .knowledge import merge_cells_unchecked, sync_changes
+from .api import CELL_M
+from .knowledge import merge_cells_unchecked, sync_box_unchecked, sync_changes
 from .messages import MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
 
 SHARING_MODES = ("delta", "full", "off")
@@ -156,7 +160,12 @@ class Medium:
 class MapSharing:
     """The map-sharing service: builds each robot's MapUpdates and merges the ones it receives."""
 
-    def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec) -> None:
+    def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None) -> None:
+        """``lidar_reach``: the owner's promise that outside :meth:`receive` only a lidar writes into the maps,
+        within ``lidar_reach`` cells (rows and columns) of each robot's cell, and that it reports every scan
+        with :meth:`scanned` from the start. A delta then compares only the places written since the robot's
+        last update (:func:`swarm.knowledge.sync_box`), not both whole maps: the same cells. Without it
+        (None) every delta compares the whole maps."""
         self.n = n
         self.spec = spec
         self.enabled = spec.map_sharing != "off" and n > 1
@@ -165,6 +174,18 @@ class MapSharing:
         self.seen_seq = [[0] * n for _ in range(n)]          # [receiver][sender] last seq merged
         self.full_requested = [False] * n
         self.requests: list[list[int]] = [[] for _ in range(n)]  # targets each robot will ask next tick
+        self.lidar_reach = lidar_reach if self.enabled and self.last_shared is not None else None
+        # Since each robot's last update: the box of rows and columns its lidar may have written
+        # (r0, r1, c0, c1; empty while r0 >= r1) and the cells merges raised (arrays).
+        self._boxes = np.zeros((n, 4), dtype=np.int64)
+        self._merged: list[list[np.ndarray]] = [[] for _ in range(n)]
+        self._whole = [False] * n  # a full map was merged: compare the whole maps
+
+    def scanned(self, poses: np.ndarray) -> None:
+        """The lidar scanned from ``poses`` (``float64[R, 3]``) this tick: widen each robot's box of places to
+        compare by its lidar window (nothing to do unless constructed with ``lidar_reach``)."""
+        if self.lidar_reach is not None:
+            _grow_boxes(self._boxes, np.ascontiguousarray(poses, dtype=np.float64), self.lidar_reach, CELL_M)
 
     def outgoing(self, tick: int, known: np.ndarray, poses: np.ndarray) -> list[list[Any]]:
         """Service messages each robot broadcasts this tick (updates due, full maps asked for, requests)."""
@@ -186,15 +207,34 @@ class MapSharing:
             if full:
                 if self.last_shared is not None:
                     self.last_shared[i] = known[i]
+                    self._forget_writes(i)
                 self.seq[i] += 1
                 out[i].append(full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i])))
                 continue
             assert self.last_shared is not None
-            changed = sync_changes(known[i], self.last_shared[i])  # ascending, as delta_update wants them
+            changed = self._changed_since_update(i, known[i])  # ascending, as delta_update wants them
             if len(changed):
                 self.seq[i] += 1
                 out[i].append(delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed))
         return out
+
+    def _changed_since_update(self, i: int, known: np.ndarray) -> np.ndarray:
+        """Robot i's cells that differ from its last update, copied into ``last_shared[i]``."""
+        assert self.last_shared is not None
+        if self.lidar_reach is None or self._whole[i]:
+            self._forget_writes(i)
+            return sync_changes(known, self.last_shared[i])
+        merged = self._merged[i]
+        extra = merged[0] if len(merged) == 1 else np.concatenate(merged) if merged else _NO_CELLS
+        changed = sync_box_unchecked(known, self.last_shared[i], self._boxes[i], extra)
+        self._forget_writes(i)
+        return changed
+
+    def _forget_writes(self, i: int) -> None:
+        """Robot i's map equals its last update: nothing written since."""
+        self._boxes[i] = _EMPTY_BOX
+        self._merged[i] = []
+        self._whole[i] = False
 
     def receive(self, receiver: int, messages: Sequence[Any], known: np.ndarray) -> list[np.ndarray | None]:
         """Handle one receiver's service messages of a tick: merge every MapUpdate and note MapRequests
@@ -216,20 +256,45 @@ class MapSharing:
         flat = known.reshape(-1)
         seen = self.seen_seq[receiver]
         delta_mode = self.spec.map_sharing == "delta"
+        writes = self._merged[receiver] if self.lidar_reach is not None else None
         for msg in updates:
             if msg.full:
                 np.maximum(flat, msg.dense(), out=flat)
                 touched.append(None)
+                if writes is not None:
+                    self._whole[receiver] = True  # any cell may have changed: the next delta compares all
             else:
                 idx, values = msg.cells()  # int64 and uint8, in range: checked when decoded
                 merge_cells_unchecked(flat, idx, values)
                 touched.append(idx)
+                if writes is not None:
+                    writes.append(idx)
             last = seen[msg.sender]
             if not msg.full and msg.seq != last + 1 and delta_mode:
                 if msg.sender not in self.requests[receiver]:
                     self.requests[receiver].append(msg.sender)
             seen[msg.sender] = max(last, msg.seq) if not msg.full else msg.seq
         return touched
+
+
+_NO_CELLS = np.zeros(0, dtype=np.int64)
+_EMPTY_BOX = np.array([0, 0, 0, 0], dtype=np.int64)
+
+
+@njit(cache=True)
+def _grow_boxes(boxes: np.ndarray, poses: np.ndarray, reach: int, cell: float) -> None:  # pragma: no cover
+    """Widen each robot's box (r0, r1, c0, c1) by the window of ``reach`` cells around its cell; the cell is
+    truncated as the runtime's other lidar windows take it (``int(y / cell)``)."""
+    for k in range(poses.shape[0]):
+        r = np.int64(poses[k, 1] / cell)
+        c = np.int64(poses[k, 0] / cell)
+        if boxes[k, 0] >= boxes[k, 1]:  # empty: start from this window
+            boxes[k, 0], boxes[k, 1], boxes[k, 2], boxes[k, 3] = r - reach, r + reach + 1, c - reach, c + reach + 1
+        else:
+            boxes[k, 0] = min(boxes[k, 0], r - reach)
+            boxes[k, 1] = max(boxes[k, 1], r + reach + 1)
+            boxes[k, 2] = min(boxes[k, 2], c - reach)
+            boxes[k, 3] = max(boxes[k, 3], c + reach + 1)
 
 
 def decode_or_none(data: bytes) -> Any:

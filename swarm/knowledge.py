@@ -27,7 +27,8 @@ from .api import CELL_M, FREE, SOLID, UNSEEN
 
 __all__ = [
     "FREE", "SOLID", "UNSEEN", "ExplorationTracker", "LogOddsGrid", "active_flags", "classify_logodds",
-    "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "sync_changes", "sync_regions",
+    "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "sync_box", "sync_box_unchecked", "sync_changes",
+    "sync_regions",
 ]
 
 
@@ -234,6 +235,56 @@ def sync_regions_flat(current: np.ndarray, last: np.ndarray, centres: np.ndarray
 
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)
+
+
+@njit(cache=True)
+def _sync_box_kernel(current: np.ndarray, last: np.ndarray, box: np.ndarray,
+                     extra: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """:func:`sync_box` without the checks; ``box`` = int64 (r0, r1, c0, c1), clipped here. The box scan is
+    ascending; with ``extra`` cells the result is sorted."""
+    h, w = current.shape
+    r0, r1, c0, c1 = max(box[0], 0), min(box[1], h), max(box[2], 0), min(box[3], w)
+    cur, prev = current.reshape(-1), last.reshape(-1)
+    words = cur.shape[0] // 8
+    cur64, prev64 = cur[:8 * words].view(np.uint64), prev[:8 * words].view(np.uint64)
+    out = np.empty(max(r1 - r0, 0) * max(c1 - c0, 0) + extra.shape[0], dtype=np.int64)
+    m = 0
+    if c1 > c0:
+        for r in range(r0, r1):
+            a, b = r * w + c0, r * w + c1
+            if _same_words(cur64, prev64, a, b):
+                continue
+            for i in range(a, b):
+                if _copy_if_changed(cur, prev, i):
+                    out[m] = i
+                    m += 1
+    for j in range(extra.shape[0]):
+        if _copy_if_changed(cur, prev, extra[j]):
+            out[m] = extra[j]
+            m += 1
+    if extra.shape[0] > 0:
+        out[:m].sort()
+    return out[:m].copy()
+
+
+def sync_box(current: np.ndarray, last: np.ndarray, box: tuple[int, int, int, int], extra: np.ndarray) -> np.ndarray:
+    """:func:`sync_changes` where the caller knows the maps can differ only inside the box of rows
+    ``r0:r1`` and columns ``c0:c1`` (clipped to the map) and at the flat cells ``extra`` (in range, repeats
+    allowed): the changed cells among them, ascending, copied into ``last``. Equal to :func:`sync_changes`
+    when that promise holds, without reading both whole maps (the map-sharing service's deltas,
+    :class:`swarm.comm.MapSharing`, where ~80 of 90 000 cells change between two updates)."""
+    if current.shape != last.shape or current.ndim != 2 or not (current.flags.c_contiguous and last.flags.c_contiguous):
+        raise InvalidInput("last", getattr(last, "shape", None), f"a C-contiguous map shaped like current {current.shape}")
+    cells = np.ascontiguousarray(extra, dtype=np.int64)
+    if cells.size and not (0 <= cells.min() and cells.max() < current.size):
+        raise InvalidInput("extra", f"cells {cells.min()}..{cells.max()}", f"flat indices in 0..{current.size - 1}")
+    return sync_box_unchecked(current, last, np.array(box, dtype=np.int64), cells)
+
+
+def sync_box_unchecked(current: np.ndarray, last: np.ndarray, box: np.ndarray, extra: np.ndarray) -> np.ndarray:
+    """:func:`sync_box` for the map-sharing service, whose maps, box (int64[4]) and cells already are what
+    it needs: it runs for every robot every sharing tick."""
+    return _sync_box_kernel(current, last, box, extra)
 
 
 def count_known(known: np.ndarray) -> int:

@@ -112,10 +112,10 @@ class Simulation:
         self.links = build_link_model(self.truth, config_from_mapping(self.spec.radio))
         self.comm = from_mapping(CommSpec, self.spec.comm)
         self.medium = Medium(n, self.comm, self.streams.radio)
-        self.sharing = MapSharing(n, self.truth.shape, self.comm)
+        self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
+        self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach)  # told of every scan
         self.inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         self.neighbour_range = self.comm.neighbour_range_m or self.lidar_params.range_m
-        self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         self.transport = transport or TransportOptions()
         self.observers = tuple(observers)
         self.metrics = Metrics(self.spec.record_every)
@@ -184,6 +184,7 @@ class Simulation:
             was_colliding = collided
             active = ~self.failed
             self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker)
+            self.sharing.scanned(poses)
             self.tracker.update_coverage(poses[:, :2], active=active)
             links = _TickLinks(self.links, poses[:, :2])
             inboxes, merged = self._receive()

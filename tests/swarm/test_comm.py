@@ -7,6 +7,7 @@ import pytest
 
 from maps import Map, generate
 from radio import RadioConfig, build_link_model
+from swarm.api import CELL_M
 from swarm.comm import CommSpec, MapSharing, Medium
 from swarm.messages import MapUpdate, decode, encode
 from swarm.simulation import Simulation
@@ -124,6 +125,44 @@ def test_gap_in_deltas_is_repaired_with_a_full_map():
     final = sharing.outgoing(12, known, np.zeros((2, 3)))
     sharing.receive(1, final[0], receiver)
     assert np.array_equal(receiver, known[0]), "after the requested full map the receiver knows what the sender knows"
+
+
+def test_deltas_from_the_lidar_windows_equal_the_whole_map_comparison():
+    """With ``lidar_reach`` the service compares only the windows scanned and the cells merged since a
+    robot's last update; every message must be the same as when it compares the whole maps."""
+    rng = np.random.default_rng(3)
+    shape, reach, n = (60, 50), 4, 3
+    spec = CommSpec(share_every=3)
+    whole, windows = MapSharing(n, shape, spec), MapSharing(n, shape, spec, lidar_reach=reach)
+    maps = {id(whole): np.zeros((n, *shape), np.uint8), id(windows): np.zeros((n, *shape), np.uint8)}
+    inboxes: dict[int, list[list]] = {id(whole): [[] for _ in range(n)], id(windows): [[] for _ in range(n)]}
+    kinds = set()
+    for tick in range(60):
+        poses = np.column_stack([rng.uniform(0, 25, n), rng.uniform(0, 30, n), np.zeros(n)])
+        scan = []
+        for r in range(n):  # what a lidar might write: cells within ``reach`` of the robot's cell
+            row, col = int(poses[r, 1] / CELL_M), int(poses[r, 0] / CELL_M)
+            rows = rng.integers(max(row - reach, 0), min(row + reach + 1, shape[0]), 15)
+            cols = rng.integers(max(col - reach, 0), min(col + reach + 1, shape[1]), 15)
+            scan.append((rows, cols, rng.integers(1, 3, 15).astype(np.uint8)))
+        sent = {}
+        for sharing in (whole, windows):
+            known = maps[id(sharing)]
+            for r, (rows, cols, values) in enumerate(scan):
+                known[r, rows, cols] = np.maximum(known[r, rows, cols], values)
+            sharing.scanned(poses)
+            for r in range(n):
+                sharing.receive(r, inboxes[id(sharing)][r], known[r])
+            out = sharing.outgoing(tick, known, poses)
+            sent[id(sharing)] = [[encode(m) for m in msgs] for msgs in out]
+            lost = tick % 7 == 0  # now and then robot 1 misses robot 0's messages: gaps, requests, full maps
+            inboxes[id(sharing)] = [[decode(encode(m)) for s in range(n) if s != r for m in out[s]
+                                     if not (lost and r == 1 and s == 0)] for r in range(n)]
+        assert sent[id(whole)] == sent[id(windows)], tick
+        assert np.array_equal(maps[id(whole)], maps[id(windows)])
+        kinds |= {type(m).__name__ + ("-full" if getattr(m, "full", False) else "")
+                  for box in inboxes[id(windows)] for m in box}
+    assert kinds == {"MapUpdate", "MapUpdate-full", "MapRequest"}  # deltas, and full maps after gaps
 
 
 def test_medium_rejects_a_forged_sender():

@@ -9,7 +9,7 @@ from maps import InvalidInput, Map
 from swarm.api import FREE, SOLID, UNSEEN
 from swarm.knowledge import (
     ExplorationTracker, LogOddsGrid, active_flags, classify_logodds, count_cells, count_known, empty_knowledge,
-    merge, merge_cells, sync_changes, sync_regions, sync_regions_flat,
+    merge, merge_cells, sync_box, sync_changes, sync_regions, sync_regions_flat,
 )
 
 
@@ -85,6 +85,38 @@ def test_sync_changes_reports_the_changed_cells_and_brings_last_up_to_date() -> 
     assert got.tolist() == expected.tolist() and len(got) > 0
     assert np.array_equal(last, current)
     assert sync_changes(current, last).size == 0
+
+
+def test_sync_box_equals_sync_changes_when_the_changes_are_in_the_box_or_listed() -> None:
+    rng = np.random.default_rng(8)
+    for case in range(300):
+        h, w = (int(v) for v in rng.integers(1, 40, 2))
+        r0, r1 = sorted(int(v) for v in rng.integers(-3, h + 4, 2))
+        c0, c1 = sorted(int(v) for v in rng.integers(-3, w + 4, 2))
+        last = rng.integers(0, 3, (h, w), dtype=np.uint8)
+        current = last.copy()
+        inside = np.zeros((h, w), dtype=bool)
+        inside[max(r0, 0):max(r1, 0), max(c0, 0):max(c1, 0)] = True
+        current[inside & (rng.random((h, w)) < 0.3)] += 1      # changes in the box ...
+        extra = rng.integers(0, h * w, int(rng.integers(0, 12)))
+        current.reshape(-1)[extra] = rng.integers(0, 3, len(extra))  # ... and at listed cells (repeats too)
+        current %= 3
+        expected_last = last.copy()
+        want = sync_changes(current, expected_last)
+        got = sync_box(current, last, (r0, r1, c0, c1), extra)
+        assert got.tolist() == want.tolist(), case
+        assert np.array_equal(last, current), case
+
+
+def test_sync_box_ignores_changes_outside_its_promise_and_checks_its_cells() -> None:
+    current = np.zeros((6, 6), dtype=np.uint8)
+    last = current.copy()
+    current[0, 0] = current[5, 5] = current[2, 3] = FREE
+    assert sync_box(current, last, (1, 4, 1, 4), np.array([35])).tolist() == [15, 35]
+    assert last[0, 0] == UNSEEN  # outside the box and the list: not looked at
+    with pytest.raises(InvalidInput) as err:
+        sync_box(current, last, (0, 6, 0, 6), np.array([36]))
+    assert err.value.field == "extra"
 
 
 def test_sync_regions_sees_the_window_and_the_listed_cells_only() -> None:
