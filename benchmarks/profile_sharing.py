@@ -27,9 +27,9 @@ TIMED: list[tuple[Any, str, str]] = [
     (comm.Medium, "envelope", "encode an envelope"),
     (comm.Medium, "deliver", "deliver a tick's envelopes"),
     (messages.zlib, "decompress", "zlib.decompress (once per message)"),
-    (comm.MapUpdate, "cells", "a delta's cells (per receiver, decoded once)"),
-    (comm.MapUpdate, "dense", "a full map's cells (per receiver, decoded once)"),
-    (comm, "merge_cells_unchecked", "merge a delta into a receiver"),
+    (comm.MapUpdate, "cells", "a delta's cells (decoded on the first call)"),
+    (comm.MapUpdate, "dense", "a full map's cells (decoded on the first call)"),
+    (comm, "merge_cells_many", "merge a delta into all its receivers"),
 ]
 
 

@@ -29,7 +29,7 @@ from maps.errors import InvalidInput
 from maps.params import check_choice, check_float, check_int
 
 from .api import CELL_M
-from .knowledge import merge_cells_unchecked, sync_box_unchecked, sync_changes
+from .knowledge import merge_cells_many, sync_box_unchecked, sync_changes
 from .messages import MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
 
 SHARING_MODES = ("delta", "full", "off")
@@ -240,41 +240,83 @@ class MapSharing:
         """Handle one receiver's service messages of a tick: merge every MapUpdate and note MapRequests
         addressed to it. Returns, per merged update, the flat indices it carried (None for a full map: any
         cell may have changed). Other messages are left to the algorithm."""
-        updates = []
         for msg in messages:
-            if isinstance(msg, MapUpdate):
-                if msg.shape != known.shape:
-                    raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape}")
-                updates.append(msg)
-            elif isinstance(msg, MapRequest) and msg.target == receiver:
-                self.full_requested[receiver] = True
+            if isinstance(msg, MapUpdate) and msg.shape != known.shape:
+                raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape}")
+        if any(isinstance(msg, MapUpdate) for msg in messages):
+            _check_writable(known)
         touched: list[np.ndarray | None] = []
-        if not updates:
-            return touched
-        if not (known.flags.c_contiguous and known.flags.writeable):
-            raise InvalidInput("known", "a read-only or non-contiguous map", "a writable C-contiguous uint8 map")
-        flat = known.reshape(-1)
-        seen = self.seen_seq[receiver]
-        delta_mode = self.spec.map_sharing == "delta"
-        writes = self._merged[receiver] if self.lidar_reach is not None else None
-        for msg in updates:
-            if msg.full:
-                np.maximum(flat, msg.dense(), out=flat)
-                touched.append(None)
-                if writes is not None:
-                    self._whole[receiver] = True  # any cell may have changed: the next delta compares all
-            else:
-                idx, values = msg.cells()  # int64 and uint8, in range: checked when decoded
-                merge_cells_unchecked(flat, idx, values)
-                touched.append(idx)
-                if writes is not None:
-                    writes.append(idx)
-            last = seen[msg.sender]
-            if not msg.full and msg.seq != last + 1 and delta_mode:
-                if msg.sender not in self.requests[receiver]:
-                    self.requests[receiver].append(msg.sender)
-            seen[msg.sender] = max(last, msg.seq) if not msg.full else msg.seq
+        stack, rows = known[np.newaxis], np.zeros(1, dtype=np.int64)
+        for msg in messages:
+            self._take(msg, [receiver], stack, rows, [touched])
         return touched
+
+    def receive_tick(self, deliveries: Sequence[tuple[Any, Sequence[int]]], known: np.ndarray,
+                     live: np.ndarray, cells: bool = True) -> list[list[np.ndarray | None]]:
+        """:meth:`receive` for every robot at once: ``deliveries`` are a tick's messages with the robots each
+        reached, in the order the inboxes list them (sender, then sequence), and ``known`` the maps
+        (``uint8[R, H, W]``); robots not ``live`` are left alone. The same effect and the same lists as
+        calling :meth:`receive` per robot with its inbox, but each map update is merged into all its
+        receivers in one compiled call (a 16-robot run merges ~140,000 updates). ``cells=False``: the lists
+        stay empty (the in-process runtime does not read them)."""
+        _check_writable(known)
+        touched: list[list[np.ndarray | None]] = [[] for _ in range(self.n)]
+        flags = live.tolist()
+        for msg, receivers in deliveries:
+            if not isinstance(msg, (MapUpdate, MapRequest)):
+                continue
+            ids = [r for r in receivers if flags[r]]
+            if not ids:
+                continue
+            if isinstance(msg, MapUpdate) and msg.shape != known.shape[1:]:
+                raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape[1:]}")
+            lists = [touched[r] for r in ids] if cells else None
+            self._take(msg, ids, known, np.array(ids, dtype=np.int64), lists)
+        return touched
+
+    def _take(self, msg: Any, ids: list[int], stack: np.ndarray, rows: np.ndarray,
+              lists: list[list[np.ndarray | None]] | None) -> None:
+        """One service message reaching robots ``ids``, whose maps are ``stack[rows]`` (checked): merge a
+        MapUpdate into each, note what it wrote for their next deltas, append the cells it carried (None for
+        a full map) to ``lists[k]`` for robot ``ids[k]`` (unless None) and book its sequence number; or note
+        a MapRequest addressed to one of them."""
+        if isinstance(msg, MapRequest):
+            if msg.target in ids:
+                self.full_requested[msg.target] = True
+            return
+        if not isinstance(msg, MapUpdate):
+            return
+        tracking = self.lidar_reach is not None
+        idx: np.ndarray | None = None
+        if msg.full:
+            dense = msg.dense()
+            for row in rows.tolist():
+                flat = stack[row].reshape(-1)
+                np.maximum(flat, dense, out=flat)
+        else:
+            idx, values = msg.cells()  # int64 and uint8, in range: checked when decoded
+            merge_cells_many(stack, rows, idx, values)
+        delta_gap = not msg.full and self.spec.map_sharing == "delta"
+        sender, seq = msg.sender, msg.seq
+        if lists is not None:
+            for cells in lists:
+                cells.append(idx)
+        for r in ids:
+            if tracking:
+                if idx is None:
+                    self._whole[r] = True  # any cell may have changed: the next delta compares all
+                else:
+                    self._merged[r].append(idx)
+            seen = self.seen_seq[r]
+            last = seen[sender]
+            if delta_gap and seq != last + 1 and sender not in self.requests[r]:
+                self.requests[r].append(sender)
+            seen[sender] = seq if msg.full else max(last, seq)
+
+
+def _check_writable(known: np.ndarray) -> None:
+    if not (known.flags.c_contiguous and known.flags.writeable):
+        raise InvalidInput("known", "a read-only or non-contiguous map", "a writable C-contiguous uint8 map")
 
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)

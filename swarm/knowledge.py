@@ -27,7 +27,7 @@ from .api import CELL_M, FREE, SOLID, UNSEEN
 
 __all__ = [
     "FREE", "SOLID", "UNSEEN", "ExplorationTracker", "LogOddsGrid", "active_flags", "classify_logodds",
-    "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "sync_box", "sync_box_unchecked", "sync_changes",
+    "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "merge_cells_many", "sync_box", "sync_box_unchecked", "sync_changes",
     "sync_regions",
 ]
 
@@ -92,6 +92,23 @@ def merge_cells(known: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
         raise InvalidInput("known", "a read-only or non-contiguous map", "a writable C-contiguous uint8 map")
     merge_cells_unchecked(known.reshape(-1), np.ascontiguousarray(idx, dtype=np.int64),
                           np.ascontiguousarray(values, dtype=np.uint8))
+
+
+@njit(cache=True)
+def _merge_cells_many_kernel(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray,
+                             values: np.ndarray) -> None:  # pragma: no cover - compiled
+    for k in range(rows.shape[0]):
+        flat = stack[rows[k]].reshape(-1)
+        for j in range(idx.shape[0]):
+            i = idx[j]
+            if values[j] > flat[i]:
+                flat[i] = values[j]
+
+
+def merge_cells_many(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
+    """:func:`merge_cells_unchecked` into each map ``stack[rows[k]]`` of a writable C-contiguous stack
+    (``uint8[R, H, W]``, rows int64 in range): one call for all the receivers of a map update."""
+    _merge_cells_many_kernel(stack, rows, idx, values)
 
 
 def merge_cells_unchecked(flat: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:

@@ -115,6 +115,7 @@ class Simulation:
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach)  # told of every scan
         self.inboxes: list[list[Envelope]] = [[] for _ in range(n)]
+        self._deliveries: list[tuple[Any, list[int]]] = []  # last tick's messages and who got each, in inbox order
         self.neighbour_range = self.comm.neighbour_range_m or self.lidar_params.range_m
         self.transport = transport or TransportOptions()
         self.observers = tuple(observers)
@@ -235,14 +236,14 @@ class Simulation:
 
     # ---------------------------------------------------------------------------------- messaging ----
     def _receive(self) -> tuple[list[list[Envelope]], list[list[np.ndarray | None]]]:
-        """This tick's inboxes (sent last tick); map updates are merged into the receiver's map."""
+        """This tick's inboxes (sent last tick); map updates are merged into the receivers' maps, each into
+        all its receivers at once (:meth:`MapSharing.receive_tick`). The merged cells per robot are listed
+        only for a batched host, which ships them."""
         inboxes, self.inboxes = self.inboxes, [[] for _ in range(self.spec.robots.count)]
-        merged: list[list[np.ndarray | None]] = [[] for _ in inboxes]
-        for i, inbox in enumerate(inboxes):
-            if self.failed[i]:
-                continue
-            if inbox:
-                merged[i] = self.sharing.receive(i, [env.message for env in inbox], self.known[i])
+        deliveries, self._deliveries = self._deliveries, []
+        if not deliveries:  # most ticks
+            return inboxes, [[] for _ in inboxes]
+        merged = self.sharing.receive_tick(deliveries, self.known, ~self.failed, cells=self._mirror is not None)
         return inboxes, merged
 
     def _send(self, tick: int, poses: np.ndarray, actions: list[Action | None], links: Any) -> list[list[Envelope]]:
@@ -263,6 +264,7 @@ class Simulation:
             if self.failed.any():
                 link = link & ~self.failed[:, None]
             self.inboxes = self.medium.deliver(tick, outboxes, link)
+            self._deliveries = [(env.message, env.delivered_to) for out in outboxes for env in out if env.delivered_to]
         return outboxes
 
     # ------------------------------------------------------------------------------- observations ----

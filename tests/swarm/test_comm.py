@@ -165,6 +165,43 @@ def test_deltas_from_the_lidar_windows_equal_the_whole_map_comparison():
     assert kinds == {"MapUpdate", "MapUpdate-full", "MapRequest"}  # deltas, and full maps after gaps
 
 
+def _same_cell_lists(a: list, b: list) -> bool:
+    return len(a) == len(b) and all(len(x) == len(y) and all(
+        (u is None and v is None) or (u is not None and v is not None and np.array_equal(u, v)) for u, v in zip(x, y))
+        for x, y in zip(a, b))
+
+
+def test_receive_tick_equals_receive_per_robot():
+    """One call for a tick's deliveries does what a call per robot with its inbox does: the same maps,
+    cell lists, sequence books, requests and full-map flags (robot 2 is down and left alone)."""
+    rng = np.random.default_rng(4)
+    shape, n = (20, 30), 4
+    live = np.array([True, True, False, True])
+    per_robot, at_once = MapSharing(n, shape, CommSpec(share_every=2)), MapSharing(n, shape, CommSpec(share_every=2))
+    maps = [np.zeros((n, *shape), np.uint8), np.zeros((n, *shape), np.uint8)]
+    deliveries: list = []
+    kinds = set()
+    for tick in range(40):
+        cells, values = rng.integers(0, 600, 30), rng.integers(0, 3, (n, 30)).astype(np.uint8)
+        for known in maps:  # the same new knowledge in both, only ever growing
+            flat = known.reshape(n, -1)
+            flat[:, cells] = np.maximum(flat[:, cells], values)
+        inboxes = [[m for m, to in deliveries if r in to] for r in range(n)]
+        lists = [per_robot.receive(r, inboxes[r], maps[0][r]) if live[r] else [] for r in range(n)]
+        assert _same_cell_lists(at_once.receive_tick(deliveries, maps[1], live), lists), tick
+        assert np.array_equal(maps[0], maps[1]), tick
+        assert (per_robot.seen_seq, per_robot.requests, per_robot.full_requested) == \
+            (at_once.seen_seq, at_once.requests, at_once.full_requested), tick
+        out = per_robot.outgoing(tick, maps[0], np.zeros((n, 3)))
+        assert [[encode(m) for m in msgs] for msgs in out] == \
+            [[encode(m) for m in msgs] for msgs in at_once.outgoing(tick, maps[1], np.zeros((n, 3)))], tick
+        deliveries = [(decode(encode(m)), [r for r in range(n) if r != s and rng.random() < 0.7])
+                      for s in range(n) for m in out[s]]
+        deliveries.append((Ping(sender=0, tick=tick), [1, 3]))  # an algorithm's message: not the service's
+        kinds |= {type(m).__name__ + ("-full" if getattr(m, "full", False) else "") for m, _ in deliveries}
+    assert {"MapUpdate", "MapUpdate-full", "MapRequest"} <= kinds  # deltas, gaps, requests and full maps
+
+
 def test_medium_rejects_a_forged_sender():
     medium = Medium(2, CommSpec(), np.random.default_rng(0))
     with pytest.raises(ValueError, match="claiming sender"):
