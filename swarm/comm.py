@@ -161,9 +161,9 @@ class MapSharing:
     """The map-sharing service: builds each robot's MapUpdates and merges the ones it receives."""
 
     def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None) -> None:
-        """``lidar_reach``: the owner's promise that outside :meth:`receive` only a lidar writes into the maps,
-        within ``lidar_reach`` cells (rows and columns) of each robot's cell, and that it reports every scan
-        with :meth:`scanned` from the start. A delta then compares only the places written since the robot's
+        """``lidar_reach``: the owner's promise that apart from this service's merges only a lidar writes into
+        the maps, within ``lidar_reach`` cells (rows and columns) of each robot's cell, and that it reports
+        every scan with :meth:`scanned` from the start. A delta then compares only the places written since the robot's
         last update (:func:`swarm.knowledge.sync_box`), not both whole maps: the same cells. Without it
         (None) every delta compares the whole maps."""
         self.n = n
@@ -299,8 +299,8 @@ class MapSharing:
         delta_gap = not msg.full and self.spec.map_sharing == "delta"
         sender, seq = msg.sender, msg.seq
         if lists is not None:
-            for cells in lists:
-                cells.append(idx)
+            for carried in lists:
+                carried.append(idx)
         for r in ids:
             if tracking:
                 if idx is None:

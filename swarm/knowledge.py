@@ -27,8 +27,8 @@ from .api import CELL_M, FREE, SOLID, UNSEEN
 
 __all__ = [
     "FREE", "SOLID", "UNSEEN", "ExplorationTracker", "LogOddsGrid", "active_flags", "classify_logodds",
-    "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "merge_cells_many", "sync_box", "sync_box_unchecked", "sync_changes",
-    "sync_regions",
+    "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "merge_cells_many", "sync_box",
+    "sync_box_unchecked", "sync_changes", "sync_regions",
 ]
 
 
@@ -97,6 +97,7 @@ def merge_cells(known: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
 @njit(cache=True)
 def _merge_cells_many_kernel(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray,
                              values: np.ndarray) -> None:  # pragma: no cover - compiled
+    """:func:`_merge_cells_kernel` into each map ``stack[rows[k]]``."""
     for k in range(rows.shape[0]):
         flat = stack[rows[k]].reshape(-1)
         for j in range(idx.shape[0]):
@@ -112,8 +113,8 @@ def merge_cells_many(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, value
 
 
 def merge_cells_unchecked(flat: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
-    """:func:`merge_cells` on a flat writable map with int64 indices (in range) and uint8 values: for the
-    map-sharing service, whose decoded updates already are (it merges every update into every receiver)."""
+    """:func:`merge_cells` on a flat writable map with int64 indices (in range) and uint8 values, for callers
+    whose cells already are (decoded map updates); :func:`merge_cells_many` merges into several maps."""
     _merge_cells_kernel(flat, idx, values)
 
 
@@ -290,8 +291,10 @@ def sync_box(current: np.ndarray, last: np.ndarray, box: tuple[int, int, int, in
     allowed): the changed cells among them, ascending, copied into ``last``. Equal to :func:`sync_changes`
     when that promise holds, without reading both whole maps (the map-sharing service's deltas,
     :class:`swarm.comm.MapSharing`, where ~80 of 90 000 cells change between two updates)."""
-    if current.shape != last.shape or current.ndim != 2 or not (current.flags.c_contiguous and last.flags.c_contiguous):
-        raise InvalidInput("last", getattr(last, "shape", None), f"a C-contiguous map shaped like current {current.shape}")
+    contiguous = current.flags.c_contiguous and last.flags.c_contiguous
+    if current.shape != last.shape or current.ndim != 2 or not contiguous:
+        raise InvalidInput("last", getattr(last, "shape", None),
+                           f"a C-contiguous map shaped like current {current.shape}")
     cells = np.ascontiguousarray(extra, dtype=np.int64)
     if cells.size and not (0 <= cells.min() and cells.max() < current.size):
         raise InvalidInput("extra", f"cells {cells.min()}..{cells.max()}", f"flat indices in 0..{current.size - 1}")
