@@ -176,38 +176,50 @@ def _same_words(cur64: np.ndarray, prev64: np.ndarray, a: int, b: int) -> bool: 
     return True
 
 
+@njit(cache=True, inline="always")
+def _sync_rect(cur: np.ndarray, prev: np.ndarray, cols: int, r0: int, r1: int, c0: int, c1: int, extra: np.ndarray,
+               e0: int, e1: int, out: np.ndarray, m: int) -> int:  # pragma: no cover - compiled
+    """Copy into ``prev`` the cells of the flat map ``cur`` (rows ``cols`` wide) that differ in rows ``r0:r1``
+    x columns ``c0:c1`` (clipped by the caller) and at ``extra[e0:e1]``, listing them in ``out`` from ``m``
+    (sorted when there were extra cells: the rectangle's scan alone is ascending); returns the new end.
+    The per-map body of the window and box scans (:func:`sync_regions`, :func:`sync_box`)."""
+    words = cur.shape[0] // 8
+    cur64, prev64 = cur[:8 * words].view(np.uint64), prev[:8 * words].view(np.uint64)
+    start = m
+    if c1 > c0:
+        for r in range(r0, r1):
+            a, b = r * cols + c0, r * cols + c1
+            if _same_words(cur64, prev64, a, b):
+                continue
+            for i in range(a, b):
+                if _copy_if_changed(cur, prev, i):
+                    out[m] = i
+                    m += 1
+    for j in range(e0, e1):
+        if _copy_if_changed(cur, prev, extra[j]):
+            out[m] = extra[j]
+            m += 1
+    if e1 > e0:
+        out[start:m].sort()
+    return m
+
+
 @njit(cache=True)
 def _sync_windows_kernel(current: np.ndarray, last: np.ndarray, centres: np.ndarray, reach: int, active: np.ndarray,
                          extra: np.ndarray, ends: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover - compiled
-    """The window scan plus listed cells of :func:`sync_regions` for every active map of a stack. On entry ``ends[k]`` is where map k's extra cells
-    end in ``extra``; on return, where its changed cells end in ``out`` (sorted when it had extra cells: the
-    window scan alone is ascending already). Fewer arguments: numba's dispatch costs ~0.5 us per array."""
+    """The window scan plus listed cells of :func:`sync_regions` for every active map of a stack. On entry
+    ``ends[k]`` is where map k's extra cells end in ``extra``; on return, where its changed cells end in
+    ``out``. Fewer arguments: numba's dispatch costs ~0.5 us per array."""
     rows, cols = current.shape[1], current.shape[2]
-    words = rows * cols // 8
     m = 0
     e0 = 0
     for k in range(current.shape[0]):
-        start = m
         e1 = ends[k]
         if active[k]:
-            cur, prev = current[k].reshape(-1), last[k].reshape(-1)
-            cur64, prev64 = cur[:8 * words].view(np.uint64), prev[:8 * words].view(np.uint64)
             r, c = centres[k, 0], centres[k, 1]
-            c0, c1 = max(c - reach, 0), min(c + reach + 1, cols)
-            for rr in range(max(r - reach, 0), min(r + reach + 1, rows)):
-                a, b = rr * cols + c0, rr * cols + c1
-                if _same_words(cur64, prev64, a, b):
-                    continue
-                for i in range(a, b):
-                    if _copy_if_changed(cur, prev, i):
-                        out[m] = i
-                        m += 1
-            for j in range(e0, e1):
-                if _copy_if_changed(cur, prev, extra[j]):
-                    out[m] = extra[j]
-                    m += 1
-            if e1 > e0:
-                out[start:m].sort()
+            m = _sync_rect(current[k].reshape(-1), last[k].reshape(-1), cols, max(r - reach, 0),
+                           min(r + reach + 1, rows), max(c - reach, 0), min(c + reach + 1, cols), extra, e0, e1,
+                           out, m)
         e0 = e1
         ends[k] = m
 
@@ -258,30 +270,11 @@ _NO_CELLS = np.zeros(0, dtype=np.int64)
 @njit(cache=True)
 def _sync_box_kernel(current: np.ndarray, last: np.ndarray, box: np.ndarray,
                      extra: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
-    """:func:`sync_box` without the checks; ``box`` = int64 (r0, r1, c0, c1), clipped here. The box scan is
-    ascending; with ``extra`` cells the result is sorted."""
+    """:func:`sync_box` without the checks; ``box`` = int64 (r0, r1, c0, c1), clipped here."""
     h, w = current.shape
     r0, r1, c0, c1 = max(box[0], 0), min(box[1], h), max(box[2], 0), min(box[3], w)
-    cur, prev = current.reshape(-1), last.reshape(-1)
-    words = cur.shape[0] // 8
-    cur64, prev64 = cur[:8 * words].view(np.uint64), prev[:8 * words].view(np.uint64)
     out = np.empty(max(r1 - r0, 0) * max(c1 - c0, 0) + extra.shape[0], dtype=np.int64)
-    m = 0
-    if c1 > c0:
-        for r in range(r0, r1):
-            a, b = r * w + c0, r * w + c1
-            if _same_words(cur64, prev64, a, b):
-                continue
-            for i in range(a, b):
-                if _copy_if_changed(cur, prev, i):
-                    out[m] = i
-                    m += 1
-    for j in range(extra.shape[0]):
-        if _copy_if_changed(cur, prev, extra[j]):
-            out[m] = extra[j]
-            m += 1
-    if extra.shape[0] > 0:
-        out[:m].sort()
+    m = _sync_rect(current.reshape(-1), last.reshape(-1), w, r0, r1, c0, c1, extra, 0, extra.shape[0], out, 0)
     return out[:m].copy()
 
 
