@@ -25,11 +25,10 @@ from typing import Any, Sequence
 import numpy as np
 from numba import njit
 
-from maps.errors import InvalidInput
 from maps.params import check_choice, check_float, check_int
 
 from .api import CELL_M
-from .knowledge import merge_cells_many, sync_box_unchecked, sync_changes
+from .knowledge import check_writable_map, merge_cells_many, sync_box_unchecked, sync_changes
 from .messages import MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
 
 SHARING_MODES = ("delta", "full", "off")
@@ -244,7 +243,7 @@ class MapSharing:
             if isinstance(msg, MapUpdate) and msg.shape != known.shape:
                 raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape}")
         if any(isinstance(msg, MapUpdate) for msg in messages):
-            _check_writable(known)
+            check_writable_map(known)
         touched: list[np.ndarray | None] = []
         stack, rows = known[np.newaxis], np.zeros(1, dtype=np.int64)
         for msg in messages:
@@ -259,7 +258,7 @@ class MapSharing:
         calling :meth:`receive` per robot with its inbox, but each map update is merged into all its
         receivers in one compiled call (a 16-robot run merges ~140,000 updates). ``cells=False``: the lists
         stay empty (the in-process runtime does not read them)."""
-        _check_writable(known)
+        check_writable_map(known)
         touched: list[list[np.ndarray | None]] = [[] for _ in range(self.n)]
         flags = live.tolist()
         for msg, receivers in deliveries:
@@ -312,11 +311,6 @@ class MapSharing:
             if delta_gap and seq != last + 1 and sender not in self.requests[r]:
                 self.requests[r].append(sender)
             seen[sender] = seq if msg.full else max(last, seq)
-
-
-def _check_writable(known: np.ndarray) -> None:
-    if not (known.flags.c_contiguous and known.flags.writeable):
-        raise InvalidInput("known", "a read-only or non-contiguous map", "a writable C-contiguous uint8 map")
 
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)

@@ -26,9 +26,9 @@ from maps.errors import InvalidInput
 from .api import CELL_M, FREE, SOLID, UNSEEN
 
 __all__ = [
-    "FREE", "SOLID", "UNSEEN", "ExplorationTracker", "LogOddsGrid", "active_flags", "classify_logodds",
-    "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "merge_cells_many", "sync_box",
-    "sync_box_unchecked", "sync_changes", "sync_regions",
+    "FREE", "SOLID", "UNSEEN", "ExplorationTracker", "LogOddsGrid", "active_flags", "check_writable_map",
+    "classify_logodds", "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "merge_cells_many",
+    "sync_box", "sync_box_unchecked", "sync_changes", "sync_regions",
 ]
 
 
@@ -84,12 +84,17 @@ def _merge_cells_kernel(flat: np.ndarray, idx: np.ndarray, values: np.ndarray) -
             flat[i] = values[k]
 
 
+def check_writable_map(known: np.ndarray) -> None:
+    """Refuse a map (or stack of maps) that cells cannot be merged into in place."""
+    if not (known.flags.c_contiguous and known.flags.writeable):
+        raise InvalidInput("known", "a read-only or non-contiguous map", "a writable C-contiguous uint8 map")
+
+
 def merge_cells(known: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
     """Raise cells ``idx`` (flat indices, repeats allowed) of ``known`` to at least ``values``, in place:
     ``numpy.maximum.at`` semantics at the cost of one pass (``ufunc.at`` is ~20x slower, and merging
     received map updates runs for every receiver every sharing tick). Indices must be in range."""
-    if not (known.flags.c_contiguous and known.flags.writeable):
-        raise InvalidInput("known", "a read-only or non-contiguous map", "a writable C-contiguous uint8 map")
+    check_writable_map(known)
     merge_cells_unchecked(known.reshape(-1), np.ascontiguousarray(idx, dtype=np.int64),
                           np.ascontiguousarray(values, dtype=np.uint8))
 
