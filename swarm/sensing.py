@@ -54,6 +54,7 @@ from maps import Map
 from maps.errors import InvalidInput
 from maps.params import check_choice, check_float, check_int
 
+from ._jitops import opaque, select
 from .api import CELL_M, FREE, SOLID
 from .knowledge import ExplorationTracker, LogOddsGrid, active_flags
 
@@ -184,23 +185,44 @@ def _lidar_ray_start(x: float, y: float, dx: float, dy: float,
 
 
 @njit(cache=True, inline="always")
-def _lidar_walk_visible(solid: np.ndarray, known: np.ndarray, robot: int, write_known: bool,
+def _lidar_advance(t_x: float, t_y: float, d_x: float, d_y: float) -> tuple[bool, float, float]:
+    """One Amanatides-Woo step of the two boundary distances: whether the ray crosses a column boundary
+    next (``t_x <= t_y``), and the distances after the step: the crossed one moves on by its spacing, the
+    other gets ``+ 0.0``. These are the float operations of ``t_x += d_x * in_x; t_y += d_y * (1 - in_x)``
+    with a 0/1 ``in_x``, value for value, but picked by two selects
+    (:mod:`swarm._jitops`): the walk's loop-carried chain is then compare -> select, not compare ->
+    convert -> multiply -> add, which bound the walk (the 16-robot scan is ~25 % faster, measured)."""
+    in_x = t_x <= t_y
+    n_x = opaque(t_x + d_x)
+    z_x = opaque(t_x + 0.0)
+    n_y = opaque(t_y + d_y)
+    z_y = opaque(t_y + 0.0)
+    return in_x, select(in_x, n_x, z_x), select(in_x, z_y, n_y)
+
+
+@njit(cache=True, inline="always")
+def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_base: int, write_known: bool,
                         seen: np.ndarray, x: float, y: float, dx: float, dy: float, range_m: float,
                         cell: float) -> tuple[float, int]:
-    """Walk one ray by the exact rule (module docstring). Marks ``seen`` (and ``known[robot]`` with a
-    maximum when ``write_known``); returns (entry distance of the first solid cell or inf, newly seen
-    free cells). Needs a solid outer edge, which :class:`maps.Map` guarantees, to stay on the raster."""
+    """Walk one ray by the exact rule (module docstring). ``solid``, ``seen`` and ``known`` are flat views
+    of the rasters, ``cols`` wide (``known`` of all robots: this robot's map starts at ``known_base``).
+    Marks ``seen`` (and the robot's map with a maximum when ``write_known``); returns (entry distance of
+    the first solid cell or inf, newly seen free cells). Needs a solid outer edge, which :class:`maps.Map`
+    guarantees, to stay on the raster; indices are unsigned, so no negative-index code is compiled."""
     row, col, step_r, step_c, t_x, t_y, d_x, d_y = _lidar_ray_start(x, y, dx, dy, cell)
     r2 = range_m * range_m
     t_entry = 0.0
     new = 0
     # A cell entered at t has its centre within t + cell / sqrt(2): no need to measure it that early.
     sure = range_m - 0.7072 * cell
+    k = row * cols + col
+    step_k = step_r * cols
     while True:
-        if solid[row, col]:
+        at = np.uint64(k)
+        if solid[at]:
             if write_known:
-                known[robot, row, col] = SOLID
-            seen[row, col] = True
+                known[np.uint64(known_base + k)] = SOLID
+            seen[at] = True
             return t_entry, new
         if t_entry <= sure:
             in_range = True
@@ -209,17 +231,16 @@ def _lidar_walk_visible(solid: np.ndarray, known: np.ndarray, robot: int, write_
             cy = (row + 0.5) * cell - y
             in_range = cx * cx + cy * cy <= r2
         if in_range:
-            if write_known and known[robot, row, col] < FREE:
-                known[robot, row, col] = FREE
-            if not seen[row, col]:
-                seen[row, col] = True
+            if write_known and known[np.uint64(known_base + k)] < FREE:
+                known[np.uint64(known_base + k)] = FREE
+            if not seen[at]:
+                seen[at] = True
                 new += 1
-        in_x = np.int64(t_x <= t_y)        # branch-free step: the branch mispredicts about half the time
         t_entry = min(t_x, t_y)
-        col += step_c * in_x
-        row += step_r * (1 - in_x)
-        t_x += d_x * in_x
-        t_y += d_y * (1 - in_x)
+        in_x, t_x, t_y = _lidar_advance(t_x, t_y, d_x, d_y)
+        col = select(in_x, col + step_c, col)
+        row = select(in_x, row, row + step_r)
+        k = select(in_x, k + step_c, k + step_k)
         if t_entry > range_m:
             return np.inf, new
 
@@ -234,6 +255,7 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     bad = _lidar_first_bad_pose(poses, active, rows, cols, cell)
     if bad >= 0:
         return -(bad + 1)
+    solid_flat, known_flat, seen_flat = solid.reshape(solid.size), known.reshape(known.size), seen.reshape(seen.size)
     new = 0
     for r in range(poses.shape[0]):
         if not active[r]:
@@ -247,7 +269,8 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
         for i in range(cos_a.shape[0]):
             dx = ch * cos_a[i] - sh * sin_a[i]
             dy = sh * cos_a[i] + ch * sin_a[i]
-            t_hit, n_new = _lidar_walk_visible(solid, known, r, True, seen, x, y, dx, dy, range_m, cell)
+            t_hit, n_new = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, True, seen_flat,
+                                               x, y, dx, dy, range_m, cell)
             new += n_new
             ranges[r, i] = t_hit
     return new
@@ -284,12 +307,10 @@ def _lidar_walk_votes(solid: np.ndarray, x: float, y: float, dx: float, dy: floa
             votes[row, col] += vote
         if hit:
             return n_touched
-        in_x = np.int64(t_x <= t_y)        # branch-free step: the branch mispredicts about half the time
         t_entry = min(t_x, t_y)
-        col += step_c * in_x
-        row += step_r * (1 - in_x)
-        t_x += d_x * in_x
-        t_y += d_y * (1 - in_x)
+        in_x, t_x, t_y = _lidar_advance(t_x, t_y, d_x, d_y)
+        col = select(in_x, col + step_c, col)
+        row = select(in_x, row, row + step_r)
         if t_entry > limit or row < 0 or row >= rows or col < 0 or col >= cols:
             return n_touched
 
@@ -307,6 +328,7 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     bad = _lidar_first_bad_pose(poses, active, rows, cols, cell)
     if bad >= 0:
         return -(bad + 1)
+    solid_flat, known_flat, seen_flat = solid.reshape(solid.size), known.reshape(known.size), seen.reshape(seen.size)
     noisy = noise_std > 0.0 or noise_per_metre > 0.0
     hit32 = np.float32(hit)
     miss32 = np.float32(miss)
@@ -328,7 +350,8 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
         for i in range(cos_a.shape[0]):
             dx = ch * cos_a[i] - sh * sin_a[i]
             dy = sh * cos_a[i] + ch * sin_a[i]
-            t_hit, n_new = _lidar_walk_visible(solid, known, r, False, seen, x, y, dx, dy, range_m, cell)
+            t_hit, n_new = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, False, seen_flat,
+                                               x, y, dx, dy, range_m, cell)
             new += n_new
             z = t_hit
             if noisy and t_hit <= range_m:

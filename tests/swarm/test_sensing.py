@@ -489,3 +489,60 @@ def test_noise_free_logodds_hits_the_corner_grazed_wall_like_the_ternary_scan() 
     ranges = lidar.scan(np.array([CORNER_POSE]), known)
     assert t_ranges[1] == ranges[0, 1] and ternary[7, 8] == SOLID
     assert np.array_equal(known[0], ternary)
+
+
+def sum_walk_ranges(truth: Map, pose: tuple[float, float, float], cos_a: np.ndarray, sin_a: np.ndarray,
+                    range_m: float) -> np.ndarray:
+    """The walk's entry distances in plain Python floats, by the textbook Amanatides-Woo sums ``t_x +=
+    d_x * in_x`` with a 0/1 ``in_x``, as float32 ranges: the kernel picks its steps by selects instead
+    and must give these bits, signed zeros included, for every ray."""
+    x, y, theta = pose
+    ch, sh = math.cos(theta), math.sin(theta)
+    out = np.empty(len(cos_a), dtype=np.float32)
+    for i, (ca, sa) in enumerate(zip(cos_a.tolist(), sin_a.tolist())):
+        dx, dy = ch * ca - sh * sa, sh * ca + ch * sa
+        col, row = math.floor(x / CELL), math.floor(y / CELL)
+        step_c, t_x, d_x = 0, math.inf, 0.0
+        if dx != 0.0:
+            step_c = 1 if dx > 0.0 else -1
+            t_x, d_x = ((col + (1 if dx > 0.0 else 0)) * CELL - x) / dx, CELL / abs(dx)
+        step_r, t_y, d_y = 0, math.inf, 0.0
+        if dy != 0.0:
+            step_r = 1 if dy > 0.0 else -1
+            t_y, d_y = ((row + (1 if dy > 0.0 else 0)) * CELL - y) / dy, CELL / abs(dy)
+        t_entry = 0.0
+        while not truth.solid[row, col]:
+            in_x = int(t_x <= t_y)
+            t_entry = min(t_x, t_y)
+            col, row = col + step_c * in_x, row + step_r * (1 - in_x)
+            t_x, t_y = t_x + d_x * in_x, t_y + d_y * (1 - in_x)
+            if t_entry > range_m:
+                t_entry = math.inf
+                break
+        out[i] = t_entry
+    return out
+
+
+def test_the_walk_gives_the_textbook_sums_bit_for_bit_also_from_cell_boundaries() -> None:
+    truth = generate("building", 30, 2)
+    rng = np.random.default_rng(5)
+    poses = random_free_poses(truth, 12, rng)
+    poses[:4, :2] = np.round(poses[:4, :2] / CELL) * CELL   # on cell corners: boundary distances of -0.0
+    poses[4:8, 0] = np.round(poses[4:8, 0] / CELL) * CELL   # on a column boundary
+    poses[::3, 2] = 0.0                                     # axis-parallel rays (dy == 0: t_y = inf)
+    poses = poses[truth.solid[(poses[:, 1] // CELL).astype(int), (poses[:, 0] // CELL).astype(int)] == 0]
+    # A robot on the corner of a wall cell: rays leaving down-left enter it at distance +0.0, after a
+    # zero-length step past the corner (the sums turn the other boundary's -0.0 into +0.0 on the way).
+    solid = room(12, 12)
+    solid[3, 3] = True
+    corner = make_map(solid)
+    cases = [(truth, pose) for pose in poses] + [(corner, (2.0, 2.0, theta)) for theta in (0.0, 0.3, -2.0)]
+    hits_at_zero = 0
+    for mode in ("ternary", "logodds"):
+        for world, pose in cases:
+            lidar = Lidar(world, LidarParams(range_m=5.0, mode=mode))
+            ranges = lidar.scan(np.array([pose]), empty_knowledge(world.shape, 1))[0]
+            want = sum_walk_ranges(world, tuple(pose), lidar._cos, lidar._sin, 5.0)
+            assert np.array_equal(ranges.view(np.uint32), want.view(np.uint32)), (mode, pose)
+            hits_at_zero += int(np.count_nonzero(want == 0.0))
+    assert hits_at_zero > 0
