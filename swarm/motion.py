@@ -217,6 +217,21 @@ class Follower:
             self._path, self._consts, self._index, float(pose[0]), float(pose[1]), float(pose[2]))
         return v, omega
 
+    def command_unless(self, grid: np.ndarray, cells: np.ndarray, limit: int,
+                       pose: Sequence[float]) -> tuple[float, float] | None:
+        """:meth:`command`, unless one of ``cells`` (flat indices into ``grid``, ``uint8[H, W]``) holds a
+        value ``>= limit``: then None, and nothing changes. One compiled call for both, since a caller that
+        must check its path's cells every tick before following the path (the navigator) would otherwise
+        pay for two calls per robot per tick."""
+        if self._done:
+            return None if _any_at_least(grid.reshape(-1), cells, limit) else (0.0, 0.0)
+        clear, v, omega, index, remaining, done = _follow_step_unless(
+            grid, cells, limit, self._path, self._consts, self._index, float(pose[0]), float(pose[1]), float(pose[2]))
+        if not clear:
+            return None
+        self._index, self._remaining, self._done = index, remaining, done
+        return v, omega
+
     def turn_to(self, pose: Sequence[float], heading: float) -> tuple[float, float]:
         """A pure rotation toward ``heading`` (rad); (0, 0) once within ``heading_tolerance``."""
         err = wrap_angle(float(heading) - float(pose[2]))
@@ -325,6 +340,27 @@ def _follow_step(path: np.ndarray, consts: np.ndarray, index: int, x: float, y: 
         dist += path[i, 2] - path[i + 1, 2]
         i += 1
     return direction * limit * math.cos(err), omega, index, remaining, False
+
+
+@njit(cache=True)
+def _any_at_least(flat: np.ndarray, cells: np.ndarray, limit: int) -> bool:  # pragma: no cover - compiled
+    """Whether ``flat[cells[i]] >= limit`` for some i."""
+    for i in range(cells.shape[0]):
+        if flat[np.uint64(cells[i])] >= limit:
+            return True
+    return False
+
+
+@njit(cache=True)
+def _follow_step_unless(grid: np.ndarray, cells: np.ndarray, limit: int, path: np.ndarray, consts: np.ndarray,
+                        index: int, x: float, y: float,
+                        theta: float) -> tuple[bool, float, float, int, float, bool]:  # pragma: no cover - compiled
+    """:func:`_follow_step` behind the check of :meth:`Follower.command_unless`: ``(clear, v, omega, index,
+    remaining, done)``; when not clear, the rest is meaningless (nothing was computed)."""
+    if _any_at_least(grid.ravel(), cells, limit):  # a view of a C-contiguous map, a copy of another
+        return False, 0.0, 0.0, index, 0.0, False
+    v, omega, index, remaining, done = _follow_step(path, consts, index, x, y, theta)
+    return True, v, omega, index, remaining, done
 
 
 __all__ = ["FollowParams", "Follower", "MAX_SUBSTEP_MOVE_M", "MOTION_PRESETS", "MotionParams", "TICK_S",

@@ -30,6 +30,7 @@ SNAP_RADIUS_CELLS = 4
 PROGRESS_M = 0.05
 
 _nav_status = frozen_builder(NavStatus)  # about half the runtime's status() calls build a new one
+_NO_CELLS = np.zeros(0, dtype=np.int64)
 
 
 class Navigator:
@@ -66,11 +67,16 @@ class Navigator:
         it (uint8[H, W], values 0..2); it is not scanned for bad values again on every plan."""
         if self.goal is None or self.state in ("reached", "unreachable", "blocked", "idle"):
             return 0.0, 0.0
-        if self.state == "planning" or self._corridor_blocked(known):
+        # Moving: the corridor check and the follower's step are one compiled call; planning (or a
+        # blocked corridor) plans first.
+        step = None if self.state == "planning" else self.follower.command_unless(known, self._corridor_cells(),
+                                                                                  SOLID, pose)
+        if step is None:
             self._plan(pose, known)
             if self.state != "moving":
                 return 0.0, 0.0
-        v, omega = self.follower.command(pose)
+            step = self.follower.command(pose)
+        v, omega = step
         if self.follower.done:
             self.state = "reached"
             return 0.0, 0.0
@@ -135,8 +141,8 @@ class Navigator:
             return None
         return grid.simplify(space, path), inside and bool(space[goal_cell])
 
-    def _corridor_blocked(self, known: np.ndarray) -> bool:
-        return self.corridor is not None and _any_solid(known.reshape(-1), self.corridor)
+    def _corridor_cells(self) -> np.ndarray:
+        return self.corridor if self.corridor is not None else _NO_CELLS
 
     def _track_progress(self, pose: Pose, known: np.ndarray) -> None:
         remaining = self.follower.remaining_m
@@ -167,14 +173,6 @@ def _corridor(polyline: np.ndarray, known: np.ndarray) -> np.ndarray:
     as ascending flat indices: if one of them turns SOLID, the path must change."""
     poly = np.ascontiguousarray(polyline, dtype=np.float64)
     return np.sort(_corridor_kernel(poly, known, CELL_M, 0.2))
-
-
-@njit(cache=True)
-def _any_solid(flat: np.ndarray, cells: np.ndarray) -> bool:  # pragma: no cover - compiled
-    for i in range(cells.shape[0]):
-        if flat[cells[i]] >= SOLID:
-            return True
-    return False
 
 
 _FOOTPRINT_DR = np.array([0, -1, 1, 0, 0])

@@ -315,3 +315,27 @@ def test_command_equals_the_plain_formulas_bit_for_bit(seed: int) -> None:
             assert (fast.index, fast.done, fast.remaining_m) == (plain.index, plain.done, plain.remaining_m)
             target = pts[min(fast.index, m - 1)]
             here = here + (target - here) * rng.uniform(0.0, 0.7) + rng.normal(0.0, 0.05, 2)
+
+
+def test_command_unless_follows_like_command_and_stops_before_a_marked_cell() -> None:
+    grid = np.zeros((6, 8), dtype=np.uint8)
+    cells = np.array([3, 17, 40], dtype=np.int64)
+    plain, fused = Follower(MotionParams()), Follower(MotionParams())
+    for f in (plain, fused):
+        f.set_path([(0.0, 0.0), (2.0, 0.5), (3.0, 2.0)])
+    pose = (0.1, -0.05, 0.3)
+    for _ in range(5):
+        want = plain.command(pose)
+        assert fused.command_unless(grid, cells, 2, pose) == want
+        assert (fused.index, fused.remaining_m, fused.done) == (plain.index, plain.remaining_m, plain.done)
+        pose = (pose[0] + 0.1, pose[1] + 0.02, pose[2])
+    grid.reshape(-1)[17] = 1                      # below the limit: still clear
+    assert fused.command_unless(grid, cells, 2, pose) == plain.command(pose)
+    grid.reshape(-1)[40] = 2                      # a marked cell: no command, nothing advances
+    before = (fused.index, fused.remaining_m, fused.done)
+    assert fused.command_unless(grid, cells, 2, (2.0, 0.5, 0.0)) is None
+    assert (fused.index, fused.remaining_m, fused.done) == before
+    assert fused.command_unless(grid[:, ::-1], np.zeros(0, np.int64), 2, pose) == plain.command(pose)  # any layout
+    idle = Follower(MotionParams())
+    assert idle.command_unless(grid, cells, 2, pose) is None
+    assert idle.command_unless(grid, cells[:2], 2, pose) == (0.0, 0.0)
