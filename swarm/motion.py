@@ -172,9 +172,10 @@ class Follower:
             raise InvalidInput("waypoints", waypoints, "an array of shape (M, 2), M >= 1") from None
         if pts.ndim != 2 or pts.shape[0] < 1 or pts.shape[1] != 2:
             raise InvalidInput("waypoints", getattr(pts, "shape", waypoints), "an array of shape (M, 2), M >= 1")
-        if not np.isfinite(pts).all():
+        table = _path_table(np.ascontiguousarray(pts), self._consts)
+        if table.shape[0] == 0:  # the table's kernel checks the coordinates (a numpy pass cost more)
             raise InvalidInput("waypoints", "non-finite values", "finite coordinates in metres")
-        self._path = _path_table(np.ascontiguousarray(pts), self._consts)
+        self._path = table
         self._index = 0
         self._done = False
         self._remaining = float(self._path[0, 2])
@@ -281,8 +282,12 @@ def _bend_speed(path: np.ndarray, i: int, px: float, py: float, consts: np.ndarr
 def _path_table(pts: np.ndarray, consts: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
     """The follower's table of ``pts`` (float64[M, 2], M >= 1): per waypoint x, y, the path length from it
     to the end (``math.dist`` summed from the end), the heading of the segment leaving it (NaN for the last
-    and for zero-length segments) and its corner speed (the first: top speed, the last: 0)."""
+    and for zero-length segments) and its corner speed (the first: top speed, the last: 0). An empty table
+    when a coordinate is not finite."""
     m = pts.shape[0]
+    for i in range(m):
+        if not (math.isfinite(pts[i, 0]) and math.isfinite(pts[i, 1])):
+            return np.empty((0, 5), dtype=np.float64)
     path = np.empty((m, 5), dtype=np.float64)
     path[:, :2] = pts
     path[m - 1, 2] = 0.0

@@ -109,7 +109,10 @@ class Navigator:
             waypoints[-1] = self.goal  # end exactly on the goal when the robot fits there
         self.follower.set_path(waypoints)
         self.path_length = grid.path_length_m(waypoints)
-        self.corridor = _corridor(np.vstack([[pose.x, pose.y], waypoints]), known)
+        polyline = np.empty((waypoints.shape[0] + 1, 2), dtype=np.float64)
+        polyline[0] = pose.x, pose.y
+        polyline[1:] = waypoints
+        self.corridor = _corridor(polyline, known)
         self.best_remaining = math.inf
         self.ticks_since_progress = 0
         self.state = "moving"
@@ -172,7 +175,7 @@ def _corridor(polyline: np.ndarray, known: np.ndarray) -> np.ndarray:
     neighbours, the footprint :func:`swarm.grid.configuration_space` keeps clear) that are not SOLID now,
     as ascending flat indices: if one of them turns SOLID, the path must change."""
     poly = np.ascontiguousarray(polyline, dtype=np.float64)
-    return np.sort(_corridor_kernel(poly, known, CELL_M, 0.2))
+    return _corridor_kernel(poly, known, CELL_M, 0.2)
 
 
 _FOOTPRINT_DR = np.array([0, -1, 1, 0, 0])
@@ -180,42 +183,44 @@ _FOOTPRINT_DC = np.array([0, 0, 0, -1, 1])
 
 
 @njit(cache=True, inline="always")
-def _mark_footprint(x: float, y: float, known: np.ndarray, cell: float, seen: np.ndarray,
-                    out: np.ndarray, m: int) -> int:  # pragma: no cover - compiled
-    """Append the not yet seen, non-SOLID cells of the footprint of point (x, y) (clipped to the map) to
-    ``out`` from position ``m``; returns the new count."""
+def _mark_footprint(x: float, y: float, known: np.ndarray, cell: float, out: np.ndarray,
+                    m: int) -> int:  # pragma: no cover - compiled
+    """Append the non-SOLID cells of the footprint of point (x, y) (clipped to the map) to ``out`` from
+    position ``m``, repeats included; returns the new count."""
     h, w = known.shape
     r0 = int(np.floor(y / cell))
     c0 = int(np.floor(x / cell))
     for t in range(_FOOTPRINT_DR.shape[0]):
         r = min(max(r0 + _FOOTPRINT_DR[t], 0), h - 1)
         c = min(max(c0 + _FOOTPRINT_DC[t], 0), w - 1)
-        p = r * w + c
-        if seen[p]:
-            continue
-        seen[p] = True
-        if known[r, c] >= SOLID:
-            continue
-        out[m] = p
-        m += 1
+        if known[r, c] < SOLID:
+            out[m] = r * w + c
+            m += 1
     return m
 
 
 @njit(cache=True)
 def _corridor_kernel(poly: np.ndarray, known: np.ndarray, cell: float, spacing: float) -> np.ndarray:  # pragma: no cover
-    """Distinct non-SOLID flat cells of the footprints of the samples: the polyline's first point, then
-    for each segment ``ceil(length / spacing)`` (at least 1) points at fractions k / steps, k = 1..steps."""
+    """Distinct non-SOLID flat cells, ascending, of the footprints of the samples: the polyline's first
+    point, then for each segment ``ceil(length / spacing)`` (at least 1) points at fractions k / steps,
+    k = 1..steps. Repeats are dropped after sorting (a few hundred cells: cheaper than clearing a
+    map-sized mask per plan)."""
     n_seg = poly.shape[0] - 1
     steps = np.empty(n_seg, dtype=np.int64)
     for s in range(n_seg):
         steps[s] = max(1, int(np.ceil(np.hypot(poly[s + 1, 0] - poly[s, 0], poly[s + 1, 1] - poly[s, 1]) / spacing)))
-    seen = np.zeros(known.size, dtype=np.bool_)
-    out = np.empty(min(known.size, _FOOTPRINT_DR.shape[0] * (1 + steps.sum())), dtype=np.int64)
-    m = _mark_footprint(poly[0, 0], poly[0, 1], known, cell, seen, out, 0)
+    out = np.empty(_FOOTPRINT_DR.shape[0] * (1 + steps.sum()), dtype=np.int64)
+    m = _mark_footprint(poly[0, 0], poly[0, 1], known, cell, out, 0)
     for s in range(n_seg):
         dx = poly[s + 1, 0] - poly[s, 0]
         dy = poly[s + 1, 1] - poly[s, 1]
         for k in range(1, steps[s] + 1):
             frac = k / steps[s]
-            m = _mark_footprint(poly[s, 0] + dx * frac, poly[s, 1] + dy * frac, known, cell, seen, out, m)
-    return out[:m]
+            m = _mark_footprint(poly[s, 0] + dx * frac, poly[s, 1] + dy * frac, known, cell, out, m)
+    cells = np.sort(out[:m])
+    kept = 0
+    for i in range(m):
+        if i == 0 or cells[i] != cells[i - 1]:
+            cells[kept] = cells[i]
+            kept += 1
+    return cells[:kept].copy()
