@@ -183,10 +183,10 @@ _FOOTPRINT_DC = np.array([0, 0, 0, -1, 1])
 
 
 @njit(cache=True, inline="always")
-def _mark_footprint(x: float, y: float, known: np.ndarray, cell: float, out: np.ndarray,
-                    m: int) -> int:  # pragma: no cover - compiled
-    """Append the non-SOLID cells of the footprint of point (x, y) (clipped to the map) to ``out`` from
-    position ``m``, repeats included; returns the new count."""
+def _mark_footprint(x: float, y: float, known: np.ndarray, cell: float, mask: np.ndarray, r_lo: int,
+                    c_lo: int) -> None:  # pragma: no cover - compiled
+    """Mark in ``mask`` (the box of map cells from (r_lo, c_lo)) the non-SOLID cells of the footprint of
+    point (x, y), clipped to the map."""
     h, w = known.shape
     r0 = int(np.floor(y / cell))
     c0 = int(np.floor(x / cell))
@@ -194,33 +194,40 @@ def _mark_footprint(x: float, y: float, known: np.ndarray, cell: float, out: np.
         r = min(max(r0 + _FOOTPRINT_DR[t], 0), h - 1)
         c = min(max(c0 + _FOOTPRINT_DC[t], 0), w - 1)
         if known[r, c] < SOLID:
-            out[m] = r * w + c
-            m += 1
-    return m
+            mask[r - r_lo, c - c_lo] = 1
 
 
 @njit(cache=True)
 def _corridor_kernel(poly: np.ndarray, known: np.ndarray, cell: float, spacing: float) -> np.ndarray:  # pragma: no cover
     """Distinct non-SOLID flat cells, ascending, of the footprints of the samples: the polyline's first
     point, then for each segment ``ceil(length / spacing)`` (at least 1) points at fractions k / steps,
-    k = 1..steps. Repeats are dropped after sorting (a few hundred cells: cheaper than clearing a
-    map-sized mask per plan)."""
+    k = 1..steps. The cells are marked in a mask over the polyline's bounding box (two cells wider on
+    every side than its vertices' cells: the footprint, and rounding of the samples), which is read
+    row by row: ascending without a sort, and no map-sized mask to clear per plan."""
+    h, w = known.shape
     n_seg = poly.shape[0] - 1
-    steps = np.empty(n_seg, dtype=np.int64)
-    for s in range(n_seg):
-        steps[s] = max(1, int(np.ceil(np.hypot(poly[s + 1, 0] - poly[s, 0], poly[s + 1, 1] - poly[s, 1]) / spacing)))
-    out = np.empty(_FOOTPRINT_DR.shape[0] * (1 + steps.sum()), dtype=np.int64)
-    m = _mark_footprint(poly[0, 0], poly[0, 1], known, cell, out, 0)
+    x_lo, x_hi, y_lo, y_hi = poly[0, 0], poly[0, 0], poly[0, 1], poly[0, 1]
+    for s in range(1, poly.shape[0]):
+        x_lo, x_hi = min(x_lo, poly[s, 0]), max(x_hi, poly[s, 0])
+        y_lo, y_hi = min(y_lo, poly[s, 1]), max(y_hi, poly[s, 1])
+    r_lo = min(max(int(np.floor(y_lo / cell)) - 2, 0), h - 1)
+    r_hi = min(max(int(np.floor(y_hi / cell)) + 2, 0), h - 1)
+    c_lo = min(max(int(np.floor(x_lo / cell)) - 2, 0), w - 1)
+    c_hi = min(max(int(np.floor(x_hi / cell)) + 2, 0), w - 1)
+    mask = np.zeros((r_hi - r_lo + 1, c_hi - c_lo + 1), dtype=np.uint8)
+    _mark_footprint(poly[0, 0], poly[0, 1], known, cell, mask, r_lo, c_lo)
     for s in range(n_seg):
         dx = poly[s + 1, 0] - poly[s, 0]
         dy = poly[s + 1, 1] - poly[s, 1]
-        for k in range(1, steps[s] + 1):
-            frac = k / steps[s]
-            m = _mark_footprint(poly[s, 0] + dx * frac, poly[s, 1] + dy * frac, known, cell, out, m)
-    cells = np.sort(out[:m])
-    kept = 0
-    for i in range(m):
-        if i == 0 or cells[i] != cells[i - 1]:
-            cells[kept] = cells[i]
-            kept += 1
-    return cells[:kept].copy()
+        steps = max(1, int(np.ceil(np.hypot(dx, dy) / spacing)))
+        for k in range(1, steps + 1):
+            frac = k / steps
+            _mark_footprint(poly[s, 0] + dx * frac, poly[s, 1] + dy * frac, known, cell, mask, r_lo, c_lo)
+    out = np.empty(int(mask.sum()), dtype=np.int64)
+    m = 0
+    for r in range(mask.shape[0]):
+        for c in range(mask.shape[1]):
+            if mask[r, c]:
+                out[m] = (r + r_lo) * w + c + c_lo
+                m += 1
+    return out
