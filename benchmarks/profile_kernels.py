@@ -6,9 +6,9 @@ profiler cannot name compiled code (py-spy shows it as one anonymous block); thi
 regress inside the run, where its inputs, its calls and the caches are the run's own (it caught a corridor
 kernel that took 24.6 us per plan against 9.2 before, which the whole run's noise hid).
 
-Kernels are looked up as module attributes in ``swarm``, ``radio`` and ``algorithms`` after a short warm-up
-run, so every kernel is compiled or loaded before it is wrapped; calls from one kernel to another stay
-compiled and are counted in the caller. The timer adds about 1 us per call (a kernel called 170,000
+Kernels are looked up as module attributes in ``swarm``, ``radio`` and ``algorithms`` after a first run of
+the same workload, so every kernel is compiled or loaded before it is wrapped (the script takes two runs'
+time); calls from one kernel to another stay compiled and are counted in the caller. The timer adds about 1 us per call (a kernel called 170,000
 times carries ~0.2 s of it), so compare shares and per-call times between versions, not with
 ``bench_runtime.py``.
 """
@@ -64,7 +64,9 @@ def main() -> None:
     args = parser.parse_args()
     spec = {"seed": args.seed, "map": {"kind": "building", "size": args.size},
             "robots": {"count": args.robots, "spawn": "together"}, "algorithm": {"name": "frontier"}}
-    Simulation({**spec, "stop": {"max_ticks": 300}}).run()  # compile or load every kernel the run uses
+    # Every kernel the run uses must be compiled before any is wrapped: a kernel compiled later would see
+    # a wrapper, not a kernel, where it calls another by name. The same spec runs the same code paths.
+    Simulation({**spec, "stop": {"max_ticks": args.max_ticks}}).run()
     spent: Counter = Counter()
     calls: Counter = Counter()
     sim = Simulation({**spec, "stop": {"max_ticks": args.max_ticks}})
