@@ -8,9 +8,9 @@ kernel that took 24.6 us per plan against 9.2 before, which the whole run's nois
 
 Kernels are looked up as module attributes in ``swarm``, ``radio`` and ``algorithms`` after a first run of
 the same workload, so every kernel is compiled or loaded before it is wrapped (the script takes two runs'
-time); calls from one kernel to another stay compiled and are counted in the caller. The timer adds about 1 us per call (a kernel called 170,000
-times carries ~0.2 s of it), so compare shares and per-call times between versions, not with
-``bench_runtime.py``.
+time); calls from one kernel to another stay compiled and are counted in the caller. The timer adds about
+1 us per call (a kernel called 170,000 times carries ~0.2 s of it), so compare shares and per-call times
+between versions, not with ``bench_runtime.py``.
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ from collections import Counter
 from types import ModuleType
 
 from numba.core.registry import CPUDispatcher
-from profile_sharing import wrap
+from workload import add_workload_arguments, workload_spec, wrap
 
 import algorithms
 import radio
@@ -56,20 +56,15 @@ def wrap_kernels(modules: list[ModuleType], spent: Counter, calls: Counter) -> i
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--robots", type=int, default=16)
-    parser.add_argument("--size", type=int, default=150)
-    parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--max-ticks", type=int, default=36000)
+    add_workload_arguments(parser)
     parser.add_argument("--top", type=int, default=30, help="kernels to list (by time)")
     args = parser.parse_args()
-    spec = {"seed": args.seed, "map": {"kind": "building", "size": args.size},
-            "robots": {"count": args.robots, "spawn": "together"}, "algorithm": {"name": "frontier"}}
     # Every kernel the run uses must be compiled before any is wrapped: a kernel compiled later would see
     # a wrapper, not a kernel, where it calls another by name. The same spec runs the same code paths.
-    Simulation({**spec, "stop": {"max_ticks": args.max_ticks}}).run()
+    Simulation(workload_spec(args)).run()
     spent: Counter = Counter()
     calls: Counter = Counter()
-    sim = Simulation({**spec, "stop": {"max_ticks": args.max_ticks}})
+    sim = Simulation(workload_spec(args))
     wrapped = wrap_kernels(project_modules(), spent, calls)  # after set-up: only the run's calls count
     result = sim.run()
     wall = result.summary["wall_time_s"]

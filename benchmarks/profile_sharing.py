@@ -11,9 +11,10 @@ merging. The timers add about 1 us per call, so the run itself is a little slowe
 from __future__ import annotations
 
 import argparse
-import time
 from collections import Counter
-from typing import Any, Callable
+from typing import Any
+
+from workload import add_workload_arguments, workload_spec, wrap
 
 import swarm.comm as comm
 import swarm.messages as messages
@@ -34,36 +35,15 @@ TIMED: list[tuple[Any, str, str]] = [
 ]
 
 
-def wrap(owner: Any, name: str, label: str, spent: Counter, calls: Counter) -> None:
-    """Replace ``owner.name`` by a version that adds its wall time to ``spent[label]``."""
-    inner: Callable[..., Any] = getattr(owner, name)
-
-    def timed(*args: Any, **kwargs: Any) -> Any:
-        t0 = time.perf_counter()
-        try:
-            return inner(*args, **kwargs)
-        finally:
-            spent[label] += time.perf_counter() - t0
-            calls[label] += 1
-
-    setattr(owner, name, timed)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--robots", type=int, default=16)
-    parser.add_argument("--size", type=int, default=150)
-    parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--max-ticks", type=int, default=36000)
+    add_workload_arguments(parser)
     args = parser.parse_args()
     spent: Counter = Counter()
     calls: Counter = Counter()
     for owner, name, label in TIMED:
         wrap(owner, name, label, spent, calls)
-    sim = Simulation({"seed": args.seed, "map": {"kind": "building", "size": args.size},
-                      "robots": {"count": args.robots, "spawn": "together"}, "algorithm": {"name": "frontier"},
-                      "stop": {"max_ticks": args.max_ticks}})
-    result = sim.run()
+    result = Simulation(workload_spec(args)).run()
     wall = result.summary["wall_time_s"]
     print(result.one_line())
     print(f"run {wall:.2f} s wall")
