@@ -224,10 +224,9 @@ class Follower:
         value ``>= limit``: then None, and nothing changes. One compiled call for both, since a caller that
         must check its path's cells every tick before following the path (the navigator) would otherwise
         pay for two calls per robot per tick."""
-        if self._done:
-            return None if _any_at_least(grid.reshape(-1), cells, limit) else (0.0, 0.0)
         clear, v, omega, index, remaining, done = _follow_step_unless(
-            grid, cells, limit, self._path, self._consts, self._index, float(pose[0]), float(pose[1]), float(pose[2]))
+            grid, cells, limit, self._path, self._consts, self._index, self._remaining, self._done,
+            float(pose[0]), float(pose[1]), float(pose[2]))
         if not clear:
             return None
         self._index, self._remaining, self._done = index, remaining, done
@@ -348,22 +347,17 @@ def _follow_step(path: np.ndarray, consts: np.ndarray, index: int, x: float, y: 
 
 
 @njit(cache=True)
-def _any_at_least(flat: np.ndarray, cells: np.ndarray, limit: int) -> bool:  # pragma: no cover - compiled
-    """Whether ``flat[cells[i]] >= limit`` for some i."""
-    for i in range(cells.shape[0]):
-        if flat[np.uint64(cells[i])] >= limit:
-            return True
-    return False
-
-
-@njit(cache=True)
 def _follow_step_unless(grid: np.ndarray, cells: np.ndarray, limit: int, path: np.ndarray, consts: np.ndarray,
-                        index: int, x: float, y: float,
+                        index: int, remaining: float, done: bool, x: float, y: float,
                         theta: float) -> tuple[bool, float, float, int, float, bool]:  # pragma: no cover - compiled
     """:func:`_follow_step` behind the check of :meth:`Follower.command_unless`: ``(clear, v, omega, index,
-    remaining, done)``; when not clear, the rest is meaningless (nothing was computed)."""
-    if _any_at_least(grid.ravel(), cells, limit):  # a view of a C-contiguous map, a copy of another
-        return False, 0.0, 0.0, index, 0.0, False
+    remaining, done)``, the follower's state unchanged when not clear or already ``done`` (then (0, 0))."""
+    flat = grid.ravel()  # a view of a C-contiguous map, a copy of another
+    for i in range(cells.shape[0]):
+        if flat[np.uint64(cells[i])] >= limit:
+            return False, 0.0, 0.0, index, remaining, done
+    if done:
+        return True, 0.0, 0.0, index, remaining, done
     v, omega, index, remaining, done = _follow_step(path, consts, index, x, y, theta)
     return True, v, omega, index, remaining, done
 

@@ -30,7 +30,6 @@ SNAP_RADIUS_CELLS = 4
 PROGRESS_M = 0.05
 
 _nav_status = frozen_builder(NavStatus)  # about half the runtime's status() calls build a new one
-_NO_CELLS = np.zeros(0, dtype=np.int64)
 
 
 class Navigator:
@@ -67,10 +66,12 @@ class Navigator:
         it (uint8[H, W], values 0..2); it is not scanned for bad values again on every plan."""
         if self.goal is None or self.state in ("reached", "unreachable", "blocked", "idle"):
             return 0.0, 0.0
-        # Moving: the corridor check and the follower's step are one compiled call; planning (or a
-        # blocked corridor) plans first.
-        step = None if self.state == "planning" else self.follower.command_unless(known, self._corridor_cells(),
-                                                                                  SOLID, pose)
+        # Moving (which comes with a corridor): the corridor check and the follower's step are one compiled
+        # call; planning (or a blocked corridor) plans first.
+        step = None
+        if self.state != "planning":
+            assert self.corridor is not None
+            step = self.follower.command_unless(known, self.corridor, SOLID, pose)
         if step is None:
             self._plan(pose, known)
             if self.state != "moving":
@@ -143,9 +144,6 @@ class Navigator:
         if path is None:
             return None
         return grid.simplify(space, path), inside and bool(space[goal_cell])
-
-    def _corridor_cells(self) -> np.ndarray:
-        return self.corridor if self.corridor is not None else _NO_CELLS
 
     def _track_progress(self, pose: Pose, known: np.ndarray) -> None:
         remaining = self.follower.remaining_m
