@@ -122,7 +122,6 @@ class Simulation:
         self.metrics = Metrics(self.spec.record_every)
         self.events: list[dict[str, Any]] = []
         self.failed = np.zeros(n, dtype=bool)
-        self._failures = 0  # robots in ``failed``: the loop's stop test needs no array pass per tick
         self._mirror: np.ndarray | None = None
         self.setup_time_s = time.perf_counter() - t0
 
@@ -198,7 +197,7 @@ class Simulation:
                 stop_reason = "max_ticks"
             elif stalled_for >= spec.stop.stall_ticks:
                 stop_reason = "stalled"
-            elif self._failures == n:
+            elif not active.any():
                 stop_reason = "all_failed"
             if stop_reason or self.metrics.due(tick):
                 self._record(tick, explored, collisions, links)
@@ -262,7 +261,7 @@ class Simulation:
             outboxes.append([self.medium.envelope(i, m) for m in (*service[i], *extra)])
         if any(outboxes):
             link = links.senders_link([i for i, out in enumerate(outboxes) if out])
-            if self._failures:
+            if self.failed.any():
                 link = link & ~self.failed[:, None]
             self.inboxes = self.medium.deliver(tick, outboxes, link)
             self._deliveries = [(env.message, env.delivered_to) for out in outboxes for env in out if env.delivered_to]
@@ -346,7 +345,6 @@ class Simulation:
         for i, (at, reason) in sorted(host.stats.failures.items()):
             if not self.failed[i]:
                 self.failed[i] = True
-                self._failures += 1
                 self.world.disable(i)
                 self.navigators[i].set_goal(None)
                 self.events.append({"tick": at, "robot": i, "event": "agent_failed", "reason": reason})
