@@ -28,7 +28,7 @@ TIMED: list[tuple[Any, str, str]] = [
     (messages.zlib, "compress", "  of which zlib.compress"),
     (comm.Medium, "envelope", "encode an envelope"),
     (comm.Medium, "deliver", "deliver a tick's envelopes"),
-    (messages.zlib, "decompress", "zlib.decompress (once per message)"),
+    (messages.zlib, "decompress", "zlib.decompress (updates that came as bytes)"),
     (comm.MapUpdate, "cells", "a delta's cells (decoded on the first call)"),
     (comm.MapUpdate, "dense", "a full map's cells (decoded on the first call)"),
     (comm, "merge_cells_many", "merge a delta into all its receivers"),

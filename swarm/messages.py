@@ -202,6 +202,12 @@ class MapUpdate:
         return cached
 
     def _raw(self) -> bytes:
+        """The payload before zlib: kept by an update built in this process (:func:`full_update`,
+        :func:`delta_update`), so its receivers here skip the decompression (lossless, so the same bytes);
+        decompressed otherwise."""
+        plain = self.__dict__.get("_plain")
+        if plain is not None:
+            return plain
         try:
             return zlib.decompress(self.payload, bufsize=max(64, 5 * self.count + 16))
         except zlib.error:
@@ -258,9 +264,11 @@ def map_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[
 
 def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float]) -> MapUpdate:
     """The full-map MapUpdate of ``known`` (``pose``: three Python floats)."""
-    payload = zlib.compress(_cellcodec.pack2(known.reshape(-1)), MAP_ZLIB_LEVEL)
-    return _new_update(sender=sender, seq=seq, tick=tick, full=True, shape=(int(known.shape[0]), int(known.shape[1])),
-                       count=int(np.count_nonzero(known)), payload=payload, pose=pose)
+    plain = _cellcodec.pack2(known.reshape(-1)).tobytes()
+    update = _new_update(sender=sender, seq=seq, tick=tick, full=True, shape=(int(known.shape[0]), int(known.shape[1])),
+                         count=int(np.count_nonzero(known)), payload=zlib.compress(plain, MAP_ZLIB_LEVEL), pose=pose)
+    update.__dict__["_plain"] = plain  # see MapUpdate._raw
+    return update
 
 
 def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
@@ -268,9 +276,11 @@ def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tupl
     """The delta MapUpdate of cells ``changed`` of ``known``: distinct ascending int64 flat indices, as
     :func:`swarm.knowledge.sync_changes` gives them, and ``pose`` three Python floats, so nothing is sorted
     or converted again (the map-sharing service builds one per robot per sharing tick)."""
-    payload = zlib.compress(_cellcodec.pack_delta(known.reshape(-1), changed), MAP_ZLIB_LEVEL)
-    return _new_update(sender=sender, seq=seq, tick=tick, full=False, shape=(int(known.shape[0]), int(known.shape[1])),
-                       count=len(changed), payload=payload, pose=pose)
+    plain = _cellcodec.pack_delta(known.reshape(-1), changed).tobytes()
+    update = _new_update(sender=sender, seq=seq, tick=tick, full=False, shape=(int(known.shape[0]), int(known.shape[1])),
+                         count=len(changed), payload=zlib.compress(plain, MAP_ZLIB_LEVEL), pose=pose)
+    update.__dict__["_plain"] = plain  # see MapUpdate._raw
+    return update
 
 
 _new_update = frozen_builder(MapUpdate)

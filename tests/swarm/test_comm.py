@@ -306,13 +306,31 @@ def test_map_update_payload_layout_and_round_trip(shape):
     size = known.size
     for changed in (None, np.zeros(0, np.int64), np.array([size - 1]), np.arange(size),
                     np.sort(rng.choice(size, size // 2 + 1, replace=False))):
-        msg = decode(encode(map_update(3, 1, 0, known, (1.0, 2.0, 0.5), changed)))
+        local = map_update(3, 1, 0, known, (1.0, 2.0, 0.5), changed)
+        msg = decode(encode(local))
         assert zlib.decompress(msg.payload) == _reference_payload(known, changed)
-        idx, values = msg.cells()
         want = np.flatnonzero(known) if changed is None else changed
-        assert np.array_equal(idx, want) and np.array_equal(values, known.reshape(-1)[want])
-        if changed is None:
-            assert np.array_equal(msg.dense(), known.reshape(-1))
+        # The decoded message, and the built one whose receivers here skip zlib (MapUpdate._raw).
+        for update in (msg, local):
+            idx, values = update.cells()
+            assert np.array_equal(idx, want) and np.array_equal(values, known.reshape(-1)[want])
+            if changed is None:
+                assert np.array_equal(update.dense(), known.reshape(-1))
+        assert local.__dict__["_plain"] == zlib.decompress(local.payload)
+
+
+def test_a_map_update_built_here_is_checked_like_a_received_one():
+    """Receivers in this process read a built update's payload before zlib, with the same checks: a value
+    outside 0..2 (packed as 2 bits) is refused as when the bytes arrive over the wire."""
+    from swarm.messages import MessageError, delta_update, full_update
+
+    known = np.ones((4, 6), dtype=np.uint8)
+    known[1, 2] = 3
+    for update in (full_update(1, 1, 0, known, (0.0, 0.0, 0.0)),
+                   delta_update(1, 1, 0, known, (0.0, 0.0, 0.0), np.array([3, 8], dtype=np.int64))):
+        for msg in (update, decode(encode(update))):
+            with pytest.raises(MessageError, match="outside"):
+                msg.cells()
 
 
 @pytest.mark.parametrize("raw, n, full, error", [
