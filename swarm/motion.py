@@ -24,6 +24,7 @@ from maps.errors import InvalidInput
 from maps.params import check_float, check_int
 
 from ._pymath import py_hypot
+from .arena import Arena
 
 TICK_S: float = 0.1
 """One logic tick of simulated time (DESIGN.md section 3)."""
@@ -138,6 +139,19 @@ def wrap_angle(angle: float) -> float:
     return math.pi - (math.pi - angle) % (2.0 * math.pi)
 
 
+class FollowerSlots:
+    """The changing state of ``n`` followers, a row each: the waypoint each heads for, the path length still
+    to drive, whether it is done, and its path table (an :class:`~swarm.arena.Arena` row). In arrays, so
+    that one compiled call can step many followers (:class:`swarm.navigation.NavigationFleet`); a lone
+    :class:`Follower` has a table of one."""
+
+    def __init__(self, n: int) -> None:
+        self.index = np.zeros(n, dtype=np.int64)
+        self.remaining = np.zeros(n, dtype=np.float64)
+        self.done = np.ones(n, dtype=np.bool_)
+        self.paths = Arena(n, np.float64, (5,))
+
+
 class Follower:
     """Follows a polyline of waypoints: rotate in place when the heading error is large, otherwise drive
     with heading correction; brake for sharp bends and for the last waypoint so that it ends within
@@ -148,13 +162,14 @@ class Follower:
     end so the robot converges without overshoot despite commands changing only once per tick.
     """
 
-    def __init__(self, params: MotionParams, follow: FollowParams | None = None) -> None:
+    def __init__(self, params: MotionParams, follow: FollowParams | None = None, *,
+                 slots: FollowerSlots | None = None, row: int = 0) -> None:
+        """``slots``/``row``: keep the state in row ``row`` of a fleet's :class:`FollowerSlots` (default: a
+        table of one of its own)."""
         self.params = params
         self.follow = follow if follow is not None else FollowParams()
-        self._path = _NO_PATH    # per waypoint: x, y, suffix, heading (NaN: None), corner speed (_path_table)
-        self._index = 0
-        self._done = True
-        self._remaining = 0.0
+        self._slots = slots if slots is not None else FollowerSlots(1)
+        self._row = row
         # Constants of the per-tick arithmetic, computed once with the same operations as in the formulas
         # (braking at half the acceleration); the parameters are frozen, so they hold for the follower's life.
         two_brake = 2.0 * (0.5 * params.max_accel)
@@ -175,36 +190,45 @@ class Follower:
         table = _path_table(np.ascontiguousarray(pts), self._consts)
         if table.shape[0] == 0:  # the table's kernel checks the coordinates (a numpy pass cost more)
             raise InvalidInput("waypoints", "non-finite values", "finite coordinates in metres")
-        self._path = table
-        self._index = 0
-        self._done = False
-        self._remaining = float(self._path[0, 2])
+        s, r = self._slots, self._row
+        s.paths.put(r, table)
+        s.index[r] = 0
+        s.done[r] = False
+        s.remaining[r] = table[0, 2]
 
     def clear(self) -> None:
         """Forget the path; :meth:`command` returns (0, 0) until the next :meth:`set_path`."""
-        self._path = _NO_PATH
-        self._done = True
-        self._remaining = 0.0
+        s, r = self._slots, self._row
+        s.paths.put(r, _NO_PATH)
+        s.done[r] = True
+        s.remaining[r] = 0.0
 
     @property
     def done(self) -> bool:
         """True when there is no path or the last waypoint has been reached."""
-        return self._done
+        return bool(self._slots.done[self._row])
 
     @property
     def remaining_m(self) -> float:
         """Path length still to drive, measured from the pose of the last :meth:`command` (before the
         first command: from the first waypoint)."""
-        return 0.0 if self._done else self._remaining
+        s, r = self._slots, self._row
+        return 0.0 if s.done[r] else float(s.remaining[r])
 
     @property
     def index(self) -> int:
         """Index of the waypoint the robot is heading for."""
-        return self._index
+        return int(self._slots.index[self._row])
+
+    @property
+    def path_table(self) -> np.ndarray:
+        """Per waypoint: x, y, path length from it to the end, heading of the segment leaving it (NaN for
+        the last and zero-length ones), corner speed (read-only use)."""
+        return self._slots.paths.get(self._row)
 
     @property
     def waypoints(self) -> tuple[tuple[float, float], ...]:
-        return tuple(map(tuple, self._path[:, :2].tolist()))
+        return tuple(map(tuple, self.path_table[:, :2].tolist()))
 
     # --------------------------------------------------------------------------------------- control ----
     def command(self, pose: Sequence[float]) -> tuple[float, float]:
@@ -212,10 +236,11 @@ class Follower:
         within ``switch_radius``, turn in place while the heading error exceeds ``rotate_above``, else
         drive at the braking limit of the bends ahead (:func:`_follow_step`, compiled;
         ``tests/swarm/test_motion.py`` checks it against the plain Python formulas bit for bit)."""
-        if self._done:
+        s, r = self._slots, self._row
+        if s.done[r]:
             return 0.0, 0.0
-        v, omega, self._index, self._remaining, self._done = _follow_step(
-            self._path, self._consts, self._index, float(pose[0]), float(pose[1]), float(pose[2]))
+        v, omega, s.index[r], s.remaining[r], s.done[r] = _follow_step(
+            s.paths.get(r), self._consts, int(s.index[r]), float(pose[0]), float(pose[1]), float(pose[2]))
         return v, omega
 
     def command_unless(self, grid: np.ndarray, cells: np.ndarray, limit: int,
@@ -224,12 +249,13 @@ class Follower:
         value ``>= limit``: then None, and nothing changes. One compiled call for both, since a caller that
         must check its path's cells every tick before following the path (the navigator) would otherwise
         pay for two calls per robot per tick."""
+        s, r = self._slots, self._row
         clear, v, omega, index, remaining, done = _follow_step_unless(
-            grid, cells, limit, self._path, self._consts, self._index, self._remaining, self._done,
+            grid, cells, limit, s.paths.get(r), self._consts, int(s.index[r]), float(s.remaining[r]), bool(s.done[r]),
             float(pose[0]), float(pose[1]), float(pose[2]))
         if not clear:
             return None
-        self._index, self._remaining, self._done = index, remaining, done
+        s.index[r], s.remaining[r], s.done[r] = index, remaining, done
         return v, omega
 
     def turn_to(self, pose: Sequence[float], heading: float) -> tuple[float, float]:
@@ -362,5 +388,5 @@ def _follow_step_unless(grid: np.ndarray, cells: np.ndarray, limit: int, path: n
     return True, v, omega, index, remaining, done
 
 
-__all__ = ["FollowParams", "Follower", "MAX_SUBSTEP_MOVE_M", "MOTION_PRESETS", "MotionParams", "TICK_S",
+__all__ = ["FollowParams", "Follower", "FollowerSlots", "MAX_SUBSTEP_MOVE_M", "MOTION_PRESETS", "MotionParams", "TICK_S",
            "wrap_angle"]

@@ -6,6 +6,10 @@ into straight segments, and hands them to the waypoint follower. Each tick it ch
 cell in the path's corridor has turned SOLID (replan) and whether the robot is making progress (replan
 after ``stuck_ticks`` without progress; report ``blocked`` after ``max_replans``). A goal that no path
 reaches is reported ``unreachable``. What to do then is the algorithm's decision.
+
+The runtime commands all its navigators at once (:class:`NavigationFleet`): their per-tick state lives in
+arrays (:class:`NavigatorSlots`), so the step of every moving robot is one compiled call per tick; a lone
+:class:`Navigator` keeps the same state in a table of one and behaves identically.
 """
 
 from __future__ import annotations
@@ -20,7 +24,8 @@ from .api import CELL_M, SOLID, NavStatus, Pose, cell_of, frozen_builder
 from .grid import memo
 from .grid.cspace import configuration_space_of, nearest_in_of
 from .grid.local import plan_local_first
-from .motion import Follower
+from .arena import Arena
+from .motion import Follower, FollowerSlots, _follow_step
 from .planners import AStar, get_planner
 from .spec import NavigationSpec
 from .world import MotionParams
@@ -32,19 +37,34 @@ PROGRESS_M = 0.05
 _nav_status = frozen_builder(NavStatus)  # about half the runtime's status() calls build a new one
 
 
+class NavigatorSlots:
+    """The state a navigator's per-tick step reads and writes, a row per navigator, in arrays (its
+    follower's :class:`~swarm.motion.FollowerSlots`, its corridor as an :class:`~swarm.arena.Arena` row, the
+    best remaining length and the ticks since progress), so that :class:`NavigationFleet` steps all of them
+    in one compiled call."""
+
+    def __init__(self, n: int) -> None:
+        self.followers = FollowerSlots(n)
+        self.corridors = Arena(n, np.int64)
+        self.best_remaining = np.full(n, math.inf)
+        self.stalled = np.zeros(n, dtype=np.int64)
+
+
 class Navigator:
-    def __init__(self, spec: NavigationSpec, motion: MotionParams, rng: np.random.Generator | None = None) -> None:
+    def __init__(self, spec: NavigationSpec, motion: MotionParams, rng: np.random.Generator | None = None, *,
+                 slots: NavigatorSlots | None = None, row: int = 0) -> None:
+        """``slots``/``row``: keep the per-tick state in row ``row`` of a fleet's table (default: its own)."""
         self.spec = spec
         self.motion = motion
         self.planner = get_planner(spec.planner)
         self.rng = rng if rng is not None else np.random.default_rng(0)
-        self.follower = Follower(motion)
+        self._slots = slots if slots is not None else NavigatorSlots(1)
+        self._row = row
+        self.follower = Follower(motion, slots=self._slots.followers, row=row)
         self.goal: tuple[float, float] | None = None
         self.state = "idle"
         self.path_length = 0.0
-        self.corridor: np.ndarray | None = None  # flat cell indices
-        self.best_remaining = math.inf
-        self.ticks_since_progress = 0
+        self.corridor: np.ndarray | None = None  # flat cell indices (the slots' arena row while moving)
         self.replans = 0
         self.plans = 0
         self._status = NavStatus(goal=None, state="idle", path_length=0.0, ticks_since_progress=0)
@@ -68,15 +88,32 @@ class Navigator:
             return 0.0, 0.0
         # Moving (which comes with a corridor): the corridor check and the follower's step are one compiled
         # call; planning (or a blocked corridor) plans first.
-        step = None
-        if self.state != "planning":
-            assert self.corridor is not None
-            step = self.follower.command_unless(known, self.corridor, SOLID, pose)
+        if self.state == "planning":
+            return self._plan_and_step(pose, known)
+        assert self.corridor is not None
+        step = self.follower.command_unless(known, self.corridor, SOLID, pose)
         if step is None:
-            self._plan(pose, known)
-            if self.state != "moving":
-                return 0.0, 0.0
-            step = self.follower.command(pose)
+            return self._plan_and_step(pose, known)
+        return self._after_step(step, pose, known)
+
+    @property
+    def best_remaining(self) -> float:
+        """The shortest remaining path length seen since the last progress reset (m)."""
+        return float(self._slots.best_remaining[self._row])
+
+    @property
+    def ticks_since_progress(self) -> int:
+        return int(self._slots.stalled[self._row])
+
+    def _plan_and_step(self, pose: Pose, known: np.ndarray) -> tuple[float, float]:
+        """:meth:`command` from a plan: plan, then the follower's first step on it."""
+        self._plan(pose, known)
+        if self.state != "moving":
+            return 0.0, 0.0
+        return self._after_step(self.follower.command(pose), pose, known)
+
+    def _after_step(self, step: tuple[float, float], pose: Pose, known: np.ndarray) -> tuple[float, float]:
+        """:meth:`command` after the follower's step: arrival, then progress (which may replan)."""
         v, omega = step
         if self.follower.done:
             self.state = "reached"
@@ -113,9 +150,10 @@ class Navigator:
         polyline = np.empty((waypoints.shape[0] + 1, 2), dtype=np.float64)
         polyline[0] = pose.x, pose.y
         polyline[1:] = waypoints
-        self.corridor = _corridor(polyline, known)
-        self.best_remaining = math.inf
-        self.ticks_since_progress = 0
+        slots, row = self._slots, self._row
+        self.corridor = slots.corridors.put(row, _corridor(polyline, known))
+        slots.best_remaining[row] = math.inf
+        slots.stalled[row] = 0
         self.state = "moving"
 
     def _waypoints(self, pose: Pose, known: np.ndarray) -> tuple[np.ndarray, bool] | None:
@@ -146,18 +184,142 @@ class Navigator:
         return grid.simplify(space, path), inside and bool(space[goal_cell])
 
     def _track_progress(self, pose: Pose, known: np.ndarray) -> None:
+        slots, row = self._slots, self._row
         remaining = self.follower.remaining_m
-        if remaining < self.best_remaining - PROGRESS_M:
-            self.best_remaining = remaining
-            self.ticks_since_progress = 0
+        if remaining < slots.best_remaining[row] - PROGRESS_M:
+            slots.best_remaining[row] = remaining
+            slots.stalled[row] = 0
             return
-        self.ticks_since_progress += 1
-        if self.ticks_since_progress >= self.spec.stuck_ticks:
-            if self.replans >= self.spec.max_replans:
-                self.state = "blocked"
-                return
-            self.replans += 1
-            self._plan(pose, known)
+        slots.stalled[row] += 1
+        if slots.stalled[row] >= self.spec.stuck_ticks:
+            self._stuck(pose, known)
+
+    def _stuck(self, pose: Pose, known: np.ndarray) -> None:
+        """No progress for ``stuck_ticks``: replan, or report ``blocked`` after ``max_replans``."""
+        if self.replans >= self.spec.max_replans:
+            self.state = "blocked"
+            return
+        self.replans += 1
+        self._plan(pose, known)
+
+
+class NavigationFleet:
+    """The runtime's navigators, a row each of one :class:`NavigatorSlots`, commanded together.
+
+    On nearly every tick nearly every robot is moving: its corridor is checked, its follower steps and its
+    progress is counted. For all of them that is one compiled call (:func:`_fleet_step`), instead of a
+    call and a few Python frames per robot. What needs Python (plans, an arrival, no progress for
+    ``stuck_ticks``) then goes through :class:`Navigator`'s own methods, robot by robot in robot order.
+    The commands and states are those of :meth:`Navigator.command` robot by robot: a robot's step reads
+    only its own map, pose and state, and plans (and the random numbers they draw) come in the same order.
+    """
+
+    def __init__(self, spec: NavigationSpec, motion: MotionParams, rngs: list[np.random.Generator]) -> None:
+        n = len(rngs)
+        self.slots = NavigatorSlots(n)
+        self.navigators = [Navigator(spec, motion, rng, slots=self.slots, row=i) for i, rng in enumerate(rngs)]
+        self._consts = self.navigators[0].follower._consts if n else np.zeros(0)
+        self._stuck_ticks = spec.stuck_ticks
+        self._flags = np.zeros(n, dtype=np.int8)
+
+    def command(self, rows: list[int], poses: np.ndarray, pose_tuples: list[Pose], known: np.ndarray,
+                out: np.ndarray) -> None:
+        """``out[i] = navigators[i].command(pose_tuples[i], known[i])`` for every robot ``i`` in ``rows``
+        (ascending); ``poses`` (float64[R, 3]) holds the same poses, ``known`` (uint8[R, H, W], C-contiguous)
+        is the robots' maps, ``out`` (float64[R, 2]) has zero rows for them."""
+        navs = self.navigators
+        moving: list[int] = []
+        python: list[int] = []  # planning: all of it in Python (other states command (0, 0))
+        for i in rows:
+            state = navs[i].state
+            if state == "moving":
+                moving.append(i)
+            elif state == "planning":
+                python.append(i)
+        flags = self._flags
+        if moving:
+            s, f = self.slots, self.slots.followers
+            if _fleet_step(np.array(moving, dtype=np.int64), known, s.corridors.buffer, s.corridors.start,
+                           s.corridors.end, f.paths.buffer, f.paths.start, f.paths.end, self._consts, f.index,
+                           f.remaining, f.done, s.best_remaining, s.stalled, self._stuck_ticks, PROGRESS_M, poses,
+                           out, flags):
+                python = sorted(python + [i for i in moving if flags[i] != _STEPPED])  # robot order
+        for i in python:
+            nav = navs[i]
+            if nav.state == "planning":
+                out[i] = nav.command(pose_tuples[i], known[i])
+                continue
+            flag = flags[i]
+            if flag == _BLOCKED:
+                out[i] = nav._plan_and_step(pose_tuples[i], known[i])
+            elif flag == _ARRIVED:
+                nav.state = "reached"
+            else:  # _STUCK
+                nav._stuck(pose_tuples[i], known[i])
+                if nav.state != "moving":
+                    out[i] = 0.0
+
+
+_STEPPED, _BLOCKED, _ARRIVED, _STUCK = 0, 1, 2, 3
+
+
+@njit(cache=True)
+def _fleet_step(rows: np.ndarray, known: np.ndarray, cells: np.ndarray, cell_start: np.ndarray, cell_end: np.ndarray,
+                paths: np.ndarray, path_start: np.ndarray, path_end: np.ndarray, consts: np.ndarray,
+                index: np.ndarray, remaining: np.ndarray, done: np.ndarray, best: np.ndarray, stalled: np.ndarray,
+                stuck_ticks: int, progress_m: float, poses: np.ndarray, out: np.ndarray,
+                flags: np.ndarray) -> bool:  # pragma: no cover - compiled
+    """For each moving robot ``k`` in ``rows``, what :meth:`Navigator.command` does up to the point where
+    Python is needed, with the same operations: ``flags[k]`` = _BLOCKED when a corridor cell (robot k's
+    ``cells[cell_start[k]:cell_end[k]]``) is SOLID (nothing changes); else the follower's step
+    (:func:`swarm.motion._follow_step` on its path table, state in ``index``/``remaining``/``done``) into
+    ``out[k]``, then _ARRIVED (and (0, 0)) when the path is done, else the progress count (``best``,
+    ``stalled``): _STUCK when it reaches ``stuck_ticks``, otherwise _STEPPED. Returns whether any robot
+    was left to Python (not _STEPPED)."""
+    size = np.uint64(known.shape[1] * known.shape[2])
+    left = False
+    flat = known.ravel()  # a view of the C-contiguous maps
+    for t in range(rows.shape[0]):
+        k = rows[t]
+        base = np.uint64(k) * size
+        blocked = False
+        for i in range(cell_start[k], cell_end[k]):
+            if flat[base + np.uint64(cells[i])] >= SOLID:
+                blocked = True
+                break
+        if blocked:
+            flags[k] = _BLOCKED
+            left = True
+            continue
+        if done[k]:
+            flags[k] = _ARRIVED
+            left = True
+            out[k, 0] = 0.0
+            out[k, 1] = 0.0
+            continue
+        v, omega, idx, rem, finished = _follow_step(paths[path_start[k]:path_end[k]], consts, index[k], poses[k, 0],
+                                                    poses[k, 1], poses[k, 2])
+        index[k] = idx
+        remaining[k] = rem
+        done[k] = finished
+        if finished:
+            flags[k] = _ARRIVED
+            left = True
+            out[k, 0] = 0.0
+            out[k, 1] = 0.0
+            continue
+        flags[k] = _STEPPED
+        if rem < best[k] - progress_m:
+            best[k] = rem
+            stalled[k] = 0
+        else:
+            stalled[k] += 1
+            if stalled[k] >= stuck_ticks:
+                flags[k] = _STUCK
+                left = True
+        out[k, 0] = v
+        out[k, 1] = omega
+    return left
 
 
 def _clip(cell: tuple[int, int], shape: tuple[int, int]) -> tuple[int, int]:

@@ -10,7 +10,8 @@ One logic tick (0.1 s, DESIGN.md section 4):
 4. inboxes: messages sent last tick arrive; map updates are merged into the receiver's map;
 5. the transport hands each live robot its observation and gets its action (goal or velocity, messages);
 6. this tick's broadcasts are judged by this tick's links and queued for next tick;
-7. navigation turns goals into (v, omega) commands on each robot's own map;
+7. navigation turns goals into (v, omega) commands on each robot's own map (every moving robot's step in
+   one compiled call, :class:`swarm.navigation.NavigationFleet`);
 8. metrics: explored thresholds every tick, a time-series row every ``record_every`` ticks.
 
 Everything random comes from :func:`swarm.spec.seed_streams`; nothing reads the clock except the
@@ -35,7 +36,7 @@ from .comm import CommSpec, Envelope, MapSharing, Medium
 from .grid._validate import vouch_known
 from .knowledge import sync_changes, sync_regions_flat
 from .metrics import Metrics
-from .navigation import Navigator
+from .navigation import NavigationFleet
 from .neighbours import bearings
 from .result import RunResult
 from .sensing import ExplorationTracker, Lidar, LidarParams
@@ -106,9 +107,9 @@ class Simulation:
         self.tracker = ExplorationTracker(self.truth)
         self.known = np.zeros((n, *self.truth.shape), dtype=np.uint8)
         self._views = [self._read_only(i) for i in range(n)]
-        self._maps = list(self.known)  # each robot's writable map, for its navigator (no view per tick)
-        self.navigators = [Navigator(self.spec.navigation, self.motion, planner_rng(self.spec.seed, i))
-                           for i in range(n)]
+        self.fleet = NavigationFleet(self.spec.navigation, self.motion,
+                                     [planner_rng(self.spec.seed, i) for i in range(n)])
+        self.navigators = self.fleet.navigators
         self.links = build_link_model(self.truth, config_from_mapping(self.spec.radio))
         self.comm = from_mapping(CommSpec, self.spec.comm)
         self.medium = Medium(n, self.comm, self.streams.radio)
@@ -210,29 +211,35 @@ class Simulation:
                 actions = host.act(tick, self._inputs(tick, poses, pose_tuples, collided, inboxes))
             self._note_failures(tick, host)
             sent = self._send(tick, poses, actions, links)
-            moving = False
-            rows: list[tuple[float, float]] = []
-            for i, action in enumerate(actions):
-                nav = self.navigators[i]
-                if action is None:
-                    rows.append((0.0, 0.0))
-                    continue
-                if action.clear_goal:
-                    nav.set_goal(None)
-                if action.goal is not None:
-                    nav.set_goal(action.goal)
-                if action.velocity is not None:
-                    v, w = action.velocity
-                else:
-                    v, w = nav.command(pose_tuples[i], self._maps[i])
-                rows.append((v, w))
-                moving = moving or v != 0.0 or w != 0.0 or nav.state in ("moving", "planning")
-            commands = np.array(rows, dtype=np.float64)
+            commands = self._commands(actions, poses, pose_tuples)
+            moving = bool(commands.any()) or any(nav.state in ("moving", "planning")
+                                                 for nav, action in zip(self.navigators, actions) if action is not None)
             stalled_for = 0 if moving else stalled_for + 1
             for observer in self.observers:
                 observer(TickView(tick, poses, self.known, self.tracker, actions, links, sent))
             tick += 1
         return self._result(tick, stop_reason, collisions, time.perf_counter() - t0, host)
+
+    def _commands(self, actions: list[Action | None], poses: np.ndarray, pose_tuples: list[Pose]) -> np.ndarray:
+        """The tick's (v, omega) per robot: an action's velocity, else its navigator's command toward the
+        goal the action set (all navigators at once, :class:`NavigationFleet`); (0, 0) without an action."""
+        commands = np.zeros((len(actions), 2), dtype=np.float64)
+        steered: list[int] = []
+        for i, action in enumerate(actions):
+            if action is None:
+                continue
+            nav = self.navigators[i]
+            if action.clear_goal:
+                nav.set_goal(None)
+            if action.goal is not None:
+                nav.set_goal(action.goal)
+            if action.velocity is not None:
+                v, w = action.velocity
+                commands[i] = v, w
+            else:
+                steered.append(i)
+        self.fleet.command(steered, poses, pose_tuples, self.known, commands)
+        return commands
 
     # ---------------------------------------------------------------------------------- messaging ----
     def _receive(self) -> tuple[list[list[Envelope]], list[list[np.ndarray | None]]]:

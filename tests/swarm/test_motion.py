@@ -214,7 +214,8 @@ class _PlainFollower(Follower):
     bit for bit, or every run would change."""
 
     def set_path(self, waypoints):  # type: ignore[override]
-        super().set_path(waypoints)  # validation and the index / done / remaining state
+        super().set_path(waypoints)  # validation
+        self._index, self._done = 0, False  # its own state, in Python (the base class keeps it in arrays)
         self._points = list(map(tuple, np.asarray(waypoints, dtype=np.float64).tolist()))
         m = len(self._points)
         seg = [math.dist(self._points[i], self._points[i + 1]) for i in range(m - 1)]
@@ -224,6 +225,18 @@ class _PlainFollower(Follower):
         self._corner_speed = [self._plain_bend_speed(i, self._points[i - 1]) if i > 0 else
                               (0.0 if m == 1 else self.params.max_speed) for i in range(m)]
         self._remaining = self._suffix[0]
+
+    @property
+    def index(self) -> int:
+        return self._index
+
+    @property
+    def done(self) -> bool:
+        return self._done
+
+    @property
+    def remaining_m(self) -> float:
+        return 0.0 if self._done else self._remaining
 
     def command(self, pose):  # type: ignore[override]
         if self._done:
@@ -307,7 +320,7 @@ def test_command_equals_the_plain_formulas_bit_for_bit(seed: int) -> None:
         fast.set_path(pts)
         plain.set_path(pts)
         # the compiled path table: lengths to the end and corner speeds as the Python formulas give them
-        assert fast._path[:, 2].tolist() == plain._suffix and fast._path[:, 4].tolist() == plain._corner_speed
+        assert fast.path_table[:, 2].tolist() == plain._suffix and fast.path_table[:, 4].tolist() == plain._corner_speed
         here = pts[0] + rng.normal(0.0, 0.3, 2)
         for _ in range(40):
             pose = (float(here[0]), float(here[1]), float(rng.uniform(-4.0, 4.0)))
