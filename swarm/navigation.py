@@ -99,11 +99,11 @@ class Navigator:
     @property
     def best_remaining(self) -> float:
         """The shortest remaining path length seen since the last progress reset (m)."""
-        return float(self._slots.best_remaining[self._row])
+        return self._slots.best_remaining.item(self._row)
 
     @property
     def ticks_since_progress(self) -> int:
-        return int(self._slots.stalled[self._row])
+        return self._slots.stalled.item(self._row)
 
     def _plan_and_step(self, pose: Pose, known: np.ndarray) -> tuple[float, float]:
         """:meth:`command` from a plan: plan, then the follower's first step on it."""
@@ -127,10 +127,11 @@ class Navigator:
         """The current status; the same (immutable) object while nothing in it changed, since the runtime
         asks for every robot every tick and most ticks change nothing."""
         s = self._status
+        stalled = self._slots.stalled.item(self._row)
         if (s.state != self.state or s.goal != self.goal or s.path_length != self.path_length
-                or s.ticks_since_progress != self.ticks_since_progress):
+                or s.ticks_since_progress != stalled):
             s = self._status = _nav_status(goal=self.goal, state=self.state, path_length=self.path_length,
-                                           ticks_since_progress=self.ticks_since_progress)
+                                           ticks_since_progress=stalled)
         return s
 
     # ----------------------------------------------------------------------------------- planning ----

@@ -198,7 +198,7 @@ class Simulation:
                 stop_reason = "max_ticks"
             elif stalled_for >= spec.stop.stall_ticks:
                 stop_reason = "stalled"
-            elif not active.any():
+            elif np.count_nonzero(active) == 0:  # (ndarray.any() costs ~1 us on 16 flags, this 0.3)
                 stop_reason = "all_failed"
             if stop_reason or self.metrics.due(tick):
                 self._record(tick, explored, collisions, links)
@@ -212,8 +212,8 @@ class Simulation:
             self._note_failures(tick, host)
             sent = self._send(tick, poses, actions, links)
             commands = self._commands(actions, poses, pose_tuples)
-            moving = bool(commands.any()) or any(nav.state in ("moving", "planning")
-                                                 for nav, action in zip(self.navigators, actions) if action is not None)
+            moving = np.count_nonzero(commands) > 0 or any(nav.state in ("moving", "planning") for nav, action
+                                                           in zip(self.navigators, actions) if action is not None)
             stalled_for = 0 if moving else stalled_for + 1
             for observer in self.observers:
                 observer(TickView(tick, poses, self.known, self.tracker, actions, links, sent))
@@ -268,7 +268,7 @@ class Simulation:
             outboxes.append([self.medium.envelope(i, m) for m in (*service[i], *extra)])
         if any(outboxes):
             link = links.senders_link([i for i, out in enumerate(outboxes) if out])
-            if self.failed.any():
+            if np.count_nonzero(self.failed):
                 link = link & ~self.failed[:, None]
             self.inboxes = self.medium.deliver(tick, outboxes, link)
             self._deliveries = [(env.message, env.delivered_to) for out in outboxes for env in out if env.delivered_to]
