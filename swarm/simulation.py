@@ -42,7 +42,7 @@ from .result import RunResult
 from .sensing import ExplorationTracker, Lidar, LidarParams
 from .spawn import spawn
 from .spec import ROBOT_STREAM, RunSpec, planner_rng, seed_streams
-from .transport import AgentHost, PhaseTimes, TickBatch, TickInput, make_host
+from .transport import AgentHost, PhaseTimes, TickBatch, make_host
 from .transport.wire import ResetPacket
 from .world import MotionParams, World
 
@@ -294,23 +294,22 @@ class Simulation:
         return self.links.in_sight(poses[:, :2], self.neighbour_range)
 
     def _inputs(self, tick: int, pose_array: np.ndarray, poses: list[Pose], collided: np.ndarray,
-                inboxes: list[list[Envelope]]) -> list[TickInput | None]:
+                inboxes: list[list[Envelope]]) -> list[Observation | None]:
         distance = self.world.distance.tolist()
-        energy = (self.world.distance + self.world.rotation).tolist()
+        energy = [d + r for d, r in zip(distance, self.world.rotation.tolist())]  # float64 sums, as numpy's
         neighbours = self._neighbours(pose_array)
         hit = collided.tolist()
         failed = self.failed.tolist()
-        inputs: list[TickInput | None] = []
+        inputs: list[Observation | None] = []
         for i, pose in enumerate(poses):
             if failed[i]:
                 inputs.append(None)
                 continue
             inbox = inboxes[i]
-            obs = _observation(tick=tick, robot_id=i, pose=pose, known=self._views[i],
-                               inbox=tuple([env.message for env in inbox]) if inbox else (),
-                               neighbours=neighbours[i], collided=hit[i], nav=self.navigators[i].status(),
-                               distance_travelled=distance[i], energy_used=energy[i])
-            inputs.append(TickInput(obs))
+            inputs.append(_observation(tick=tick, robot_id=i, pose=pose, known=self._views[i],
+                                       inbox=tuple([env.message for env in inbox]) if inbox else (),
+                                       neighbours=neighbours[i], collided=hit[i], nav=self.navigators[i].status(),
+                                       distance_travelled=distance[i], energy_used=energy[i]))
         return inputs
 
     def _batch(self, poses: np.ndarray, collided: np.ndarray, inboxes: list[list[Envelope]],

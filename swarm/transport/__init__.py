@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Sequence
 
-from .base import AgentHost, HostStats, TickBatch, TickInput
+from .base import AgentHost, HostStats, TickBatch
 from .inprocess import InProcessHost
 from .timing import PhaseTimes
 
@@ -24,4 +24,4 @@ def make_host(kind: str, run_key: str, listen: Sequence[str] = (), remote: Seque
     return ZenohHost(run_id or new_run_id(run_key), listen=listen, remote=remote, timeout_s=timeout_s, times=times)
 
 
-__all__ = ["AgentHost", "HostStats", "InProcessHost", "PhaseTimes", "TRANSPORTS", "TickBatch", "TickInput", "make_host"]
+__all__ = ["AgentHost", "HostStats", "InProcessHost", "PhaseTimes", "TRANSPORTS", "TickBatch", "make_host"]

@@ -18,13 +18,6 @@ from .wire import ResetPacket
 
 
 @dataclass
-class TickInput:
-    """One robot's observation for a tick (hosts that call algorithms directly)."""
-
-    obs: Observation
-
-
-@dataclass
 class TickBatch:
     """Every robot's observation of a tick as the runtime's arrays, row i = robot i, for hosts that pack all
     robots at once (zenoh): nothing per robot is built on the runtime's side. Read-only for the host."""
@@ -50,13 +43,14 @@ class HostStats:
 
 
 class AgentHost(Protocol):
-    batched: bool  # act() takes a TickBatch instead of one TickInput per robot
+    batched: bool  # act() takes a TickBatch instead of one Observation per robot
     stats: HostStats
 
     def start(self, resets: Sequence[ResetPacket]) -> None: ...
 
-    def act(self, tick: int, inputs: Sequence[TickInput | None] | TickBatch) -> list[Action | None]:
-        """Actions for the robots given inputs (None for failed robots); None where a robot failed now."""
+    def act(self, tick: int, inputs: Sequence[Observation | None] | TickBatch) -> list[Action | None]:
+        """Actions for the robots given their observations (None for failed robots), or a TickBatch for a
+        batched host; None where a robot failed now."""
         ...
 
     def close(self) -> None: ...

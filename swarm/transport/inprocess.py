@@ -5,8 +5,8 @@ from __future__ import annotations
 from typing import Sequence
 
 from .. import registry
-from ..api import Action
-from .base import HostStats, TickInput
+from ..api import Action, Observation
+from .base import HostStats
 from .timing import PhaseTimes, timed
 from .wire import ResetPacket
 
@@ -27,9 +27,9 @@ class InProcessHost:
             self.agents.append(agent)
             self._acts.append(timed(self._times, "agent: algorithm", agent.act))
 
-    def act(self, tick: int, inputs: Sequence[TickInput | None]) -> list[Action | None]:
+    def act(self, tick: int, inputs: Sequence[Observation | None]) -> list[Action | None]:
         acts = self._acts
-        return [None if inp is None else check_action(acts[i](inp.obs), i) for i, inp in enumerate(inputs)]
+        return [None if obs is None else check_action(acts[i](obs), i) for i, obs in enumerate(inputs)]
 
     def close(self) -> None:
         self.agents = []
