@@ -3,6 +3,7 @@ they equal a fresh computation bit for bit, and so the search's answers equal th
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -69,6 +70,40 @@ def test_kept_inputs_equal_a_fresh_computation_after_every_change(radius: float,
             assert total == int(np.count_nonzero(view & (space != 0)))
             partial += 0 < np.count_nonzero((before != robot_map).any(axis=1)) < robot_map.shape[0] // 2
     assert partial >= 20  # most steps changed some rows only: the band updates were exercised
+
+
+@pytest.mark.parametrize("radius, margin, unseen_ok", [(0.3, 0.05, False), (0.9, 0.1, False), (0.3, 0.05, True)])
+def test_one_changed_cell_is_recomputed_as_far_as_it_reaches_in_every_direction(radius: float, margin: float,
+                                                                               unseen_ok: bool) -> None:
+    """A single cell that changes in an open map changes view cells exactly ``reach + 1`` steps away along
+    its row and column (and the space ``erosion depth`` away): the box recomputed around it must reach that
+    far on all four sides, and the slice it is computed from as far again (an unseen cell that far makes
+    the box's edge cells view cells). Checked for a revealed cell (UNSEEN -> FREE) and a new wall
+    (FREE -> SOLID) at several places, each after a refresh that saw the map before the change."""
+    reach = default_view_reach_cells(radius, margin)
+    rows, widths = _erosion_rows(radius, margin)
+    band = max(erosion_depth(radius, margin), reach + 1)
+    for where, before, after, far in itertools.product(((20, 20), (20, 3), (2, 25), (37, 38)),
+                                                       (UNSEEN, FREE), (FREE, SOLID), (False, True)):
+        if before == after:
+            continue
+        kept.forget_all()
+        robot_map = np.full((40, 41), FREE, np.uint8)
+        if far:
+            for dr, dc in ((0, 2 * band), (0, -2 * band), (2 * band, 0), (-2 * band, 0)):
+                r, c = where[0] + dr, where[1] + dc  # seen from the box's edge: the slice must reach it
+                if 0 <= r < 40 and 0 <= c < 41:
+                    robot_map[r, c] = UNSEEN
+        robot_map[where] = before
+        inputs = kept.inputs_for(robot_map, radius, margin, unseen_ok, reach)
+        kept.refresh(robot_map, *inputs, unseen_ok, rows, widths, reach, band)
+        robot_map[where] = after
+        total = kept.refresh(robot_map, *inputs, unseen_ok, rows, widths, reach, band)
+        space = grid.configuration_space(robot_map, radius, margin, unseen_ok).view(np.uint8)
+        view = grid.view_cells(robot_map, reach)
+        assert np.array_equal(inputs.pad[1:-1, 1:-1], space)
+        assert np.array_equal(inputs.targets[1:-1, 1:-1], (view & (space != 0)).view(np.uint8))
+        assert total == int(np.count_nonzero(view & (space != 0)))
 
 
 def test_the_kept_search_finds_what_the_fresh_search_finds() -> None:
