@@ -372,16 +372,25 @@ def _follow_step(path: np.ndarray, consts: np.ndarray, index: int, x: float, y: 
     return direction * limit * math.cos(err), omega, index, remaining, False
 
 
+@njit(cache=True, inline="always")
+def cells_below(flat: np.ndarray, base: np.uint64, cells: np.ndarray, lo: int, hi: int,
+                limit: int) -> bool:  # pragma: no cover - compiled
+    """Whether ``flat[base + cells[i]] < limit`` for every i in ``lo:hi`` (the corridor check of
+    :meth:`Follower.command_unless` and of the navigation fleet's step, on unsigned indices)."""
+    for i in range(lo, hi):
+        if flat[base + np.uint64(cells[i])] >= limit:
+            return False
+    return True
+
+
 @njit(cache=True)
 def _follow_step_unless(grid: np.ndarray, cells: np.ndarray, limit: int, path: np.ndarray, consts: np.ndarray,
                         index: int, remaining: float, done: bool, x: float, y: float,
                         theta: float) -> tuple[bool, float, float, int, float, bool]:  # pragma: no cover - compiled
     """:func:`_follow_step` behind the check of :meth:`Follower.command_unless`: ``(clear, v, omega, index,
     remaining, done)``, the follower's state unchanged when not clear or already ``done`` (then (0, 0))."""
-    flat = grid.ravel()  # a view of a C-contiguous map, a copy of another
-    for i in range(cells.shape[0]):
-        if flat[np.uint64(cells[i])] >= limit:
-            return False, 0.0, 0.0, index, remaining, done
+    if not cells_below(grid.ravel(), np.uint64(0), cells, 0, cells.shape[0], limit):  # ravel: a view if C-contiguous
+        return False, 0.0, 0.0, index, remaining, done
     if done:
         return True, 0.0, 0.0, index, remaining, done
     v, omega, index, remaining, done = _follow_step(path, consts, index, x, y, theta)

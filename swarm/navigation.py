@@ -25,7 +25,7 @@ from .grid import memo
 from .grid.cspace import configuration_space_of, nearest_in_of
 from .grid.local import plan_local_first
 from .arena import Arena
-from .motion import Follower, FollowerSlots, _follow_step
+from .motion import Follower, FollowerSlots, _follow_step, cells_below
 from .planners import AStar, get_planner
 from .spec import NavigationSpec
 from .world import MotionParams
@@ -273,22 +273,17 @@ def _fleet_step(rows: np.ndarray, known: np.ndarray, cells: np.ndarray, cell_sta
     """For each moving robot ``k`` in ``rows``, what :meth:`Navigator.command` does up to the point where
     Python is needed, with the same operations: ``flags[k]`` = _BLOCKED when a corridor cell (robot k's
     ``cells[cell_start[k]:cell_end[k]]``) is SOLID (nothing changes); else the follower's step
-    (:func:`swarm.motion._follow_step` on its path table, state in ``index``/``remaining``/``done``) into
+    (the corridor check and :func:`swarm.motion._follow_step` as :meth:`~swarm.motion.Follower.command_unless`
+    makes them, on its path table, state in ``index``/``remaining``/``done``) into
     ``out[k]``, then _ARRIVED (and (0, 0)) when the path is done, else the progress count (``best``,
     ``stalled``): _STUCK when it reaches ``stuck_ticks``, otherwise _STEPPED. Returns whether any robot
     was left to Python (not _STEPPED)."""
     size = np.uint64(known.shape[1] * known.shape[2])
-    left = False
     flat = known.ravel()  # a view of the C-contiguous maps
+    left = False
     for t in range(rows.shape[0]):
         k = rows[t]
-        base = np.uint64(k) * size
-        blocked = False
-        for i in range(cell_start[k], cell_end[k]):
-            if flat[base + np.uint64(cells[i])] >= SOLID:
-                blocked = True
-                break
-        if blocked:
+        if not cells_below(flat, np.uint64(k) * size, cells, cell_start[k], cell_end[k], SOLID):
             flags[k] = _BLOCKED
             left = True
             continue
