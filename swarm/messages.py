@@ -264,11 +264,9 @@ def map_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[
 
 def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float]) -> MapUpdate:
     """The full-map MapUpdate of ``known`` (``pose``: three Python floats)."""
-    plain = _cellcodec.pack2(known.reshape(-1)).tobytes()
-    update = _new_update(sender=sender, seq=seq, tick=tick, full=True, shape=(int(known.shape[0]), int(known.shape[1])),
-                         count=int(np.count_nonzero(known)), payload=zlib.compress(plain, MAP_ZLIB_LEVEL), pose=pose)
-    update.__dict__["_plain"] = plain  # see MapUpdate._raw
-    return update
+    return _compressed_update(_cellcodec.pack2(known.reshape(-1)).tobytes(), sender=sender, seq=seq, tick=tick,
+                              full=True, shape=(int(known.shape[0]), int(known.shape[1])),
+                              count=int(np.count_nonzero(known)), pose=pose)
 
 
 def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
@@ -276,14 +274,20 @@ def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tupl
     """The delta MapUpdate of cells ``changed`` of ``known``: distinct ascending int64 flat indices, as
     :func:`swarm.knowledge.sync_changes` gives them, and ``pose`` three Python floats, so nothing is sorted
     or converted again (the map-sharing service builds one per robot per sharing tick)."""
-    plain = _cellcodec.pack_delta(known.reshape(-1), changed).tobytes()
-    update = _new_update(sender=sender, seq=seq, tick=tick, full=False, shape=(int(known.shape[0]), int(known.shape[1])),
-                         count=len(changed), payload=zlib.compress(plain, MAP_ZLIB_LEVEL), pose=pose)
-    update.__dict__["_plain"] = plain  # see MapUpdate._raw
-    return update
+    return _compressed_update(_cellcodec.pack_delta(known.reshape(-1), changed).tobytes(), sender=sender, seq=seq,
+                              tick=tick, full=False, shape=(int(known.shape[0]), int(known.shape[1])),
+                              count=len(changed), pose=pose)
 
 
 _new_update = frozen_builder(MapUpdate)
+
+
+def _compressed_update(plain: bytes, **fields: Any) -> MapUpdate:
+    """A MapUpdate whose payload is ``plain`` compressed, keeping ``plain`` for receivers in this process
+    (:meth:`MapUpdate._raw`)."""
+    update = _new_update(payload=zlib.compress(plain, MAP_ZLIB_LEVEL), **fields)
+    update.__dict__["_plain"] = plain
+    return update
 
 
 @message("swarm.map_request", version=1)
