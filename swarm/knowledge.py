@@ -76,8 +76,8 @@ def merge(into: np.ndarray, other: np.ndarray) -> int:
     return int(_merge_max_kernel(into, np.ascontiguousarray(other)))
 
 
-@njit(cache=True)
-def _merge_cells_kernel(flat: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
+@njit(cache=True, inline="always")  # also the body of _merge_cells_many_kernel
+def _merge_cells_kernel(flat: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:  # pragma: no cover - compiled
     for k in range(idx.shape[0]):
         i = idx[k]
         if values[k] > flat[i]:
@@ -104,11 +104,7 @@ def _merge_cells_many_kernel(stack: np.ndarray, rows: np.ndarray, idx: np.ndarra
                              values: np.ndarray) -> None:  # pragma: no cover - compiled
     """:func:`_merge_cells_kernel` into each map ``stack[rows[k]]``."""
     for k in range(rows.shape[0]):
-        flat = stack[rows[k]].reshape(-1)
-        for j in range(idx.shape[0]):
-            i = idx[j]
-            if values[j] > flat[i]:
-                flat[i] = values[j]
+        _merge_cells_kernel(stack[rows[k]].reshape(-1), idx, values)
 
 
 def merge_cells_many(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
