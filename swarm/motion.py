@@ -397,5 +397,5 @@ def _follow_step_unless(grid: np.ndarray, cells: np.ndarray, limit: int, path: n
     return True, v, omega, index, remaining, done
 
 
-__all__ = ["FollowParams", "Follower", "FollowerSlots", "MAX_SUBSTEP_MOVE_M", "MOTION_PRESETS", "MotionParams", "TICK_S",
-           "wrap_angle"]
+__all__ = ["FollowParams", "Follower", "FollowerSlots", "MAX_SUBSTEP_MOVE_M", "MOTION_PRESETS", "MotionParams",
+           "TICK_S", "wrap_angle"]
