@@ -185,7 +185,7 @@ class Simulation:
             collisions += int(np.count_nonzero(collided > was_colliding))  # contacts that began this tick
             was_colliding = collided
             active = ~self.failed
-            self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker)
+            self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker, measure=False)
             self.sharing.scanned(poses)
             self.tracker.update_coverage(poses[:, :2], active=active)
             links = _TickLinks(self.links, poses[:, :2])

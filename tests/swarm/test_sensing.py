@@ -546,3 +546,110 @@ def test_the_walk_gives_the_textbook_sums_bit_for_bit_also_from_cell_boundaries(
             assert np.array_equal(ranges.view(np.uint32), want.view(np.uint32)), (mode, pose)
             hits_at_zero += int(np.count_nonzero(want == 0.0))
     assert hits_at_zero > 0
+
+
+# ------------------------------------------------------------------------ settled robots (measure=False)
+def _pair_of_lidars(truth: Map, n: int) -> tuple[tuple[Lidar, np.ndarray], tuple[Lidar, np.ndarray]]:
+    """Two lidars with their own trackers and maps: one casts every robot, one skips settled robots."""
+    return ((Lidar(truth, tracker=ExplorationTracker(truth)), empty_knowledge(truth.shape, n)),
+            (Lidar(truth, tracker=ExplorationTracker(truth)), empty_knowledge(truth.shape, n)))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_skipping_settled_robots_leaves_maps_and_tracker_as_casting_every_robot(seed: int) -> None:
+    truth = generate("building", 40, seed)
+    rng = np.random.default_rng(seed)
+    n = 6
+    (full, full_known), (lazy, lazy_known) = _pair_of_lidars(truth, n)
+    spots = random_free_poses(truth, 40, rng)  # the places robots come back to
+    survey = random_free_poses(truth, 600, rng)  # both lidars first survey the map, so robots can be settled
+    for lidar, known in ((full, full_known), (lazy, lazy_known)):
+        for k in range(0, len(survey), n):
+            lidar.scan(survey[k:k + n], known)
+    skipped = cast = 0
+    for step in range(60):
+        poses = spots[rng.integers(0, len(spots), n)].copy()
+        poses[:, 2] = rng.uniform(-math.pi, math.pi, n)
+        poses[:, :2] += rng.uniform(-0.2, 0.2, (n, 2)) * (truth.free[(poses[:, 1] // CELL).astype(int),
+                                                                    (poses[:, 0] // CELL).astype(int)])[:, None]
+        poses = poses[truth.free[(poses[:, 1] // CELL).astype(int), (poses[:, 0] // CELL).astype(int)]]
+        active = rng.random(len(poses)) > 0.1
+        if len(poses) < n:
+            continue
+        if step % 4 == 3:   # map sharing: every robot takes the others' maps (maxima)
+            for known in (full_known, lazy_known):
+                known[:] = known.max(axis=0)
+        if step % 2:        # damage: forget cells, and wrong walls in free space (merged from a peer)
+            r = rng.integers(0, n, 2)
+            cells = rng.integers(0, truth.shape[0], (20, 2))
+            value = rng.integers(0, 3, 20).astype(np.uint8)
+            for known in (full_known, lazy_known):
+                known[r[:, None], cells[:, 0], cells[:, 1]] = value
+        assert full.scan(poses, full_known, active=active) is not None
+        assert lazy.scan(poses, lazy_known, active=active, measure=False) is None
+        assert np.array_equal(full_known, lazy_known)
+        assert np.array_equal(full.tracker.seen, lazy.tracker.seen)
+        assert full.tracker.seen_free_cells == lazy.tracker.seen_free_cells
+        assert np.array_equal(full.cast, active)
+        assert not lazy.cast[~active].any()
+        skipped += int(np.count_nonzero(active & ~lazy.cast))
+        cast += int(np.count_nonzero(lazy.cast))
+    assert skipped > 20 and cast > 20  # both paths were taken
+
+
+def test_a_settled_robot_is_cast_again_when_any_cell_its_rays_reach_is_missing() -> None:
+    truth = generate("building", 40, 5)
+    pose = random_free_poses(truth, 1, np.random.default_rng(5))
+    written = empty_knowledge(truth.shape, 1)
+    Lidar(truth).scan(pose, written)                             # the cells one scan from here writes
+    lidar = Lidar(truth)
+    everything = np.where(truth.solid, SOLID, FREE).astype(np.uint8)[None]
+    lidar.tracker.seen_buffer[:] = True                          # the map and the tracker hold everything
+    known = everything.copy()
+    lidar.scan(pose, known, measure=False)
+    assert not lidar.cast[0] and np.array_equal(known, everything)   # settled: not cast, nothing written
+    rows, cols = np.nonzero(written[0])
+    x, y = pose[0, 0], pose[0, 1]
+    far = np.argsort(np.hypot((cols + 0.5) * CELL - x, (rows + 0.5) * CELL - y))[-12:]
+    for r, c in zip(rows[far], cols[far]):                       # the farthest cells the rays write
+        known[0, r, c] = UNSEEN
+        lidar.scan(pose, known, measure=False)
+        assert lidar.cast[0] and np.array_equal(known, everything)
+    r0, c0 = int(y // CELL), int(x // CELL)
+    outside = everything.copy()
+    outside[0, np.abs(np.arange(truth.shape[0]) - r0) > 16] = UNSEEN     # beyond the reach: still settled
+    outside[0, :, np.abs(np.arange(truth.shape[1]) - c0) > 16] = UNSEEN
+    lidar.scan(pose, outside, measure=False)
+    assert not lidar.cast[0]
+
+
+def test_a_wall_cell_the_tracker_has_not_seen_keeps_the_robot_cast() -> None:
+    truth = make_map(room(30, 30))
+    pose = np.array([[2.3, 2.4, 0.0]])                           # near the corner: the walls are in range
+    lidar = Lidar(truth)
+    known = np.where(truth.solid, SOLID, FREE).astype(np.uint8)[None]
+    lidar.tracker.seen_buffer[:] = True
+    lidar.scan(pose, known, measure=False)
+    assert not lidar.cast[0]
+    lidar.tracker.seen_buffer[0, 3] = False                      # a wall cell the rays hit
+    lidar.scan(pose, known, measure=False)
+    assert lidar.cast[0] and lidar.tracker.seen[0, 3]
+    lidar.scan(pose, known, measure=False)
+    assert not lidar.cast[0]
+    lidar.tracker.seen_buffer[0, 0] = False                      # a corner no ray can enter: no matter
+    lidar.scan(pose, known, measure=False)
+    assert not lidar.cast[0]
+
+
+def test_a_robot_inside_a_thick_wall_is_cast_although_no_ray_could_enter_its_cell() -> None:
+    solid = np.ones((30, 30), dtype=bool)
+    solid[3:-3, 3:-3] = False
+    truth = make_map(solid)
+    lidar = Lidar(truth)
+    known = np.where(truth.solid, SOLID, FREE).astype(np.uint8)[None]
+    lidar.tracker.seen_buffer[:] = True
+    known[0, 1, 1] = UNSEEN                                      # enclosed by wall: only a robot in it sees it
+    lidar.scan(np.array([[3.0, 3.0, 0.0]]), known, measure=False)
+    assert not lidar.cast[0] and known[0, 1, 1] == UNSEEN
+    lidar.scan(np.array([[0.7, 0.7, 0.0]]), known, measure=False)
+    assert lidar.cast[0] and known[0, 1, 1] == SOLID
