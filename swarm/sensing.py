@@ -58,6 +58,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+from scipy import ndimage
 
 from maps import Map
 from maps.errors import InvalidInput
@@ -262,7 +263,8 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     """One tick of the ternary lidar for every robot and ray. Returns the number of newly seen free
     cells, or ``-(r + 1)`` (nothing written) if robot r's pose is invalid. With a ``required`` raster
     (:func:`_required_raster`; empty: cast every robot) a robot whose scan would write nothing
-    (:func:`_lidar_settled`) is not cast: its ranges are NaN and ``cast[r]`` is 0 (1 for robots cast)."""
+    (:func:`_lidar_settled`) is not cast: its ranges are NaN and ``cast[r]`` is False (True for robots
+    cast)."""
     rows, cols = solid.shape
     bad = _lidar_first_bad_pose(poses, active, rows, cols, cell)
     if bad >= 0:
@@ -272,20 +274,19 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     required_flat = required.reshape(required.size)
     new = 0
     for r in range(poses.shape[0]):
-        cast[r] = 0
+        cast[r] = False
         if not active[r]:
             for i in range(cos_a.shape[0]):
                 ranges[r, i] = np.nan
             continue
         x = poses[r, 0]
         y = poses[r, 1]
-        if skip_settled and _lidar_settled(solid_flat, required_flat, known_flat, r * rows * cols, seen_flat, rows,
-                                           cols, int(math.floor(y / cell)), int(math.floor(x / cell)),
-                                           half_widths):
+        if skip_settled and _lidar_settled(required_flat, known_flat, r * rows * cols, seen_flat, rows, cols,
+                                           int(math.floor(y / cell)), int(math.floor(x / cell)), half_widths):
             for i in range(cos_a.shape[0]):
                 ranges[r, i] = np.nan
             continue
-        cast[r] = 1
+        cast[r] = True
         ch = math.cos(poses[r, 2])
         sh = math.sin(poses[r, 2])
         for i in range(cos_a.shape[0]):
@@ -299,17 +300,17 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
 
 
 @njit(cache=True, inline="always")
-def _lidar_settled(solid: np.ndarray, required: np.ndarray, known: np.ndarray, known_base: int, seen: np.ndarray,
-                   rows: int, cols: int, row0: int, col0: int, half_widths: np.ndarray) -> bool:
+def _lidar_settled(required: np.ndarray, known: np.ndarray, known_base: int, seen: np.ndarray, rows: int,
+                   cols: int, row0: int, col0: int, half_widths: np.ndarray) -> bool:
     """Whether a ternary scan from a pose in cell (row0, col0) would write nothing: every cell its rays
     can reach (the cells within range of any point of the robot's cell, rows ``row0 - K .. row0 + K`` with
     ``half_widths[k]`` columns each side) already holds what a ray would leave there, in the robot's map
     (``known`` from ``known_base``) and in ``seen``. ``required`` (flat): 1 for a free cell (the ray leaves
     it at least FREE), 2 for a solid cell a ray can enter (it becomes exactly SOLID), 0 for a solid cell
     enclosed by solid 4-neighbours, which no ray enters (rays step 4-connected and stop at the first solid
-    cell). A robot in a solid cell writes it at distance 0, so it is never settled. Flat views, as in
-    :func:`_lidar_walk_visible`."""
-    if solid[row0 * cols + col0]:
+    cell). A robot in a solid cell (``required`` not 1) writes it at distance 0, so it is never settled.
+    Flat views, as in :func:`_lidar_walk_visible`."""
+    if required[row0 * cols + col0] != 1:
         return False
     reach = (half_widths.shape[0] - 1) // 2
     for k in range(half_widths.shape[0]):
@@ -439,12 +440,15 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     return new
 
 
+_CAST_EVERY_ROBOT = np.zeros((0, 0), dtype=np.uint8)
+"""The ``required`` raster that asks the ternary kernel to cast every active robot (``measure=True``)."""
+
+
 def _required_raster(solid: np.ndarray) -> np.ndarray:
     """``uint8[H, W]`` for :func:`_lidar_settled`: 1 for free cells, 2 for solid cells with a free
     4-neighbour, 0 for solid cells whose 4-neighbours are all solid (the map's outside counts as solid)."""
     s = np.asarray(solid, dtype=bool)
-    pad = np.pad(s, 1, constant_values=True)
-    enclosed = s & pad[:-2, 1:-1] & pad[2:, 1:-1] & pad[1:-1, :-2] & pad[1:-1, 2:]
+    enclosed = ndimage.binary_erosion(s, structure=ndimage.generate_binary_structure(2, 1), border_value=1)
     required = np.where(s, 2, 1).astype(np.uint8)
     required[enclosed] = 0
     return required
@@ -491,7 +495,7 @@ class Lidar:
         self._no_noise = np.zeros((1, 1), dtype=np.float64)
         self._required = np.zeros((0, 0), dtype=np.uint8)   # built on the first scan that skips settled robots
         self._half_widths = _reach_half_widths(self.params.range_m, CELL_M)
-        self._cast = np.zeros(0, dtype=np.uint8)
+        self._cast = np.zeros(0, dtype=np.bool_)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -522,9 +526,9 @@ class Lidar:
         ranges = np.empty((n, self.n_rays), dtype=np.float32)
         p = self.params
         if self._cast.shape[0] != n:
-            self._cast = np.zeros(n, dtype=np.uint8)
+            self._cast = np.zeros(n, dtype=np.bool_)
         if p.mode == "ternary":
-            required = self._no_required
+            required = _CAST_EVERY_ROBOT
             if not measure:
                 if self._required.shape[0] == 0:
                     self._required = _required_raster(self.truth.solid)
@@ -554,13 +558,11 @@ class Lidar:
         trk.add_seen(new)
         return ranges if measure else None
 
-    _no_required = np.zeros((0, 0), dtype=np.uint8)
-
     @property
     def cast(self) -> np.ndarray:
         """Per robot of the last scan: whether its rays were cast (read-only ``bool[R]``; all active robots
         unless it was a ternary scan with ``measure=False``)."""
-        view = self._cast.view(np.bool_)
+        view = self._cast.view()
         view.setflags(write=False)
         return view
 
