@@ -9,6 +9,12 @@ Pin to one core for the reference figure: ``taskset -c 0 python benchmarks/bench
 kernel loads), and reports each run, the best and the median: the project's shared virtual machine
 changes speed by up to 2x within seconds (a fixed pure-Python loop took 37-80 us over one minute), so one
 run says little and the best of several is the closest to what the code itself costs.
+
+``--warm-process`` first runs the workload once, untimed, on the next seed (another map) and then times
+the run: the steady state of a campaign worker, which runs many specs in one process and loads numba's
+compiled kernels from their cache only during its first run (each kernel on its first call: ~0.2 s of
+this workload's loop in a fresh process). Without it the timed run pays those loads, as a one-off
+``swarm run`` does. Peak RSS then covers both runs.
 """
 
 from __future__ import annotations
@@ -26,9 +32,9 @@ import time
 from swarm.simulation import Simulation
 
 
-def run_once(args: argparse.Namespace) -> dict:
-    """Build and run the workload once in this process; its figures (run loop timed apart from set-up)."""
-    spec = {"seed": args.seed, "map": {"kind": args.kind, "size": args.size},
+def workload(args: argparse.Namespace, seed: int) -> dict:
+    """The benchmark's spec with this seed."""
+    spec = {"seed": seed, "map": {"kind": args.kind, "size": args.size},
             "robots": {"count": args.robots, "spawn": "together"}, "algorithm": {"name": args.algorithm},
             "stop": {"max_ticks": args.max_ticks}, "transport": args.transport}
     if args.set:
@@ -36,6 +42,15 @@ def run_once(args: argparse.Namespace) -> dict:
         from swarm.cli.run_cmd import _merge
 
         spec = _merge(spec, parse_params(tuple(args.set), "--set"))
+    return spec
+
+
+def run_once(args: argparse.Namespace) -> dict:
+    """Build and run the workload once in this process (after an untimed run on the next seed with
+    ``--warm-process``); its figures (run loop timed apart from set-up)."""
+    if args.warm_process:
+        Simulation(workload(args, args.seed + 1)).run()
+    spec = workload(args, args.seed)
     t0 = time.perf_counter()
     sim = Simulation(spec)
     setup = time.perf_counter() - t0
@@ -89,6 +104,8 @@ def main() -> None:
     ap.add_argument("--transport", default="inprocess")
     ap.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE")
     ap.add_argument("--profile", action="store_true")
+    ap.add_argument("--warm-process", action="store_true",
+                    help="time the run after an untimed one on the next seed in the same process (kernels loaded)")
     ap.add_argument("--repeat", type=int, default=1, metavar="N",
                     help="run N times, each in a fresh process, and report the best and the median")
     ap.add_argument("--emit-json", action="store_true", help=argparse.SUPPRESS)  # one run for --repeat
