@@ -58,6 +58,7 @@ Key = tuple[int, tuple[int, int], float, float, bool, int]
 class _Kept(threading.local):
     def __init__(self) -> None:
         self.entries: OrderedDict[Key, KeptInputs] = OrderedDict()
+        self.far: set[Key] = set()  # kept maps whose last target search went past its window (went_far)
         self.dist = np.zeros(0, dtype=np.float64)      # all inf between searches (see clean_workspace)
         self.touched = np.zeros(0, dtype=np.int32)
 
@@ -73,17 +74,37 @@ def inputs_for(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: b
     h, w = known.shape
     if not keep:
         return _new_inputs(h, w)
-    key = (known.__array_interface__["data"][0], (h, w), radius_m, margin_m, unseen_ok, reach)
+    key = key_of(known, radius_m, margin_m, unseen_ok, reach)
     entries = _KEPT.entries
     entry = entries.get(key)
     if entry is None:
         if entries and next(iter(entries.values())).copy.shape != (h, w):
-            entries.clear()  # another run's map size: those entries can never be found again
+            forget_all()  # another run's map size: those entries can never be found again
         entry = entries[key] = _new_inputs(h, w)
         while len(entries) > MAX_ENTRIES:
-            entries.popitem(last=False)
+            _KEPT.far.discard(entries.popitem(last=False)[0])
     entries.move_to_end(key)
     return entry
+
+
+def key_of(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: bool, reach: int) -> Key:
+    """The key of the map in ``known``'s buffer with these search parameters."""
+    return known.__array_interface__["data"][0], known.shape, radius_m, margin_m, unseen_ok, reach
+
+
+def went_far(key: Key) -> bool:
+    """Whether the last target search on this kept map found its target only past the local window (or
+    none): a hint for :func:`swarm.grid.nearest_reachable_unseen`, which then skips the window, because
+    the next search most likely goes far too. A hint only: both stages give the same answer."""
+    return key in _KEPT.far
+
+
+def note_far(key: Key, far: bool) -> None:
+    """Record for :func:`went_far` how the search on a kept map (one with an entry) ended."""
+    if far and key in _KEPT.entries:
+        _KEPT.far.add(key)
+    else:
+        _KEPT.far.discard(key)
 
 
 def _new_inputs(h: int, w: int) -> KeptInputs:
@@ -103,8 +124,9 @@ def clean_workspace(n: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def forget_all() -> None:
-    """Drop every kept entry of this thread (for tests)."""
+    """Drop every kept entry of this thread, and the hints about them."""
     _KEPT.entries.clear()
+    _KEPT.far.clear()
 
 
 @njit(cache=True)

@@ -15,7 +15,10 @@ from scipy.sparse.csgraph import dijkstra
 
 from maps.errors import InvalidInput
 from swarm import grid
-from swarm.api import FREE, SOLID, UNSEEN
+from swarm.api import FREE, ROBOT_RADIUS_M, SOLID, UNSEEN
+from swarm.grid import kept
+from swarm.grid.cspace import DEFAULT_MARGIN_M
+from swarm.grid.targets import LOCAL_FIRST_M, default_view_reach_cells
 
 SQRT2 = math.sqrt(2.0)
 CELL = 0.5
@@ -725,3 +728,37 @@ def test_local_first_search_equals_the_whole_map_search():
         start = (int(cell[0]), int(cell[1]))
         assert grid.nearest_reachable_unseen(known, start) == grid.nearest_reachable_unseen(known, start,
                                                                                             local_first_m=None)
+
+
+def test_a_target_just_past_the_local_window_is_not_missed():
+    """The window must not settle for a target when a nearer one is hidden by its edge: an open room, the
+    unknown beyond a column some 30 cells east of the start (its frontier at or past the window's edge),
+    and a lone unknown cell at about the same distance elsewhere. A window of half-width 31 cells that
+    accepted any target within 15 m answered 4 of these wrongly."""
+    checked = 0
+    for d in range(28, 37):
+        for dr, dc in [(r, c) for r in range(-36, 37, 3) for c in range(-36, 1, 3) if 28 <= max(abs(r), abs(c))]:
+            known = np.full((100, 120), FREE, np.uint8)
+            start = (50, 40)
+            known[:, start[1] + d:] = UNSEEN
+            known[start[0] + dr, start[1] + dc] = UNSEEN
+            kept.forget_all()  # no hint from an earlier map in this buffer: the window is tried
+            whole = grid.nearest_reachable_unseen(known, start, local_first_m=None)
+            assert grid.nearest_reachable_unseen(known, start) == whole, (d, dr, dc)
+            checked += whole is not None and whole[1] <= LOCAL_FIRST_M
+    assert checked >= 500  # most answers lie within the window's length: the window decided them
+
+
+def test_a_map_whose_last_search_went_far_skips_the_window_and_still_gets_the_whole_map_answer():
+    kept.forget_all()
+    known = np.full((100, 120), FREE, np.uint8)
+    known[:, 110:] = UNSEEN
+    starts = [(50, 10), (50, 100), (50, 101), (20, 15), (80, 98)]   # far, near, near, far, near
+    key = kept.key_of(known, ROBOT_RADIUS_M, DEFAULT_MARGIN_M, False,
+                      default_view_reach_cells(ROBOT_RADIUS_M, DEFAULT_MARGIN_M))
+    hints = []
+    for start in starts:
+        got = grid.nearest_reachable_unseen(known, start)
+        assert got == grid.nearest_reachable_unseen(known, start, local_first_m=None)
+        hints.append(kept.went_far(key))
+    assert hints == [True, False, False, True, False]
