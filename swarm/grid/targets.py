@@ -103,6 +103,7 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
     local = check_length(local_first_m, "local_first_m", allow_none=True)
     search = _TargetSearch(radius, margin, bool(unseen_traversable), reach, snap)
     keep = k is known
+    key = None  # the kept map whose window hint this search reads and updates
     if local is not None:
         budget = int(local / CELL_M)  # the longest search (cells) the window decides
         half = budget + window_margin(radius, margin, reach) + snap + 1
@@ -114,11 +115,10 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
                                           budget)
                 if found is not None:
                     return found
-            found = search.run(k, s, ex, keep=keep)
-            if key is not None:
-                kept.note_far(key, found is None or found[1] > local)
-            return found
-    return search.run(k, s, ex, keep=keep)
+    found = search.run(k, s, ex, keep=keep)
+    if key is not None:
+        kept.note_far(key, found is None or found[1] > local)
+    return found
 
 
 def window_margin(radius_m: float, margin_m: float, reach: int) -> int:
