@@ -75,3 +75,22 @@ def test_small_spec_on_50_tile_maps_finishes_every_run_and_reports(tmp_path: Pat
     assert list((folder / "curves").glob("algorithms__building_50_16_*_materials.png"))
     summary = (folder / "tables" / "summary.md").read_text()
     assert "Minotaur" in summary and "TNF" in summary and "Greed" in summary
+
+
+def test_frontier_recheck_example_pairs_the_two_recheck_periods_on_the_same_maps() -> None:
+    spec = load_campaign(ROOT / "examples" / "frontier-recheck.toml")
+    assert [o.label for o in spec.grid["algorithm"]] == ["frontier-recheck-20", "frontier-recheck-40"]
+    assert expected_runs(spec) == 96
+    runs: dict[tuple, dict[str, object]] = {}
+    for cell in spec.cells():
+        for rep in range(spec.replicates):
+            run = spec.run_for(cell, rep).spec
+            where = (cell["map"].label, cell["size"].label, cell["robots"].label, rep)
+            runs.setdefault(where, {})[cell["algorithm"].label] = run
+    assert len(runs) == 48
+    for pair in runs.values():
+        a, b = pair["frontier-recheck-20"], pair["frontier-recheck-40"]
+        # the same map and start poses; only the re-check period differs (20 is the explorer's default)
+        assert a.map == b.map and a.robots == b.robots and a.seed == b.seed
+        assert a.algorithm.params == {**b.algorithm.params, "recheck_ticks": 20}
+        assert b.algorithm.params["recheck_ticks"] == 40
