@@ -124,7 +124,8 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
 def window_margin(radius_m: float, margin_m: float, reach: int) -> int:
     """How many rings at a window's edge (not on the map's border) may differ from the whole map in a
     target search: the configuration space erodes ``erosion_depth`` of them, and a view cell depends on
-    cells up to ``reach`` steps plus the frontier test's neighbour away."""
+    cells up to ``reach`` steps plus the frontier test's neighbour away. For the same reason it is how
+    far past a changed row the kept inputs are recomputed (:func:`swarm.grid.kept.refresh`)."""
     return max(erosion_depth(radius_m, margin_m), reach + 1)
 
 
@@ -163,7 +164,7 @@ class _TargetSearch:
         dist, touched = kept.clean_workspace((h + 2) * (w + 2))
         ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude)
         inputs = kept.inputs_for(known, self.radius_m, self.margin_m, self.unseen_traversable, self.reach, keep=keep)
-        margin = max(erosion_depth(self.radius_m, self.margin_m), self.reach + 1)
+        margin = window_margin(self.radius_m, self.margin_m, self.reach)
         status, row, col, cells, sr, sc, space, path = kept.map_target(known, ex, self.reach, self.unseen_traversable,
                                                                        rows, widths, start[0], start[1], self.snap,
                                                                        dist, ring, touched, *inputs, margin)
