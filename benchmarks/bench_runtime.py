@@ -15,6 +15,11 @@ the run: the steady state of a campaign worker, which runs many specs in one pro
 compiled kernels from their cache only during its first run (each kernel on its first call: ~0.2 s of
 this workload's loop in a fresh process). Without it the timed run pays those loads, as a one-off
 ``swarm run`` does. Peak RSS then covers both runs.
+
+A run that had to compile numba kernels (no cache yet: the first run after an install, or after a kernel
+was edited) says so, with the kernels' compile time: compiling takes most of a minute and LLVM lifts the
+process's peak RSS to ~450 MB, so such a run measures the compiler, not the simulation. ``--repeat``
+leaves compiling runs out of its best, median and peak RSS (all of them if every run compiled).
 """
 
 from __future__ import annotations
@@ -28,6 +33,10 @@ import statistics
 import subprocess
 import sys
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+from numba.core import event
 
 from swarm.simulation import Simulation
 
@@ -45,34 +54,62 @@ def workload(args: argparse.Namespace, seed: int) -> dict:
     return spec
 
 
+@contextmanager
+def compiles_counted(tally: dict) -> Iterator[None]:
+    """Count into ``tally`` (``kernels``, ``seconds``) the numba compilations started inside the block:
+    numba raises its ``numba:compile`` event only when a kernel is not in its cache. Kernels compiled
+    while compiling another (inlined callees) count once, with their caller's time."""
+    with event.install_recorder("numba:compile") as recorder:
+        yield
+    depth, started = 0, 0.0
+    for stamp, ev in recorder.buffer:
+        if ev.is_start:
+            if depth == 0:
+                started = stamp
+                tally["kernels"] += 1
+            depth += 1
+        else:
+            depth -= 1
+            if depth == 0:
+                tally["seconds"] += stamp - started
+
+
 def run_once(args: argparse.Namespace) -> dict:
     """Build and run the workload once in this process (after an untimed run on the next seed with
-    ``--warm-process``); its figures (run loop timed apart from set-up)."""
-    if args.warm_process:
-        Simulation(workload(args, args.seed + 1)).run()
-    spec = workload(args, args.seed)
-    t0 = time.perf_counter()
-    sim = Simulation(spec)
-    setup = time.perf_counter() - t0
-    profiler = cProfile.Profile() if args.profile else None
-    if profiler:
-        profiler.enable()
-    cpu0 = time.process_time()
-    result = sim.run()
-    cpu = time.process_time() - cpu0
-    if profiler:
-        profiler.disable()
-        pstats.Stats(profiler).sort_stats("tottime").print_stats(25)
+    ``--warm-process``); its figures (run loop timed apart from set-up), and the numba kernels compiled
+    on the way (none once numba's cache holds them)."""
+    tally = {"kernels": 0, "seconds": 0.0}
+    with compiles_counted(tally):
+        if args.warm_process:
+            Simulation(workload(args, args.seed + 1)).run()
+        spec = workload(args, args.seed)
+        t0 = time.perf_counter()
+        sim = Simulation(spec)
+        setup = time.perf_counter() - t0
+        profiler = cProfile.Profile() if args.profile else None
+        if profiler:
+            profiler.enable()
+        cpu0 = time.process_time()
+        result = sim.run()
+        cpu = time.process_time() - cpu0
+        if profiler:
+            profiler.disable()
+            pstats.Stats(profiler).sort_stats("tottime").print_stats(25)
     s = result.summary
     return {"line": result.one_line(), "ticks": s["ticks"], "wall": s["wall_time_s"], "cpu": cpu, "setup": setup,
-            "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "plans": sum(s["plans"])}
+            "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, "plans": sum(s["plans"]),
+            "compiled": tally["kernels"], "compile_s": tally["seconds"]}
 
 
 def report(r: dict) -> str:
     """One run's figures on one line."""
-    return (f"ticks {r['ticks']}  run {r['wall']:.2f} s wall, {r['cpu']:.2f} s CPU -> "
+    line = (f"ticks {r['ticks']}  run {r['wall']:.2f} s wall, {r['cpu']:.2f} s CPU -> "
             f"{r['ticks'] / r['wall']:.0f} ticks/s wall, {r['ticks'] / r['cpu']:.0f} ticks per CPU-second"
             f"  (set-up {r['setup']:.2f} s)  peak RSS {r['rss_mb']:.0f} MB  plans {r['plans']}")
+    if r["compiled"]:
+        line += (f"  COMPILED {r['compiled']} numba kernels ({r['compile_s']:.1f} s; the cache was cold, so"
+                 " this run measures the compiler)")
+    return line
 
 
 def repeat(n: int, argv: list[str]) -> None:
@@ -88,9 +125,18 @@ def repeat(n: int, argv: list[str]) -> None:
         if i == 0:
             print(r["line"])
         print(f"run {i + 1}: {report(r)}", flush=True)
-    rates = sorted(r["ticks"] / r["wall"] for r in runs)
-    print(f"{n} runs: best {rates[-1]:.0f} ticks/s, median {statistics.median(rates):.0f}, worst {rates[0]:.0f}; "
-          f"peak RSS up to {max(r['rss_mb'] for r in runs):.0f} MB")
+    print(summary(runs))
+
+
+def summary(runs: list[dict]) -> str:
+    """Best, median and worst ticks/s and the peak RSS of the runs that compiled nothing (of all runs if
+    every one compiled), saying how many were left out."""
+    warm = [r for r in runs if not r["compiled"]] or runs
+    left_out = len(runs) - len(warm)
+    rates = sorted(r["ticks"] / r["wall"] for r in warm)
+    note = f" (left out: {left_out} run(s) that compiled numba kernels)" if left_out else ""
+    return (f"{len(warm)} runs: best {rates[-1]:.0f} ticks/s, median {statistics.median(rates):.0f}, "
+            f"worst {rates[0]:.0f}; peak RSS up to {max(r['rss_mb'] for r in warm):.0f} MB{note}")
 
 
 def main() -> None:
