@@ -111,6 +111,7 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
 
     from ..simulation import Simulation
     from ..spec import RunSpec
+    from .compile_notice import compile_notice
 
     flags = {"map": map_, "size": size, "map_seed": map_seed, "robots": robots, "spawn": spawn,
              "algorithm": algorithm, "seed": seed, "max_ticks": max_ticks, "explored": explored,
@@ -126,21 +127,22 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
             raise InvalidInput("--mp4", str(mp4), "an MP4 path once the video extra is installed "
                                "(pip install 'swarm-sim[video]')") from None
     options = _transport_options(spec, listen, remote, agent_timeout, run_id)
-    sim = Simulation(spec, transport=options)
-    recorder = None
-    if gif is not None or mp4 is not None:
-        from ..animation import GifRecorder
+    with compile_notice():
+        sim = Simulation(spec, transport=options)
+        recorder = None
+        if gif is not None or mp4 is not None:
+            from ..animation import GifRecorder
 
-        recorder = GifRecorder(sim.truth)
-        sim.observers = (recorder,)
-    run_recorder = None
-    if record_out is not None:
-        from ..record import Recorder
+            recorder = GifRecorder(sim.truth)
+            sim.observers = (recorder,)
+        run_recorder = None
+        if record_out is not None:
+            from ..record import Recorder
 
-        if not (record_out.parent if str(record_out.parent) else Path(".")).is_dir():
-            raise InvalidInput("--record", str(record_out), "a path in an existing folder")
-        run_recorder = Recorder.attach(sim)
-    result = sim.run()
+            if not (record_out.parent if str(record_out.parent) else Path(".")).is_dir():
+                raise InvalidInput("--record", str(record_out), "a path in an existing folder")
+            run_recorder = Recorder.attach(sim)
+        result = sim.run()
     click.echo(result.one_line())
     if json_out is not None:
         click.echo(f"wrote {result.write_json(json_out)}")
