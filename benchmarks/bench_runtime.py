@@ -18,8 +18,9 @@ this workload's loop in a fresh process). Without it the timed run pays those lo
 
 A run that had to compile numba kernels (no cache yet: the first run after an install, or after a kernel
 was edited) says so, with the kernels' compile time: compiling takes most of a minute and LLVM lifts the
-process's peak RSS to ~450 MB, so such a run measures the compiler, not the simulation. ``--repeat``
-leaves compiling runs out of its best, median and peak RSS (all of them if every run compiled).
+process's peak RSS to ~450 MB, so such a run measures the compiler, not the simulation. ``--repeat N``
+leaves compiling runs out of its best, median and peak RSS and runs another in their place, so the
+summary covers N runs on a warm cache.
 """
 
 from __future__ import annotations
@@ -113,18 +114,19 @@ def report(r: dict) -> str:
 
 
 def repeat(n: int, argv: list[str]) -> None:
-    """Run this script ``n`` times in fresh processes with ``argv`` (which asks for one run); summarise."""
-    runs = []
-    for i in range(n):
+    """Run this script in fresh processes with ``argv`` (which asks for one run) until ``n`` runs compiled
+    nothing (a run that compiled, on a cold cache, is replaced once: at most ``2 n`` runs); summarise."""
+    runs: list[dict] = []
+    while sum(not r["compiled"] for r in runs) < n and len(runs) < 2 * n:
         child = subprocess.run([sys.executable, __file__, *argv, "--emit-json"], capture_output=True, text=True)
         if child.returncode != 0:  # a bad --set, say: the run's own error, not a traceback of this one
             sys.stderr.write(child.stderr)
             raise SystemExit(child.returncode)
         r = json.loads(child.stdout.strip().splitlines()[-1])
         runs.append(r)
-        if i == 0:
+        if len(runs) == 1:
             print(r["line"])
-        print(f"run {i + 1}: {report(r)}", flush=True)
+        print(f"run {len(runs)}: {report(r)}", flush=True)
     print(summary(runs))
 
 
