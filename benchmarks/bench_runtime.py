@@ -131,12 +131,13 @@ def repeat(n: int, argv: list[str]) -> None:
 
 
 def summary(runs: list[dict]) -> str:
-    """Best, median and worst ticks/s and the peak RSS of the runs that compiled nothing (of all runs if
-    every one compiled), saying how many were left out."""
+    """Best, median and worst ticks/s and the peak RSS of the runs that compiled nothing, saying how many
+    were left out; of all runs if every one compiled, saying so."""
     warm = [r for r in runs if not r["compiled"]] or runs
     left_out = len(runs) - len(warm)
     rates = sorted(r["ticks"] / r["wall"] for r in warm)
-    note = f" (left out: {left_out} run(s) that compiled numba kernels)" if left_out else ""
+    note = (f" (left out: {left_out} run(s) that compiled numba kernels)" if left_out else
+            " (every run compiled numba kernels: these figures include the compiler)" if runs[0]["compiled"] else "")
     return (f"{len(warm)} runs: best {rates[-1]:.0f} ticks/s, median {statistics.median(rates):.0f}, "
             f"worst {rates[0]:.0f}; peak RSS up to {max(r['rss_mb'] for r in warm):.0f} MB{note}")
 

@@ -47,3 +47,5 @@ def test_report_flags_a_compiling_run_and_summary_leaves_it_out():
     assert line.startswith("2 runs: best 1250 ticks/s, median 1125, worst 1000; peak RSS up to 210 MB")
     assert "left out: 1 run(s)" in line
     assert bench.summary([cold]).startswith("1 runs: best 20 ticks/s")  # nothing else to show
+    assert "every run compiled" in bench.summary([cold])
+    assert "compiled" not in bench.summary([warm_a, warm_b])
