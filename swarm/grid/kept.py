@@ -67,14 +67,17 @@ _KEPT = _Kept()
 
 
 def inputs_for(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: bool, reach: int, *,
-               keep: bool = True) -> KeptInputs:
+               keep: bool = True, key: Key | None = None) -> KeptInputs:
     """The kept inputs for the map in ``known``'s buffer with these search parameters (a new entry when
     there is none); call :func:`refresh` before using them. ``keep=False`` gives new inputs that are not
-    kept: for a map converted for this one search (another dtype or layout), whose buffer is gone after it."""
+    kept: for a map converted for this one search (another dtype or layout), whose buffer is gone after it.
+    ``key``: :func:`key_of` for these arguments, when the caller already has it (reading the buffer's
+    address costs more than the dictionary lookup)."""
     h, w = known.shape
     if not keep:
         return _new_inputs(h, w)
-    key = key_of(known, radius_m, margin_m, unseen_ok, reach)
+    if key is None:
+        key = key_of(known, radius_m, margin_m, unseen_ok, reach)
     entries = _KEPT.entries
     entry = entries.get(key)
     if entry is None:

@@ -115,7 +115,7 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
                                           budget)
                 if found is not None:
                     return found
-    found = search.run(k, s, ex, keep=keep)
+    found = search.run(k, s, ex, keep=keep, key=key)
     if key is not None:
         kept.note_far(key, found is None or found[1] > local)
     return found
@@ -152,18 +152,20 @@ class _TargetSearch:
             return None
         return (int(row) + r0, int(col) + c0), _distance_m(cells, (int(sr) + r0, int(sc) + c0), start)
 
-    def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None, keep: bool = True
-            ) -> tuple[tuple[int, int], float] | None:
+    def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None, keep: bool = True,
+            key: kept.Key | None = None) -> tuple[tuple[int, int], float] | None:
         """The search on the whole map ``known``, one compiled call (:func:`swarm.grid.kept.map_target`) on
         inputs kept from this map's previous search and brought up to date (``keep=False``: a map converted
-        for this call, whose inputs are not worth keeping). The path to the target is kept for the
-        navigator's plan (:mod:`swarm.grid.memo`)."""
+        for this call, whose inputs are not worth keeping; ``key``: the map's :func:`swarm.grid.kept.key_of`
+        when the caller already has it). The path to the target is kept for the navigator's plan
+        (:mod:`swarm.grid.memo`)."""
         rows, widths = _erosion_rows(self.radius_m, self.margin_m)
         h, w = known.shape
         _, ring = _WORK.get((h + 2) * (w + 2))
         dist, touched = kept.clean_workspace((h + 2) * (w + 2))
         ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude)
-        inputs = kept.inputs_for(known, self.radius_m, self.margin_m, self.unseen_traversable, self.reach, keep=keep)
+        inputs = kept.inputs_for(known, self.radius_m, self.margin_m, self.unseen_traversable, self.reach,
+                                 keep=keep, key=key)
         margin = window_margin(self.radius_m, self.margin_m, self.reach)
         status, row, col, cells, sr, sc, space, path = kept.map_target(known, ex, self.reach, self.unseen_traversable,
                                                                        rows, widths, start[0], start[1], self.snap,
