@@ -29,7 +29,7 @@ from maps.params import check_choice, check_float, check_int
 
 from .api import CELL_M
 from .knowledge import check_writable_map, merge_cells_many, sync_box_unchecked, sync_changes
-from .messages import MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
+from .messages import MAX_MESSAGE_BYTES, MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
 
 SHARING_MODES = ("delta", "full", "off")
 
@@ -72,6 +72,10 @@ class Envelope:
 
 @dataclass
 class CommStats:
+    """What the medium counted over a run; ``malformed``: messages an algorithm (or its remote agent) tried
+    to send that were dropped before the radio (see :meth:`Medium.envelope`), ``malformed_by_robot`` per
+    sender."""
+
     sent: int = 0
     bytes_sent: int = 0
     delivered: int = 0
@@ -82,29 +86,58 @@ class CommStats:
     malformed: int = 0
     map_bytes_sent: int = 0
     last_contact: list[int] = field(default_factory=list)
+    malformed_by_robot: list[int] = field(default_factory=list)
 
     def as_dict(self) -> dict[str, Any]:
         return {"sent": self.sent, "bytes_sent": self.bytes_sent, "delivered": self.delivered,
                 "bytes_delivered": self.bytes_delivered, "dropped_link": self.dropped_link,
                 "dropped_loss": self.dropped_loss, "dropped_bandwidth": self.dropped_bandwidth,
-                "malformed": self.malformed, "map_bytes_sent": self.map_bytes_sent,
-                "last_contact": list(self.last_contact)}
+                "malformed": self.malformed, "malformed_by_robot": list(self.malformed_by_robot),
+                "map_bytes_sent": self.map_bytes_sent, "last_contact": list(self.last_contact)}
+
+    def count_malformed(self, robot: int, n: int = 1) -> None:
+        self.malformed += n
+        self.malformed_by_robot[robot] += n
 
 
 class Medium:
     """Carries envelopes from outboxes at tick t to inboxes at tick t+1 through the link matrix."""
 
-    def __init__(self, n: int, spec: CommSpec, rng: np.random.Generator) -> None:
+    def __init__(self, n: int, spec: CommSpec, rng: np.random.Generator,
+                 map_shape: tuple[int, int] | None = None) -> None:
+        """``map_shape``: the knowledge maps' shape, which every MapUpdate an algorithm sends must have."""
         self.n = n
         self.spec = spec
         self.rng = rng
-        self.stats = CommStats(last_contact=[-1] * n)
+        self.map_shape = tuple(map_shape) if map_shape is not None else None
+        self.stats = CommStats(last_contact=[-1] * n, malformed_by_robot=[0] * n)
+        self.dropped: list[tuple[int, str]] = []  # (sender, reason) of messages dropped since last read
         self._seq = [0] * n
 
-    def envelope(self, sender: int, msg: Any) -> Envelope:
-        """Encode a message from ``sender`` (its ``sender`` field must be the robot's id)."""
-        if getattr(msg, "sender", None) != sender:
-            raise MessageError(f"robot {sender} sent a message claiming sender={getattr(msg, 'sender', None)!r}")
+    def envelope(self, sender: int, msg: Any) -> Envelope | None:
+        """Encode a message an algorithm (or its remote agent) sends from ``sender``; None when it is
+        malformed, counted and noted in :attr:`dropped`: its ``sender`` is not the robot (a forgery), it is
+        not a registered message or does not encode, it is larger than a message may be, or it is a map
+        update of another map's shape or with a corrupt payload (it would fail every receiver's merge)."""
+        problem = _outgoing_problem(sender, msg, self.map_shape)
+        data = b""
+        if problem is None:
+            try:
+                data = encode(msg)
+            except (MessageError, TypeError, ValueError, OverflowError) as exc:
+                problem = f"does not encode ({type(exc).__name__})"
+            else:
+                if len(data) > MAX_MESSAGE_BYTES:
+                    problem = f"{len(data)} bytes, more than {MAX_MESSAGE_BYTES}"
+        if problem is not None:
+            self.stats.count_malformed(sender)
+            self.dropped.append((sender, problem))
+            return None
+        self._seq[sender] += 1
+        return Envelope(sender, self._seq[sender], data, msg)
+
+    def service_envelope(self, sender: int, msg: Any) -> Envelope:
+        """Encode a message of the runtime's own map-sharing service (built here: not checked again)."""
         data = encode(msg)
         self._seq[sender] += 1
         return Envelope(sender, self._seq[sender], data, msg)
@@ -331,6 +364,24 @@ def _grow_boxes(boxes: np.ndarray, poses: np.ndarray, reach: int, cell: float) -
             boxes[k, 1] = max(boxes[k, 1], r + reach + 1)
             boxes[k, 2] = min(boxes[k, 2], c - reach)
             boxes[k, 3] = max(boxes[k, 3], c + reach + 1)
+
+
+def _outgoing_problem(sender: int, msg: Any, shape: tuple[int, int] | None) -> str | None:
+    """Why a message an algorithm sends from ``sender`` cannot go on the radio, or None."""
+    claimed = getattr(msg, "sender", None)
+    if isinstance(claimed, bool) or not isinstance(claimed, (int, np.integer)) or claimed != sender:
+        return f"claims sender {str(claimed)[:20]}"
+    if isinstance(msg, MapUpdate):
+        try:
+            msg.validate()
+            if shape is not None and msg.shape != shape:
+                return f"map update of shape {msg.shape}, the maps are {shape}"
+            msg.dense() if msg.full else msg.cells()  # decoded once; receivers reuse it
+        except MessageError as exc:
+            return str(exc)[:100]
+        except Exception as exc:  # a hand-built update with fields of the wrong types
+            return f"map update with bad fields ({type(exc).__name__})"
+    return None
 
 
 def decode_or_none(data: bytes) -> Any:

@@ -23,6 +23,7 @@ message and counts it).
 from __future__ import annotations
 
 import dataclasses
+import math
 import zlib
 from typing import Any, Callable, TypeVar
 
@@ -134,8 +135,21 @@ def decode(data: bytes) -> Any:
         raise MessageError(f"{items[0]}: {type(exc).__name__}: {exc}") from None
     check = getattr(msg, "validate", None)
     if check is not None:
-        check()
+        try:
+            check()
+        except MessageError:
+            raise
+        except Exception as exc:  # a validator that trips over a value of the wrong type: still malformed
+            raise MessageError(f"{items[0]}: invalid fields ({type(exc).__name__})") from None
     return msg
+
+
+def _is_int(v: Any) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _finite(v: Any) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
 def _restore(value: Any, annotation: Any) -> Any:
@@ -167,8 +181,12 @@ class MapUpdate:
 
     def validate(self) -> None:
         if (not isinstance(self.shape, tuple) or len(self.shape) != 2
-                or not all(isinstance(v, int) and 0 < v <= 100_000 for v in self.shape)):
+                or not all(_is_int(v) and 0 < v <= 100_000 for v in self.shape)):
             raise MessageError("map_update: bad shape")
+        if not (_is_int(self.seq) and self.seq >= 0 and _is_int(self.tick) and isinstance(self.full, bool)):
+            raise MessageError("map_update: bad seq, tick or full flag")
+        if not (isinstance(self.pose, tuple) and len(self.pose) == 3 and all(_finite(v) for v in self.pose)):
+            raise MessageError("map_update: bad pose")
         if not isinstance(self.payload, bytes) or not isinstance(self.count, int) or self.count < 0:
             raise MessageError("map_update: bad payload")
         if self.count > self.shape[0] * self.shape[1]:
@@ -298,6 +316,10 @@ class MapRequest:
     sender: int
     target: int
 
+    def validate(self) -> None:
+        if not _is_int(self.target):
+            raise MessageError("map_request: target must be an integer")
+
 
 @message("swarm.heartbeat", version=1)
 @dataclasses.dataclass(frozen=True)
@@ -309,3 +331,7 @@ class Heartbeat:
     x: float
     y: float
     theta: float
+
+    def validate(self) -> None:
+        if not (_is_int(self.tick) and all(_finite(v) for v in (self.x, self.y, self.theta))):
+            raise MessageError("heartbeat: tick must be an integer and x, y, theta finite numbers")

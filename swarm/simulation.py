@@ -43,9 +43,13 @@ from .sensing import ExplorationTracker, Lidar, LidarParams
 from .spawn import spawn
 from .spec import ROBOT_STREAM, RunSpec, planner_rng, seed_streams
 from .transport import AgentHost, PhaseTimes, TickBatch, make_host
+from .transport.auth import RunSecret
+from .transport.base import ACT_COUNTS
 from .transport.wire import ResetPacket
 from .world import MotionParams, World
 
+MAX_DROP_EVENTS = 100
+"""Malformed messages get an event each up to this many per run (a flooding agent must not grow the result)."""
 _observation = frozen_builder(Observation)  # Observation(...) without the frozen __init__'s cost (16 a tick)
 _pose = tuple.__new__  # _pose(Pose, row) is Pose(*row) without NamedTuple's argument handling (16 a tick)
 
@@ -69,6 +73,7 @@ class TransportOptions:
     timeout_s: float = 10.0
     run_id: str | None = None
     times: PhaseTimes | None = field(default=None, compare=False)  # benchmarks: where the ticks go
+    secret: RunSecret | None = field(default=None, repr=False)  # remote agents' tokens derive from it (a fresh one if None)
 
 
 @dataclass
@@ -112,7 +117,7 @@ class Simulation:
         self.navigators = self.fleet.navigators
         self.links = build_link_model(self.truth, config_from_mapping(self.spec.radio))
         self.comm = from_mapping(CommSpec, self.spec.comm)
-        self.medium = Medium(n, self.comm, self.streams.radio)
+        self.medium = Medium(n, self.comm, self.streams.radio, map_shape=self.truth.shape)
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach)  # told of every scan
         self.inboxes: list[list[Envelope]] = [[] for _ in range(n)]
@@ -123,6 +128,7 @@ class Simulation:
         self.metrics = Metrics(self.spec.record_every)
         self.events: list[dict[str, Any]] = []
         self.failed = np.zeros(n, dtype=bool)
+        self._drop_events = 0
         self._mirror: np.ndarray | None = None
         self.setup_time_s = time.perf_counter() - t0
 
@@ -149,7 +155,7 @@ class Simulation:
     def run(self) -> RunResult:
         opts = self.transport
         host = make_host(self.spec.transport, self.spec.key, listen=opts.listen, remote=opts.remote,
-                         timeout_s=opts.timeout_s, run_id=opts.run_id, times=opts.times)
+                         timeout_s=opts.timeout_s, run_id=opts.run_id, times=opts.times, secret=opts.secret)
         if opts.times is not None:
             self._time_phases(opts.times)
         try:
@@ -265,7 +271,14 @@ class Simulation:
             if not service[i] and not extra:  # most ticks: nothing to send
                 outboxes.append([])
                 continue
-            outboxes.append([self.medium.envelope(i, m) for m in (*service[i], *extra)])
+            box = [self.medium.service_envelope(i, m) for m in service[i]]
+            for m in extra:
+                env = self.medium.envelope(i, m)
+                if env is not None:
+                    box.append(env)
+            outboxes.append(box)
+        if self.medium.dropped:
+            self._note_drops(tick)
         if any(outboxes):
             link = links.senders_link([i for i, out in enumerate(outboxes) if out])
             if np.count_nonzero(self.failed):
@@ -347,6 +360,15 @@ class Simulation:
             pieces[i] = sync_changes(self.known[i], self._mirror[i])
         return np.concatenate(pieces), np.cumsum([len(piece) for piece in pieces], dtype=np.int64)
 
+    def _note_drops(self, tick: int) -> None:
+        """Events for the messages the medium dropped as malformed this tick (the first
+        ``MAX_DROP_EVENTS`` of a run; all of them are counted in ``summary.messages``)."""
+        room = MAX_DROP_EVENTS - self._drop_events
+        for robot, reason in self.medium.dropped[:max(room, 0)]:
+            self.events.append({"tick": tick, "robot": robot, "event": "message_dropped", "reason": reason})
+        self._drop_events += min(len(self.medium.dropped), max(room, 0))
+        self.medium.dropped.clear()
+
     def _note_failures(self, tick: int, host: AgentHost) -> None:
         for i, (at, reason) in sorted(host.stats.failures.items()):
             if not self.failed[i]:
@@ -369,7 +391,17 @@ class Simulation:
                             all_connected=len(groups) == 1,
                             mean_pair_distance_m=float(links.distance.mean()) if n > 1 else 0.0)
 
+    def _message_counts(self, host: AgentHost) -> dict[str, Any]:
+        """The medium's counts, with the messages a remote agent sent that did not decode counted as malformed
+        like those the medium dropped."""
+        counts = self.medium.stats.as_dict()
+        undecodable = host.stats.per_robot("bad_messages", self.spec.robots.count)
+        counts["malformed"] += sum(undecodable)
+        counts["malformed_by_robot"] = [a + b for a, b in zip(counts["malformed_by_robot"], undecodable)]
+        return counts
+
     def _result(self, tick: int, stop_reason: str, collisions: int, wall: float, host: AgentHost) -> RunResult:
+        n = self.spec.robots.count
         summary = {
             "ticks": tick,
             "stop_reason": stop_reason,
@@ -379,7 +411,8 @@ class Simulation:
             "distance_m": [float(d) for d in self.world.distance],
             "collisions": collisions,
             "plans": [nav.plans for nav in self.navigators],
-            "messages": {**self.medium.stats.as_dict(), "malformed_from_agents": host.stats.malformed},
+            "messages": self._message_counts(host),
+            "acts": {kind: host.stats.per_robot(kind, n) for kind in ACT_COUNTS},
             "failed_robots": [int(i) for i in np.flatnonzero(self.failed)],
             "final_poses": [[float(v) for v in p] for p in self.world.poses],
             "map_seed": int(self.streams.map_seed) if self.spec.map.kind != "file" else None,

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import time
 import tomllib
 from pathlib import Path
 from typing import Any
@@ -11,6 +13,7 @@ import click
 from maps.errors import InvalidInput
 
 from . import cli
+from .checks import FiniteSeconds, check_output_path, write_failed
 from .options import parse_params
 
 
@@ -87,9 +90,12 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
               help="zenoh endpoint remote agents connect to, e.g. tcp/127.0.0.1:7447 (needs --transport zenoh).")
 @click.option("--remote", multiple=True, type=click.IntRange(0), metavar="ID",
               help="Robot ids whose agents run in other processes ('swarm agent'); repeatable.")
-@click.option("--agent-timeout", type=click.FloatRange(0, min_open=True), default=10.0, show_default=True,
+@click.option("--agent-timeout", type=FiniteSeconds(), default=10.0, show_default=True,
               help="Seconds to wait for a remote agent's action before its robot is marked failed.")
 @click.option("--run-id", default=None, help="Name of the run on the wire (default: the spec key + a nonce).")
+@click.option("--token-file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="The run secret remote agents authenticate with: read, or created (mode 0600) if missing. "
+                   "Default: $SWARM_TOKEN, else a new secret whose robot tokens are printed.")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), help="Write the result JSON.")
 @click.option("--gif", type=click.Path(dir_okay=False, path_type=Path), help="Write an animation.")
 @click.option("--mp4", type=click.Path(dir_okay=False, path_type=Path),
@@ -101,8 +107,8 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
             map_params: tuple[str, ...], robots: int | None, spawn: str | None, algorithm: str | None,
             algorithm_params: tuple[str, ...], seed: int | None, max_ticks: int | None, explored: float | None,
             transport: str | None, sets: tuple[str, ...], listen: tuple[str, ...], remote: tuple[int, ...],
-            agent_timeout: float, run_id: str | None, json_out: Path | None, gif: Path | None,
-            mp4: Path | None, record_out: Path | None, print_spec: bool) -> None:
+            agent_timeout: float, run_id: str | None, token_file: Path | None, json_out: Path | None,
+            gif: Path | None, mp4: Path | None, record_out: Path | None, print_spec: bool) -> None:
     """Run one exploration and print a one-line summary.
 
     With no arguments: 4 robots with the frontier explorer on a 50 x 50 building, seed 0.
@@ -117,6 +123,7 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
              "algorithm": algorithm, "seed": seed, "max_ticks": max_ticks, "explored": explored,
              "transport": transport}
     spec = RunSpec.from_mapping(build_spec_mapping(spec_file, flags, sets, algorithm_params, map_params))
+    _check_transport_flags(spec, listen, remote, run_id, token_file)
     if print_spec:
         click.echo(json.dumps(spec.canonical(), indent=1, sort_keys=True))
         return
@@ -126,7 +133,10 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
         except ImportError:
             raise InvalidInput("--mp4", str(mp4), "an MP4 path once the video extra is installed "
                                "(pip install 'swarm-sim[video]')") from None
-    options = _transport_options(spec, listen, remote, agent_timeout, run_id)
+    for flag, path in (("--json", json_out), ("--gif", gif), ("--mp4", mp4), ("--record", record_out)):
+        if path is not None:
+            check_output_path(flag, path)
+    options = _transport_options(spec, listen, remote, agent_timeout, run_id, token_file)
     with compile_notice():
         sim = Simulation(spec, transport=options)
         recorder = None
@@ -139,27 +149,33 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
         if record_out is not None:
             from ..record import Recorder
 
-            if not (record_out.parent if str(record_out.parent) else Path(".")).is_dir():
-                raise InvalidInput("--record", str(record_out), "a path in an existing folder")
             run_recorder = Recorder.attach(sim)
         result = sim.run()
     click.echo(result.one_line())
-    if json_out is not None:
-        click.echo(f"wrote {result.write_json(json_out)}")
-    if recorder is not None and gif is not None:
-        click.echo(f"wrote {recorder.save(gif)}")
-    if recorder is not None and mp4 is not None:
-        click.echo(f"wrote {recorder.save_mp4(mp4)}")
-    if run_recorder is not None and record_out is not None:
-        run_recorder.finish(sim, result)
-        click.echo(f"wrote {run_recorder.save(record_out)}")
+    outputs = (("--json", json_out, lambda p: result.write_json(p)),
+               ("--gif", gif if recorder is not None else None, lambda p: recorder.save(p)),
+               ("--mp4", mp4 if recorder is not None else None, lambda p: recorder.save_mp4(p)),
+               ("--record", record_out if run_recorder is not None else None,
+                lambda p: (run_recorder.finish(sim, result), run_recorder.save(p))[1]))
+    for flag, path, write in outputs:
+        if path is None:
+            continue
+        try:
+            click.echo(f"wrote {write(path)}")
+        except OSError as exc:  # checked before the run; a disk may still fill up
+            raise write_failed(flag, path, exc) from None
 
 
-def _transport_options(spec, listen: tuple[str, ...], remote: tuple[int, ...], timeout: float,
-                       run_id: str | None):
-    from ..simulation import TransportOptions
-    from ..transport.zenoh_host import new_run_id
+def _check_transport_flags(spec, listen: tuple[str, ...], remote: tuple[int, ...], run_id: str | None,
+                           token_file: Path | None) -> None:
+    """The transport flags are well formed and fit the spec (nothing opened or written yet)."""
+    from ..transport.auth import check_run_id
+    from ..transport.sessions import check_endpoint
 
+    for endpoint in listen:
+        check_endpoint(endpoint, "--listen")
+    if run_id is not None:
+        check_run_id(run_id)
     if (listen or remote) and spec.transport != "zenoh":
         raise InvalidInput("--remote" if remote else "--listen", list(remote or listen),
                            "remote agents only with --transport zenoh")
@@ -168,30 +184,73 @@ def _transport_options(spec, listen: tuple[str, ...], remote: tuple[int, ...], t
             raise InvalidInput("--remote", r, f"a robot id below --robots ({spec.robots.count})")
     if remote and not listen:
         raise InvalidInput("--listen", None, "an endpoint remote agents can connect to, e.g. tcp/127.0.0.1:7447")
+    if token_file is not None and not listen:
+        raise InvalidInput("--token-file", str(token_file), "only with --listen (remote agents)")
+
+
+def _transport_options(spec, listen: tuple[str, ...], remote: tuple[int, ...], timeout: float,
+                       run_id: str | None, token_file: Path | None):
+    """How the run reaches its remote agents: their secret (read or created) and the commands to start them."""
+    from ..simulation import TransportOptions
+    from ..transport.auth import TOKEN_ENV, runtime_secret
+    from ..transport.zenoh_host import new_run_id
+
+    secret = runtime_secret(token_file) if listen else None
     if remote:
+        assert secret is not None
         run_id = run_id or new_run_id(spec.key)
         for r in remote:
-            click.echo(f"waiting for: swarm agent --connect {listen[0]} --run {run_id} --robot {r}", err=True)
-    return TransportOptions(listen=listen, remote=remote, timeout_s=timeout, run_id=run_id)
+            if token_file is not None:
+                how = f"--token-file {token_file}"
+            elif os.environ.get(TOKEN_ENV):
+                how = f"(with ${TOKEN_ENV} set)"
+            else:
+                how = f"--token {secret.robot_token(run_id, r).text()}"
+            click.echo(f"waiting for: swarm agent --connect {listen[0]} --run {run_id} --robot {r} {how}", err=True)
+    return TransportOptions(listen=listen, remote=remote, timeout_s=timeout, run_id=run_id, secret=secret)
 
 
 @cli.command("agent")
 @click.option("--connect", required=True, metavar="ENDPOINT", help="The runtime's --listen endpoint.")
 @click.option("--run", "run_id", required=True, help="The run id the runtime printed.")
-@click.option("--robot", type=click.IntRange(0), required=True, help="Which robot this agent drives.")
+@click.option("--robot", type=click.IntRange(0, 999), required=True, help="Which robot this agent drives.")
 @click.option("--algorithm", default=None, help="Algorithm to run (default: the run spec's).")
-@click.option("--timeout", type=click.FloatRange(0, min_open=True), default=60.0, show_default=True,
+@click.option("--timeout", type=FiniteSeconds(), default=60.0, show_default=True,
               help="Give up after this many seconds without hearing from the runtime.")
-def agent_cmd(connect: str, run_id: str, robot: int, algorithm: str | None, timeout: float) -> None:
+@click.option("--token", default=None, metavar="TOKEN",
+              help="This robot's token as 'swarm run' printed it (visible to other users in 'ps': prefer "
+                   "--token-file or $SWARM_TOKEN).")
+@click.option("--token-file", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="A file holding the run secret or this robot's token (waited for until --timeout).")
+def agent_cmd(connect: str, run_id: str, robot: int, algorithm: str | None, timeout: float, token: str | None,
+              token_file: Path | None) -> None:
     """Run one robot's algorithm in this process against 'swarm run --transport zenoh --listen ... --remote ID'."""
+    from ..transport.auth import TOKEN_ENV, agent_token, check_run_id, parse_token, read_token_file
     from ..transport.remote import run_agent
+    from ..transport.sessions import check_endpoint
 
+    check_endpoint(connect, "--connect")
+    check_run_id(run_id, "--run")
+    if token is not None and token_file is not None:
+        raise InvalidInput("--token", "<hidden>", "either --token or --token-file, not both")
     if algorithm is not None:
         from .. import registry
 
         registry.load(algorithm)
-    code = run_agent(connect, run_id, robot, algorithm=algorithm, timeout_s=timeout,
-                     log=lambda text: click.echo(text, err=True))
+    if token is not None:
+        held, field = parse_token(token, "--token"), "--token"
+    elif token_file is not None:
+        deadline = time.monotonic() + timeout
+        while not token_file.exists() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        held, field = read_token_file(token_file), "--token-file"
+    elif os.environ.get(TOKEN_ENV):
+        held, field = parse_token(os.environ[TOKEN_ENV], TOKEN_ENV), TOKEN_ENV
+    else:
+        raise InvalidInput("--token", None, f"this robot's token (--token, --token-file or ${TOKEN_ENV}), "
+                           "as 'swarm run' printed it")
+    code = run_agent(connect, run_id, robot, agent_token(held, run_id, robot, field), algorithm=algorithm,
+                     timeout_s=timeout, log=lambda text: click.echo(text, err=True))
     if code:
         raise click.exceptions.Exit(code)
 

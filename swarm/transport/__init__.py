@@ -4,6 +4,9 @@ from __future__ import annotations
 
 from typing import Sequence
 
+from maps.errors import InvalidInput
+
+from .auth import RunSecret
 from .base import AgentHost, HostStats, TickBatch
 from .inprocess import InProcessHost
 from .timing import PhaseTimes
@@ -12,16 +15,19 @@ TRANSPORTS = ("inprocess", "zenoh")
 
 
 def make_host(kind: str, run_key: str, listen: Sequence[str] = (), remote: Sequence[int] = (),
-              timeout_s: float = 10.0, run_id: str | None = None, times: PhaseTimes | None = None) -> AgentHost:
-    """The transport named in the run spec; ``listen``/``remote`` serve agents in other processes; ``times``
-    (for benchmarks) collects where the host's ticks go."""
+              timeout_s: float = 10.0, run_id: str | None = None, times: PhaseTimes | None = None,
+              secret: RunSecret | None = None) -> AgentHost:
+    """The transport named in the run spec; ``listen``/``remote`` serve agents in other processes, which
+    authenticate with robot tokens derived from ``secret``; ``times`` (for benchmarks) collects where the
+    host's ticks go."""
     if kind == "inprocess":
-        if remote:
-            raise ValueError("remote agents need transport = 'zenoh'")
+        if remote or listen:
+            raise InvalidInput("transport", kind, "'zenoh' for remote agents or a listen endpoint")
         return InProcessHost(times)
     from .zenoh_host import ZenohHost, new_run_id
 
-    return ZenohHost(run_id or new_run_id(run_key), listen=listen, remote=remote, timeout_s=timeout_s, times=times)
+    return ZenohHost(run_id or new_run_id(run_key), listen=listen, remote=remote, timeout_s=timeout_s, times=times,
+                     secret=secret)
 
 
 __all__ = ["AgentHost", "HostStats", "InProcessHost", "PhaseTimes", "TRANSPORTS", "TickBatch", "make_host"]

@@ -36,10 +36,29 @@ class TickBatch:
     distance: np.ndarray                      # float64[R, R]: pair distances
 
 
+ACT_COUNTS = ("malformed", "refused", "late", "duplicate")
+"""What a host counts per robot about act packets it did not take: ``malformed`` (does not decode, or
+answers another tick or robot), ``refused`` (unsigned or wrongly signed), ``late`` (signed for another
+tick), ``duplicate`` (a second valid reply for the same tick)."""
+
+
 @dataclass
 class HostStats:
-    malformed: int = 0
+    """What the host counted (per robot) and which robots' agents failed."""
+
+    counts: dict[str, dict[int, int]] = field(default_factory=lambda: {k: {} for k in (*ACT_COUNTS, "bad_messages")})
     failures: dict[int, tuple[int, str]] = field(default_factory=dict)  # robot -> (tick, reason)
+
+    def count(self, kind: str, robot: int, n: int = 1) -> None:
+        """Add ``n`` to robot ``robot``'s ``kind`` counter (``bad_messages``: messages in taken acts that did
+        not decode, dropped one by one)."""
+        per_robot = self.counts[kind]
+        per_robot[robot] = per_robot.get(robot, 0) + n
+
+    def per_robot(self, kind: str, n: int) -> list[int]:
+        """Robot by robot, the ``kind`` counts of a run of ``n`` robots."""
+        per_robot = self.counts[kind]
+        return [per_robot.get(i, 0) for i in range(n)]
 
 
 class AgentHost(Protocol):

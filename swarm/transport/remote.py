@@ -1,8 +1,9 @@
 """``swarm agent``: run one robot's algorithm in this process against a simulation elsewhere.
 
-The agent connects to the runtime's ``listen`` endpoint, subscribes to its robot's keys, announces itself
-with a liveliness token, takes the ``reset`` packet (algorithm, parameters, seed) and then answers every
-observation with an action until the runtime publishes ``end``.
+The agent connects to the runtime's ``listen`` endpoint as its robot's zenoh user (authenticated with the
+robot token, :mod:`swarm.transport.auth`), subscribes to its robot's keys, announces itself with a
+liveliness token, takes the ``reset`` packet (algorithm, parameters, seed) and then answers every
+observation with an act packet signed for its tick, until the runtime publishes ``end``.
 """
 
 from __future__ import annotations
@@ -13,13 +14,17 @@ from typing import Callable
 
 import zenoh
 
+from maps.errors import InvalidInput
+
 from .agent import AgentRunner
+from .auth import RobotToken, sign_act
+from .sessions import open_session
 from .wire import WireError, decode_reset
-from .zenoh_host import BLOCK, session_config
+from .zenoh_host import BLOCK
 
 
-def run_agent(connect: str, run_id: str, robot: int, algorithm: str | None = None, timeout_s: float = 60.0,
-              log: Callable[[str], None] = print) -> int:
+def run_agent(connect: str, run_id: str, robot: int, token: RobotToken, algorithm: str | None = None,
+              timeout_s: float = 60.0, log: Callable[[str], None] = print) -> int:
     """Serve one robot until the run ends; returns a process exit status (0 = the run ended normally)."""
     prefix = f"swarm/{run_id}"
     inbox: queue.SimpleQueue[tuple[str, bytes]] = queue.SimpleQueue()
@@ -27,13 +32,14 @@ def run_agent(connect: str, run_id: str, robot: int, algorithm: str | None = Non
     def push(kind: str) -> Callable[[zenoh.Sample], None]:
         return lambda sample: inbox.put((kind, sample.payload.to_bytes()))
 
-    session = zenoh.open(session_config(connect=[connect]))
+    session = open_session("--connect", [connect], connect=[connect], user=token.user, password=token.password)
     declared = []
     try:
         deadline = time.monotonic() + timeout_s
         while not list(session.info.peers_zid()):
             if time.monotonic() > deadline:
-                log(f"swarm agent: no runtime at {connect} after {timeout_s:g} s")
+                log(f"swarm agent: no runtime at {connect} accepted robot {robot}'s token after {timeout_s:g} s "
+                    "(not running, another run, or a wrong token)")
                 return 1
             time.sleep(0.01)
         for kind in ("reset", "obs"):
@@ -44,6 +50,7 @@ def run_agent(connect: str, run_id: str, robot: int, algorithm: str | None = Non
         declared.append(act)
         declared.append(session.liveliness().declare_token(f"{prefix}/robot/{robot}/alive"))
         runner: AgentRunner | None = None
+        act_key = token.act_key
         while True:
             try:
                 kind, data = inbox.get(timeout=timeout_s)
@@ -54,14 +61,21 @@ def run_agent(connect: str, run_id: str, robot: int, algorithm: str | None = Non
                 log("swarm agent: run ended")
                 return 0
             if kind == "reset":
-                reset = decode_reset(data)
-                runner = AgentRunner(reset, algorithm)
+                try:
+                    reset = decode_reset(data)
+                    runner = AgentRunner(reset, algorithm)
+                except (WireError, InvalidInput) as exc:
+                    log(f"swarm agent: cannot start from the runtime's reset packet ({str(exc)[:200]})")
+                    return 2
                 log(f"swarm agent: robot {robot} of run {run_id}, algorithm {algorithm or reset.algorithm}")
             elif kind == "obs" and runner is not None:
                 try:
-                    act.put(runner.handle(data))
+                    obs = runner.observe(data)
                 except WireError as exc:  # dropped unanswered: the runtime's timeout decides what follows
                     log(f"swarm agent: dropped a malformed obs packet ({exc})")
+                    continue
+                reply = runner.answer(obs)
+                act.put(reply, attachment=sign_act(token, obs.tick, reply, act_key))
     finally:
         for d in reversed(declared):
             try:

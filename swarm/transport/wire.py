@@ -67,12 +67,14 @@ class ObsPacket(NamedTuple):
 
 
 class ActPacket(NamedTuple):
-    """A decoded act packet (a named tuple, as cheap to build as ObsPacket)."""
+    """A decoded act packet (a named tuple, as cheap to build as ObsPacket). ``action.messages`` holds the
+    messages that decoded; ``bad_messages`` counts those that did not (dropped one by one)."""
 
     tick: int
     robot_id: int
     action: Action
     message_bytes: tuple[bytes, ...]
+    bad_messages: int = 0
 
 
 _LOCAL = threading.local()
@@ -131,12 +133,24 @@ def encode_reset(p: ResetPacket) -> bytes:
 
 
 def decode_reset(data: bytes) -> ResetPacket:
+    """A reset packet, every field checked (an agent must not trip over a bad one)."""
     f = _unpack(data, "reset", 13)[2:]
-    robot = RobotInfo(id=_int(f[0], "id"), n_robots=_int(f[1], "n_robots"), map_shape=tuple(f[2]),
-                      radius=f[3], lidar_range=f[4], max_speed=f[5], max_turn_rate=f[6], tick_seconds=f[7],
-                      battery=f[8])
-    return ResetPacket(robot=robot, algorithm=str(f[9]), params=dict(f[10]), seed_entropy=_int(f[11], "seed"),
-                       seed_spawn_key=tuple(int(k) for k in f[12]))
+    robot_id, n_robots = _int(f[0], "reset: id"), _int(f[1], "reset: n_robots")
+    shape = f[2]
+    if (type(shape) is not list or len(shape) != 2 or not all(type(v) is int and 0 < v <= 100_000 for v in shape)
+            or not 0 <= robot_id < n_robots <= 100_000):
+        raise WireError("reset: bad robot id, robot count or map shape")
+    if type(f[9]) is not str or type(f[10]) is not dict or type(f[12]) is not list:
+        raise WireError("reset: algorithm must be a string, params a map, the spawn key a list")
+    seed = _int(f[11], "reset: seed")
+    spawn_key = tuple(_int(k, "reset: spawn key") for k in f[12])
+    if seed < 0 or any(k < 0 for k in spawn_key) or len(spawn_key) > 8:
+        raise WireError("reset: seed and spawn key must be non-negative integers")
+    robot = RobotInfo(id=robot_id, n_robots=n_robots, map_shape=(shape[0], shape[1]), radius=_num(f[3], "reset: radius"),
+                      lidar_range=_num(f[4], "reset: lidar range"), max_speed=_num(f[5], "reset: max speed"),
+                      max_turn_rate=_num(f[6], "reset: max turn rate"), tick_seconds=_num(f[7], "reset: tick"),
+                      battery=None if f[8] is None else _num(f[8], "reset: battery"))
+    return ResetPacket(robot=robot, algorithm=f[9], params=f[10], seed_entropy=seed, seed_spawn_key=spawn_key)
 
 
 # ------------------------------------------------------------------------------------------ obs ----
@@ -336,12 +350,16 @@ def decode_act(data: bytes) -> ActPacket:
         raise WireError("act: debug must be a map")
     if not messages:
         action = _action(goal=goal, velocity=velocity, messages=(), debug=debug, clear_goal=bool(clear_goal))
-        return _tuple_new(ActPacket, (tick, robot, action, ()))
+        return _tuple_new(ActPacket, (tick, robot, action, (), 0))
     if not all(isinstance(m, bytes) for m in messages):
         raise WireError("act: messages must be a list of byte strings")
-    try:
-        decoded = tuple(decode(m) for m in messages)
-    except MessageError as exc:
-        raise WireError(f"act: bad message ({exc})") from None
-    action = Action(goal=goal, velocity=velocity, messages=decoded, debug=debug, clear_goal=bool(clear_goal))
-    return ActPacket(tick=tick, robot_id=robot, action=action, message_bytes=tuple(messages))
+    decoded, kept = [], []
+    for m in messages:
+        try:
+            decoded.append(decode(m))
+        except MessageError:
+            continue
+        kept.append(m)
+    action = Action(goal=goal, velocity=velocity, messages=tuple(decoded), debug=debug, clear_goal=bool(clear_goal))
+    return ActPacket(tick=tick, robot_id=robot, action=action, message_bytes=tuple(kept),
+                     bad_messages=len(messages) - len(kept))

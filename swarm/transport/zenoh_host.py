@@ -14,11 +14,20 @@ agents connect to the runtime's ``listen`` endpoint; the runtime waits for every
 tick t before advancing, so thread timing never changes a result. A remote agent that loses its
 liveliness token or stays silent for ``timeout_s`` is marked failed at that tick and its robot stops.
 Sessions open in peer mode with multicast scouting off and no endpoints unless given (loopback only).
+
+**Trust** (:mod:`swarm.transport.auth`). Local robots' keys never leave this session: their ``obs``
+publishers and ``act`` subscribers are session-local, so no packet from the network can act for them.
+A listening runtime admits only sessions that pass zenoh's usrpwd authentication as a remote robot's user
+and lets each see and send only its own robot's keys (zenoh access control). Every act packet of a
+remote robot must carry a valid HMAC tag for its tick under that robot's key; the first signed reply per
+robot and tick is taken; a later one for a tick already answered (a second reply, a replay) is counted
+(``duplicate``), one for a tick not asked or given up on (``late``), unsigned or wrongly signed ones are
+refused and counted (``refused``), a taken one that does not decode is counted (``malformed``) and the
+robot keeps doing what it did.
 """
 
 from __future__ import annotations
 
-import json
 import threading
 import time
 import uuid
@@ -28,28 +37,21 @@ import zenoh
 
 from ..api import Action, Observation
 from .agent import AgentRunner, InboxDecoder
+from .auth import Credentials, RunSecret, access_control, check_run_id, verify_act
 from .base import HostStats, TickBatch
 from .packing import ObsEncoder
+from .sessions import open_session, session_config
 from .timing import PhaseTimes, timed
 from .wire import ResetPacket, WireError, decode_act, encode_reset
 
 BLOCK = zenoh.CongestionControl.BLOCK
 
 
-def session_config(listen: Sequence[str] = (), connect: Sequence[str] = ()) -> zenoh.Config:
-    """Peer mode, no multicast scouting, only the given endpoints (reference/zenoh-pymunk.md A1, A5)."""
-    c = zenoh.Config()
-    c.insert_json5("mode", '"peer"')
-    c.insert_json5("scouting/multicast/enabled", "false")
-    c.insert_json5("scouting/delay", "0")
-    c.insert_json5("listen/endpoints", json.dumps(list(listen)))
-    c.insert_json5("connect/endpoints", json.dumps(list(connect)))
-    c.insert_json5("connect/timeout_ms", "1000")
-    return c
-
-
 def new_run_id(key: str) -> str:
     return f"{key}-{uuid.uuid4().hex[:8]}"
+
+
+LOCAL, REMOTE = zenoh.Locality.SESSION_LOCAL, zenoh.Locality.REMOTE
 
 
 def robot_of(key_expr: object) -> int | None:
@@ -65,18 +67,36 @@ class ZenohHost:
     batched = True
 
     def __init__(self, run_id: str, listen: Sequence[str] = (), remote: Sequence[int] = (),
-                 timeout_s: float = 10.0, join_timeout_s: float = 60.0, times: PhaseTimes | None = None) -> None:
-        """``times`` (for benchmarks): where the ticks go, see :mod:`swarm.transport.timing`."""
+                 timeout_s: float = 10.0, join_timeout_s: float = 60.0, times: PhaseTimes | None = None,
+                 secret: RunSecret | None = None) -> None:
+        """``listen``: endpoints remote agents connect to (authenticated with robot tokens derived from
+        ``secret``, a fresh one if None); ``times`` (for benchmarks): where the ticks go, see
+        :mod:`swarm.transport.timing`."""
         self.stats = HostStats()
         self._times = times
         self._decode_act = timed(times, "host: act decode", decode_act)
-        self.run_id = run_id
+        self.run_id = check_run_id(run_id, "run id")
         self.prefix = f"swarm/{run_id}"
         self.remote = set(remote)
         self.timeout_s = timeout_s
         self.join_timeout_s = join_timeout_s
-        self.session = zenoh.open(session_config(listen=listen))
+        self.secret = secret or RunSecret.generate()
+        self._tokens = {r: self.secret.robot_token(run_id, r) for r in sorted(self.remote)}
+        self._credentials: Credentials | None = None
+        if listen:
+            self._credentials = Credentials(list(self._tokens.values()))
+            try:
+                self.session = open_session("--listen", list(listen), listen=listen,
+                                            dictionary_file=str(self._credentials.path),
+                                            access_control=access_control(self.prefix, sorted(self.remote)))
+            except BaseException:
+                self._credentials.remove()
+                raise
+        else:
+            self.session = zenoh.open(session_config())
         self._cond = threading.Condition()
+        self._tick = -1  # the tick whose replies are awaited
+        self._taken: dict[int, int] = {}  # remote robot -> the last tick whose reply was taken
         self._replies: dict[int, bytes] = {}
         self._alive: set[int] = set()
         self._lost: set[int] = set()
@@ -92,23 +112,41 @@ class ZenohHost:
 
     # ---------------------------------------------------------------------------------- callbacks ----
     def _act_subscriber(self, robot: int) -> None:
-        """One subscriber per robot's act key, so a reply needs no key parsing; it wakes act() only when
-        remote agents are awaited (local agents answer synchronously inside the obs put)."""
+        """One subscriber per robot's act key, so a reply needs no key parsing. A local robot's takes only
+        this session's samples (its agent answers synchronously inside the obs put); a remote robot's takes
+        only the network's, checks each reply's signature and tick, keeps the first and wakes act()."""
         replies = self._replies
-        if not self.remote:
+        if robot not in self.remote:
             def on_act(sample: zenoh.Sample) -> None:
-                # Local agents answer inside act()'s own put, in its thread: no lock needed (a stray publisher's
-                # reply from a zenoh thread is one dict store, atomic under the GIL, and fails the tick check).
+                # Local agents answer inside act()'s own put, in its thread: no lock needed.
                 replies[robot] = sample.payload.to_bytes()
+
+            origin = LOCAL
         else:
+            token = self._tokens[robot]
+            key = token.act_key
+            stats = self.stats
+            taken = self._taken
+
             def on_act(sample: zenoh.Sample) -> None:
                 data = sample.payload.to_bytes()
+                attachment = sample.attachment
+                tick = verify_act(token, key, attachment.to_bytes() if attachment is not None else None, data)
                 with self._cond:
-                    replies[robot] = data
-                    self._cond.notify_all()
+                    if tick is None:
+                        stats.count("refused", robot)
+                    elif tick == self._tick and robot not in replies:
+                        replies[robot] = data
+                        taken[robot] = tick
+                        self._cond.notify_all()
+                    elif tick <= taken.get(robot, -1):  # a second reply (or a replay) for a tick already answered
+                        stats.count("duplicate", robot)
+                    else:  # a tick not asked yet, or one given up on
+                        stats.count("late", robot)
 
+            origin = REMOTE
         self._declared.append(self.session.declare_subscriber(
-            f"{self.prefix}/robot/{robot}/act", zenoh.handlers.Callback(on_act, indirect=False)))
+            f"{self.prefix}/robot/{robot}/act", zenoh.handlers.Callback(on_act, indirect=False), allowed_origin=origin))
 
     def _on_alive(self, sample: zenoh.Sample) -> None:
         robot = robot_of(sample.key_expr)
@@ -126,7 +164,8 @@ class ZenohHost:
         :meth:`_answer_local`, after every robot's obs has been delivered. Decoding all packets in a row,
         then running the algorithms, then sending all actions keeps each step's code and data in cache
         (interleaved, each step ran cold after an algorithm: twice the decoding's cost)."""
-        publisher = self.session.declare_publisher(f"{self.prefix}/robot/{robot}/act", congestion_control=BLOCK)
+        publisher = self.session.declare_publisher(f"{self.prefix}/robot/{robot}/act", congestion_control=BLOCK,
+                                                   allowed_destination=LOCAL)
         self._declared.append(publisher)
         put = timed(self._times, "zenoh: act put", publisher.put)
         answer = timed(self._times, "agent: answer", runner.answer)
@@ -137,7 +176,7 @@ class ZenohHost:
             pending.append((put, answer, observe(sample.payload.to_bytes())))
 
         self._declared.append(self.session.declare_subscriber(
-            f"{self.prefix}/robot/{robot}/obs", zenoh.handlers.Callback(on_obs, indirect=False)))
+            f"{self.prefix}/robot/{robot}/obs", zenoh.handlers.Callback(on_obs, indirect=False), allowed_origin=LOCAL))
 
     def _answer_local(self) -> None:
         """Every local agent's action for the observations delivered since the last call, in robot order."""
@@ -153,7 +192,8 @@ class ZenohHost:
         for reset in resets:
             i = reset.robot.id
             self._act_subscriber(i)
-            publisher = self.session.declare_publisher(f"{self.prefix}/robot/{i}/obs", congestion_control=BLOCK)
+            publisher = self.session.declare_publisher(f"{self.prefix}/robot/{i}/obs", congestion_control=BLOCK,
+                                                       allowed_destination=REMOTE if i in self.remote else LOCAL)
             self._publishers[i] = publisher
             self._puts[i] = timed(self._times, "zenoh: obs put", publisher.put)
             if i not in self.remote:
@@ -180,6 +220,7 @@ class ZenohHost:
             asked[list(self.stats.failures)] = False
         with self._cond:
             self._replies.clear()
+            self._tick = tick
         packets = self._encode(tick, asked, batch.poses, batch.collided, batch.travelled, batch.energy, batch.navs,
                                batch.known, batch.cells, batch.ends, batch.inboxes, batch.near, batch.distance)
         puts = self._puts
@@ -205,13 +246,15 @@ class ZenohHost:
             try:
                 packet = decode(data)
             except WireError:
-                self.stats.malformed += 1
+                self.stats.count("malformed", i)
                 actions[i] = Action()
                 continue
             if packet.tick != tick or packet.robot_id != i:
-                self.stats.malformed += 1
+                self.stats.count("malformed", i)
                 actions[i] = Action()
                 continue
+            if packet.bad_messages:
+                self.stats.count("bad_messages", i, packet.bad_messages)
             actions[i] = packet.action
         return actions
 
@@ -241,3 +284,5 @@ class ZenohHost:
             except Exception:
                 pass
         self.session.close()
+        if self._credentials is not None:
+            self._credentials.remove()

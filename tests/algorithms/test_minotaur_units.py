@@ -235,4 +235,4 @@ def test_same_run_over_zenoh() -> None:
     a = Simulation(spec).run().summary
     b = Simulation({**spec, "transport": "zenoh"}).run().summary
     assert a["final_poses"] == b["final_poses"] and a["messages"]["sent"] == b["messages"]["sent"]
-    assert b["messages"]["malformed_from_agents"] == 0
+    assert b["messages"]["malformed"] == 0 and b["acts"]["malformed"] == [0, 0, 0]

@@ -202,10 +202,23 @@ def test_receive_tick_equals_receive_per_robot():
     assert {"MapUpdate", "MapUpdate-full", "MapRequest"} <= kinds  # deltas, gaps, requests and full maps
 
 
-def test_medium_rejects_a_forged_sender():
-    medium = Medium(2, CommSpec(), np.random.default_rng(0))
-    with pytest.raises(ValueError, match="claiming sender"):
-        medium.envelope(0, Ping(sender=1, tick=0))
+def test_medium_drops_and_counts_what_an_algorithm_may_not_send():
+    """A forged sender, something that is not a registered message, a map update of another shape or with a
+    corrupt payload: dropped before the radio, counted per sender, the reason noted; good messages pass."""
+    from swarm.messages import MapUpdate, full_update
+
+    medium = Medium(3, CommSpec(), np.random.default_rng(0), map_shape=(8, 8))
+    corrupt = MapUpdate(sender=1, seq=1, tick=0, full=False, shape=(8, 8), count=2, payload=b"junk", pose=(0.0, 0.0, 0.0))
+    bad = [(0, Ping(sender=1, tick=0)), (1, Ping(sender=True, tick=0)), (1, "a string"), (2, object()),
+           (1, full_update(1, 1, 0, np.zeros((3, 3), np.uint8), (0.0, 0.0, 0.0))), (1, corrupt)]
+    for sender, msg in bad:
+        assert medium.envelope(sender, msg) is None
+    good = medium.envelope(1, full_update(1, 1, 0, np.ones((8, 8), np.uint8), (0.0, 0.0, 0.0)))
+    assert good is not None and good.seq == 1, "dropped messages take no sequence number"
+    assert medium.envelope(2, Ping(sender=2, tick=0)) is not None
+    assert medium.stats.malformed == len(bad) and medium.stats.malformed_by_robot == [1, 4, 1]
+    reasons = [reason for _, reason in medium.dropped]
+    assert "claims sender 1" in reasons[0] and "shape" in reasons[4] and "corrupt" in reasons[5]
 
 
 def test_comm_metrics_in_the_time_series():

@@ -21,7 +21,8 @@ import zenoh
 from swarm.api import Action
 from swarm.simulation import Simulation, TransportOptions
 from swarm.transport.wire import WIRE_VERSION, decode_obs, encode_act
-from swarm.transport.zenoh_host import session_config
+from swarm.transport.auth import RunSecret, sign_act
+from swarm.transport.sessions import session_config
 
 pytestmark = pytest.mark.timeout(240)
 
@@ -34,17 +35,21 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-def start_agent(endpoint: str, run_id: str, robot: int) -> subprocess.Popen:
+SECRET = RunSecret.generate()
+
+
+def start_agent(endpoint: str, run_id: str, robot: int, secret: RunSecret = SECRET) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "swarm", "agent", "--connect", endpoint, "--run", run_id,
                              "--robot", str(robot), "--timeout", "60"],
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                            env={**os.environ, "PYTHONHASHSEED": "7"})
+                            env={**os.environ, "PYTHONHASHSEED": "7",
+                                 "SWARM_TOKEN": secret.robot_token(run_id, robot).text()})
 
 
 def remote_options(robots=(1,)):
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     return endpoint, TransportOptions(listen=(endpoint,), remote=tuple(robots), timeout_s=20.0,
-                                      run_id=f"test-{uuid.uuid4().hex[:8]}")
+                                      run_id=f"test-{uuid.uuid4().hex[:8]}", secret=SECRET)
 
 
 def test_inprocess_and_zenoh_give_bit_identical_runs():
@@ -104,13 +109,13 @@ def test_parallel_runs_with_the_same_ids_never_cross_talk():
         bridge.close()
     for k in range(2):
         assert results[k].timeseries == solo.timeseries
-        assert results[k].summary["messages"]["malformed_from_agents"] == 0
+        assert results[k].summary["acts"] == {kind: [0, 0, 0] for kind in ("malformed", "refused", "late", "duplicate")}
 
 
 def test_killed_remote_agent_fails_its_robot_and_the_run_goes_on():
     endpoint, options = remote_options()
     spec = {**SPEC, "transport": "zenoh", "stop": {"max_ticks": 400}}
-    options = TransportOptions(listen=options.listen, remote=(1,), timeout_s=5.0, run_id=options.run_id)
+    options = TransportOptions(listen=options.listen, remote=(1,), timeout_s=5.0, run_id=options.run_id, secret=SECRET)
     holder: dict = {}
 
     def kill_at_tick_100(view):
@@ -147,7 +152,8 @@ def test_malformed_actions_are_dropped_and_counted():
     bad = [b"\x00garbage", msgpack.packb(["act", WIRE_VERSION + 1]), msgpack.packb(["act", WIRE_VERSION, 0]),
            encode_act(999, 1, Action()), b"x" * (9 * 1024 * 1024),
            msgpack.packb(["act", WIRE_VERSION, 5, 1, ["a", 1], None, False, [b"\x01"], None])]
-    with zenoh.open(session_config(connect=[endpoint])) as s:
+    token = SECRET.robot_token(options.run_id, 1)
+    with zenoh.open(session_config(connect=[endpoint], user=token.user, password=token.password)) as s:
         while not list(s.info.peers_zid()):
             time.sleep(0.01)
         answered = []
@@ -156,18 +162,19 @@ def test_malformed_actions_are_dropped_and_counted():
             packet = decode_obs(sample.payload.to_bytes(), 80 * 80)
             k = len(answered)
             answered.append(packet.tick)
+            reply = bad[k] if k < len(bad) else encode_act(packet.tick, 1, Action())
             # BLOCK as the real agent's publisher: zenoh's default (DROP) may lose the 9 MB reply on a busy machine
-            s.put(f"{prefix}/act", bad[k] if k < len(bad) else encode_act(packet.tick, 1, Action()),
+            s.put(f"{prefix}/act", reply, attachment=sign_act(token, packet.tick, reply),
                   congestion_control=zenoh.CongestionControl.BLOCK)
 
         sub = s.declare_subscriber(f"{prefix}/obs", zenoh.handlers.Callback(on_obs, indirect=False))
-        token = s.liveliness().declare_token(f"{prefix}/alive")
+        alive = s.liveliness().declare_token(f"{prefix}/alive")
         t.join(60)
-        token.undeclare()
+        alive.undeclare()
         sub.undeclare()
     assert not t.is_alive()
     r = box["r"]
-    assert r.summary["messages"]["malformed_from_agents"] == len(bad)
+    assert r.summary["acts"]["malformed"] == [0, len(bad), 0]
     assert r.summary["failed_robots"] == [] and r.summary["ticks"] == 12
 
 

@@ -124,11 +124,17 @@ def runner(inbox: InboxDecoder | None = None) -> AgentRunner:
     return AgentRunner(ResetPacket(robot, "frontier", {}, 1, (2,)), inbox=inbox)
 
 
-def test_agent_rejects_an_undecodable_inbox_message_and_keeps_its_map():
-    r = runner()
-    with pytest.raises(WireError):
-        r.handle(obs_packet(inbox=(b"\x93\xa3bad",)))
-    assert not r.known.any(), "a rejected packet writes no cell"
+def test_agent_leaves_out_an_undecodable_inbox_message_and_counts_it():
+    """A message the agent cannot decode (garbage, or a type its algorithm does not register) costs that
+    message, not the observation: the rest of the inbox and the map cells still arrive."""
+    shared = InboxDecoder()
+    r = runner(shared)
+    beat = encode(Heartbeat(sender=1, tick=11, x=1.0, y=2.0, theta=0.5))
+    unknown = msgpack.packb(["nobody.registered_this", 1, 1, 2.0])
+    obs = r.observe(obs_packet(inbox=(b"\x93\xa3bad", beat, unknown), idx=(3, 9), val=(1, 2)))
+    assert obs.inbox == (Heartbeat(sender=1, tick=11, x=1.0, y=2.0, theta=0.5),)
+    assert shared.undecodable == 2
+    assert r.known.reshape(-1)[[3, 9]].tolist() == [1, 2]
 
 
 def test_inbox_messages_are_decoded_once_per_payload_and_tick():
@@ -250,13 +256,24 @@ def test_act_numbers_may_be_integers_and_come_back_as_floats():
     {"tick": 1.0}, {"tick": True}, {"robot": "2"}, {"goal": [1.0]}, {"goal": (1.0, 2.0, 3.0)}, {"goal": "xy"},
     {"goal": [float("nan"), 1.0]}, {"goal": [1.0, float("inf")]}, {"goal": [True, 1.0]}, {"goal": [1.0, "2"]},
     {"velocity": [float("-inf"), 0.0]}, {"velocity": {"v": 1}}, {"messages": b"m"}, {"messages": ["m"]},
-    {"messages": [b"\x93\xa3bad"]}, {"debug": [1]}, {"kind": "obs"}, {"version": 1},
+    {"debug": [1]}, {"kind": "obs"}, {"version": 1},
 ])
 def test_malformed_act_raises_wire_error(change):
     with pytest.raises(WireError):
         decode_act(repack(act_fields(**change)))
     with pytest.raises(WireError):
         decode_act(repack(act_fields()[:-1]))
+
+
+def test_messages_that_do_not_decode_are_dropped_one_by_one_and_counted():
+    from swarm.messages import Heartbeat, encode
+
+    good = encode(Heartbeat(sender=2, tick=1, x=1.0, y=2.0, theta=0.5))
+    bad = [b"\x93\xa3bad", b"", encode(Heartbeat(sender=2, tick=1, x=float("nan"), y=2.0, theta=0.5)),
+           msgpack.packb(["swarm.heartbeat", 1, 2, "t", 1.0, 2.0, 0.5]), msgpack.packb(["swarm.map_request", 1, 2, 1.5])]
+    p = decode_act(repack(act_fields(messages=[bad[0], good, *bad[1:], good])))
+    assert p.bad_messages == len(bad)
+    assert p.action.messages == (Heartbeat(2, 1, 1.0, 2.0, 0.5),) * 2 and p.message_bytes == (good, good)
 
 
 def test_agent_decoder_reuses_an_unchanged_nav_status_and_notices_every_change():

@@ -13,6 +13,7 @@ from pathlib import Path
 import pytest
 
 from swarm.simulation import Simulation, TransportOptions
+from swarm.transport.auth import RunSecret
 
 DOC = Path(__file__).resolve().parents[2] / "docs" / "wire-format.md"
 
@@ -29,16 +30,19 @@ def test_documented_agent_drives_its_robot(tmp_path):
     run_id = f"doc-{uuid.uuid4().hex[:8]}"
     spec = {"seed": 1, "map": {"kind": "building", "size": 30}, "robots": {"count": 2}, "transport": "zenoh",
             "stop": {"max_ticks": 40}}
-    sim = Simulation(spec, transport=TransportOptions(listen=(endpoint,), remote=(1,), timeout_s=20, run_id=run_id))
+    secret = RunSecret.generate()
+    sim = Simulation(spec, transport=TransportOptions(listen=(endpoint,), remote=(1,), timeout_s=20, run_id=run_id,
+                                                      secret=secret))
     box = {}
     t = threading.Thread(target=lambda: box.setdefault("r", sim.run()))
     t.start()
-    agent = subprocess.Popen([sys.executable, str(script), endpoint, run_id, "1"], stderr=subprocess.PIPE, text=True)
+    agent = subprocess.Popen([sys.executable, str(script), endpoint, run_id, "1", secret.robot_token(run_id, 1).text()],
+                             stderr=subprocess.PIPE, text=True)
     t.join(120)
     agent.wait(30)
     r = box["r"]
     assert agent.returncode == 0, agent.stderr.read()
-    assert r.summary["failed_robots"] == [] and r.summary["messages"]["malformed_from_agents"] == 0
+    assert r.summary["failed_robots"] == [] and r.summary["acts"] == {k: [0, 0] for k in ("malformed", "refused", "late", "duplicate")}
     assert r.summary["distance_m"][1] > 1.0, "the documented agent drove robot 1 forward"
 
 
