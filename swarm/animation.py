@@ -8,6 +8,7 @@ run; the frames are drawn at the end.
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
@@ -39,10 +40,13 @@ class GifRecorder:
                 self.snapshots = [s for s in self.snapshots if s[0] % self.frame_every == 0]
 
     def save(self, path: str | Path, duration_ms: int = 80) -> Path:
+        """Write the GIF atomically (encoded in memory first): a failed write leaves an existing file as it was."""
+        from maps.io import atomic_write_bytes
+
         frames = self.frames()
-        path = Path(path)
-        frames[0].save(path, save_all=True, append_images=frames[1:], duration=duration_ms, loop=0)
-        return path
+        buffer = io.BytesIO()
+        frames[0].save(buffer, format="GIF", save_all=True, append_images=frames[1:], duration=duration_ms, loop=0)
+        return atomic_write_bytes(Path(path), buffer.getvalue())
 
     def save_mp4(self, path: str | Path, fps: int = 12) -> Path:
         """The same frames as an H.264 MP4 (for slides), through imageio-ffmpeg's bundled ffmpeg (the
