@@ -36,7 +36,7 @@ import numpy as np
 from scipy import ndimage
 
 from .errors import InvalidInput
-from .materials import DEFAULT_TABLE, DEFAULT_WALL_MATERIALS, check_material_name
+from .materials import DEFAULT_TABLE, DEFAULT_WALL_MATERIALS, check_known_material
 from .model import CELL_M, CELLS_PER_TILE, Map
 from .params import check_float, check_int, check_weights, to_mapping
 from .raster import FOUR, tiles_to_cells
@@ -72,12 +72,16 @@ class BuildingParams:
         check_float("room_split_percent", self.room_split_percent, 0.0, 100.0)
         check_float("extra_door_percent", self.extra_door_percent, 0.0, 100.0)
         check_int("border", self.border, 1, 10)
-        check_material_name(self.exterior_material, "exterior_material")
+        check_known_material(self.exterior_material, "exterior_material")
         object.__setattr__(self, "interior_materials",
                            dict(check_weights("interior_materials", self.interior_materials)))
         if 2 * self.door_padding + self.door_width > self.min_room_side:
             raise InvalidInput("door_width", self.door_width,
                                f"2*door_padding + door_width <= min_room_side ({self.min_room_side})")
+
+
+class _RoomsWithoutDoor(Exception):
+    """Door placement could not connect every room (see :func:`generate_building` for what that means)."""
 
 
 class Rect(NamedTuple):
@@ -146,7 +150,17 @@ def generate_building(width: int, height: int, seed: int, params: BuildingParams
         if rid not in graph:
             graph.add_node(rid, kind="hall" if rid < n_halls else "room")
     adjacencies = _adjacencies(free_rects, material, params)
-    _place_doors(graph, adjacencies, material, labels, table, params, layout_rng)
+    try:
+        _place_doors(graph, adjacencies, material, labels, table, params, layout_rng)
+    except _RoomsWithoutDoor:
+        side = 2 * params.border + params.min_room_side
+        if min(interior.x1 - interior.x0, interior.y1 - interior.y0) >= params.min_room_side:
+            raise RuntimeError(f"building generator left rooms without a door (seed {seed}, {width} x {height}); "
+                               "please report the seed") from None
+        # Inside the border there is less than a room side: rooms that thin can share walls too short for a door.
+        raise InvalidInput("size", f"{width}x{height}",
+                           f"at least {side} tiles per side with border {params.border} and min_room_side "
+                           f"{params.min_room_side} (this one leaves rooms without a door)") from None
 
     solid = tiles_to_cells(material != 0)
     cell_material = tiles_to_cells(material)
@@ -312,7 +326,7 @@ def _place_doors(graph: nx.MultiGraph, adjacencies: list[_Adjacency], material: 
             queue.append(v)
     missing = set(graph.nodes) - connected
     if missing:
-        raise RuntimeError(f"building generator left rooms {sorted(missing)} without a door; please report the seed")
+        raise _RoomsWithoutDoor(sorted(missing))
     if p.extra_door_percent > 0:
         for k, e in enumerate(usable):
             if k not in used and rng.random() * 100.0 < p.extra_door_percent:

@@ -31,6 +31,7 @@ import numpy as np
 from scipy import ndimage
 from scipy.spatial import cKDTree
 
+from .errors import InvalidInput
 from .materials import DEFAULT_TABLE, DEFAULT_WALL_MATERIALS
 from .model import Map
 from .params import check_float, check_int, check_weights
@@ -91,7 +92,8 @@ def generate_cave(width: int, height: int, seed: int, params: CaveParams) -> Map
     free = ~solid
     keep = reachable_free(free)
     if not keep.any():
-        raise RuntimeError(f"cave seed {seed}: no space a robot fits in; lower fill_percent")
+        raise InvalidInput("seed", seed, f"a seed whose {width} x {height} cave leaves room for a robot (this one "
+                                         "leaves none: try another seed, a bigger size or a lower fill_percent)")
     pockets = free & ~keep
     if pockets.any():
         fill = nearest_wall_material(material, solid)

@@ -2,6 +2,14 @@
 
 A map stores a small material table ``id -> name``; id 0 is always ``"air"`` (free space). The radio
 package resolves names to attenuation figures, so a map file never carries physics numbers, only names.
+
+**Vocabulary.** :data:`KNOWN_MATERIALS` are the names the radio's built-in table prices
+(``radio.materials.DEFAULT_MATERIALS`` has exactly these; ``maps`` cannot import ``radio``, so the list
+lives here). Where a user *types* a material name (generator parameters, importer options, legend
+colours) it must be one of them, or, for a legend, one the legend declares in its ``materials`` list: a
+typo such as ``concrette`` is an error up front instead of a map the radio refuses later. A :class:`Map`
+itself (a file, or one built in Python) may carry any valid name: the radio resolves it at build time
+and refuses names that neither its built-in table nor the run's ``[radio.materials]`` define.
 """
 
 from __future__ import annotations
@@ -9,11 +17,15 @@ from __future__ import annotations
 import hashlib
 import re
 
-from .errors import InvalidInput
+from .errors import InvalidInput, shorten
 
 AIR = "air"
 DEFAULT_WALL_MATERIALS: tuple[str, ...] = ("concrete", "wood", "brick")
 DEFAULT_TABLE: tuple[str, ...] = (AIR, *DEFAULT_WALL_MATERIALS)
+
+KNOWN_MATERIALS: tuple[str, ...] = (AIR, "concrete", "wood", "brick", "wall", "glass", "drywall", "metal")
+"""Every material the built-in radio table defines; all but ``air`` are wall materials."""
+KNOWN_WALL_MATERIALS: tuple[str, ...] = KNOWN_MATERIALS[1:]
 
 _NAME_RE = re.compile(r"^[a-z][a-z0-9_\-]{0,31}$")
 
@@ -34,6 +46,19 @@ def check_material_name(name: object, field: str = "material") -> str:
     """Return ``name`` if it is a valid material name (lower-case identifier), else raise."""
     if not isinstance(name, str) or not _NAME_RE.match(name):
         raise InvalidInput(field, name, "a lower-case name of 1-32 letters, digits, '_' or '-', starting with a letter")
+    return name
+
+
+def check_known_material(name: object, field: str = "material", declared: tuple[str, ...] = ()) -> str:
+    """Return ``name`` if it is a known wall material (or one in ``declared``), else raise naming ``field``.
+
+    ``air`` is never a wall material. The message lists the allowed names.
+    """
+    allowed = f"a wall material: {', '.join(KNOWN_WALL_MATERIALS)}"
+    if declared:
+        allowed += f" (or one the legend declares: {shorten(', '.join(declared))})"
+    if not isinstance(name, str) or name == AIR or (name not in KNOWN_WALL_MATERIALS and name not in declared):
+        raise InvalidInput(field, name, allowed)
     return name
 
 

@@ -12,7 +12,7 @@ import math
 from collections.abc import Mapping
 from typing import Any, TypeVar
 
-from .errors import InvalidInput
+from .errors import InvalidInput, field_name, short_repr
 
 T = TypeVar("T")
 
@@ -23,7 +23,8 @@ def from_mapping(cls: type[T], data: Mapping[str, Any] | None, prefix: str = "")
     names = [f.name for f in dataclasses.fields(cls) if f.init]  # type: ignore[arg-type]
     for key in data:
         if key not in names:
-            raise InvalidInput(f"{prefix}{key}", data[key], f"a parameter of {cls.__name__}: {', '.join(names)}")
+            shown = key if isinstance(key, str) else short_repr(key)  # str() of a 5000-digit int raises
+            raise InvalidInput(f"{prefix}{shown}", data[key], f"a parameter of {cls.__name__}: {', '.join(names)}")
     return cls(**data)
 
 
@@ -55,7 +56,11 @@ def check_int(name: str, value: Any, lo: int | None = None, hi: int | None = Non
 def check_float(name: str, value: Any, lo: float | None = None, hi: float | None = None, *,
                 lo_open: bool = False, hi_open: bool = False) -> float:
     """A finite number within the given bounds (open or closed); NaN and inf are refused."""
-    ok = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+    try:
+        ok = ok and math.isfinite(value)
+    except OverflowError:  # an int beyond the float range (TOML integers are unbounded)
+        ok = False
     if ok and lo is not None and (value < lo or (lo_open and value == lo)):
         ok = False
     if ok and hi is not None and (value > hi or (hi_open and value == hi)):
@@ -81,18 +86,20 @@ def check_bool(name: str, value: Any) -> bool:
 
 
 def check_weights(name: str, value: Any) -> tuple[tuple[str, float], ...]:
-    """A non-empty mapping name -> non-negative weight with a positive sum, as sorted pairs."""
-    from .materials import check_material_name
+    """A non-empty mapping known wall material -> non-negative weight with a positive, finite sum, as sorted
+    pairs (see :func:`maps.materials.check_known_material`)."""
+    from .materials import check_known_material
 
     if not isinstance(value, Mapping) or not value:
         raise InvalidInput(name, value, "a non-empty table of material = weight")
     pairs = []
     for key, w in value.items():
-        check_material_name(key, f"{name}.{key}")
-        check_float(f"{name}.{key}", w, 0.0)
+        check_known_material(key, field_name(name, key))
+        check_float(field_name(name, key), w, 0.0)
         pairs.append((key, float(w)))
-    if sum(w for _, w in pairs) <= 0:
-        raise InvalidInput(name, dict(value), "weights with a positive sum")
+    total = sum(w for _, w in pairs)
+    if not 0 < total < math.inf:
+        raise InvalidInput(name, dict(value), "weights with a positive, finite sum")
     return tuple(sorted(pairs))
 
 

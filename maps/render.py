@@ -7,8 +7,12 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
+from .errors import InvalidInput
 from .materials import colour_of
 from .model import Map
+
+MAX_PICTURE_PIXELS = 2**26
+"""A picture (map or heatmap) of more pixels is refused: 64 Mpx is 192 MiB of RGB before PNG encoding."""
 
 
 def palette(m: Map) -> np.ndarray:
@@ -26,9 +30,21 @@ def auto_scale(m: Map, target_px: int = 900) -> int:
     return max(1, target_px // max(m.shape))
 
 
+def check_scale(m: Map, scale: int | None, field: str = "scale") -> int:
+    """``scale`` (or the automatic one) if the picture of ``m`` stays within ``MAX_PICTURE_PIXELS``, else an
+    :class:`InvalidInput` naming ``field`` with the largest scale that fits."""
+    scale = scale or auto_scale(m)
+    rows, cols = m.shape
+    if rows * cols * scale * scale > MAX_PICTURE_PIXELS:
+        largest = int((MAX_PICTURE_PIXELS / (rows * cols)) ** 0.5)
+        raise InvalidInput(field, scale, f"at most {largest} pixels per cell for this {cols} x {rows}-cell map "
+                                         f"(pictures of at most {MAX_PICTURE_PIXELS} pixels)")
+    return scale
+
+
 def render(m: Map, scale: int | None = None, legend: bool = True, title: str | None = None) -> Image.Image:
     """The map as a PIL image; ``scale`` pixels per 0.5 m cell (automatic if None)."""
-    scale = scale or auto_scale(m)
+    scale = check_scale(m, scale)
     rgb = np.repeat(np.repeat(map_rgb(m), scale, axis=0), scale, axis=1)
     image = Image.fromarray(rgb, "RGB")
     if not legend:

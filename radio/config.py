@@ -28,7 +28,7 @@ from typing import Any
 
 import numpy as np
 
-from maps.errors import InvalidInput
+from maps.errors import InvalidInput, field_name
 from maps.params import check_choice, check_float, from_mapping, to_mapping
 
 from .crossings import DEFAULT_GRAZE_TOLERANCE_M
@@ -36,6 +36,8 @@ from .materials import Material, material_from_value
 
 MODELS: tuple[str, ...] = ("multiwall", "global", "los", "maes")
 WALL_MODES: tuple[str, ...] = ("crossing", "per_metre")
+MAX_ROBOT_ID_DIGITS = 9
+"""Per-robot override keys are robot ids of at most this many digits (a run has at most 1000 robots)."""
 MAX_FREQUENCY_GHZ = 100.0
 """Upper end of the 3GPP TR 38.901 model (0.5-100 GHz); lower frequencies are allowed and clamp the table."""
 
@@ -53,8 +55,8 @@ class RadioConfig:
     - ``graze_tolerance_m``: wall runs / gaps at most this long along the segment are ignored / bridged
       (see :mod:`radio.crossings`).
     - ``materials``: extra or overriding materials, name -> entry (see :func:`radio.materials.material_from_value`).
-    - ``tx_power_overrides`` / ``sensitivity_overrides``: robot id -> dBm; ids beyond a run's robot count are
-      unused (one config serves campaigns with several robot counts).
+    - ``tx_power_overrides`` / ``sensitivity_overrides``: robot id -> dBm (finite). A run spec refuses ids
+      beyond its robot count (:class:`swarm.spec.RunSpec`); used directly, :meth:`tx_power_array` ignores them.
     """
 
     model: str = "multiwall"
@@ -126,7 +128,7 @@ def _check_materials(value: Any) -> dict[str, dict[str, Any]]:
     if not isinstance(value, Mapping):
         raise InvalidInput("materials", value, "a table of material name = dB entries")
     out = {}
-    for name in sorted(value, key=str):
+    for name in sorted(value, key=lambda k: (not isinstance(k, str), k if isinstance(k, str) else "")):
         material = material_from_value(name, value[name])
         out[name] = {"freq_ghz": material.freq_ghz, "db": material.db, "thickness_m": material.thickness_m}
     return out
@@ -137,14 +139,16 @@ def _check_overrides(name: str, value: Any) -> types.MappingProxyType:
         raise InvalidInput(name, value, "a table of robot id = dBm")
     out: dict[int, float] = {}
     for key, dbm in value.items():
+        where = field_name(name, key)
         robot = key
-        if isinstance(key, str) and key.isdigit():
-            robot = int(key)
-        if not isinstance(robot, (int, np.integer)) or isinstance(robot, bool) or robot < 0:
-            raise InvalidInput(f"{name}.{key}", key, "a robot id: an integer >= 0")
+        if isinstance(key, str) and key.isascii() and key.isdigit() and len(key) <= MAX_ROBOT_ID_DIGITS:
+            robot = int(key)  # isascii: "\u00b3".isdigit() is true but int() refuses it
+        if (not isinstance(robot, (int, np.integer)) or isinstance(robot, bool) or robot < 0
+                or robot >= 10**MAX_ROBOT_ID_DIGITS):
+            raise InvalidInput(where, key, f"a robot id: an integer in 0..{10**MAX_ROBOT_ID_DIGITS - 1}")
         if int(robot) in out:
-            raise InvalidInput(f"{name}.{key}", key, "each robot id once")
-        out[int(robot)] = check_float(f"{name}.{key}", dbm)
+            raise InvalidInput(where, key, "each robot id once")
+        out[int(robot)] = check_float(where, dbm)
     return types.MappingProxyType(dict(sorted(out.items())))
 
 

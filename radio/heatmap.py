@@ -18,7 +18,7 @@ from PIL import Image, ImageDraw, ImageFont
 
 from maps.io import atomic_write_bytes
 from maps.model import CELL_M, Map
-from maps.render import auto_scale, palette
+from maps.render import check_scale, palette
 
 from .models import LinkModel, Point
 
@@ -95,7 +95,7 @@ def field_range(field: RssiField) -> tuple[float, float]:
 
 def render_heatmap(truth: Map, field: RssiField, scale: int | None = None, title: str | None = None) -> Image.Image:
     """The RSSI field over the map as a PIL image (north up) with a colour-bar legend underneath."""
-    scale = scale or auto_scale(truth)
+    scale = check_scale(truth, scale)
     lo, hi = field_range(field)
     free = truth.free
     rgb = colour_ramp(field.rssi, lo, hi).astype(np.float64)

@@ -33,7 +33,7 @@ from typing import Any
 
 import numpy as np
 
-from maps.errors import InvalidInput
+from maps.errors import InvalidInput, shorten
 from maps.materials import AIR, check_material_name
 from maps.params import check_float
 
@@ -114,7 +114,8 @@ DEFAULT_MATERIALS: Mapping[str, Material] = {
         _table("metal", (60.0, 60.0, 60.0)),
     )
 }
-"""Built-in materials (see the module docstring for the source of every figure)."""
+"""Built-in materials (see the module docstring for the source of every figure). Their names are
+``maps.materials.KNOWN_MATERIALS``, the vocabulary map generators, importers and legends accept (tested)."""
 
 _ENTRY_KEYS = ("freq_ghz", "db", "thickness_m")
 
@@ -158,6 +159,8 @@ def _from_list(name: str, field: str, db: Any, freqs: Any, thickness: Any) -> Ma
         raise InvalidInput(field, db, "a number or a list of numbers")
     if freqs is TABLE_FREQUENCIES_GHZ and len(db) != len(TABLE_FREQUENCIES_GHZ):
         raise InvalidInput(field, db, "3 values: dB at 1.3, 2.4 and 5.2 GHz (or give freq_ghz too)")
+    if not isinstance(freqs, (list, tuple)):
+        raise InvalidInput(f"materials.{name}.freq_ghz", freqs, "a list of frequencies in GHz, one per db value")
     return Material(name, tuple(freqs), tuple(db), thickness)
 
 
@@ -172,7 +175,7 @@ def resolve_table(names: tuple[str, ...], overrides: Mapping[str, Material]) -> 
     for name in names:
         if name not in known:
             raise InvalidInput("material", name,
-                               f"a material the radio defines ({', '.join(sorted(known))}); "
+                               f"a material the radio defines ({shorten(', '.join(sorted(known)), 200)}); "
                                f"add it under [radio.materials]")
         out.append(known[name])
     return tuple(out)

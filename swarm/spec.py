@@ -173,6 +173,7 @@ class RunSpec:
             object.__setattr__(self, name, resolver(dict(value)))
         check_choice("transport", self.transport, TRANSPORTS)
         check_int("record_every", self.record_every, 1, 100_000)
+        _check_override_ids(self.radio, self.robots.count)
 
     # ------------------------------------------------------------------------------ construction ----
     @classmethod
@@ -223,6 +224,16 @@ def _plain(v: Any) -> Any:
     if isinstance(v, np.generic):
         return v.item()
     return v
+
+
+def _check_override_ids(radio: Mapping[str, Any], count: int) -> None:
+    """Per-robot radio overrides must name robots of this run: an override for robot 999 of 4 would be
+    silently unused (the radio config itself validated the keys as integers and the powers as finite)."""
+    for section in ("tx_power_overrides", "sensitivity_overrides"):
+        for key in radio.get(section) or {}:
+            if int(key) >= count:
+                raise InvalidInput(f"radio.{section}.{key}", int(key),
+                                   f"a robot id in 0..{count - 1} (robots.count is {count})")
 
 
 def _resolve_lidar(d: dict[str, Any]) -> dict[str, Any]:

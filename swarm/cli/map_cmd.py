@@ -7,7 +7,8 @@ from pathlib import Path
 import click
 
 from . import cli
-from .options import parse_params
+from .options import Choice, IntRange, parse_params
+from .options import Path as PathType
 
 
 @cli.group("map")
@@ -16,15 +17,15 @@ def map_group() -> None:
 
 
 @map_group.command("generate")
-@click.option("--kind", type=click.Choice(["building", "cave"]), default="building", show_default=True)
+@click.option("--kind", type=Choice(["building", "cave"]), default="building", show_default=True)
 @click.option("--size", default="100", show_default=True, metavar="N|WxH",
               help="Tiles (1 m) per side, >= 20; e.g. 100 or 120x80.")
-@click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=0, show_default=True)
+@click.option("--seed", type=IntRange(0, 2**63 - 1), default=0, show_default=True)
 @click.option("--param", "params", multiple=True, metavar="KEY=VALUE",
               help="Generator parameter (repeatable), e.g. --param fill_percent=45; see 'swarm map params'.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), help="Write the map (.npz).")
-@click.option("--png", type=click.Path(dir_okay=False, path_type=Path), help="Write a picture (.png).")
-@click.option("--scale", type=click.IntRange(1, 32), default=None, help="Pixels per 0.5 m cell in the picture.")
+@click.option("-o", "--output", type=PathType(dir_okay=False, path_type=Path), help="Write the map (.npz).")
+@click.option("--png", type=PathType(dir_okay=False, path_type=Path), help="Write a picture (.png).")
+@click.option("--scale", type=IntRange(1, 32), default=None, help="Pixels per 0.5 m cell in the picture.")
 def generate_cmd(kind: str, size: str, seed: int, params: tuple[str, ...], output: Path | None, png: Path | None,
                  scale: int | None) -> None:
     """Generate a cave or building map.
@@ -35,7 +36,7 @@ def generate_cmd(kind: str, size: str, seed: int, params: tuple[str, ...], outpu
 
     from maps import generate
     from maps.io import save_npz
-    from maps.render import save_png
+    from maps.render import check_scale, save_png
 
     from maps import parse_size
     from maps.errors import InvalidInput
@@ -49,6 +50,8 @@ def generate_cmd(kind: str, size: str, seed: int, params: tuple[str, ...], outpu
     elapsed = time.perf_counter() - t0
     if output is None and png is None:
         png = Path(f"{kind}-{size}-s{seed}.png")
+    if png is not None:
+        check_scale(m, scale, "--scale")  # before writing anything
     click.echo(f"{m.summary()} (generated in {elapsed * 1000:.0f} ms)")
     if output is not None:
         click.echo(f"wrote {save_npz(m, output)}")
@@ -57,7 +60,7 @@ def generate_cmd(kind: str, size: str, seed: int, params: tuple[str, ...], outpu
 
 
 @map_group.command("params")
-@click.argument("kind", type=click.Choice(["building", "cave"]))
+@click.argument("kind", type=Choice(["building", "cave"]))
 def params_cmd(kind: str) -> None:
     """List a generator's parameters with their defaults."""
     import dataclasses
@@ -70,31 +73,33 @@ def params_cmd(kind: str) -> None:
 
 
 @map_group.command("show")
-@click.argument("path", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), help="Write a picture (.png).")
-@click.option("--legend", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+@click.argument("path", type=PathType(exists=True, dir_okay=False, path_type=Path))
+@click.option("-o", "--output", type=PathType(dir_okay=False, path_type=Path), help="Write a picture (.png).")
+@click.option("--legend", type=PathType(exists=True, dir_okay=False, path_type=Path),
               help="Legend TOML when PATH is an image.")
-@click.option("--scale", type=click.IntRange(1, 32), default=None, help="Pixels per 0.5 m cell.")
+@click.option("--scale", type=IntRange(1, 32), default=None, help="Pixels per 0.5 m cell.")
 def show_cmd(path: Path, output: Path | None, legend: Path | None, scale: int | None) -> None:
     """Describe a map file and optionally render it."""
     from maps.io import load_map
-    from maps.render import save_png
+    from maps.render import check_scale, save_png
 
     m = load_map(path, legend=legend)
+    if output is not None:
+        check_scale(m, scale, "--scale")
     click.echo(m.summary())
     if output is not None:
         click.echo(f"wrote {save_png(m, output, scale=scale, title=path.name)}")
 
 
 @map_group.command("import")
-@click.argument("path", type=click.Path(exists=True, dir_okay=False, path_type=Path))
-@click.option("--legend", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+@click.argument("path", type=PathType(exists=True, dir_okay=False, path_type=Path))
+@click.option("--legend", type=PathType(exists=True, dir_okay=False, path_type=Path),
               help="Legend TOML mapping colours to materials (images); not needed for .pgm (MAES) and .csv (xBOA).")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), required=True,
+@click.option("-o", "--output", type=PathType(dir_okay=False, path_type=Path), required=True,
               help="Write the map (.npz).")
-@click.option("--png", type=click.Path(dir_okay=False, path_type=Path), help="Also write a picture.")
+@click.option("--png", type=PathType(dir_okay=False, path_type=Path), help="Also write a picture.")
 @click.option("--material", default=None, help="Wall material for .pgm/.csv walls (default concrete).")
-@click.option("--border", type=click.IntRange(0, 10), default=0, show_default=True,
+@click.option("--border", type=IntRange(0, 10), default=0, show_default=True,
               help="Add a wall border this many tiles thick.")
 @click.option("--border-material", default="concrete", show_default=True)
 def import_cmd(path: Path, legend: Path | None, output: Path, png: Path | None, material: str | None, border: int,
@@ -102,12 +107,20 @@ def import_cmd(path: Path, legend: Path | None, output: Path, png: Path | None, 
     """Import a floor plan: an image with a legend, a MAES ASCII PGM or an xBOA 0/1 CSV."""
     from maps.errors import InvalidInput
     from maps.io import load_map, save_npz
+    from maps.materials import check_known_material
     from maps.render import save_png
 
+    if path.suffix.lower() == ".npz":
+        for flag, value, unset in (("--material", material, None), ("--border", border, 0),
+                                   ("--legend", legend, None)):
+            if value != unset:
+                raise InvalidInput(flag, str(value), "only for .pgm, .csv and image files (a .npz is a swarm map)")
+    check_known_material(border_material, "--border-material")
     options: dict[str, object] = {"border": border, "border_material": border_material}
     if material is not None:
         if legend is not None:
             raise InvalidInput("--material", material, "only for .pgm and .csv files (images take materials from the legend)")
+        check_known_material(material, "--material")
         options["material"] = material
     m = load_map(path, legend=legend, **options)
     click.echo(m.summary())

@@ -8,7 +8,8 @@ from typing import Any, Callable
 import click
 
 from . import cli
-from .options import POINT, parse_params
+from .options import FLOAT, POINT, Choice, IntRange, parse_params
+from .options import Path as PathType
 
 # CLI flag -> RadioConfig field, so a bad value names the flag the user typed.
 _FLAGS = {"--model": "model", "--freq": "frequency_ghz", "--tx-power": "tx_power_dbm",
@@ -23,17 +24,17 @@ def radio_group() -> None:
 def radio_options(func: Callable[..., Any]) -> Callable[..., Any]:
     """The radio flags shared by the subcommands."""
     options = [
-        click.argument("path", type=click.Path(exists=True, dir_okay=False, path_type=Path)),
-        click.option("--model", type=click.Choice(["multiwall", "global", "los", "maes"]), default=None,
+        click.argument("path", type=PathType(exists=True, dir_okay=False, path_type=Path)),
+        click.option("--model", type=Choice(["multiwall", "global", "los", "maes"]), default=None,
                      help="Link model [default: multiwall]."),
-        click.option("--freq", type=float, default=None, metavar="GHZ", help="Carrier frequency [default: 2.4]."),
-        click.option("--tx-power", type=float, default=None, metavar="DBM", help="Transmit power [default: 15]."),
-        click.option("--sensitivity", type=float, default=None, metavar="DBM",
+        click.option("--freq", type=FLOAT, default=None, metavar="GHZ", help="Carrier frequency [default: 2.4]."),
+        click.option("--tx-power", type=FLOAT, default=None, metavar="DBM", help="Transmit power [default: 15]."),
+        click.option("--sensitivity", type=FLOAT, default=None, metavar="DBM",
                      help="Receiver sensitivity [default: -82]."),
-        click.option("--wall-mode", type=click.Choice(["crossing", "per_metre"]), default=None,
+        click.option("--wall-mode", type=Choice(["crossing", "per_metre"]), default=None,
                      help="Charge walls per crossing or per metre of wall [default: crossing]."),
-        click.option("--max-range", type=float, default=None, metavar="M", help="Range limit in metres (implies --model los)."),
-        click.option("--config", "config_path", type=click.Path(exists=True, dir_okay=False, path_type=Path),
+        click.option("--max-range", type=FLOAT, default=None, metavar="M", help="Range limit in metres (implies --model los)."),
+        click.option("--config", "config_path", type=PathType(exists=True, dir_okay=False, path_type=Path),
                      help="TOML file with radio settings (its [radio] table, or top-level keys)."),
         click.option("--param", "params", multiple=True, metavar="KEY=VALUE",
                      help="Radio setting (repeatable), e.g. --param materials.glass=[2,2.5,3]."),
@@ -45,19 +46,23 @@ def radio_options(func: Callable[..., Any]) -> Callable[..., Any]:
 
 def _load(path: Path, config_path: Path | None, params: tuple[str, ...], flags: dict[str, Any]):
     """The map and its link model from the flags (flags override --param, which overrides --config)."""
-    import tomllib
+    from collections.abc import Mapping
 
     from maps.errors import InvalidInput
-    from maps.io import load_map
+    from maps.io import MAX_LEGEND_BYTES, load_map, parse_toml, read_file_bytes
     from radio import build_link_model, config_from_mapping
 
     data: dict[str, Any] = {}
     if config_path is not None:
         try:
-            raw = tomllib.loads(config_path.read_text())
-        except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-            raise InvalidInput("--config", str(config_path), f"a TOML file ({exc})") from None
-        data = dict(raw.get("radio", raw))
+            text = read_file_bytes(config_path, "--config", MAX_LEGEND_BYTES).decode("utf-8")
+        except UnicodeDecodeError:
+            raise InvalidInput("--config", str(config_path), "a UTF-8 TOML file") from None
+        raw = parse_toml(text, "--config", str(config_path))
+        section = raw.get("radio", raw)
+        if not isinstance(section, Mapping):
+            raise InvalidInput("--config", str(config_path), "a TOML file whose [radio] is a table of settings")
+        data = dict(section)
     data.update(parse_params(params))
     set_flags = {flag: value for flag, value in flags.items() if value is not None}
     for flag, value in set_flags.items():
@@ -150,9 +155,9 @@ def format_budget(link_model: Any, src: tuple[float, float], dst: tuple[float, f
 @radio_group.command("heatmap")
 @radio_options
 @click.option("--tx", type=POINT, required=True, help="Transmitter x,y in metres.")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), required=True,
+@click.option("-o", "--output", type=PathType(dir_okay=False, path_type=Path), required=True,
               help="Write the picture (.png).")
-@click.option("--scale", type=click.IntRange(1, 32), default=None, help="Pixels per 0.5 m cell.")
+@click.option("--scale", type=IntRange(1, 32), default=None, help="Pixels per 0.5 m cell.")
 def heatmap_cmd(path: Path, model: str | None, freq: float | None, tx_power: float | None,
                 sensitivity: float | None, wall_mode: str | None, max_range: float | None,
                 config_path: Path | None, params: tuple[str, ...], tx: tuple[float, float], output: Path,
@@ -160,11 +165,13 @@ def heatmap_cmd(path: Path, model: str | None, freq: float | None, tx_power: flo
     """Render the RSSI received from --tx at every free cell, with the sensitivity contour."""
     import time
 
+    from maps.render import check_scale
     from radio.heatmap import rssi_field, save_heatmap
 
     truth, link_model = _load(path, config_path, params,
                               _flags(model, freq, tx_power, sensitivity, wall_mode, max_range))
     _check_inside(truth, "--tx", tx)
+    check_scale(truth, scale, "--scale")
     t0 = time.perf_counter()
     field = rssi_field(link_model, tx)
     elapsed = time.perf_counter() - t0

@@ -13,7 +13,6 @@ import math
 
 import msgpack
 import numpy as np
-import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
