@@ -34,8 +34,10 @@ def _register() -> None:
 
 
 def _usage_message(exc: click.UsageError) -> str:
+    from .options import short_message
+
     lines = exc.format_message().strip().splitlines()
-    msg = lines[0] if lines else "invalid usage"
+    msg = short_message(lines[0]) if lines else "invalid usage"
     ctx = exc.ctx
     if isinstance(exc, click.BadParameter) or ctx is None:
         return msg  # click already names the flag, the value and the allowed range or choices

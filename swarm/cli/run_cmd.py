@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import time
-import tomllib
 from pathlib import Path
 from typing import Any
 
@@ -18,12 +17,15 @@ from .options import parse_params
 
 
 def load_spec_file(path: Path) -> dict[str, Any]:
+    """A run spec TOML file, read with a size cap; any unreadable or invalid file is an InvalidInput."""
+    from maps.io import parse_toml, read_file_bytes
+
+    data = read_file_bytes(path, "--spec")
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise InvalidInput("--spec", str(path), f"a readable TOML file ({exc.strerror})") from None
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise InvalidInput("--spec", str(path), f"valid TOML ({str(exc).splitlines()[0]})") from None
+        text = data.decode("utf-8")
+    except UnicodeDecodeError:
+        raise InvalidInput("--spec", str(path), "a UTF-8 TOML file") from None
+    return parse_toml(text, "--spec", str(path))
 
 
 def _merge(base: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
