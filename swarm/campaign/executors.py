@@ -9,12 +9,19 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import re
 import resource
+import socket
+import threading
 import time
 import traceback
 from collections.abc import Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Protocol
+
+from maps.errors import InvalidInput
+
+from .limits import DASK_CONNECT_TIMEOUT_S
 
 Task = tuple[str, dict[str, Any]]
 
@@ -92,20 +99,74 @@ class PoolExecutor:
         self.pool.shutdown(wait=True, cancel_futures=True)
 
 
+DASK_SCHEMES = ("tcp", "tls", "ucx", "ws", "wss")
+_ADDRESS = re.compile(r"^(?:(?P<scheme>[a-z]+)://)?(?P<host>\[[0-9A-Fa-f:.]+\]|[A-Za-z0-9_.-]+):(?P<port>[0-9]{1,5})/?$")
+
+
+def check_dask_address(address: str) -> tuple[str, str, int] | None:
+    """None for ``local``; else ``(scheme, host, port)`` of a scheduler address, or :class:`InvalidInput`."""
+    if address == "local":
+        return None
+    m = _ADDRESS.match(address)
+    allowed = "local, or a Dask scheduler address [tcp|tls|ucx|ws|wss]://HOST:PORT, e.g. tcp://10.0.0.5:8786"
+    if not m or (m.group("scheme") or "tcp") not in DASK_SCHEMES or not 0 < int(m.group("port")) < 65536:
+        raise InvalidInput("--dask", address, allowed)
+    return m.group("scheme") or "tcp", m.group("host").strip("[]"), int(m.group("port"))
+
+
+def _reachable(address: str, host: str, port: int, timeout_s: float) -> None:
+    """Fail at once when nothing listens at ``host:port`` (Dask itself retries until its timeout)."""
+    try:
+        with socket.create_connection((host, port), timeout=timeout_s):
+            pass
+    except OSError as exc:
+        reason = exc.strerror or str(exc) or type(exc).__name__
+        raise InvalidInput("--dask", address, f"the address of a running Dask scheduler (cannot connect to "
+                                              f"{host}:{port}: {reason})") from None
+
+
+def _connect(client_cls: Any, address: str, timeout_s: float) -> Any:
+    """``Client(address)`` within ``timeout_s`` seconds, whatever answers there: Dask bounds its connect
+    but not its handshake, so a port that accepts and stays silent would hang it; the attempt runs in a
+    daemon thread and is abandoned at the deadline."""
+    box: dict[str, Any] = {}
+
+    def attempt() -> None:
+        try:
+            box["client"] = client_cls(address, timeout=f"{timeout_s}s")
+        except BaseException as exc:  # refused, timed out, garbage handshake (e.g. a huge length prefix)
+            box["error"] = exc
+
+    thread = threading.Thread(target=attempt, name="dask-connect", daemon=True)
+    thread.start()
+    thread.join(timeout_s + 2)
+    if "client" in box:
+        return box["client"]
+    exc = box.get("error")
+    reason = (str(exc).splitlines()[0][:160] or type(exc).__name__) if exc is not None else "no handshake"
+    raise InvalidInput("--dask", address, f"the address of a running Dask scheduler (no answer within "
+                                          f"{timeout_s:g} s: {reason})")
+
+
 class DaskExecutor:
     """Dask distributed: ``local`` starts a LocalCluster of ``workers`` single-threaded processes; anything
     else is a scheduler address (``tcp://host:8786``), e.g. a cluster started by dask-jobqueue on SLURM."""
 
-    def __init__(self, address: str, workers: int) -> None:
-        from distributed import Client, LocalCluster
+    def __init__(self, address: str, workers: int, timeout_s: float = DASK_CONNECT_TIMEOUT_S) -> None:
+        where = check_dask_address(address)
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError:
+            raise InvalidInput("--dask", address, "an installed Dask (pip install distributed)") from None
 
         self.cluster = None
-        if address == "local":
+        if where is None:
             self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                         dashboard_address=None, silence_logs=40)
             self.client = Client(self.cluster)
         else:
-            self.client = Client(address, timeout="30s")
+            _reachable(address, where[1], where[2], timeout_s)
+            self.client = _connect(Client, address, timeout_s)
         self.name = f"dask:{address}"
         self.window = max(2 * workers, 2 * len(self.client.scheduler_info().get("workers", {})) or 2)
 

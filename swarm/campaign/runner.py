@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import sys
 import time
+from array import array
+from collections.abc import Iterator
 from dataclasses import dataclass
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -14,6 +16,7 @@ from maps.errors import InvalidInput
 from .executors import Executor, make_executor
 from .spec import CampaignSpec, Run, parse_campaign
 from .store import THRESHOLD_COLUMNS, ResultsStore
+from .writers import Writer, live_writers
 
 NONDETERMINISTIC_COLUMNS = ("wall_time_s", "worker_pid", "worker_rss_mb", "part", "swarm_version")
 TIMESERIES_COLUMNS = ("tick", "explored", "coverage", "distance_m", "collisions", "msgs_sent", "bytes_sent",
@@ -132,68 +135,113 @@ class Progress:
         self.stream.flush()
 
 
-def run_campaign(spec: CampaignSpec, folder: str | Path, executor: Executor | None = None,
+ExecutorArg = Executor | Callable[[], Executor] | None
+
+
+def run_campaign(spec: CampaignSpec, folder: str | Path, executor: ExecutorArg = None,
                  shard: tuple[int, int] | None = None, retry_failed: bool = False, progress: bool = True,
                  flush_runs: int = 20, flush_seconds: float = 30.0,
-                 on_result: Callable[[dict[str, Any]], None] | None = None) -> Outcome:
-    """Execute the runs of ``spec`` not yet in ``folder`` (and failed ones if ``retry_failed``)."""
-    store = ResultsStore(folder)
-    store.open_for(spec.source)
-    runs = select(spec.runs(), shard)
-    done = store.done_keys()
-    todo = [r for r in runs if done.get(r.key) != "ok" and (retry_failed or done.get(r.key) != "failed")]
-    by_key = {r.key: r for r in todo}
+                 on_result: Callable[[dict[str, Any]], None] | None = None,
+                 log: Callable[[str], None] | None = None) -> Outcome:
+    """Execute the runs of ``spec`` not yet in ``folder`` (and failed ones if ``retry_failed``).
+
+    ``executor``: an executor, a function making one (called only once the folder is registered and
+    checked writable, and only if there is anything to run), or None for the default process pool. This
+    process registers as a writer of ``folder`` first (:mod:`.writers`): a live writer of overlapping runs is
+    an :class:`InvalidInput`. A part that cannot be written stops the campaign with :class:`CommitError`.
+    """
     t0 = time.monotonic()
-    own = executor is None
-    executor = executor or make_executor()
-    bar = Progress(len(todo)) if progress and todo else None
+    store = ResultsStore(folder)
+    total = spec.run_count()
+    selected = spec.indices(shard)
+    with Writer(store, spec.source, shard=shard, retry_failed=retry_failed, total=total) as writer:
+        done = store.done_keys()
+        todo = array("q", (i for i, key in spec.iter_keys(shard)
+                           if done.get(key) != "ok" and (retry_failed or done.get(key) != "failed")))
+        outcome = Outcome(total=len(selected), skipped=len(selected) - len(todo), ran=len(todo), failed=0, wall_s=0.0)
+        if log:
+            log(f"{len(todo)} to run, {outcome.skipped} already done")
+        if todo:
+            outcome.failed = _execute(spec, store, writer.id, todo, executor, progress, flush_runs, flush_seconds,
+                                      on_result, log)
+    outcome.wall_s = time.monotonic() - t0
+    return outcome
+
+
+def _execute(spec: CampaignSpec, store: ResultsStore, writer: str, todo: array, executor: ExecutorArg,
+             progress: bool, flush_runs: int, flush_seconds: float,
+             on_result: Callable[[dict[str, Any]], None] | None, log: Callable[[str], None] | None) -> int:
+    """Run ``todo`` (run indices) and commit their rows part by part; returns how many failed."""
+    own = executor is None or not hasattr(executor, "run")
+    if executor is None:
+        runner: Executor = make_executor()
+    elif own:
+        runner = executor()  # type: ignore[operator]
+    else:
+        runner = executor  # type: ignore[assignment]
+    if log:
+        log(f"running on {runner.name}")
+    bar = Progress(len(todo)) if progress else None
     rows: list[dict[str, Any]] = []
     ts_rows: list[dict[str, Any]] = []
     last_flush = time.monotonic()
     failed = 0
+    in_flight: dict[str, Run] = {}
+
+    def tasks() -> Iterator[tuple[str, dict[str, Any]]]:
+        for index in todo:
+            run = spec.run_at(index)
+            in_flight[run.key] = run
+            yield run.key, run.canonical()
 
     def flush() -> None:
         nonlocal rows, ts_rows, last_flush
-        if rows:
-            store.write_part(rows, ts_rows)
-        rows, ts_rows, last_flush = [], [], time.monotonic()
+        batch, ts_batch = rows, ts_rows
+        rows, ts_rows, last_flush = [], [], time.monotonic()  # cleared first: a failed commit is not retried
+        if batch:
+            store.write_part(batch, ts_batch, writer=writer)
 
     try:
-        for result in executor.run((r.key, r.spec.canonical()) for r in todo):
-            run = by_key[result["key"]]
-            rows.append(runs_row(spec, run, result))
-            ts_rows.extend(timeseries_rows(run.key, result["timeseries"]))
-            failed += result["status"] != "ok"
-            if bar:
-                bar.update(result["status"] == "ok")
-            if on_result:
-                on_result(result)
-            if len(rows) >= flush_runs or time.monotonic() - last_flush >= flush_seconds:
-                flush()
+        try:
+            for result in runner.run(tasks()):
+                run = in_flight.pop(result["key"])
+                rows.append(runs_row(spec, run, result))
+                ts_rows.extend(timeseries_rows(run.key, result["timeseries"]))
+                failed += result["status"] != "ok"
+                if bar:
+                    bar.update(result["status"] == "ok")
+                if on_result:
+                    on_result(result)
+                if len(rows) >= flush_runs or time.monotonic() - last_flush >= flush_seconds:
+                    flush()
+        finally:
+            flush()  # also on Ctrl-C: what finished is kept
     finally:
-        flush()
         if own:
-            executor.close()
-    return Outcome(total=len(runs), skipped=len(runs) - len(todo), ran=len(todo), failed=failed,
-                   wall_s=time.monotonic() - t0)
+            runner.close()
+    return failed
 
 
 def status(folder: str | Path) -> dict[str, Any]:
-    """done / failed / pending counts of a results folder against its spec."""
+    """done / failed / pending counts of a results folder against its spec, and its live writers."""
     store = ResultsStore(folder)
-    spec = parse_campaign(store.spec_source(), str(Path(folder) / "campaign.toml"))
-    keys = [r.key for r in spec.runs()]
+    spec = parse_campaign(store.spec_source(), str(Path(folder) / "campaign.toml"), max_runs=None)
     done = store.done_keys()
-    ok = sum(1 for k in keys if done.get(k) == "ok")
-    failed = sum(1 for k in keys if done.get(k) == "failed")
+    ok = failed = total = 0
+    for _, key in spec.iter_keys():
+        total += 1
+        st = done.get(key)
+        ok += st == "ok"
+        failed += st == "failed"
     errors: dict[str, int] = {}
-    table = store.runs_table()
-    if table is not None and failed:
+    table = store.runs_table(columns=("key", "status", "error")) if failed else None
+    if table is not None:
         for st, err in zip(table.column("status").to_pylist(), table.column("error").to_pylist()):
             if st == "failed":
                 errors[err] = errors.get(err, 0) + 1
-    return {"campaign": spec.name, "total": len(keys), "done": ok, "failed": failed,
-            "pending": len(keys) - ok - failed, "errors": errors, "parts": len(store.run_files())}
+    return {"campaign": spec.name, "total": total, "done": ok, "failed": failed,
+            "pending": total - ok - failed, "errors": errors, "parts": len(store.run_files()),
+            "writers": live_writers(folder)}
 
 
 def deterministic_rows(folder: str | Path) -> list[dict[str, Any]]:

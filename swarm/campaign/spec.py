@@ -44,27 +44,41 @@ seed derive from (campaign seed, map kind, size, replicate) only, through :func:
 Every algorithm, robot count and comm model therefore meets the same worlds and starting points (paired
 comparisons), and nothing depends on the order runs execute in. Each run is keyed by the hash of its
 canonical spec (:attr:`swarm.spec.RunSpec.key`).
+
+Every ``[grid]`` entry is a list. The runs are never all built at once: the run count comes from the grid
+(:mod:`.cells`), a campaign of more than ``max_runs`` runs is refused before any run spec exists, one run
+spec per cell is built to validate it, and a run's spec JSON and key are written from its cell's template
+when needed (:meth:`CampaignSpec.iter_keys`, :meth:`CampaignSpec.run_at`), in the same order, with the same
+indices and keys as when every run was built up front.
 """
 
 from __future__ import annotations
 
-import itertools
+import dataclasses
+import hashlib
 import json
 import tomllib
+from array import array
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
 from pathlib import Path
-from collections.abc import Mapping
 from typing import Any
 
 from maps.errors import InvalidInput
 
 from ..spec import RunSpec, derive_seed
+from . import cells as cellgrid
+from .files import read_user_file
+from .limits import MAX_RUNS
+from .text import clip
 
 DIMENSIONS = ("map", "size", "robots", "spawn", "algorithm", "radio", "comm", "transport")
 REQUIRED = ("map", "size", "robots", "spawn", "algorithm", "radio")
 SECTIONS = ("campaign", "grid", "run", "stop", "output", "exclude", "include")
 SPEC_FORMAT = 1
+MAX_OPTIONS = 10_000
+"""Values per grid dimension."""
 
 
 @dataclass(frozen=True)
@@ -77,17 +91,76 @@ class Option:
 
 @dataclass(frozen=True)
 class Run:
-    """One run of a campaign: where it sits in the grid (``cell`` labels), its replicate and its spec."""
+    """One run of a campaign: where it sits in the grid (``cell`` labels), its replicate, its seeds and its
+    canonical spec JSON (what :attr:`swarm.spec.RunSpec.key` hashes). The :class:`RunSpec` is built on first
+    use: a campaign lists its runs by key without building 54,000 of them."""
 
     index: int
     cell: dict[str, Any]
     replicate: int
-    spec: RunSpec
     seeds: dict[str, int]
+    spec_json: str = field(repr=False)
 
-    @property
+    @cached_property
     def key(self) -> str:
-        return self.spec.key
+        return run_key(self.spec_json)
+
+    @cached_property
+    def spec(self) -> RunSpec:
+        return RunSpec.from_mapping(json.loads(self.spec_json))
+
+    def canonical(self) -> dict[str, Any]:
+        """The spec as the executor sends it (the same dict as ``self.spec.canonical()``)."""
+        return json.loads(self.spec_json)
+
+
+def run_key(spec_json: str) -> str:
+    """:attr:`swarm.spec.RunSpec.key` of a canonical spec JSON, without building the spec."""
+    return hashlib.sha256(spec_json.encode()).hexdigest()[:16]
+
+
+_SEED_SLOTS = {"run_seed": "\x00swarm:run-seed\x00", "map_seed": "\x00swarm:map-seed\x00",
+               "spawn_seed": "\x00swarm:spawn-seed\x00"}
+
+
+class _NoTemplate(Exception):
+    """A spec whose seeds cannot be left open (one of its strings holds a placeholder)."""
+
+
+class _Template:
+    """The canonical JSON of a cell's run spec with its three seeds left open.
+
+    Replicates of a cell differ only in ``seed``, ``map.seed`` and ``robots.spawn_seed`` (see
+    :meth:`CampaignSpec.run_for`), all validated as integers in 0..2**63-1 and all drawn by
+    :func:`swarm.spec.derive_seed`, which yields exactly that range. So one validated spec per cell is the
+    validation of every replicate, and a replicate's JSON is the cell's with its seeds written in.
+    """
+
+    def __init__(self, spec: RunSpec) -> None:
+        self.first = spec.to_json()
+        data = json.loads(self.first)
+        data["seed"] = _SEED_SLOTS["run_seed"]
+        data["map"]["seed"] = _SEED_SLOTS["map_seed"]
+        data["robots"]["spawn_seed"] = _SEED_SLOTS["spawn_seed"]
+        text = json.dumps(data, sort_keys=True, separators=(",", ":"))
+        slots = sorted((text.find(json.dumps(mark)), name, json.dumps(mark)) for name, mark in _SEED_SLOTS.items())
+        self.pieces: list[str] = []
+        self.order: list[str] = []
+        pos = 0
+        for at, name, token in slots:
+            if at < 0 or text.count(token) != 1:
+                raise _NoTemplate(name)
+            self.pieces.append(text[pos:at])
+            self.order.append(name)
+            pos = at + len(token)
+        self.pieces.append(text[pos:])
+
+    def render(self, seeds: Mapping[str, int]) -> str:
+        out = [self.pieces[0]]
+        for name, piece in zip(self.order, self.pieces[1:]):
+            out.append(str(int(seeds[name])))
+            out.append(piece)
+        return "".join(out)
 
 
 @dataclass(frozen=True)
@@ -108,36 +181,166 @@ class CampaignSpec:
     def timeseries_every(self) -> int:
         return int(self.output.get("timeseries_every", 10))
 
+    # ---------------------------------------------------------------------------------- cells ----
     def cells(self) -> list[dict[str, Option]]:
         """The grid cells (one option per dimension): the cross product minus ``[[exclude]]`` plus
         ``[[include]]``, in a stable order."""
-        cells = [dict(zip(self.grid, combo)) for combo in itertools.product(*self.grid.values())]
-        cells = [c for c in cells if not any(_matches(c, rule) for rule in self.exclude)]
+        return [cell for _, cell in self._coded_cells()]
+
+    def cell_bound(self) -> int:
+        """How many cells :meth:`cells` lists, counted from the grid without listing them (cells that turn
+        out to define the same runs, e.g. an ``[[include]]`` repeating a grid cell, still count)."""
+        sizes = [len(opts) for opts in self.grid.values()]
+        return cellgrid.count(sizes, self._boxes) + len(self._include_cells)
+
+    def run_bound(self) -> int:
+        """An upper bound of :meth:`run_count`, from the grid alone (no run spec built)."""
+        return self.cell_bound() * self.replicates
+
+    @cached_property
+    def _boxes(self) -> list[dict[int, frozenset[int]]]:
+        """Each ``[[exclude]]`` rule as option indices per dimension position (see :mod:`.cells`)."""
+        dims = list(self.grid)
+        boxes = []
+        for rule in self.exclude:
+            box = {}
+            for key, wanted in rule.items():
+                if key not in self.grid:
+                    box = None  # names a dimension the grid lacks: matches no cell (as _matches)
+                    break
+                box[dims.index(key)] = frozenset(i for i, opt in enumerate(self.grid[key])
+                                                 if _option_matches(opt, wanted))
+            if box is not None:
+                boxes.append(box)
+        return boxes
+
+    @cached_property
+    def _include_cells(self) -> tuple[dict[str, Option], ...]:
+        extra = []
         for k, rule in enumerate(self.include):
-            extra = {}
+            cell = {}
             for dim in self.grid:
                 if dim not in rule:
                     raise InvalidInput(f"include[{k}].{dim}", None, "a value for every grid dimension")
-                extra[dim] = self._option(dim, rule[dim], f"include[{k}].{dim}")
-            cells.append(extra)
-        return cells
+                cell[dim] = self._option(dim, rule[dim], f"include[{k}].{dim}")
+            extra.append(cell)
+        return tuple(extra)
 
-    def runs(self) -> list[Run]:
-        """Every run, in a stable order (grid order, then replicate); specs validated (built once, cached)."""
-        return list(self._runs)
+    def _coded_cells(self) -> Iterator[tuple[int, dict[str, Option]]]:
+        """``(code, cell)`` in :meth:`cells` order; ``code`` finds the cell again (:meth:`_cell_of`)."""
+        dims, options = list(self.grid), list(self.grid.values())
+        for code, idx in cellgrid.iter_cells([len(o) for o in options], self._boxes):
+            yield code, {dim: opts[i] for dim, opts, i in zip(dims, options, idx)}
+        for k, cell in enumerate(self._include_cells):
+            yield -1 - k, dict(cell)
+
+    def _cell_of(self, code: int) -> dict[str, Option]:
+        if code < 0:
+            return dict(self._include_cells[-1 - code])
+        options = list(self.grid.values())
+        idx = cellgrid.decode(code, [len(o) for o in options])
+        return {dim: opts[i] for dim, opts, i in zip(self.grid, options, idx)}
+
+    # ----------------------------------------------------------------------------------- runs ----
+    @cached_property
+    def _distinct(self) -> array:
+        """Codes of the cells that define distinct runs, each validated by building its replicate 0.
+
+        Two cells with identical run specs (an ``[[include]]`` repeating a grid cell, a comm option that
+        restates a default) are one: the later is dropped, as before. Seeds depend on (map kind, size,
+        replicate) only and kind and size are in the spec, so cells equal at replicate 0 are equal at every
+        replicate, and cells that differ at replicate 0 differ at every replicate."""
+        codes = array("q")
+        seen: set[str] = set()
+        for code, cell in self._coded_cells():
+            run = self.run_for(cell, 0)
+            if run.key in seen:
+                continue
+            seen.add(run.key)
+            if len(self._templates) < _TEMPLATE_CACHE:
+                self._templates[len(codes)] = self._new_template(run.spec)
+            codes.append(code)
+        return codes
 
     @cached_property
-    def _runs(self) -> tuple[Run, ...]:
-        out: list[Run] = []
-        seen: set[str] = set()
-        for cell in self.cells():
-            for rep in range(self.replicates):
-                run = self.run_for(cell, rep, len(out))
-                if run.key in seen:
-                    continue  # an [[include]] that repeats a grid cell
-                seen.add(run.key)
-                out.append(run)
-        return tuple(out)
+    def _templates(self) -> dict[int, Any]:
+        return {}
+
+    def _template(self, pos: int) -> Any:
+        tpl = self._templates.get(pos)
+        if tpl is None:
+            if len(self._templates) >= _TEMPLATE_CACHE:
+                self._templates.clear()
+            tpl = self._templates[pos] = self._new_template(self.run_for(self._cell_of(self._distinct[pos]), 0).spec)
+        return tpl
+
+    @staticmethod
+    def _new_template(spec: RunSpec) -> Any:
+        try:
+            tpl = _Template(spec)
+        except _NoTemplate:
+            return spec  # a string in the spec holds a placeholder: build each replicate's spec instead
+        return tpl if tpl.render(_seeds_of(spec)) == tpl.first else spec
+
+    def run_count(self) -> int:
+        """How many runs the campaign holds (distinct run specs); validates one run spec per cell."""
+        return len(self._distinct) * self.replicates
+
+    def validate(self, max_runs: int | None = MAX_RUNS) -> int:
+        """Check the grid before anything runs: at most ``max_runs`` runs (counted from the grid, before any
+        run spec is built), every cell's run spec valid, at least one run. Returns :meth:`run_count`."""
+        if max_runs is not None:
+            bound = self.run_bound()
+            if bound > max_runs:
+                raise InvalidInput("grid", f"{bound:,} runs ({bound // self.replicates:,} cells x "
+                                           f"{self.replicates:,} replicates)",
+                                   f"at most {max_runs:,} runs (raise the limit with --max-runs N)")
+        total = self.run_count()
+        if total == 0:
+            raise InvalidInput("exclude", f"{len(self.exclude)} rules",
+                               "rules that keep at least one cell ([[exclude]] removes every cell of the grid)")
+        return total
+
+    def run_at(self, index: int) -> Run:
+        """Run number ``index`` of :meth:`runs`, built alone."""
+        pos, rep = divmod(index, self.replicates)
+        if not 0 <= index < self.run_count():
+            raise IndexError(index)
+        cell = self._cell_of(self._distinct[pos])
+        tpl = self._template(pos)
+        if isinstance(tpl, RunSpec):
+            return self.run_for(cell, rep, index)
+        kind, size_key = _world(cell)
+        seeds = _world_seeds(self.seed, kind, size_key, rep)
+        return Run(index=index, cell={dim: opt.label for dim, opt in cell.items()}, replicate=rep,
+                   seeds=dict(seeds), spec_json=tpl.render(seeds))
+
+    def indices(self, shard: tuple[int, int] | None = None) -> range:
+        """Indices of the runs of ``shard`` (``(i, n)``: every n-th run from the i-th), or of every run."""
+        i, n = shard or (0, 1)
+        return range(i, self.run_count(), n)
+
+    def iter_runs(self, shard: tuple[int, int] | None = None) -> Iterator[Run]:
+        """The runs of :meth:`runs` (or of ``shard``) one at a time, in order."""
+        for index in self.indices(shard):
+            yield self.run_at(index)
+
+    def iter_keys(self, shard: tuple[int, int] | None = None) -> Iterator[tuple[int, str]]:
+        """``(index, key)`` of every run (or of ``shard``), without building runs."""
+        reps = self.replicates
+        for index in self.indices(shard):
+            pos, rep = divmod(index, reps)
+            tpl = self._template(pos)
+            if isinstance(tpl, RunSpec):
+                yield index, self.run_at(index).key
+                continue
+            kind, size_key = _world(self._cell_of(self._distinct[pos]))
+            yield index, run_key(tpl.render(_world_seeds(self.seed, kind, size_key, rep)))
+
+    def runs(self) -> list[Run]:
+        """Every run, in a stable order (grid order, then replicate). Builds the whole list: prefer
+        :meth:`iter_runs`, :meth:`iter_keys` and :meth:`run_at` for big campaigns."""
+        return list(self.iter_runs())
 
     def _option(self, dim: str, value: Any, where: str) -> Option:
         for opt in self.grid.get(dim, ()):
@@ -146,10 +349,10 @@ class CampaignSpec:
         return _parse_option(dim, value, where)
 
     def run_for(self, cell: Mapping[str, Option], rep: int, index: int = 0) -> Run:
-        """The run of a grid cell at replicate ``rep`` (``index``: its position in :meth:`runs`)."""
+        """The run of a grid cell at replicate ``rep`` (``index``: its position in :meth:`runs`), its spec
+        built and validated."""
         kind_opt, size = cell["map"], cell["size"].value
-        kind = kind_opt.value["kind"]
-        size_key = size if isinstance(size, int) else "x".join(map(str, size))
+        kind, size_key = _world(cell)
         seeds = _world_seeds(self.seed, kind, size_key, rep)
         spec: dict[str, Any] = json.loads(json.dumps(self.run))
         spec["seed"] = seeds["run_seed"]
@@ -165,11 +368,28 @@ class CampaignSpec:
         spec["stop"] = {**spec.get("stop", {}), **self.stop}
         spec["record_every"] = self.timeseries_every
         labels = {dim: opt.label for dim, opt in cell.items()}
-        return Run(index=index, cell=labels, replicate=rep, spec=RunSpec.from_mapping(spec), seeds=dict(seeds))
+        built = RunSpec.from_mapping(spec)
+        run = Run(index=index, cell=labels, replicate=rep, seeds=dict(seeds), spec_json=built.to_json())
+        run.__dict__["spec"] = built  # cached_property slot: no second build
+        return run
 
     def to_json(self) -> str:
         return json.dumps({"format": SPEC_FORMAT, "name": self.name, "seed": self.seed,
                            "replicates": self.replicates, "source": self.source}, sort_keys=True)
+
+
+_TEMPLATE_CACHE = 4096
+"""Cell templates kept per campaign (runs of a cell are consecutive, so a small cache serves any order)."""
+
+
+def _world(cell: Mapping[str, Option]) -> tuple[str, int | str]:
+    """(map kind, size key) of a cell: with the replicate, all its seeds depend on."""
+    size = cell["size"].value
+    return cell["map"].value["kind"], size if isinstance(size, int) else "x".join(map(str, size))
+
+
+def _seeds_of(spec: RunSpec) -> dict[str, int]:
+    return {"run_seed": spec.seed, "map_seed": spec.map.seed, "spawn_seed": spec.robots.spawn_seed}
 
 
 @lru_cache(maxsize=65536)
@@ -181,34 +401,41 @@ def _world_seeds(campaign_seed: int, kind: str, size_key: int | str, replicate: 
 
 
 # -------------------------------------------------------------------------------------- parsing ----
-def load_campaign(path: str | Path) -> CampaignSpec:
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InvalidInput("spec", str(path), f"a readable campaign TOML ({exc.strerror})") from None
-    return parse_campaign(text, str(path))
+def load_campaign(path: str | Path, max_runs: int | None = MAX_RUNS) -> CampaignSpec:
+    """Read, parse and validate the campaign TOML at ``path`` (see :func:`parse_campaign`)."""
+    return parse_campaign(read_user_file(path, "spec", "campaign TOML"), str(path), max_runs=max_runs)
 
 
-def parse_campaign(text: str, source: str = "<string>") -> CampaignSpec:
+def parse_campaign(text: str, source: str = "<string>", max_runs: int | None = MAX_RUNS) -> CampaignSpec:
+    """Parse a campaign TOML and validate it before anything runs: its shape, its size (at most
+    ``max_runs`` runs; None: no limit) and one run spec per cell."""
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise InvalidInput("spec", source, f"valid TOML ({str(exc).splitlines()[0]})") from None
-    spec = campaign_from_mapping(raw)
-    spec = CampaignSpec(**{**spec.__dict__, "source": text})
-    spec.runs()  # validate every run before anything runs
+        raise InvalidInput("spec", source, f"valid TOML ({clip(str(exc).splitlines()[0], 120)})") from None
+    except (RecursionError, ValueError) as exc:  # nested too deeply; an integer of over 4300 digits
+        raise InvalidInput("spec", source, f"valid TOML ({type(exc).__name__}: {clip(str(exc), 100)})") from None
+    try:
+        spec = dataclasses.replace(campaign_from_mapping(raw), source=text)
+        spec.validate(max_runs)
+    except InvalidInput:
+        raise
+    except (TypeError, ValueError, KeyError, AttributeError, OverflowError, RecursionError) as exc:
+        # a combination the checks above do not describe: still one line naming the file, not a traceback
+        raise InvalidInput("spec", source, f"a valid campaign spec ({type(exc).__name__}: "
+                                           f"{clip(str(exc), 120)})") from None
     return spec
 
 
 def campaign_from_mapping(raw: Mapping[str, Any]) -> CampaignSpec:
+    """The spec's shape and grid options checked, without building any run spec (see :func:`parse_campaign`)."""
     for key in raw:
         if key not in SECTIONS:
-            raise InvalidInput(key, raw[key], f"a section of a campaign spec: {', '.join(SECTIONS)}")
+            raise InvalidInput(clip(key), raw[key], f"a section of a campaign spec: {', '.join(SECTIONS)}")
     head = _table(raw, "campaign")
     for key in head:
         if key not in ("name", "seed", "replicates", "description"):
-            raise InvalidInput(f"campaign.{key}", head[key], "name, seed, replicates, description")
+            raise InvalidInput(f"campaign.{clip(key)}", head[key], "name, seed, replicates, description")
     name = head.get("name", "campaign")
     if not isinstance(name, str) or not name or "/" in name:
         raise InvalidInput("campaign.name", name, "a non-empty name without '/'")
@@ -221,7 +448,7 @@ def campaign_from_mapping(raw: Mapping[str, Any]) -> CampaignSpec:
     grid_raw = _table(raw, "grid")
     for key in grid_raw:
         if key not in DIMENSIONS:
-            raise InvalidInput(f"grid.{key}", grid_raw[key], f"one of {', '.join(DIMENSIONS)}")
+            raise InvalidInput(f"grid.{clip(key)}", grid_raw[key], f"one of {', '.join(DIMENSIONS)}")
     for key in REQUIRED:
         if key not in grid_raw:
             raise InvalidInput(f"grid.{key}", None, "a list of values (every campaign crosses map, size, robots, "
@@ -230,13 +457,20 @@ def campaign_from_mapping(raw: Mapping[str, Any]) -> CampaignSpec:
     for dim in DIMENSIONS:
         if dim not in grid_raw:
             continue
-        values = grid_raw[dim] if isinstance(grid_raw[dim], list) else [grid_raw[dim]]
+        values = grid_raw[dim]
+        if not isinstance(values, list):
+            raise InvalidInput(f"grid.{dim}", values, f"a list, e.g. [{_example(values)}] (every grid entry "
+                                                      "lists the values to cross)")
         if not values:
             raise InvalidInput(f"grid.{dim}", values, "a non-empty list")
+        if len(values) > MAX_OPTIONS:
+            raise InvalidInput(f"grid.{dim}", f"{len(values):,} values", f"at most {MAX_OPTIONS:,} values")
         options = tuple(_parse_option(dim, v, f"grid.{dim}[{i}]") for i, v in enumerate(values))
         labels = [o.label for o in options]
         if len(set(labels)) != len(labels):
-            raise InvalidInput(f"grid.{dim}", labels, "distinct entries (give tables a distinct 'label')")
+            dup = next(label for i, label in enumerate(labels) if label in labels[:i])
+            raise InvalidInput(f"grid.{dim}", dup, "distinct entries (this label repeats; give tables a distinct "
+                                                   "'label')")
         grid[dim] = options
     run_base = _table(raw, "run")
     for key in ("seed", "map", "robots", "algorithm", "radio", "transport", "stop", "record_every"):
@@ -246,7 +480,7 @@ def campaign_from_mapping(raw: Mapping[str, Any]) -> CampaignSpec:
     output = _table(raw, "output")
     for key in output:
         if key not in ("timeseries_every",):
-            raise InvalidInput(f"output.{key}", output[key], "timeseries_every")
+            raise InvalidInput(f"output.{clip(key)}", output[key], "timeseries_every")
     every = output.get("timeseries_every", 10)
     if not isinstance(every, int) or isinstance(every, bool) or not 1 <= every <= 100_000:
         raise InvalidInput("output.timeseries_every", every, "an integer in 1..100000 (ticks)")
@@ -271,7 +505,7 @@ def _rules(raw: Mapping[str, Any], name: str, grid: Mapping[str, Any]) -> list[d
     for k, rule in enumerate(rules):
         for key in rule:
             if key not in grid:
-                raise InvalidInput(f"{name}[{k}].{key}", rule[key], f"a grid dimension: {', '.join(grid)}")
+                raise InvalidInput(f"{name}[{k}].{clip(key)}", rule[key], f"a grid dimension: {', '.join(grid)}")
     return [dict(r) for r in rules]
 
 
@@ -334,11 +568,23 @@ def _parse_option(dim: str, value: Any, where: str) -> Option:
 
 
 def _matches(cell: Mapping[str, Option], rule: Mapping[str, Any]) -> bool:
+    """Does an ``[[exclude]]`` rule match a cell (every key; a list matches any of its values)?"""
     for key, wanted in rule.items():
         opt = cell.get(key)
-        if opt is None:
-            return False
-        choices = wanted if isinstance(wanted, list) else [wanted]
-        if not any(w == opt.label or w == opt.value or str(w) == opt.label for w in choices):
+        if opt is None or not _option_matches(opt, wanted):
             return False
     return True
+
+
+def _option_matches(opt: Option, wanted: Any) -> bool:
+    choices = wanted if isinstance(wanted, list) else [wanted]
+    return any(w == opt.label or w == opt.value or str(w) == opt.label for w in choices)
+
+
+def _example(value: Any) -> str:
+    """``value`` as it would appear in a TOML list, if short (for 'a list, e.g. [40]')."""
+    if isinstance(value, (bool, int, float, str)):
+        text = json.dumps(value).lower() if isinstance(value, bool) else json.dumps(value)
+        if len(text) <= 30:
+            return text
+    return "..."

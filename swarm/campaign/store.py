@@ -5,17 +5,23 @@ Layout::
     DIR/campaign.toml          the spec as given (written once; a different spec in the same folder is an error)
     DIR/parts/<id>.timeseries.parquet   rows (key, tick, explored, coverage, ..., comm metrics)
     DIR/parts/<id>.runs.parquet         one row per run: spec columns, seeds, summary metrics, status
+    DIR/writers/<writer>.lock           one per live writer (see :mod:`.writers`)
 
 A part is committed by renaming its runs file into place *after* its time-series file: a run counts as
 done only when its runs row exists, and a time-series file without its runs file (a crash in between) is
-ignored and removed on the next start. Temporary files never have a ``.parquet`` suffix, so a kill -9 at
-any moment leaves either a whole part or nothing. Parts are named so that later parts sort later; a key
-that appears twice (a failed run retried) resolves to its latest row.
+ignored and removed by a later start-up once its writer is dead. Temporary files never have a ``.parquet``
+suffix, so a kill -9 at any moment leaves either a whole part or nothing. Parts are named
+``<time ns>-<seq>.<writer>`` so that later parts sort later and every part and temporary file names the
+writer that made it (parts of older versions have no writer: ``<time ns>-<random>``); a key that appears
+twice (a failed run retried) resolves to its latest row.
 """
 
 from __future__ import annotations
 
+import contextlib
+import itertools
 import os
+import re
 import time
 import uuid
 from pathlib import Path
@@ -26,63 +32,150 @@ import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from maps.errors import InvalidInput
-from maps.io import atomic_write_bytes
+
+from .identity import difference
+from .text import clip
 
 PARTS = "parts"
 RUNS_SUFFIX = ".runs.parquet"
 TS_SUFFIX = ".timeseries.parquet"
+SPEC_FILE = "campaign.toml"
 THRESHOLD_COLUMNS = {"0.5": "t50", "0.75": "t75", "0.9": "t90", "0.95": "t95", "0.98": "t98", "0.99": "t99"}
+WRITER_ID = r"[A-Za-z0-9_-]{1,40}-[0-9]{1,10}-[0-9a-f]{8}"
+"""``<host>-<pid>-<nonce>`` (see :func:`swarm.campaign.writers.new_writer_id`)."""
+_OWNED = re.compile(rf"^\.?[0-9]{{20}}-[0-9]{{6}}\.(?P<writer>{WRITER_ID})\.")
+_PROBE = re.compile(rf"^\.probe\.(?P<writer>{WRITER_ID})\.tmp$")
+
+
+def writer_of(name: str) -> str | None:
+    """The writer id in a part or temporary file name; None for names of older versions (no writer)."""
+    m = _OWNED.match(name) or _PROBE.match(name)
+    return m.group("writer") if m else None
+
+
+class CommitError(InvalidInput):
+    """A part could not be written (disk full, quota, I/O error): the campaign stops, parts committed before
+    stay, and running the same command again resumes. One line, exit status 2 like any bad folder."""
+
+    def __init__(self, folder: Path, exc: OSError, runs: int) -> None:
+        reason = exc.strerror or clip(str(exc), 120) or type(exc).__name__
+        super().__init__("-o", str(folder), f"a results folder that can take more parts: writing one failed "
+                                            f"({reason}); earlier parts are kept, the {runs} runs of this part "
+                                            "were not saved; free space and run the same command to resume")
+        self.errno = exc.errno
 
 
 class ResultsStore:
     def __init__(self, folder: str | Path) -> None:
         self.folder = Path(folder)
         self.parts = self.folder / PARTS
+        self._seq = itertools.count()
 
     # ------------------------------------------------------------------------------------ set-up ----
-    def open_for(self, source: str) -> None:
-        """Create the folder, or check an existing one belongs to the same spec; drop orphan parts."""
-        self.parts.mkdir(parents=True, exist_ok=True)
-        spec_file = self.folder / "campaign.toml"
-        if spec_file.exists():
-            if spec_file.read_text(encoding="utf-8") != source:
-                raise InvalidInput("-o", str(self.folder), "an empty folder or one holding results of this same spec "
-                                                          "(campaign.toml differs)")
-        else:
-            atomic_write_bytes(spec_file, source.encode())
-        for ts in self.parts.glob(f"*{TS_SUFFIX}"):
-            if not (self.parts / ts.name.replace(TS_SUFFIX, RUNS_SUFFIX)).exists():
-                ts.unlink()
-        for tmp in self.parts.glob(".*"):
-            tmp.unlink()
+    def prepare(self, source: str) -> None:
+        """Create the folder, or check an existing one belongs to the same spec (:mod:`.identity`: the
+        parsed TOML must be equal; comments and formatting may differ). Deletes nothing."""
+        spec_file = self.folder / SPEC_FILE
+        try:
+            self.parts.mkdir(parents=True, exist_ok=True)
+            if spec_file.exists():
+                stored = spec_file.read_text(encoding="utf-8", errors="replace")
+            else:
+                stored = None
+                _atomic_write(spec_file, source.encode())
+        except OSError as exc:
+            raise self.folder_error(exc) from None
+        if stored is not None:
+            changed = difference(stored, source)
+            if changed:
+                raise InvalidInput("-o", str(self.folder), "an empty folder or one holding results of this same "
+                                                           f"spec (campaign.toml differs: {changed})")
+
+    open_for = prepare  # the name of earlier versions (a single writer: nothing is cleaned any more)
+
+    def folder_error(self, exc: OSError) -> InvalidInput:
+        where = Path(exc.filename).name if exc.filename else self.folder.name
+        return InvalidInput("-o", str(self.folder), f"a writable results folder ({exc.strerror or exc}: {clip(where)})")
+
+    def probe(self, writer: str) -> None:
+        """Create and remove a small file in ``parts/``: a folder we cannot write fails here, before any run
+        is computed, not when the first part is committed."""
+        path = self.parts / f".probe.{writer}.tmp"
+        try:
+            fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o644)
+            try:
+                os.write(fd, b"probe")
+                os.fsync(fd)
+            finally:
+                os.close(fd)
+                path.unlink(missing_ok=True)
+        except OSError as exc:
+            raise self.folder_error(exc) from None
 
     def spec_source(self) -> str:
-        path = self.folder / "campaign.toml"
-        if not path.exists():
-            raise InvalidInput("DIR", str(self.folder), "a campaign results folder (no campaign.toml in it)")
-        return path.read_text(encoding="utf-8")
+        path = self.folder / SPEC_FILE
+        try:
+            return path.read_text(encoding="utf-8")
+        except FileNotFoundError:
+            raise InvalidInput("DIR", str(self.folder), "a campaign results folder (no campaign.toml in it)") from None
+        except OSError as exc:
+            raise InvalidInput("DIR", str(self.folder), f"a readable campaign results folder ({exc.strerror})") from None
+        except UnicodeDecodeError:
+            raise InvalidInput("DIR", str(self.folder), "a campaign results folder (its campaign.toml is not "
+                                                        "UTF-8 text)") from None
+
+    def leftovers(self) -> list[tuple[Path, str | None]]:
+        """Temporary files and time-series files without their runs file, with the writer that made each
+        (None: a name of an older version). Only files whose writer is dead may be removed."""
+        out: list[tuple[Path, str | None]] = []
+        try:
+            names = os.listdir(self.parts)
+        except FileNotFoundError:
+            return out
+        present = set(names)
+        for name in names:
+            if name.startswith(".") and name.endswith(".tmp"):
+                out.append((self.parts / name, writer_of(name)))
+            elif name.endswith(TS_SUFFIX) and name.replace(TS_SUFFIX, RUNS_SUFFIX) not in present:
+                out.append((self.parts / name, writer_of(name)))
+        return out
 
     # ----------------------------------------------------------------------------------- writing ----
-    def write_part(self, runs: list[dict[str, Any]], timeseries: list[dict[str, Any]]) -> str:
-        """Commit a batch of finished runs; returns the part id."""
-        part = f"{time.time_ns():020d}-{uuid.uuid4().hex[:8]}"
-        if timeseries:
-            _write_table(self.parts / f"{part}{TS_SUFFIX}", pa.Table.from_pylist(timeseries))
-        _write_table(self.parts / f"{part}{RUNS_SUFFIX}", pa.Table.from_pylist(runs))
+    def new_part_id(self, writer: str | None) -> str:
+        if writer is None:
+            return f"{time.time_ns():020d}-{uuid.uuid4().hex[:8]}"
+        return f"{time.time_ns():020d}-{next(self._seq) % 1_000_000:06d}.{writer}"
+
+    def write_part(self, runs: list[dict[str, Any]], timeseries: list[dict[str, Any]],
+                   writer: str | None = None) -> str:
+        """Commit a batch of finished runs; returns the part id. On an OSError nothing of the part is left
+        (no temporary file, no time-series file without its runs) and :class:`CommitError` is raised."""
+        part = self.new_part_id(writer)
+        ts_path = self.parts / f"{part}{TS_SUFFIX}"
+        runs_path = self.parts / f"{part}{RUNS_SUFFIX}"
+        try:
+            if timeseries:
+                _write_table(ts_path, pa.Table.from_pylist(timeseries), owned=writer is not None)
+            _write_table(runs_path, pa.Table.from_pylist(runs), owned=writer is not None)
+        except OSError as exc:
+            if not runs_path.exists():
+                with contextlib.suppress(OSError):
+                    ts_path.unlink(missing_ok=True)
+            raise CommitError(self.folder, exc, len(runs)) from None
         return part
 
     # ----------------------------------------------------------------------------------- reading ----
     def run_files(self) -> list[Path]:
         return sorted(self.parts.glob(f"*{RUNS_SUFFIX}")) if self.parts.exists() else []
 
-    def runs_table(self) -> pa.Table | None:
-        """All runs rows, the latest row per key."""
+    def runs_table(self, columns: Iterable[str] | None = None) -> pa.Table | None:
+        """All runs rows, the latest row per key (``columns``: only these, plus ``part``)."""
         files = self.run_files()
         if not files:
             return None
         tables = []
         for f in files:
-            t = pq.read_table(f)
+            t = self._read(f, None if columns is None else list(columns))
             tables.append(t.append_column("part", pa.array([f.name[: -len(RUNS_SUFFIX)]] * t.num_rows, pa.string())))
         table = pa.concat_tables(tables, promote_options="permissive")
         return _latest_per_key(table)
@@ -99,29 +192,54 @@ class ResultsStore:
         for part in sorted(set(wanted.values())):
             path = self.parts / f"{part}{TS_SUFFIX}"
             if path.exists():
-                t = pq.read_table(path)
+                t = self._read(path)
                 mask = pc.is_in(t.column("key"), value_set=pa.array([k for k, p in wanted.items() if p == part]))
                 tables.append(t.filter(mask))
         return pa.concat_tables(tables, promote_options="permissive") if tables else None
 
+    def _read(self, path: Path, columns: list[str] | None = None) -> pa.Table:
+        """A part file; a damaged one (parts are written atomically, so only something outside the campaign
+        damages them) is a one-line error naming it."""
+        try:
+            return pq.read_table(path, columns=columns)
+        except (OSError, pa.ArrowException) as exc:
+            raise InvalidInput("DIR", str(self.folder), f"readable Parquet parts ({clip(path.name)} cannot be "
+                                                        f"read: {clip(str(exc), 80)}; move it out of parts/ and "
+                                                        "run the campaign again to redo its runs)") from None
+
     def done_keys(self) -> dict[str, str]:
-        """key -> status ('ok' or 'failed') of every committed run."""
-        table = self.runs_table()
+        """key -> status ('ok' or 'failed') of every committed run (reads only those two columns)."""
+        table = self.runs_table(columns=("key", "status"))
         if table is None:
             return {}
         return dict(zip(table.column("key").to_pylist(), table.column("status").to_pylist()))
 
 
-def _write_table(path: Path, table: pa.Table) -> None:
-    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
+def _write_table(path: Path, table: pa.Table, owned: bool = False) -> None:
+    """Write ``table`` to a temporary file, fsync it and rename it into place (``owned``: the final name
+    carries the writer id, so the temporary name needs no extra randomness)."""
+    tmp = path.with_name(f".{path.name}.tmp" if owned else f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
     try:
         pq.write_table(table, tmp, compression="zstd")
         with open(tmp, "rb") as f:
             os.fsync(f.fileno())
         os.replace(tmp, path)
     finally:
-        if tmp.exists():
-            tmp.unlink()
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)
+
+
+def _atomic_write(path: Path, data: bytes) -> None:
+    tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
+    try:
+        with open(tmp, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    finally:
+        with contextlib.suppress(OSError):
+            tmp.unlink(missing_ok=True)
 
 
 def _latest_per_key(table: pa.Table) -> pa.Table:

@@ -3,11 +3,13 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import click
 
 from maps.errors import InvalidInput
 
+from ..campaign.limits import DASK_CONNECT_TIMEOUT_S, MAX_RUNS
 from . import cli
 
 QUICK_OUTPUT = Path("swarm-results") / "quick"
@@ -32,7 +34,8 @@ def _quick_spec_path() -> Path:
 @click.option("--workers", type=click.IntRange(1, 1024), default=None,
               help="Worker processes (default: one per core).")
 @click.option("--dask", default=None, metavar="local|tcp://HOST:PORT",
-              help="Run on Dask: 'local' starts a LocalCluster of --workers processes; an address joins a cluster.")
+              help="Run on Dask: 'local' starts a LocalCluster of --workers processes; an address joins a cluster "
+                   f"(given up after {DASK_CONNECT_TIMEOUT_S} s without an answer).")
 @click.option("--inline", is_flag=True, help="Run in this process, one after another (debugging).")
 @click.option("--shard", default=None, metavar="i/N", help="Run only every N-th run starting at i (job arrays).")
 @click.option("--retry-failed", is_flag=True, help="Run again the runs that failed before.")
@@ -40,14 +43,20 @@ def _quick_spec_path() -> Path:
               help="Build the report when done [default: only for the built-in quick campaign].")
 @click.option("--part-size", type=click.IntRange(1, 100_000), default=20, show_default=True,
               help="Runs per committed Parquet part (a crash loses at most the runs of one part in progress).")
+@click.option("--max-runs", type=click.IntRange(1), default=MAX_RUNS, show_default=True,
+              help="Refuse a campaign of more runs than this (counted from the grid before anything is built).")
 @click.option("--quiet", is_flag=True, help="No progress output.")
 def run_cmd(spec_path: Path | None, output: Path | None, workers: int | None, dask: str | None, inline: bool,
-            shard: str | None, retry_failed: bool, make_report: bool | None, part_size: int, quiet: bool) -> None:
+            shard: str | None, retry_failed: bool, make_report: bool | None, part_size: int, max_runs: int,
+            quiet: bool) -> None:
     """Run every run of SPEC.toml that OUTPUT does not hold yet.
 
     With no SPEC: the built-in quick campaign (48 short runs) into ./swarm-results/quick, then its report.
+    Several processes may write into one OUTPUT at once when their --shard selections do not overlap; a
+    process whose runs another live one is writing is refused (exit status 2).
     """
     from ..campaign import load_campaign, make_executor, run_campaign
+    from ..campaign.executors import check_dask_address
     from ..campaign.runner import parse_shard
 
     quick = spec_path is None
@@ -60,36 +69,49 @@ def run_cmd(spec_path: Path | None, output: Path | None, workers: int | None, da
     if inline and (dask or workers):
         raise InvalidInput("--inline", True, "not together with --workers or --dask")
     shard_t = parse_shard(shard)
-    spec = load_campaign(spec_path)
-    n_runs = len(spec.runs())
-    executor = make_executor(workers=workers, dask=dask, inline=inline)
-    click.echo(f"campaign {spec.name}: {n_runs} runs -> {output} ({executor.name})", err=quiet)
-    try:
-        outcome = run_campaign(spec, output, executor=executor, shard=shard_t, retry_failed=retry_failed,
-                               progress=not quiet, flush_runs=part_size)
-    finally:
-        executor.close()
+    if dask is not None:
+        check_dask_address(dask)
+    spec = load_campaign(spec_path, max_runs=max_runs)
+    n_runs = spec.run_count()
+    in_shard = f" ({len(spec.indices(shard_t))} in shard {shard})" if shard_t else ""
+    say = (lambda text: click.echo(text, err=True)) if quiet else click.echo
+    say(f"campaign {spec.name}: {n_runs} runs{in_shard} -> {output}")
+    outcome = run_campaign(spec, output, executor=lambda: make_executor(workers=workers, dask=dask, inline=inline),
+                           shard=shard_t, retry_failed=retry_failed, progress=not quiet, flush_runs=part_size,
+                           log=None if quiet else say)
     click.echo(f"{outcome.ran} ran ({outcome.failed} failed), {outcome.skipped} already done, "
                f"in {outcome.wall_s:.0f} s")
     if make_report:
         from ..campaign.report import build_report
 
         report_dir = output / "report"
-        build_report(output, report_dir)
+        _report(build_report, output, report_dir)
         click.echo(f"report: {report_dir / 'README.md'}")
+
+
+def _report(build: Any, folder: Path, report_dir: Path, **kwargs: Any) -> Path:
+    """``build(folder, report_dir, ...)`` with a file-system error (an unwritable -o, a full disk) as one line."""
+    try:
+        return build(folder, report_dir, **kwargs)
+    except OSError as exc:
+        where = exc.filename or report_dir
+        raise InvalidInput("-o", str(report_dir), f"a writable report folder ({exc.strerror or exc}: "
+                                                  f"{Path(str(where)).name[:60]})") from None
 
 
 @campaign_group.command("status")
 @click.argument("folder", metavar="DIR", type=click.Path(exists=True, file_okay=False, path_type=Path))
 def status_cmd(folder: Path) -> None:
-    """Done, failed and pending runs of a results folder."""
+    """Done, failed and pending runs of a results folder, and the processes writing it now."""
     from ..campaign import status
 
     s = status(folder)
     click.echo(f"{s['campaign']}: {s['done']} done, {s['failed']} failed, {s['pending']} pending "
                f"of {s['total']} runs ({s['parts']} parts)")
     for error, count in sorted(s["errors"].items(), key=lambda kv: -kv[1])[:10]:
-        click.echo(f"  {count} x {error}")
+        click.echo(f"  {count} x {error[:200]}")
+    for writer in s["writers"] or ():
+        click.echo(f"  writing now: {writer.describe()}")
 
 
 @campaign_group.command("report")
@@ -113,6 +135,6 @@ def report_cmd(folder: Path, output: Path | None, target: float, maes_csv: bool,
     from ..campaign.report.build import check_target
 
     check_target(target)
-    readme = build_report(folder, output or folder / "report", target=target, maes_csv=maes_csv, fmt=fmt,
-                          figures_file=figures_file, cell_figures=cell_figures)
+    readme = _report(build_report, folder, output or folder / "report", target=target, maes_csv=maes_csv, fmt=fmt,
+                     figures_file=figures_file, cell_figures=cell_figures)
     click.echo(f"report: {readme}")

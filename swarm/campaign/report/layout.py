@@ -36,6 +36,8 @@ from typing import Any
 
 from maps.errors import InvalidInput
 
+from ..text import clip, clip_list
+
 
 PANEL_KEYS = ("compare", "title", "map", "size", "robots", "spawn", "algorithm", "radio", "comm", "transport")
 COMPARABLE = ("algorithm", "radio", "comm", "spawn", "robots", "size", "map", "transport")
@@ -58,12 +60,9 @@ class FigureLayout:
 
 
 def load_layout(path: str | Path) -> tuple[FigureLayout, ...]:
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise InvalidInput("--figures", str(path), f"a readable figure layout TOML ({exc.strerror})") from None
-    return parse_layout(text, str(path))
+    from ..files import read_user_file
+
+    return parse_layout(read_user_file(path, "--figures", "figure layout TOML"), str(path))
 
 
 def parse_layout(text: str, source: str = "<string>") -> tuple[FigureLayout, ...]:
@@ -71,19 +70,23 @@ def parse_layout(text: str, source: str = "<string>") -> tuple[FigureLayout, ...
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise InvalidInput("--figures", source, f"valid TOML ({str(exc).splitlines()[0]})") from None
+        raise InvalidInput("--figures", source, f"valid TOML ({clip(str(exc).splitlines()[0], 120)})") from None
+    except RecursionError:
+        raise InvalidInput("--figures", source, "valid TOML (nested too deeply)") from None
     extra = set(raw) - {"figure"}
     if extra:
-        raise InvalidInput(sorted(extra)[0], "", "only [[figure]] tables in a figure layout")
+        raise InvalidInput(clip(sorted(extra)[0]), "", "only [[figure]] tables in a figure layout")
     figures = raw.get("figure")
     if not isinstance(figures, list) or not figures:
         raise InvalidInput("figure", figures, "one or more [[figure]] tables")
     out, names = [], set()
     for i, fig in enumerate(figures):
         where = f"figure[{i}]"
+        if not isinstance(fig, dict):
+            raise InvalidInput(where, fig, "a [[figure]] table")
         unknown = set(fig) - {"name", "title", "columns", "panel"}
         if unknown:
-            raise InvalidInput(f"{where}.{sorted(unknown)[0]}", fig[sorted(unknown)[0]],
+            raise InvalidInput(f"{where}.{clip(sorted(unknown)[0])}", fig[sorted(unknown)[0]],
                                "name, title, columns and [[figure.panel]]")
         columns = fig.get("columns", 0)
         if isinstance(columns, bool) or not isinstance(columns, int) or not 0 <= columns <= 12:
@@ -110,9 +113,9 @@ def _panel(raw: Any, where: str) -> Panel:
         raise InvalidInput(where, raw, "a table")
     for key in raw:
         if key not in PANEL_KEYS:
-            raise InvalidInput(f"{where}.{key}", raw[key], ", ".join(PANEL_KEYS))
+            raise InvalidInput(f"{where}.{clip(key)}", raw[key], ", ".join(PANEL_KEYS))
     compare = raw.get("compare")
-    if compare not in COMPARABLE:
+    if not isinstance(compare, str) or compare not in COMPARABLE:
         raise InvalidInput(f"{where}.compare", compare, ", ".join(COMPARABLE))
     if compare in raw:
         raise InvalidInput(f"{where}.{compare}", raw[compare], f"nothing: '{compare}' is the compared dimension")
@@ -135,9 +138,9 @@ def check_layout(layout: tuple[FigureLayout, ...], orders: dict[str, list[str]])
         for j, panel in enumerate(fig.panels):
             where = f"figure[{i}].panel[{j}]"
             if panel.compare not in orders:
-                raise InvalidInput(f"{where}.compare", panel.compare, ", ".join(orders))
+                raise InvalidInput(f"{where}.compare", panel.compare, clip_list(orders))
             for dim, value in panel.fixed:
                 if dim not in orders:
-                    raise InvalidInput(f"{where}.{dim}", value, f"a dimension of this campaign ({', '.join(orders)})")
+                    raise InvalidInput(f"{where}.{dim}", value, f"a dimension of this campaign ({clip_list(orders)})")
                 if value not in orders[dim]:
-                    raise InvalidInput(f"{where}.{dim}", value, ", ".join(orders[dim]))
+                    raise InvalidInput(f"{where}.{dim}", value, clip_list(orders[dim]))
