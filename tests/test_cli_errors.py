@@ -178,3 +178,12 @@ def test_the_readme_remote_agent_commands_work(tmp_path):
     assert runtime.returncode == 0 and agent.returncode == 0, (err, agent.stderr)
     assert "stopped at tick 30" in out and "run ended" in agent.stderr
     assert oct(Path(token).stat().st_mode & 0o777) == "0o600"
+
+
+def test_an_agent_that_finds_no_runtime_exits_1(capsys, monkeypatch):
+    """Not a usage error (exit 2) and not success: the command's own exit status reaches the shell."""
+    from swarm.transport.auth import RunSecret
+
+    monkeypatch.setenv("SWARM_TOKEN", RunSecret.generate().text())
+    code, _, err = run_cli(AGENT, capsys)
+    assert code == 1 and "no runtime at tcp/127.0.0.1:9" in err

@@ -368,7 +368,11 @@ class CampaignSpec:
         spec["stop"] = {**spec.get("stop", {}), **self.stop}
         spec["record_every"] = self.timeseries_every
         labels = {dim: opt.label for dim, opt in cell.items()}
-        built = RunSpec.from_mapping(spec)
+        try:
+            built = RunSpec.from_mapping(spec)
+        except InvalidInput as exc:  # a combination of valid entries that does not fit: name the cell
+            where = ", ".join(f"{dim}={clip(str(label), 30)}" for dim, label in labels.items())
+            raise InvalidInput(exc.field, exc.value, f"{exc.allowed}, in the grid cell {where}") from None
         run = Run(index=index, cell=labels, replicate=rep, seeds=dict(seeds), spec_json=built.to_json())
         run.__dict__["spec"] = built  # cached_property slot: no second build
         return run
@@ -548,7 +552,9 @@ def _parse_option(dim: str, value: Any, where: str) -> Option:
             if table is None:
                 raise InvalidInput(where, value, "a radio model name or a [radio] table with an optional label")
             label = table.pop("label", table.get("model", "multiwall"))
-            RunSpec.from_mapping({"radio": table})
+            from radio import config_from_mapping
+
+            config_from_mapping(table)  # alone: per-robot overrides are checked against each cell's robots
             return Option(str(label), table)
         if dim == "comm":
             if not isinstance(value, Mapping):

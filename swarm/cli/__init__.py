@@ -50,7 +50,9 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``swarm`` console command; returns the exit status."""
     _register()
     try:
-        cli.main(args=argv, prog_name="swarm", standalone_mode=False)
+        status = cli.main(args=argv, prog_name="swarm", standalone_mode=False)
+        if isinstance(status, int) and not isinstance(status, bool):  # click returns an Exit's code here
+            return status
     except click.exceptions.NoArgsIsHelpError as exc:
         click.echo(exc.ctx.get_help() if exc.ctx else exc.format_message())
         return 0

@@ -204,3 +204,15 @@ def test_cells_are_the_cross_product_minus_excluded_boxes(sizes, boxes):
     assert list(iter_cells(sizes, boxes)) == expected
     assert count(sizes, boxes) == len(expected)
     assert all(decode(code, sizes) == idx for code, idx in expected)
+
+
+def test_a_radio_override_is_checked_against_each_cells_robot_count():
+    """An override for robot 6 is valid in the 8-robot cells and names the 2-robot cell where it is not;
+    excluding that cell makes the campaign valid."""
+    grid = TINY.replace("robots = [1, 2]", "robots = [2, 8]").replace(
+        'radio = ["global", "los"]', 'radio = ["global", {model = "multiwall", tx_power_overrides = {"6" = 10.0}, label = "weak6"}]')
+    grid = grid.split("[[exclude]]")[0]
+    err = error_of(grid)
+    assert err.field == "radio.tx_power_overrides.6" and "robots=2" in str(err) and "radio=weak6" in str(err)
+    ok = parse_campaign(grid + '\n[[exclude]]\nrobots = 2\nradio = "weak6"\n')
+    assert all(r.spec.radio["tx_power_overrides"] == {"6": 10.0} for r in ok.runs() if r.cell["radio"] == "weak6")
