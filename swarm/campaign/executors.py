@@ -150,7 +150,12 @@ def _connect(client_cls: Any, address: str, timeout_s: float) -> Any:
 
 class DaskExecutor:
     """Dask distributed: ``local`` starts a LocalCluster of ``workers`` single-threaded processes; anything
-    else is a scheduler address (``tcp://host:8786``), e.g. a cluster started by dask-jobqueue on SLURM."""
+    else is a scheduler address (``tcp://host:8786``), e.g. a cluster started by dask-jobqueue on SLURM.
+
+    A Dask scheduler runs whatever code a client sends it, so the local cluster listens on loopback with
+    mutual TLS under a throw-away certificate held only by this process (``security=True``): another user
+    of the machine cannot connect to it. A cluster given by address is secured by its own owner (Dask's
+    ``distributed.comm.tls`` settings apply to the connection, e.g. ``--dask tls://host:8786``)."""
 
     def __init__(self, address: str, workers: int, timeout_s: float = DASK_CONNECT_TIMEOUT_S) -> None:
         where = check_dask_address(address)
@@ -161,8 +166,8 @@ class DaskExecutor:
 
         self.cluster = None
         if where is None:
-            self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                        dashboard_address=None, silence_logs=40)
+            self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                        dashboard_address=None, silence_logs=40, security=True)
             self.client = Client(self.cluster)
         else:
             _reachable(address, where[1], where[2], timeout_s)

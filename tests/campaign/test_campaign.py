@@ -173,6 +173,13 @@ def test_executors_give_identical_results(tmp_path):
         pool.close()
     dask = make_executor(workers=2, dask="local")
     try:
+        address = dask.cluster.scheduler_address
+        assert address.startswith("tls://127.0.0.1:"), "the local cluster: loopback, TLS"
+        from distributed import Client
+
+        for stranger in (address, address.replace("tls://", "tcp://")):  # no certificate: cannot submit code
+            with pytest.raises(Exception):
+                Client(stranger, timeout="3s")
         run_campaign(spec, tmp_path / "dask", executor=dask, progress=False)
     finally:
         dask.close()
