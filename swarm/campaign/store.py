@@ -175,7 +175,7 @@ class ResultsStore:
             return None
         tables = []
         for f in files:
-            t = self._read(f, None if columns is None else list(columns))
+            t = self.read_part(f, None if columns is None else list(columns))
             tables.append(t.append_column("part", pa.array([f.name[: -len(RUNS_SUFFIX)]] * t.num_rows, pa.string())))
         table = pa.concat_tables(tables, promote_options="permissive")
         return _latest_per_key(table)
@@ -192,12 +192,12 @@ class ResultsStore:
         for part in sorted(set(wanted.values())):
             path = self.parts / f"{part}{TS_SUFFIX}"
             if path.exists():
-                t = self._read(path)
+                t = self.read_part(path)
                 mask = pc.is_in(t.column("key"), value_set=pa.array([k for k, p in wanted.items() if p == part]))
                 tables.append(t.filter(mask))
         return pa.concat_tables(tables, promote_options="permissive") if tables else None
 
-    def _read(self, path: Path, columns: list[str] | None = None) -> pa.Table:
+    def read_part(self, path: Path, columns: list[str] | None = None) -> pa.Table:
         """A part file; a damaged one (parts are written atomically, so only something outside the campaign
         damages them) is a one-line error naming it."""
         try:

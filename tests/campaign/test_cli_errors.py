@@ -99,3 +99,12 @@ def test_a_damaged_part_is_named_in_one_line(tmp_path, capsys):
     part.write_bytes(RANDOM)  # damaged outside the campaign (parts are written atomically)
     for argv in (["campaign", "status", str(tmp_path)], ["campaign", "report", str(tmp_path)]):
         assert part.name[:20] in one_line_error(capsys, argv)
+
+
+def test_a_damaged_time_series_part_is_named_in_one_line(tmp_path, capsys):
+    from swarm.campaign import make_executor, parse_campaign, run_campaign
+
+    run_campaign(parse_campaign(TINY), tmp_path, executor=make_executor(inline=True), progress=False, shard=(0, 24))
+    (part,) = (tmp_path / "parts").glob("*.timeseries.parquet")
+    part.write_bytes(RANDOM)
+    assert part.name[:20] in one_line_error(capsys, ["campaign", "report", str(tmp_path)])

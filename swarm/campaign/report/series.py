@@ -39,9 +39,13 @@ def iter_parts(store: ResultsStore, runs: pd.DataFrame, columns: Sequence[str]) 
         path = store.parts / f"{part}{TS_SUFFIX}"
         if not path.exists():
             continue
-        available = set(pq.read_schema(path).names)
+        try:
+            available = set(pq.read_schema(path).names)
+        except (OSError, pa.ArrowException):
+            store.read_part(path)  # raises the one-line error naming the damaged part
+            raise
         cols = ["key", *[c for c in columns if c in available and c != "key"]]
-        table = pq.read_table(path, columns=cols)
+        table = store.read_part(path, columns=cols)
         pos = positions.to_numpy()
         idx = pc.index_in(table.column("key"), value_set=pa.array(keys[pos].tolist(), pa.string()))
         keep = pc.is_valid(idx)
