@@ -12,9 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from maps.params import check_int
-from swarm import grid
-from swarm.api import Action, Observation, RobotInfo, cell_centre, cell_of
+from swarm.api import Action, Observation, RobotInfo, cell_centre, cell_of, check_int, grid
 
 from .recovery import unseen_near
 

@@ -52,11 +52,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from maps.params import check_int
-from swarm import grid
-from swarm.api import Action, Observation, RobotInfo, cell_centre, cell_of
-from swarm.grid.cspace import DEFAULT_MARGIN_M
-from swarm.grid.targets import default_view_reach_cells
+from swarm.api import Action, Observation, RobotInfo, cell_centre, cell_of, check_int, grid
+from swarm.api.grid import DEFAULT_MARGIN_M, default_view_reach_cells
 
 from .recovery import Backoff, Exclusions, Watchdog, check_recovery_params, unseen_near
 

@@ -24,8 +24,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from maps.params import check_float, check_int
-from swarm.api import CELL_M, FREE, Observation, cell_of
+from swarm.api import CELL_M, FREE, Observation, cell_of, check_float, check_int
 
 
 def check_recovery_params(p: Any) -> None:

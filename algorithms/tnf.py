@@ -72,12 +72,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from maps.params import check_bool, check_float, check_int
-from swarm.api import CELL_M, Action, Observation, RobotInfo, cell_centre, cell_of
-from swarm.grid import configuration_space
-from swarm.grid.cspace import DEFAULT_MARGIN_M
-from swarm.grid.targets import default_view_reach_cells
-from swarm.messages import MessageError, message
+from swarm.api import CELL_M, Action, Observation, RobotInfo, cell_centre, cell_of, check_bool, check_float, check_int
+from swarm.api.grid import DEFAULT_MARGIN_M, configuration_space, default_view_reach_cells
+from swarm.api.messages import MessageError, message
 
 from .recovery import Backoff, Exclusions, Watchdog, check_recovery_params, unseen_near
 from .tnf_utility import FrontierScore, score_frontiers

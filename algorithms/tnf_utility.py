@@ -29,8 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from swarm import grid
-from swarm.api import FREE, SOLID, UNSEEN
+from swarm.api import FREE, SOLID, UNSEEN, grid
 
 GAUSS_A, GAUSS_B, GAUSS_C = 5.0, 0.5, 0.1
 UNSEEN_VALUE = 0.5

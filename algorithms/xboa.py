@@ -79,11 +79,11 @@ from algorithms.boa import Belief, DecisionParams, Lidar, Plan, heading_index, p
 from algorithms.boa.decision import minimize_with_restarts
 from algorithms.boa.fitness import ExplorationProblem
 from algorithms.boa.variants import VARIANTS, get_variant
-from maps.errors import InvalidInput
-from maps.params import check_bool, check_float, check_int
-from swarm import grid
-from swarm.api import CELL_M, SOLID, UNSEEN, Action, Observation, RobotInfo, cell_centre, cell_of
-from swarm.messages import MessageError, message
+from swarm.api import (
+    CELL_M, SOLID, UNSEEN, Action, InvalidInput, Observation, RobotInfo, cell_centre, cell_of, check_bool,
+    check_float, check_int, grid
+)
+from swarm.api.messages import MessageError, message
 
 SNAP_CELLS = 4                  # as the navigator: a robot pushed into inflated space snaps back within 2 m
 IDLE_RECHECK_TICKS = 20         # an idle robot looks again this often (teammates' maps may open new space)

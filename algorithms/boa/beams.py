@@ -24,8 +24,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from maps.errors import InvalidInput
-from maps.params import check_float
+from swarm.api import InvalidInput, check_float
 
 #: Grid step (d_row, d_col) of a forward move for each heading index (row index is y, up).
 HEADING_DR = np.array([0, 1, 1, 1, 0, -1, -1, -1], dtype=np.int64)

@@ -17,8 +17,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from maps.errors import InvalidInput
-from maps.params import check_choice, check_int, from_mapping
+from swarm.api import InvalidInput, check_choice, check_int, from_mapping
 
 from .beams import Lidar
 from .engine import minimize

@@ -36,8 +36,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from maps.errors import InvalidInput
-from maps.params import from_mapping
+from swarm.api import InvalidInput, from_mapping
 
 from . import operators as op
 from .draws import KentR, ProductR, RSource, SquareR, levy_steps

@@ -31,8 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from maps.errors import InvalidInput
-from maps.params import check_choice, check_int
+from swarm.api import InvalidInput, check_choice, check_int
 
 from .beams import BeamTables, Lidar, visible_cells
 from .gain import chain_gain, subtree_gains, tree_index

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from maps.errors import InvalidInput
+from swarm.api import InvalidInput
 
 from .beams import BeamTables
 

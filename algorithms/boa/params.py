@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from maps.params import check_bool, check_choice, check_float, check_int
+from swarm.api import check_bool, check_choice, check_float, check_int
 
 
 @dataclass(frozen=True)

@@ -50,12 +50,12 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from maps.errors import InvalidInput
-from maps.params import check_choice, check_float, check_int, from_mapping
+from swarm.api import InvalidInput, check_choice, check_float, check_int, from_mapping
+from swarm.api.grid import plan as grid_plan, steps_length
 
 from .engine import minimize
 from .params import BOAParams
-from .shortest import SQRT2, _astar, _segment_free, astar, path_length
+from .shortest import SQRT2, _segment_free, astar, path_length
 
 
 @dataclass(frozen=True)
@@ -152,7 +152,6 @@ class _Legs:
         self.free = ~self.blocked
         self.left, self.right = _runs(self.free)
         self.memo: dict[tuple[int, int, int], float] = {}
-        self._parent = np.empty(self.blocked.size, np.int64)
 
     def band_ok(self, k: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
         """Whether (k, a) -> (k+1, b) has an octile-optimal path inside rows k, k+1 (vectorised)."""
@@ -174,7 +173,8 @@ class _Legs:
             key = (int(k[i]), int(a[i]), int(b[i]))
             v = self.memo.get(key)
             if v is None:
-                v = self.memo[key] = float(_astar(self.blocked, key[0], key[1], key[0] + 1, key[2], self._parent))
+                path = grid_plan(self.free, (key[0], key[1]), (key[0] + 1, key[2]))
+                v = self.memo[key] = math.inf if path is None else steps_length(path)
             out[i] = v
         return out
 
@@ -188,10 +188,10 @@ class _Legs:
                 return [(k, c) for c in range(a, m + 1)] + [(k + 1, c) for c in range(m + 1, b + 1)]
             m = min(a, int(self.right[k + 1, b]))
             return [(k, c) for c in range(a, m - 1, -1)] + [(k + 1, c) for c in range(m - 1, b - 1, -1)]
-        p = astar(self.blocked, (k, a), (k + 1, b))
+        p = grid_plan(self.free, (k, a), (k + 1, b))
         if p is None:
             raise ValueError("disconnected leg")
-        return p
+        return [(int(r), int(c)) for r, c in p.tolist()]
 
 
 # ---------------------------------------------------------------- simplification

@@ -26,8 +26,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from maps.errors import InvalidInput
-from maps.params import check_float, check_int, from_mapping
+from swarm.api import InvalidInput, check_float, check_int, from_mapping
 
 from .engine import minimize
 from .params import BOAParams

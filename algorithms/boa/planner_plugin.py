@@ -27,28 +27,38 @@ Choices, and why:
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from maps.params import check_int
-from swarm import grid
+from swarm.api import CELL_M, InvalidInput, check_int, from_mapping, grid
 
-from .pathplan import IBOAPlannerParams, plan_path
+from .pathplan import GridPath, IBOAPlannerParams, plan_iboa
+
+
+RUNTIME_BUDGET = {"pop_size": 30, "max_gen": 30, "early_stop": 10}
+"""The IBOA budget of a runtime plan (see the module docstring); the fields of ``iboa`` not given keep it."""
 
 
 @dataclass(frozen=True)
 class IBOAPlannerSettings:
-    """How the runtime planner bounds IBOA's work (see the module docstring)."""
+    """How the runtime planner bounds IBOA's work (see the module docstring); the plug-in's ``Params``.
+    ``iboa`` may be given as a table of :class:`IBOAPlannerParams` fields (``swarm plan --param
+    iboa.pop_size=200``); fields it does not set keep :data:`RUNTIME_BUDGET` and the planner defaults."""
 
     margin_cells: int = 12
     max_window_cells: int = 120 * 120
-    iboa: IBOAPlannerParams = field(default_factory=lambda: IBOAPlannerParams(pop_size=30, max_gen=30,
-                                                                                early_stop=10))
+    iboa: IBOAPlannerParams = field(default_factory=lambda: IBOAPlannerParams(**RUNTIME_BUDGET))
 
     def __post_init__(self) -> None:
         check_int("margin_cells", self.margin_cells, 0, 10_000)
         check_int("max_window_cells", self.max_window_cells, 1, 10**8)
+        if isinstance(self.iboa, Mapping):
+            object.__setattr__(self, "iboa", from_mapping(IBOAPlannerParams, {**RUNTIME_BUDGET, **self.iboa},
+                                                          prefix="iboa."))
+        elif not isinstance(self.iboa, IBOAPlannerParams):
+            raise InvalidInput("iboa", self.iboa, "a table of IBOA planner parameters")
 
 
 @dataclass
@@ -65,16 +75,27 @@ class IBOAPlanner:
     """``swarm.planners`` plug-in ``iboa``."""
 
     name = "iboa"
+    Params = IBOAPlannerSettings
 
     def __init__(self, settings: IBOAPlannerSettings | None = None) -> None:
         self.settings = settings or IBOAPlannerSettings()
         self.stats = PlanStats()
         self.last_waypoints: list[tuple[int, int]] | None = None   # IBOA's polyline of the last plan (diagnostics)
+        self.last_plan: GridPath | None = None
+        self._last_note = ""
+
+    def describe_last(self) -> str | None:
+        """One line about the last plan (``swarm plan`` prints it)."""
+        if self.last_plan is None:
+            return f"{self.settings.iboa.variant}: {self._last_note}" if self._last_note else None
+        p = self.last_plan
+        return (f"{self.settings.iboa.variant}: {p.nfev} evaluations, {len(p.waypoints)} waypoints, grid path "
+                f"{p.grid_length * CELL_M:.2f} m before simplification, {p.length * CELL_M:.2f} m after")
 
     def plan(self, space: np.ndarray, start: tuple[int, int], goal: tuple[int, int],
              rng: np.random.Generator) -> np.ndarray | None:
         space = np.asarray(space, dtype=bool)
-        self.last_waypoints = None
+        self.last_waypoints, self.last_plan, self._last_note = None, None, ""
         start = (int(start[0]), int(start[1]))
         goal = (int(goal[0]), int(goal[1]))
         if not (space[start] and space[goal]):
@@ -85,20 +106,23 @@ class IBOAPlanner:
         c0, c1 = max(min(start[1], goal[1]) - s.margin_cells, 0), min(max(start[1], goal[1]) + s.margin_cells + 1, W)
         if (r1 - r0) * (c1 - c0) > s.max_window_cells:
             self.stats.fallback_size += 1
+            self._last_note = (f"window of {(r1 - r0) * (c1 - c0)} cells > max_window_cells = {s.max_window_cells}: "
+                               "A* instead")
             return grid.plan(space, start, goal)
         window = ~space[r0:r1, c0:c1]
-        found = plan_path(window, (start[0] - r0, start[1] - c0), (goal[0] - r0, goal[1] - c0), rng,
-                          planner="iboa", params=s.iboa)
+        found = plan_iboa(window, (start[0] - r0, start[1] - c0), (goal[0] - r0, goal[1] - c0), rng, s.iboa)
         if found is None:
             self.stats.fallback_failed += 1
+            self._last_note = "no path in the window: A* instead"
             return grid.plan(space, start, goal)
-        points = [(r + r0, c + c0) for r, c in found]
+        points = [(r + r0, c + c0) for r, c in found.waypoints]
         cells = expand(space, points)
         if cells is None:
             self.stats.fallback_unsafe += 1
+            self._last_note = "a segment left the configuration space: A* instead"
             return grid.plan(space, start, goal)
         self.stats.iboa += 1
-        self.last_waypoints = points
+        self.last_waypoints, self.last_plan = points, found
         return cells
 
 

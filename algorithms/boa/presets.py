@@ -13,7 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
-from maps.errors import InvalidInput
+from swarm.api import InvalidInput
 
 
 @dataclass(frozen=True)

@@ -26,8 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from maps.errors import InvalidInput
-from maps.params import check_bool, check_float, check_int
+from swarm.api import InvalidInput, check_bool, check_float, check_int
 
 from .beams import NORTH, Lidar
 from .decision import DecisionParams, decide

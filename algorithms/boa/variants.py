@@ -20,7 +20,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from maps.errors import InvalidInput
+from swarm.api import InvalidInput
 
 
 @dataclass(frozen=True)

@@ -68,18 +68,8 @@ from typing import Any
 
 import numpy as np
 
-from swarm import grid
-from swarm.api import (
-    CELL_M,
-    FREE,
-    SOLID,
-    Action,
-    Observation,
-    RobotInfo,
-    cell_centre,
-    cell_of,
-)
-from swarm.messages import MapUpdate, MessageError
+from swarm.api import CELL_M, FREE, SOLID, Action, Observation, RobotInfo, cell_centre, cell_of, grid
+from swarm.api.messages import MapUpdate, MessageError
 
 from ..recovery import unseen_near
 from . import rooms, walls

@@ -25,7 +25,7 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from swarm.messages import MessageError, message
+from swarm.api.messages import MessageError, message
 
 from .doorways import valid_wire
 

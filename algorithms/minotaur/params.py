@@ -9,8 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from maps.errors import InvalidInput
-from maps.params import check_bool, check_choice, check_float, check_int
+from swarm.api import InvalidInput, check_bool, check_choice, check_float, check_int
 
 SPINS = ("split", "ccw", "cw")
 

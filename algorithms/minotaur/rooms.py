@@ -17,8 +17,7 @@ from collections.abc import Iterable
 
 import numpy as np
 
-from swarm import grid
-from swarm.api import cell_of
+from swarm.api import cell_of, grid
 
 from .doorways import Doorway
 

@@ -10,7 +10,6 @@ import click
 from . import cli
 from .options import POINT, parse_params
 
-PLANNERS = ("iboa", "astar")
 SNAP_CELLS = 4          # as the runtime's navigator: a start or goal too near a wall moves at most 2 m
 
 
@@ -18,11 +17,13 @@ SNAP_CELLS = 4          # as the runtime's navigator: a start or goal too near a
 @click.argument("path", type=click.Path(exists=True, dir_okay=False, path_type=Path))
 @click.option("--from", "src", type=POINT, required=True, help="Start x,y in metres.")
 @click.option("--to", "dst", type=POINT, required=True, help="Goal x,y in metres.")
-@click.option("--planner", default="iboa", show_default=True, metavar="NAME", help="iboa | astar.")
+@click.option("--planner", default="iboa", show_default=True, metavar="NAME",
+              help="A navigation planner: astar, or one registered under swarm.planners (iboa).")
 @click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=0, show_default=True,
               help="Seed of the planner's random stream (IBOA).")
 @click.option("--param", "params", multiple=True, metavar="KEY=VALUE",
-              help="IBOA planner parameter (repeatable), e.g. --param pop_size=200 --param simplify=los.")
+              help="A field of the planner's Params (repeatable), e.g. --param iboa.pop_size=200 "
+                   "--param max_window_cells=1000000.")
 @click.option("--radius", type=click.FloatRange(0.0, 5.0), default=0.3, show_default=True,
               help="Robot radius in metres.")
 @click.option("--margin", type=click.FloatRange(0.0, 1.0), default=0.05, show_default=True,
@@ -31,16 +32,16 @@ SNAP_CELLS = 4          # as the runtime's navigator: a start or goal too near a
 @click.option("--scale", type=click.IntRange(1, 32), default=None, help="Pixels per 0.5 m cell.")
 def plan_cmd(path: Path, src: tuple[float, float], dst: tuple[float, float], planner: str, seed: int,
              params: tuple[str, ...], radius: float, margin: float, output: Path | None, scale: int | None) -> None:
-    """Plan a path from --from to --to on a map file and compare its length with the optimum.
+    """Plan a path from --from to --to on a map file with a navigation planner and compare it with the optima.
 
     Plans on the robot's configuration space of the true map (the map fully known: free where free, solid
     where solid), the space the runtime's navigator uses: every point of the path keeps --radius +
     --margin from the walls. A start or goal too close to a wall moves to the nearest cell with room for
-    the robot (at most 2 m, as the navigator snaps). Prints the path's length beside the optimal
+    the robot (at most 2 m, as the navigator snaps). The planner is the one a run's navigator would use
+    (``navigation.planner``), with its runtime settings unless --param changes them (IBOA plans in a window
+    around start and goal and falls back to A* past max_window_cells). Prints the path as the robot would
+    drive it (the navigator's line-of-sight shortcuts of the planner's cells) beside the optimal
     8-connected grid path (A*) and the any-angle shortest path (the physical limit).
-
-    IBOA (paper 001) runs on the whole map at 0.5 m cells with the runtime planner's budget (population
-    30, 30 generations); paths across a 100 m building take tens of seconds.
     """
     import time
 
@@ -48,42 +49,37 @@ def plan_cmd(path: Path, src: tuple[float, float], dst: tuple[float, float], pla
 
     from maps.errors import InvalidInput
     from maps.io import load_map
-    from maps.params import from_mapping
-    from swarm import grid
+    from swarm import grid, planners
     from swarm.api import FREE, SOLID
 
-    from algorithms.boa.pathplan import IBOAPlannerParams
-    from algorithms.boa.planner_plugin import IBOAPlannerSettings
-
-    if planner not in PLANNERS:
-        raise InvalidInput("--planner", planner, " | ".join(PLANNERS))
-    if params and planner != "iboa":
-        raise InvalidInput("--param", params[0], "only with --planner iboa")
-    base = IBOAPlannerSettings().iboa
-    iboa = from_mapping(IBOAPlannerParams, {**_fields(base), **parse_params(params)}, prefix="--param ")
+    if planner not in planners.available():
+        raise InvalidInput("--planner", planner, " | ".join(planners.available()))
+    chosen = planners.get_planner(planner, parse_params(params), field="--param")
     truth = load_map(path)
     known = np.where(truth.solid, SOLID, FREE).astype(np.uint8)
     space = grid.configuration_space(known, radius, margin)
     start, start_note = _cell(truth, space, "--from", src, radius + margin)
     goal, goal_note = _cell(truth, space, "--to", dst, radius + margin)
-    blocked = ~space
-    t0 = time.perf_counter()
-    result = _plan(planner, blocked, start, goal, np.random.default_rng(seed), iboa)
-    elapsed = time.perf_counter() - t0
-    if result is None:
+    reference = grid.plan(space, start, goal)
+    if reference is None:
         raise InvalidInput("--to", _fmt(dst), "a point the robot can reach from --from (no path exists)")
-    for line in report_lines(truth, planner, start, goal, result, elapsed, radius, margin,
-                             (start_note, goal_note)):
+    t0 = time.perf_counter()
+    cells = chosen.plan(space, start, goal, np.random.default_rng(seed))
+    elapsed = time.perf_counter() - t0
+    if cells is None:
+        raise InvalidInput("--planner", planner, "a planner that finds the path A* finds (this one found none)")
+    describe = getattr(chosen, "describe_last", None)
+    result = {"cells": np.asarray(cells, dtype=np.int64), "reference": reference, "elapsed": elapsed,
+              "note": describe() if describe is not None else None,
+              "driven": grid.path_length_m(grid.simplify(space, np.asarray(cells, dtype=np.int64))),
+              "astar": grid.steps_length(reference) * 0.5,
+              "astar_driven": grid.path_length_m(grid.simplify(space, reference)),
+              "any_angle": grid.any_angle_length_m(space, start, goal)}
+    for line in report_lines(truth, planner, start, goal, result, radius, margin, (start_note, goal_note)):
         click.echo(line)
     if output is not None:
-        title = f"{path.name}: {planner}, {result['length'] * 0.5:.1f} m (A* {result['astar'] * 0.5:.1f} m)"
+        title = f"{path.name}: {planner}, {result['driven']:.1f} m (A* {result['astar_driven']:.1f} m)"
         click.echo(f"wrote {save_plan_png(truth, space, result, output, scale, title)}")
-
-
-def _fields(params: Any) -> dict[str, Any]:
-    import dataclasses
-
-    return {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}
 
 
 def _fmt(p: tuple[float, float]) -> str:
@@ -113,29 +109,9 @@ def _cell(truth: Any, space: Any, flag: str, point: tuple[float, float], need_m:
     return (int(snapped[0]), int(snapped[1])), note
 
 
-def _plan(planner: str, blocked: Any, start: tuple[int, int], goal: tuple[int, int], rng: Any,
-          params: Any) -> dict[str, Any] | None:
-    """The path and the reference lengths, in cells."""
-    from algorithms.boa import plan_report
-    from algorithms.boa.shortest import any_angle_length, astar, astar_length, path_length
-
-    ref = astar(blocked, start, goal)
-    if ref is None:
-        return None
-    if planner == "astar":
-        return {"points": ref, "length": path_length(ref), "grid_length": path_length(ref), "nfev": 0,
-                "astar": astar_length(blocked, start, goal), "any_angle": any_angle_length(blocked, start, goal),
-                "reference": ref}
-    rep = plan_report(blocked, start, goal, rng, params)
-    if rep.path is None:
-        return None
-    return {"points": list(rep.path.waypoints), "length": rep.path.length, "grid_length": rep.path.grid_length,
-            "nfev": rep.path.nfev, "astar": rep.astar_length, "any_angle": rep.any_angle_length, "reference": ref}
-
-
 def report_lines(truth: Any, planner: str, start: tuple[int, int], goal: tuple[int, int], result: dict[str, Any],
-                 elapsed: float, radius: float, margin: float, notes: tuple[str | None, ...]) -> list[str]:
-    """The lines ``swarm plan`` prints (lengths converted from cells to metres)."""
+                 radius: float, margin: float, notes: tuple[str | None, ...]) -> list[str]:
+    """The lines ``swarm plan`` prints (metres)."""
     m = 0.5
     sx, sy = truth.cell_centre(*start)
     gx, gy = truth.cell_centre(*goal)
@@ -143,16 +119,14 @@ def report_lines(truth: Any, planner: str, start: tuple[int, int], goal: tuple[i
              f"configuration space of the true map: robot radius {radius:g} m + margin {margin:g} m"]
     lines += [n for n in notes if n]
     lines.append(f"from ({sx:g}, {sy:g}) to ({gx:g}, {gy:g}): straight line {m * _dist(start, goal):.2f} m")
-    if planner == "iboa":
-        lines.append(f"iboa: {m * result['length']:.2f} m, {len(result['points'])} waypoints "
-                     f"(grid path before simplification {m * result['grid_length']:.2f} m), "
-                     f"{result['nfev']} evaluations, {elapsed:.2f} s")
-    else:
-        lines.append(f"astar: {m * result['length']:.2f} m, {len(result['points'])} cells, {elapsed:.2f} s")
-    lines.append(f"optimal 8-connected grid path (A*): {m * result['astar']:.2f} m "
-                 f"(ratio {result['length'] / result['astar']:.3f})")
-    lines.append(f"any-angle shortest path (physical limit): {m * result['any_angle']:.2f} m "
-                 f"(ratio {result['length'] / result['any_angle']:.3f})")
+    lines.append(f"{planner}: {result['driven']:.2f} m as driven ({len(result['cells'])} cells planned, "
+                 f"shortcut by line of sight as the navigator does), {result['elapsed']:.2f} s")
+    if result["note"]:
+        lines.append(f"  {result['note']}")
+    lines.append(f"optimal 8-connected grid path (A*): {result['astar']:.2f} m, {result['astar_driven']:.2f} m "
+                 f"as driven (ratio {result['driven'] / result['astar_driven']:.3f})")
+    lines.append(f"any-angle shortest path (physical limit): {result['any_angle']:.2f} m "
+                 f"(ratio {result['driven'] / result['any_angle']:.3f})")
     return lines
 
 
@@ -183,9 +157,9 @@ def save_plan_png(truth: Any, space: Any, result: dict[str, Any], output: Path, 
     def px(cell: tuple[int, int]) -> tuple[float, float]:
         return (cell[1] + 0.5) * s, (H - cell[0] - 0.5) * s
 
-    draw.line([px(c) for c in result["reference"]], fill=(40, 90, 220), width=max(1, s // 3))
-    draw.line([px(c) for c in result["points"]], fill=(220, 30, 30), width=max(2, s // 2 + 1))
-    for cell, colour in ((result["points"][0], (20, 160, 40)), (result["points"][-1], (0, 0, 0))):
+    draw.line([px(tuple(c)) for c in result["reference"].tolist()], fill=(40, 90, 220), width=max(1, s // 3))
+    draw.line([px(tuple(c)) for c in result["cells"].tolist()], fill=(220, 30, 30), width=max(2, s // 2 + 1))
+    for cell, colour in ((tuple(result["cells"][0]), (20, 160, 40)), (tuple(result["cells"][-1]), (0, 0, 0))):
         x, y = px(cell)
         r = max(3, s)
         draw.ellipse([x - r, y - r, x + r, y + r], fill=colour)

@@ -1,0 +1,41 @@
+"""The plugin boundary: everything an exploration algorithm (or a path planner) may use from swarm.
+
+An algorithm is a class with a ``name``, a frozen-dataclass ``Params`` and two methods::
+
+    from swarm.api import Action, Observation, RobotInfo, check_int, grid
+
+    @dataclass(frozen=True)
+    class Params:
+        patience: int = 50
+        def __post_init__(self) -> None:
+            check_int("patience", self.patience, 1, 10_000)   # a bad value is a one-line error
+
+    class MyExplorer:
+        name = "mine"
+        Params = Params
+        def reset(self, robot: RobotInfo, params: Params, rng: np.random.Generator) -> None: ...
+        def act(self, obs: Observation) -> Action: ...
+
+Register it under the ``swarm.algorithms`` entry-point group (``mine = "mypkg.explorer:MyExplorer"``) or
+pass ``"mypkg.explorer:MyExplorer"`` as the algorithm name; ``swarm algorithms check mine`` checks it.
+docs/plugins.md is the guide.
+
+What is here: the types (:mod:`swarm.api.types`: :class:`Observation`, :class:`Action`, :class:`RobotInfo`,
+:class:`NavStatus`, the cell constants and conversions), the parameter validators and
+:class:`InvalidInput` (:mod:`swarm.api.params`), the grid helpers (:mod:`swarm.api.grid`: configuration
+space, plans, distance fields, frontiers, the nearest reachable unseen cell) and the message codec
+(:mod:`swarm.api.messages`: :func:`message` to declare a message type, :class:`MessageError`). Nothing
+outside ``swarm.api`` is part of the contract; ``algorithms/`` imports nothing else from swarm.
+"""
+
+from __future__ import annotations
+
+from .params import InvalidInput, check_bool, check_choice, check_float, check_int, from_mapping, to_mapping
+from .types import (CELL_M, FREE, ROBOT_RADIUS_M, SOLID, UNSEEN, Action, Explorer, NavStatus, Neighbour, Neighbours,
+                    NoParams, Observation, Pose, RobotInfo, cell_centre, cell_of, frozen_builder)
+
+__all__ = [
+    "Action", "CELL_M", "Explorer", "FREE", "InvalidInput", "NavStatus", "Neighbour", "Neighbours", "NoParams",
+    "Observation", "Pose", "ROBOT_RADIUS_M", "RobotInfo", "SOLID", "UNSEEN", "cell_centre", "cell_of", "check_bool",
+    "check_choice", "check_float", "check_int", "from_mapping", "frozen_builder", "to_mapping",
+]

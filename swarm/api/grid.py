@@ -1,0 +1,21 @@
+"""Grid helpers for plugins: configuration space, shortest paths, distance fields, frontiers, targets.
+
+Pure functions on the robot's knowledge map (``uint8[H, W]``, ``UNSEEN < FREE < SOLID``) and on boolean
+rasters, the same ones the runtime's navigator uses, so an algorithm's idea of "reachable" is the
+navigator's. Cells are ``(row, col)`` with row 0 at the bottom; metres are ``(x, y)``.
+"""
+
+from __future__ import annotations
+
+from ..grid import (DEFAULT_MARGIN_M, FrontierCluster, any_angle_length_m, cells_to_metres, configuration_space,
+                    distance_field, frontier_clusters, frontier_mask, grid_length_m, inflation_offsets, nearest_in,
+                    nearest_reachable, nearest_reachable_unseen, passable, path_length_m, plan, segment_clear,
+                    simplify, steps_length, view_cells)
+from ..grid.targets import default_view_reach_cells
+
+__all__ = [
+    "DEFAULT_MARGIN_M", "FrontierCluster", "any_angle_length_m", "cells_to_metres", "configuration_space",
+    "default_view_reach_cells", "distance_field", "frontier_clusters", "frontier_mask", "grid_length_m",
+    "inflation_offsets", "nearest_in", "nearest_reachable", "nearest_reachable_unseen", "passable", "path_length_m",
+    "plan", "segment_clear", "simplify", "steps_length", "view_cells",
+]

@@ -1,0 +1,14 @@
+"""Parameter validation for plugins: the checks swarm's own algorithms use, and the one error type.
+
+Every check raises :class:`InvalidInput` naming the field, the value and what is allowed, which the
+command line prints as one line with exit status 2. Call them in your ``Params.__post_init__``;
+:func:`from_mapping` builds a ``Params`` dataclass from a table, refusing unknown keys and values of the
+wrong type.
+"""
+
+from __future__ import annotations
+
+from maps.errors import InvalidInput
+from maps.params import check_bool, check_choice, check_float, check_int, from_mapping, to_mapping
+
+__all__ = ["InvalidInput", "check_bool", "check_choice", "check_float", "check_int", "from_mapping", "to_mapping"]
