@@ -180,7 +180,7 @@ class DaskExecutor:
 
         it = iter(tasks)
         first = [self.client.submit(execute, t, pure=False) for _, t in zip(range(self.window), it)]
-        ac = as_completed(first)
+        ac = as_completed(first, loop=self.client.loop)  # not the default client: another may be registered
         for future in ac:
             yield future.result()
             future.release()

@@ -179,7 +179,7 @@ def test_executors_give_identical_results(tmp_path):
 
         for stranger in (address, address.replace("tls://", "tcp://")):  # no certificate: cannot submit code
             with pytest.raises(Exception):
-                Client(stranger, timeout="3s")
+                Client(stranger, timeout="3s", set_as_default=False)
         run_campaign(spec, tmp_path / "dask", executor=dask, progress=False)
     finally:
         dask.close()
