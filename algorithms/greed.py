@@ -1,9 +1,9 @@
 """Greed: always head for the nearest reachable unexplored cell.
 
-Follows the Minotaur paper (Schmidt et al., ``seeds/002_4d965c322f298e5f.txt``), section 3.5: Minotaur's
+Follows the Minotaur paper (Schmidt et al., docs/papers.md), section 3.5: Minotaur's
 fallback "move to the nearest unexplored tile anywhere on the map", extracted into an algorithm of its
 own that "always moves to the nearest unexplored tile, and still communicates and shares its map with
-other robots"; and MAES's ``Greed.cs`` (reference/maes.md section 7.4) for the behaviour the paper leaves
+other robots"; and MAES's ``Greed.cs`` (docs/maes.md section 7.4) for the behaviour the paper leaves
 open: re-targeting, collisions and deadlocks.
 
 **Target.** The configuration-space cell nearest the robot **by path length on its own knowledge map**
@@ -25,7 +25,7 @@ every ``idle_recheck_ticks``: shared maps and expiring exclusions can open new t
 **Map sharing.** Greed sends no messages of its own: the runtime's map-sharing service (``comm``
 section of the run spec) broadcasts each robot's map changes every ``share_every`` ticks over the radio
 and merges what a robot receives into its own map before it decides. That replaces MAES's heartbeat
-merge (reference/maes.md section 2 item 4), which merges only when two heartbeats arrive in the same tick
+merge (docs/maes.md section 2 item 4), which merges only when two heartbeats arrive in the same tick
 and then merges the two *senders'* maps with each other, not with the receiver's: two MAES Greed robots
 never share anything. Here every received update reaches the receiver's map.
 

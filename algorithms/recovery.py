@@ -1,6 +1,6 @@
 """Recovery pieces shared by Greed and TNF: collision back-off, the no-progress watchdog, target exclusions.
 
-MAES gives each of its explorers its own ad-hoc handling of collisions and deadlocks (reference/maes.md
+MAES gives each of its explorers its own ad-hoc handling of collisions and deadlocks (docs/maes.md
 sections 7.3 and 7.4). The runtime here already plans with clearance and reports ``unreachable`` and
 ``blocked`` goals, so what is left for an algorithm is small and the same for both explorers:
 

@@ -2,11 +2,11 @@
 
 Sources: Colares and Chaimowicz, "The Next Frontier: combining information gain and distance cost for
 decentralized multi-robot exploration", ACM SAC 2016 (its full text was not available to us; the public
-descriptions are the two below); the Minotaur paper (``seeds/002_4d965c322f298e5f.txt``) section 2.2:
+descriptions are the two below); the Minotaur paper (docs/papers.md) section 2.2:
 TNF scores frontiers by information gain and the cost of getting there, and "each robot stores the newest
 destination received from each other robot. When the robot decides upon the next frontier to explore, a
 wavefront will be created from each stored destination, reducing the score of each frontier near it";
-and how MAES implements TNF and FF-TNF (reference/maes.md section 7.3), whose structure and constants we
+and how MAES implements TNF and FF-TNF (docs/maes.md section 7.3), whose structure and constants we
 keep. The utility terms are in :mod:`algorithms.tnf_utility`.
 
 **Behaviour.** A robot decides when it has no destination, reached it, its destination was seen (no
@@ -20,7 +20,7 @@ no penalty. After a collision it backs off, then steps to a random free cell abo
 collision mitigation; the draw uses the ``rng`` given to ``reset``) and decides again. Maps are shared
 by the runtime's map-sharing service, as for every algorithm.
 
-**Departures** from MAES's implementation (its bugs, reference/maes.md section 2.1, and its shortcuts)
+**Departures** from MAES's implementation (its bugs, docs/maes.md section 2.1, and its shortcuts)
 and, where marked, from the paper's description:
 
 1. *Distance term well defined.* MAES uses ``w = sqrt(sum_c |robot - c| / Dmax)`` summed over the

@@ -1,15 +1,15 @@
-"""xBOA exploration in the swarm runtime (Bendahmane & Tlemsani 2022, "xBOA", seed paper 000).
+"""xBOA exploration in the swarm runtime (Bendahmane & Tlemsani 2022, the xBOA paper in docs/papers.md).
 
 What follows the paper. Each decision, the robot's own optimiser searches goal cells on the robot's own
 knowledge map (section 4.2): a candidate is a flat vector of K goal cells (K = 1 is the short-term
 strategy, K > 1 the long-term one, section 4.3); its fitness is minus the number of currently unknown
-cells predicted to be observed along the planned path (Eq. 9 read as reference/boa.md section 4.2
+cells predicted to be observed along the planned path (Eq. 9 read as docs/boa.md section 4.2
 recommends: an optimistic raycast at every pose of the path, unknown cells do not stop a beam, known
 walls do), or 0 when the plan is infeasible: a goal not reachable, or the energy of the chained legs
 (moves + 45 degree rotations) over the battery. Population, generations, early stop and the Table-2
 presets are the paper's (section 5.2; ``algorithms.boa.DecisionParams``); every variant of the family can
 be selected (``variant``: xboa, boa, mboa, aboa, saboa, iboa-kent, iboa-levy). Whole populations are
-evaluated at once and short-term fitness is a per-decision gain table, exact (reference/boa.md section 11,
+evaluated at once and short-term fitness is a per-decision gain table, exact (docs/boa.md section 11,
 ``algorithms.boa.fitness``). Multi-robot (section 5.4.4): every robot has its own optimiser and RNG
 stream; maps travel through the runtime's map-sharing service, so the paper's central shared map is the
 special case of ``radio.model = "global"`` with ``comm.share_every = 1``.
@@ -21,10 +21,10 @@ Departures, all deliberate:
    if any of its cells is SOLID, *unknown* (counts as gain) if all of its cells are UNSEEN, and *passable*
    if one of its cells is in the robot's configuration space (radius + ``grid.DEFAULT_MARGIN_M``) and
    reachable from the robot through known-free space. Why: 1 m is the paper's cell, a decision over a
-   whole 150 m map costs 12-16 ms at 1 m against 55-170 ms at 0.5 m (measured on the fitness alone), and
-   passability from the configuration space means every goal tile holds a cell the navigator can drive
-   to (``tile_cells = 1`` decides on the knowledge cells themselves). The chosen tile becomes a metre
-   goal (its reachable cell nearest the tile centre) and the runtime's navigator drives there; the
+   whole 150 m map costs several times less at 1 m than at 0.5 m (figures: docs/performance-history.md,
+   "Figures moved out of module docstrings"), and passability from the configuration space means every
+   goal tile holds a cell the navigator can drive to (``tile_cells = 1`` decides on the knowledge cells
+   themselves). The chosen tile becomes a metre goal (its reachable cell nearest the tile centre) and the runtime's navigator drives there; the
    paper's 8-direction steps and rotations remain the *energy model inside the fitness*, not how the
    robot moves. Unseen tiles in the inside corner of a wall junction count as walls (see ``coarsen``).
 2. **Known-free paths.** The tree of minimum-energy paths runs through passable tiles only, i.e. over
@@ -35,13 +35,14 @@ Departures, all deliberate:
    default; the paper's robot has 180) and the robot's lidar range (7 m by default; the paper's 4 m),
    1 degree resolution as in the paper.
 4. **Search box.** The genes' bounds are the bounding box of the passable tiles, not the whole map
-   (decision 10 of reference/boa.md). No feasible goal lies outside it, so the optimum is unchanged, but
+   (decision 10 of docs/boa.md). No feasible goal lies outside it, so the optimum is unchanged, but
    on a 150 m map a random population would otherwise be ~95 % infeasible. The belief is cropped to that
    box plus the sensor range (exact: nothing farther can be observed from a reachable pose).
 5. **Horizon.** A decision may plan at most ``horizon_steps`` steps (12 by default; the battery left
    caps it too). The paper's only limit is the battery, and its fitness has no distance term, so with a
-   large battery the robot crosses the map for the single best view: on five seeded 50 m buildings that
-   took 2.2x as long to reach 99 % as a 12-step horizon (notes/issue8-runtime.md). ``horizon_steps = 0``
+   large battery the robot crosses the map for the single best view, which on seeded 50 m buildings took
+   far longer to reach 99 % than a 12-step horizon (docs/performance-history.md, "Figures moved out of
+   module docstrings"; ``benchmarks/experiments/bench_xboa_runtime.py sweep``). ``horizon_steps = 0``
    restores the paper's battery-only constraint.
 6. **Battery.** Energy is counted from the runtime's odometry: one step = a move of one tile (1 m by
    default) or a 45 degree turn, ``steps = distance_m / tile_m + turned_rad / (pi / 4)``. The fitness
@@ -58,7 +59,7 @@ Departures, all deliberate:
    predicted to observe has been seen (the target region is gone, e.g. through a teammate's map), or when
    a lower-id robot announces, for the same or a later tick, a plan that will observe at least half of
    that region (simultaneous decisions on the same map: the lower id keeps its target).
-9. **Overlap penalty** (``overlap_penalty``, on by default; the paper's future work, reference/boa.md
+9. **Overlap penalty** (``overlap_penalty``, on by default; the paper's future work, docs/boa.md
    section 11.3): each decision is announced in an ``xboa.target`` message (goals and the tile poses of
    the planned path); a robot counts the cells others' announced paths will observe as already known.
    Fallback targets are announced too (as a single pose) and teammates' announced goals are avoided by

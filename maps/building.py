@@ -1,6 +1,6 @@
 """Building maps: halls splitting the area, rooms between halls split recursively, doors connecting all.
 
-Follows the working 2022 MAES ``BuildingGenerator`` (reference/maes.md section 3.3), not the 2023
+Follows the working 2022 MAES ``BuildingGenerator`` (docs/maes.md section 3.3), not the 2023
 regression whose swapped min/max means rooms are never split. Because halls always cut a block across its
 full extent and rooms are cut by guillotine walls, every region is an axis-aligned rectangle; we build the
 map from those rectangles directly, which makes the true room graph exact by construction.
@@ -47,7 +47,7 @@ SOLID_LABEL = -1
 
 @dataclass(frozen=True)
 class BuildingParams:
-    """MAES defaults (reference/maes.md section 3.3); lengths in tiles (1 m)."""
+    """MAES defaults (docs/maes.md section 3.3); lengths in tiles (1 m)."""
 
     hall_width: int = 4
     max_hall_percent: float = 20.0

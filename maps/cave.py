@@ -1,4 +1,4 @@
-"""Cave maps: the MAES cave pipeline (``CaveGenerator.cs`` at commit 1bb0312, reference/maes.md section 3.2).
+"""Cave maps: the MAES cave pipeline (``CaveGenerator.cs`` at commit 1bb0312, docs/maes.md section 3.2).
 
 Pipeline, on a 1 m tile grid, then upscaled to 0.5 m cells:
 
@@ -40,7 +40,7 @@ from .raster import FOUR, nearest_wall_material, reachable_free, smooth_patches,
 
 @dataclass(frozen=True)
 class CaveParams:
-    """MAES HEAD defaults (reference/maes.md section 3.2); lengths in tiles (1 m)."""
+    """MAES HEAD defaults (docs/maes.md section 3.2); lengths in tiles (1 m)."""
 
     fill_percent: float = 50.0
     smoothing_runs: int = 3

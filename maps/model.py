@@ -1,6 +1,6 @@
 """The ground-truth map: a solid/material raster at 0.5 m cells plus, for buildings, the true room graph.
 
-Coordinates (see DESIGN.md section 3): metres, origin at the lower-left corner, x right, y up.
+Coordinates (see docs/design.md section 3): metres, origin at the lower-left corner, x right, y up.
 ``solid[row, col]`` covers ``y in [row*0.5, (row+1)*0.5)`` and ``x in [col*0.5, (col+1)*0.5)``; row 0 is
 the bottom of the map. Pictures flip rows so north is up.
 """

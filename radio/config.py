@@ -1,7 +1,7 @@
 """The radio's parameter set: which link model, the radios, eq. 1 coefficients, walls, materials.
 
 Built from the ``[radio]`` table of a run's TOML with :func:`config_from_mapping` (unknown keys are an error
-naming the key). Defaults are the Minotaur paper's (seeds/002, section 4.1: 15 dBm, -82 dBm, 2.4 GHz,
+naming the key). Defaults are the Minotaur paper's (docs/papers.md; section 4.1: 15 dBm, -82 dBm, 2.4 GHz,
 802.11ax) and 3GPP TR 38.901's indoor-office line-of-sight fit for eq. 1 (see :mod:`radio.pathloss`).
 
 ```toml

@@ -2,9 +2,8 @@
 
 Why a raster walk: walls are solid cells, and the exact Amanatides-Woo traversal ("A fast voxel traversal
 algorithm for ray tracing", Eurographics 1987) visits every cell a segment passes through, with the length
-of the segment inside each, in O(cells crossed). On this machine a numba grid walk is the fast path for the
-radio (reference/zenoh-pymunk.md section C2: ~0.02 ms for 120 pairs on an edge grid, against 2-6 ms for
-numpy segment tests and 1.7-10 ms for pymunk queries).
+of the segment inside each, in O(cells crossed). A numba grid walk is the fast path for the radio, far
+ahead of numpy segment tests and pymunk queries (docs/measurements.md section C2).
 
 Leaping (our analogue of C2's "edge grid", which needs walls on tile boundaries; we must also serve
 imported 0.5 m maps): every cell knows the uniform one-material rectangles that open from it into each

@@ -1,7 +1,7 @@
 """RSSI over a whole map from one transmitter, and its picture with the sensitivity contour.
 
 The picture a researcher wants before a campaign: where a robot at ``tx`` can be heard. Every free cell
-centre is a receiver (one numba walk per cell, 40-80 ms for a 150 x 150 m building); walls are drawn in
+centre is a receiver (one numba walk per cell; ``benchmarks/speed/bench_radio.py`` times it); walls are drawn in
 their material colours, free space in a viridis-like ramp of RSSI, cells below the receiver sensitivity
 are dimmed, and the cells on the edge of the linked region (the sensitivity contour) are drawn in magenta
 (brick walls are red). Rendering uses Pillow only (no matplotlib dependency), like :mod:`maps.render`.

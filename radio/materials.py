@@ -10,9 +10,9 @@ of a generated map (one tile), so a right-angle crossing of a generated wall cos
 
 Sources of the defaults (``DEFAULT_MATERIALS``):
 
-- ``concrete``, ``wood``, ``brick``: Minotaur paper (seeds/002, section 4.1, Table 1), taken from
-  Ikpehai et al. 2019; the same numbers MAES ships (reference/maes.md section 6.4, "according to NIST").
-- ``wall``: MAES's generic PGM wall, 0 dB at every frequency (maes.md section 6.4): it blocks
+- ``concrete``, ``wood``, ``brick``: Minotaur paper (docs/papers.md; section 4.1, Table 1), taken from
+  Ikpehai et al. 2019; the same numbers MAES ships (docs/maes.md section 6.4, "according to NIST").
+- ``wall``: MAES's generic PGM wall, 0 dB at every frequency (docs/maes.md section 6.4): it blocks
   line-of-sight but does not attenuate.
 - ``glass``: 3GPP TR 38.901 (v16) Table 7.4.3-1, standard multi-pane glass ``L = 2 + 0.2 f`` dB (f in GHz):
   2.26 / 2.48 / 3.04 dB.

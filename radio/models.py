@@ -3,12 +3,12 @@
 Orientation: ``rssi[i, j]`` is the power (dBm) robot ``i`` receives from transmitter ``j``, and
 ``link[i, j]`` is True iff a message sent by ``j`` reaches ``i`` (Minotaur paper eq. 2 with ``S_i`` the
 receiver's sensitivity and ``T_j`` the sender's power). The diagonal is ``link = False`` and ``rssi = NaN``
-(a robot does not receive its own messages; MAES section 6.1). Geometry (distance, walls) is symmetric; RSSI
+(a robot does not receive its own messages; docs/maes.md section 6.1). Geometry (distance, walls) is symmetric; RSSI
 and links are symmetric for equal radios and can be asymmetric with per-robot overrides.
 
 - :class:`MultiWall` (default): ``rssi = Ptx_j - L(d, f) - sum(A_wall)`` (eqs. 1-2), walls charged per
   crossing (or per metre with ``wall_mode = "per_metre"``).
-- :class:`MaesCompatible`: MAES's material model (reference/maes.md section 6.2): no distance term,
+- :class:`MaesCompatible`: MAES's material model (docs/maes.md section 6.2): no distance term,
   ``rssi = Ptx_j - sum(A_material * wall_length / 0.25 m)``. MAES charges per triangle of its mesh (4 per
   tile crossed at right angles); per 0.25 m of wall path reproduces its right-angle numbers (section 6.5)
   without its dependence on the crossing angle.

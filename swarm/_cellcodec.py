@@ -4,9 +4,8 @@
 * delta: ``n`` little-endian uint32 gaps between ascending flat indices (the first from 0), then the
   ``n`` cell values packed as above.
 
-Map sharing encodes about 1.5 updates and decodes up to 15 per tick on a 16-robot run; done with numpy
-these are ten array passes and temporaries each (a full 300 x 300 map unpacked through a lookup table
-took ~400 us), here one pass.
+Map sharing encodes and decodes updates every tick of a many-robot run; done with numpy these are ten
+array passes and temporaries each, here one pass (figures: docs/performance-history.md).
 """
 
 from __future__ import annotations

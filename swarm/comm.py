@@ -4,7 +4,7 @@
 radio's link matrix computed from positions at send time, optionally thinned by seeded packet loss and a
 per-link byte budget, and appear in each receiver's inbox at tick t+1, ordered by (sender, sequence). A
 robot never receives its own broadcast. (MAES judges links at receive time; we use send time, as a real
-radio does, DESIGN.md section 4.)
+radio does, docs/design.md section 4.)
 
 **Map sharing** is a runtime service configured per run (``comm.map_sharing``), so every algorithm shares
 maps the same way and comparisons are fair: every ``share_every`` ticks each robot broadcasts a
@@ -289,7 +289,7 @@ class MapSharing:
         reached, in the order the inboxes list them (sender, then sequence), and ``known`` the maps
         (``uint8[R, H, W]``); robots not ``live`` are left alone. The same effect and the same lists as
         calling :meth:`receive` per robot with its inbox, but each map update is merged into all its
-        receivers in one compiled call (a 16-robot run merges ~140,000 updates). ``cells=False``: the lists
+        receivers in one compiled call (a long many-robot run merges a great many). ``cells=False``: the lists
         stay empty (the in-process runtime does not read them)."""
         check_writable_map(known)
         touched: list[list[np.ndarray | None]] = [[] for _ in range(self.n)]

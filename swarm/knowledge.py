@@ -2,14 +2,14 @@
 
 A knowledge map is a ``uint8[H, W]`` raster of 0.5 m cells with ``UNSEEN = 0 < FREE = 1 < SOLID = 2``
 (:mod:`swarm.api`), so combining two maps is an elementwise maximum and SOLID is sticky, as in MAES's
-SLAM map (reference/maes.md section 5.3). The runtime keeps one map per robot as ``uint8[R, H, W]``.
+SLAM map (docs/maes.md section 5.3). The runtime keeps one map per robot as ``uint8[R, H, W]``.
 
 The optional log-odds mode (noisy lidar, xBOA paper section 4.1, Eqs. 5-8) keeps a ``float32`` log-odds
 value per robot and cell (:class:`LogOddsGrid`); the sensor writes the derived ternary state into the
 knowledge map, so algorithms and map merging see the same ``uint8`` rasters in both modes.
 
 :class:`ExplorationTracker` is the referee: it knows the truth and measures how much of the free space
-the swarm has seen (``explored``) and driven over (``coverage``, MAES section 5.2). It is incremental:
+the swarm has seen (``explored``) and driven over (``coverage``, docs/maes.md section 5.2). It is incremental:
 the sensor kernel reports the number of newly seen free cells, so reading the metrics is O(1) per tick.
 """
 
@@ -399,7 +399,7 @@ class ExplorationTracker:
       for the first time, so ``explored = seen free cells / free cells`` costs O(1) per tick. MAES counts
       explored triangles; on our raster the cell is the unit.
     - ``covered[r, c]``: a free cell in the 3x3 block of 0.5 m cells around a robot's cell at some tick
-      (MAES section 5.2; a cell is coverable iff it is free). ``coverage = covered / free cells``.
+      (docs/maes.md section 5.2; a cell is coverable iff it is free). ``coverage = covered / free cells``.
     """
 
     def __init__(self, truth: Map) -> None:

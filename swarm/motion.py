@@ -5,7 +5,7 @@ The follower is a pure function of the pose it is given and the path it holds, s
 whether the pose comes from ground truth or from an estimate. It knows the drive limits, so it brakes
 early enough for the world's acceleration limit to stop the robot where it should stop, and it never
 asks for more than the world will deliver. The per-tick command is one compiled call on scalars (it
-runs once per robot per tick: 3.2 us as Python, ~0.8 us compiled) that performs the same float
+runs once per robot per tick; docs/performance-history.md has its cost) that performs the same float
 operations in the same order as the Python formulas it replaced (bend speed, braking limit, turn rate,
 :func:`wrap_angle`), with CPython's own ``hypot`` (:mod:`swarm._pymath`), so runs are bit for bit what they
 were; ``tests/swarm/test_motion.py`` keeps those formulas in Python as the reference.
@@ -27,7 +27,7 @@ from ._pymath import py_hypot
 from .arena import Arena
 
 TICK_S: float = 0.1
-"""One logic tick of simulated time (DESIGN.md section 3)."""
+"""One logic tick of simulated time (docs/design.md section 3)."""
 MAX_SUBSTEP_MOVE_M: float = 0.05
 """The most a robot may travel in one physics sub-step: a tenth of the thinnest wall (one 0.5 m cell).
 Contacts are discrete, so a robot can overlap a wall by up to one sub-step's travel before the contact
@@ -87,7 +87,7 @@ class MotionParams:
 
     @classmethod
     def maes(cls) -> "MotionParams":
-        """MAES-like drive for parity campaigns (reference/maes.md section 4.1): terminal speeds of
+        """MAES-like drive for parity campaigns (docs/maes.md section 4.1): terminal speeds of
         3.0 tiles/s and 4.0 rad/s, and MAES's *initial* accelerations (force/mass = 60 m/s^2 with linear
         drag 20, i.e. 3.0 * 20; 4.0 * 30 = 120 rad/s^2 with angular drag 30). MAES approaches its
         terminal speed exponentially (63 % after ~55 ms); here the ramp is linear and done in 50 ms,

@@ -1,4 +1,4 @@
-"""The result of one run, in the shape DESIGN.md section 5 gives (also what ``swarm run --json`` writes)."""
+"""The result of one run, in the shape docs/design.md section 5 gives (also what ``swarm run --json`` writes)."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The lidar: exact grid ray casting on the truth raster, writing each robot's knowledge map.
 
-**Traversal.** Rays start at the robot's *true* pose (MAES section 5.1) and walk the 0.5 m ``truth.solid``
+**Traversal.** Rays start at the robot's *true* pose (docs/maes.md section 5.1) and walk the 0.5 m ``truth.solid``
 raster with the Amanatides-Woo DDA: the cells a ray passes through, in order, each with its *entry
 distance* (0 for the robot's own cell; the distance at which the ray crosses into it). The first boundary
 crossings come from the boundary coordinates, later ones add the constant spacing (classic A-W; the
@@ -32,8 +32,8 @@ nothing when every cell its rays can reach already holds it: free cells at least
 SOLID, all of them seen in the tracker. The cells checked are those within range of any point of the
 robot's cell, a superset of what its rays enter, less solid cells whose four neighbours are all solid
 (rays step between 4-neighbours and stop at the first solid cell, so none enters them), unless the robot
-stands in one. In the 16-robot benchmark a third of the robot-ticks are settled: robots driving through
-rooms that they, or the robots that shared their maps, have seen.
+stands in one. Settled robots are those driving through rooms that they, or the robots that shared their
+maps, have seen (how many on the runtime benchmark: docs/performance-history.md).
 
 **Log-odds mode** (noisy lidar; xBOA paper section 4.1, Eqs. 5-8). The measured range is
 ``z = t + (noise_std + noise_per_metre * t) * N(0, 1)`` (clamped at 0; ``z > range_m`` is no return),
@@ -44,7 +44,7 @@ before it with centre within range are misses. Without a return every cell enter
 within range) is a miss. Each cell takes one vote per ray; per scan and robot a cell with more hit than
 miss votes adds ``logodds_hit`` to its log-odds, one with more misses adds ``logodds_miss`` (Eq. 7: each
 increment is the log-likelihood ratio of the observation; ties change nothing). The vote keeps the many
-rays that cross a cell near the robot from counting as many independent observations (reference/boa.md
+rays that cross a cell near the robot from counting as many independent observations (docs/boa.md
 section 8.1). Values are clamped to ``[logodds_min, logodds_max]`` and classified by Eq. 8; the knowledge
 map of every cell voted on is overwritten with the class when it is FREE or SOLID (evidence may flip a
 cell; a cell back at "unknown" keeps what the map had). The ground-truth ``seen`` raster always follows the
@@ -105,7 +105,7 @@ class LidarParams:
 
     ``range_m`` 7 m is the MAES campaign value; ``rays = None`` picks :func:`auto_rays`. Noise needs
     ``mode = "logodds"``: a ternary map cannot unlearn a false wall (SOLID is sticky). The log-odds
-    defaults are the reference reconstruction's (reference/boa.md section 8.1; the paper gives no sensor
+    defaults are the reference reconstruction's (docs/boa.md section 8.1; the paper gives no sensor
     probabilities): +0.85 per hit and -0.4 per miss, i.e. log(0.7/0.3) and log(0.4/0.6) rounded, the usual
     inverse sensor model with p(occupied | hit) = 0.7 and p(occupied | miss) = 0.4; clamped at +-5;
     thresholds 0 as in the paper's Eq. 8 (log-odds 0 is the prior p = 0.5).
@@ -595,7 +595,7 @@ class Lidar:
 
 def warm_up() -> None:
     """Compile (or load from numba's on-disk cache) every sensing and knowledge kernel on a tiny map, so
-    a timed loop is not charged for compilation (``benchmarks/bench_sensing.py`` calls it before timing).
+    a timed loop is not charged for compilation (``benchmarks/speed/bench_sensing.py`` calls it before timing).
     The runtime does not call it: its arrays are of other numba types (read-only poses, for one), so the
     run loads its own versions on first use, ~0.15 s for all of a 16-robot run's kernels."""
     from .knowledge import empty_knowledge, merge

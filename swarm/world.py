@@ -2,7 +2,7 @@
 
 One :meth:`World.step` is one logic tick (0.1 s) made of ``MotionParams.substeps`` physics steps. Walls
 are ``truth.wall_rectangles`` as static boxes rounded outward by :func:`wall_margin`, in pymunk's default
-BB-tree index (never the spatial hash: reference/zenoh-pymunk.md B1); robots are dynamic discs.
+BB-tree index (never the spatial hash: docs/measurements.md B1); robots are dynamic discs.
 Everything has friction 0, so a robot driven into a wall slides along it instead of sticking, and
 contacts never exert torque on a disc.
 
@@ -17,9 +17,10 @@ contact solver removes whatever would enter a wall or another robot, and the nex
 contact-consistent velocity. The price is a delay of one sub-step between command and motion, which the
 heading computation accounts for, so that free motion is an exact circular arc.
 
-Speed. A tick costs ~6 us of ``cpSpaceStep`` per sub-step for 16 robots; everything else is kept below
-that: the forces for all sub-steps are computed by one numba kernel, written with ``pymunk.batch``'s
-C iterator (no per-body attribute access, ~0.8 us each), and poses are read back once per tick.
+Speed. Chipmunk's own ``cpSpaceStep`` should dominate a tick, so everything else is kept below it: the
+forces for all sub-steps are computed by one numba kernel, written with ``pymunk.batch``'s C iterator (no
+per-body attribute access, which costs more than the physics: docs/measurements.md B1), and poses are
+read back once per tick (figures: ``benchmarks/speed/bench_world.py``, docs/performance-history.md).
 
 Acceleration limits apply to the *wheel* speed, the world's internal drive state: a robot pressing
 against a wall keeps its wheel speed (it slips), and reversing still ramps.

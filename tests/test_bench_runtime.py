@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_runtime.py"
+_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "speed" / "bench_runtime.py"
 _SPEC = importlib.util.spec_from_file_location("bench_runtime", _PATH)
 assert _SPEC is not None and _SPEC.loader is not None
 bench = importlib.util.module_from_spec(_SPEC)

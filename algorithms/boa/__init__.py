@@ -6,10 +6,10 @@
 * Exploration (xBOA paper): ``fitness`` (belief, batched exact fitness, per-decision gain table), ``tree``
   (minimum-energy paths), ``beams``/``gain`` (lidar fans and numba kernels), ``decision`` (one decision -
   what a runtime plugin calls), ``gridworld``/``scenario`` (the paper's 24 x 24 experiment).
-* Path planning: ``pathplan`` (IBOA grid planner, paper 001), ``pathplan_levy`` (IBOA-Levy continuous
-  planner, paper 004), ``shortest`` (A*, any-angle optimum, collision tests).
+* Path planning: ``pathplan`` (IBOA grid planner, IBOA (Kent)), ``pathplan_levy`` (IBOA-Levy continuous
+  planner, IBOA (Lévy)), ``shortest`` (A*, any-angle optimum, collision tests).
 
-Specification: reference/boa.md; papers: Bendahmane & Tlemsani 2022 (xBOA), Zhai et al. 2023 (IBOA-Kent),
+Specification: docs/boa.md; papers (docs/papers.md): Bendahmane & Tlemsani 2022 (xBOA), Zhai et al. 2023 (IBOA-Kent),
 Dash et al. 2025 (IBOA-Levy).
 """
 

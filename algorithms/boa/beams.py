@@ -1,6 +1,6 @@
 """Lidar geometry on a grid: exact beam traversals, per-heading fans, and the ray trie used by the kernels.
 
-The xBOA paper's sensor (paper 000 section 5.2; reference/boa.md section 4.1): 180 degree field of view,
+The xBOA paper's sensor (its section 5.2; docs/boa.md section 4.1): 180 degree field of view,
 4 m range, 1 degree resolution (181 beams), centred on the robot's heading. A robot heading is one of
 8 directions (45 degree steps, index h: angle h*45 degrees counter-clockwise from +x, so h = 2 is north),
 so every fan is a contiguous run of a single table of absolute beams at multiples of the resolution,

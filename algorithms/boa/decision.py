@@ -1,8 +1,8 @@
 """One xBOA exploration decision: build the fitness for the robot's belief, run the optimiser, return the plan.
 
-This is the whole "brain" of paper 000's exploration loop (section 4.2, Fig. 2) and what a runtime plugin
+This is the whole "brain" of the xBOA paper's exploration loop (section 4.2, Fig. 2) and what a runtime plugin
 calls once per decision: ``decide(belief, cell, heading, battery, params, rng)``. A new optimiser is made
-for every decision (decision 8: c restarts from its initial value each time).
+for every decision (docs/boa.md decision 8: c restarts from its initial value each time).
 
 If the best candidate found has no predicted gain (fitness 0), the optimiser is run again with fresh
 random candidates, up to ``retries`` times (the paper does not say what its robot does then; a robot with

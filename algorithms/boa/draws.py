@@ -1,7 +1,7 @@
 """Random factors of the BOA moves: the r-sources (r1*r2, r**2, Kent chaos) and Levy-flight steps.
 
 Every draw comes from the ``numpy.random.Generator`` passed in; nothing here touches a global RNG.
-References: reference/boa.md sections 3.1 (r), 3.6 (Kent map), 3.7 (Levy), decision 2 and 18.
+References: docs/boa.md sections 3.1 (r), 3.6 (Kent map), 3.7 (Levy), decision 2 and 18.
 """
 
 from __future__ import annotations
@@ -10,12 +10,12 @@ import math
 
 import numpy as np
 
-#: Mantegna's scale for alpha = 1.5 (paper 004 Eq. 7): 0.6965745025576967.
+#: Mantegna's scale for alpha = 1.5 (IBOA (Lévy) Eq. 7): 0.6965745025576967.
 LEVY_RHO_15 = 0.6965745025576967
 
 
 def kent_map(r: np.ndarray | float, u: float = 0.6) -> np.ndarray:
-    """One iteration of the skew-tent (Kent) map, paper 001 Eq. 5: ``r/u`` if ``r < u`` else ``(1-r)/(1-u)``.
+    """One iteration of the skew-tent (Kent) map, IBOA (Kent) Eq. 5: ``r/u`` if ``r < u`` else ``(1-r)/(1-u)``.
 
     Deliberate departure from the extracted text, which lists the branches the other way round; read
     literally that leaves [0, 1] (0.2 -> 2.0). We use the standard skew-tent map (section 3.6):
@@ -39,7 +39,7 @@ def kent_step(state: np.ndarray, u: float, rng: np.random.Generator) -> np.ndarr
 
 
 def mantegna_rho(alpha: float) -> float:
-    """Paper 004 Eq. 7: ``[G(1+a) sin(pi a / 2) / (G((1+a)/2) a 2^((a-1)/2))]^(1/a)``."""
+    """IBOA (Lévy) Eq. 7: ``[G(1+a) sin(pi a / 2) / (G((1+a)/2) a 2^((a-1)/2))]^(1/a)``."""
     num = math.gamma(1.0 + alpha) * math.sin(math.pi * alpha / 2.0)
     den = math.gamma((1.0 + alpha) / 2.0) * alpha * 2.0 ** ((alpha - 1.0) / 2.0)
     return (num / den) ** (1.0 / alpha)
@@ -47,7 +47,7 @@ def mantegna_rho(alpha: float) -> float:
 
 def levy_steps(rng: np.random.Generator, shape: tuple[int, ...], alpha: float = 1.5, scale: float = 0.01,
                draw: str = "mantegna") -> np.ndarray:
-    """Levy-flight steps, paper 004 Eq. 6: ``scale * R1 * rho / |R2| ** (1/alpha)``.
+    """Levy-flight steps, IBOA (Lévy) Eq. 6: ``scale * R1 * rho / |R2| ** (1/alpha)``.
 
     ``draw="mantegna"`` (default, decision 18): R1, R2 ~ N(0, 1), the standard Mantegna algorithm with
     symmetric steps and tail index alpha. ``draw="uniform"``: the text's literal "random numbers in
@@ -91,7 +91,7 @@ class SquareR(RSource):
 
 
 class KentR(RSource):
-    """IBOA-Kent's chaotic r (paper 001 section 3.1), squared as Eqs. 7/8 keep ``r**2``.
+    """IBOA-Kent's chaotic r (IBOA (Kent) section 3.1), squared as Eqs. 7/8 keep ``r**2``.
 
     Choices the paper leaves open (decision 18): the state is per individual; r0 ~ U(0, 1) from the
     generator at the first chaotic draw; iterates reaching 0 or 1 are reseeded; the chaotic r is used for

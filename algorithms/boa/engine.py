@@ -1,6 +1,6 @@
 """One ask/tell engine for the whole BOA family, and ``minimize`` as a thin loop around it.
 
-Design (reference/boa.md section 10): the caller evaluates whole batches (``fun_batch(X: (m, D)) -> (m,)``),
+Design (docs/boa.md section 10): the caller evaluates whole batches (``fun_batch(X: (m, D)) -> (m,)``),
 so the cost of a generation is one vectorised call; a best-so-far archive gives pygmo "champion"
 semantics; the population's x and F are replaced together from copies, so the reference code's in-place
 bug (x moved, fitness stale; section 1 item 2) cannot happen. No global RNG: every draw comes from the
@@ -10,18 +10,18 @@ A generation (t = 1..T) in synchronous mode: draw the switch mask, r factors, pa
 all N individuals; build every candidate row (global/local trial, or the two crossover children, plus the
 mBOA intensive trial or a mutation); evaluate them in one batch; per individual keep its best candidate
 (ties: the earlier one, which makes crossover child 2 win ties and mBOA keep its BOA trial); accept it
-greedily (strict <) or always (xBOA's local move, paper 000 section 3.2); then, for IBOA-Kent, one more
+greedily (strict <) or always (xBOA's local move, xBOA paper section 3.2); then, for IBOA-Kent, one more
 batch with the convex-lens opposite of the best (replaces the best only if better); then the c/a
 schedule. Asynchronous mode (``sync=False``) asks one individual at a time, so later individuals see
 earlier ones' updates and the best, as the reference code's loop does.
 
 Deliberate choices (decisions of section 6): moves read the *population* best g*, not the archive (they
 are equal for greedy variants); the archive is updated from every evaluated row; the convex-lens scale
-eta is not given by paper 001, we use 2 (a milder jump than classic OBL's eta = 1; section 12 test 9
+eta is not given by the IBOA (Kent) paper, we use 2 (a milder jump than classic OBL's eta = 1; section 12 test 9
 checks both); the SABOA reference quirk that re-points the worst index at rejected trials is not
 reproduced (the worst is always the population's worst).
 
-Origin bias (reference/boa.md section 1 item 5), documented rather than tested: the terms r*g* - x,
+Origin bias (docs/boa.md section 1 item 5), documented rather than tested: the terms r*g* - x,
 r*x_j - x_k, SABOA's 0.5 (g* + x_worst) f, mBOA's g* (1 + r1 - r2) and IBOA-Levy's W x all contract towards
 0, so on the *un-shifted* 10-D sphere (pop 20, 100 generations, code switch) this implementation reaches
 exactly 0.0 with SABOA and 1e-111 to 1e-123 with mBOA, against about 0.01 with BOA. Tests use shifted

@@ -1,6 +1,6 @@
 """The xBOA exploration fitness on a belief grid: one object per decision, batched over whole populations.
 
-Paper 000 section 4.2, Eq. 9, read as reference/boa.md section 4.2 recommends: a candidate is a flat vector
+The xBOA paper, section 4.2, Eq. 9, read as docs/boa.md section 4.2 recommends: a candidate is a flat vector
 of K target cells (x1, y1, ..., xK, yK) (genes rounded to the nearest cell and clipped to the map); its
 fitness is ``-(number of currently unknown cells predicted to be observed along the planned path)``,
 raw and negative (Table 2 was tuned on raw counts, section 1 item 3), or 0 - the worst value - when the
@@ -76,7 +76,7 @@ class Belief:
 
     @classmethod
     def from_logodds(cls, logodds: np.ndarray, cell_m: float = 1.0) -> "Belief":
-        """From a log-odds grid, paper 000 Eq. 8: occupied if > 0, free if < 0, unknown if = 0."""
+        """From a log-odds grid, xBOA paper Eq. 8: occupied if > 0, free if < 0, unknown if = 0."""
         logodds = np.asarray(logodds)
         return cls(logodds == 0, logodds > 0, cell_m)
 

@@ -1,7 +1,7 @@
 """Predicted information gain along tree paths: numba kernels on flat belief arrays.
 
 The gain of a path is the number of *currently unknown* cells that the optimistic scans at its poses would
-observe: unknown cells do not stop a beam, known-occupied cells do (reference/boa.md section 11, decision
+observe: unknown cells do not stop a beam, known-occupied cells do (docs/boa.md section 11, decision
 13). The start pose is excluded (its scan is already in the belief), so the robot's own cell as a goal
 gains 0 and the gain is monotone along a path prefix.
 

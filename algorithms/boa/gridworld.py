@@ -1,6 +1,6 @@
 """The xBOA paper's discrete world: 1 m cell truth grid, log-odds belief, noisy 180 degree lidar with votes.
 
-Paper 000 sections 4.1 and 5.1-5.2; settings as reconstructed in reference/boa.md section 8.1 (decisions 14
+The xBOA paper, sections 4.1 and 5.1-5.2; settings as reconstructed in docs/boa.md section 8.1 (decisions 14
 and 15): range noise sigma = 0.05 * d on every beam that hits a wall (the paper's "95 % precision"); per
 scan each beam votes "free" for the cells it crossed and "occupied" for the cell its measured end point
 falls in, and per cell the majority of the scan's votes wins (plain end-point marking on 1 m cells walls

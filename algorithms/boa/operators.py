@@ -2,7 +2,7 @@
 
 Pure functions of their inputs (random numbers are drawn by the caller), so the engine can batch a whole
 generation and a test can check an operator on hand-made numbers. Equation numbers refer to
-reference/boa.md section 3 and the papers cited there.
+docs/boa.md section 3 and the papers cited there.
 """
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numpy as np
 
 
 def fragrance_power(F: np.ndarray, c: float, a: float) -> np.ndarray:
-    """Paper 000 Eq. 1 as coded: ``c * |F| ** a`` on the *stored*, raw fitness (decision 7).
+    """xBOA paper Eq. 1 as coded: ``c * |F| ** a`` on the *stored*, raw fitness (decision 7).
 
     Raw, unnormalised fitness on purpose: Table 2 was tuned on it (section 1 item 3). F = 0 gives a zero
     step.
@@ -72,7 +72,7 @@ def mboa_intensive(g: np.ndarray, r1: np.ndarray, r2: np.ndarray) -> np.ndarray:
 
 
 def crossover(Xi: np.ndarray, Xj: np.ndarray, cut: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """xBOA single-point crossover (paper 000 Algorithm 2): ``child1 = [x_i[:cut], x_j[cut:]]``,
+    """xBOA single-point crossover (xBOA paper Algorithm 2): ``child1 = [x_i[:cut], x_j[cut:]]``,
     ``child2 = [x_j[:cut], x_i[cut:]]``, one cut per row.
 
     Parents [1..5], [6..10], cut 2 -> [1, 2, 8, 9, 10] and [6, 7, 3, 4, 5].
@@ -82,7 +82,7 @@ def crossover(Xi: np.ndarray, Xj: np.ndarray, cut: np.ndarray) -> tuple[np.ndarr
 
 
 def convex_lens_opposite(x: np.ndarray, lb: np.ndarray, ub: np.ndarray, eta: float) -> np.ndarray:
-    """Convex-lens opposition-based learning, paper 001 Eq. 11: ``(ub+lb)/2 + (ub+lb)/(2 eta) - x/eta``.
+    """Convex-lens opposition-based learning, IBOA (Kent) Eq. 11: ``(ub+lb)/2 + (ub+lb)/(2 eta) - x/eta``.
 
     eta = 1 is classic OBL (lb + ub - x). lb = 0, ub = 10, x = 3 -> 7 (eta 1), 6 (eta 2). The result may
     leave the box; the engine applies its bounds rule afterwards.
@@ -92,7 +92,7 @@ def convex_lens_opposite(x: np.ndarray, lb: np.ndarray, ub: np.ndarray, eta: flo
 
 
 def random_reset(X: np.ndarray, gene: np.ndarray, value: np.ndarray) -> np.ndarray:
-    """GA random-reset mutation: row i gets gene ``gene[i]`` set to ``value[i]`` (paper 001 section 4.1)."""
+    """GA random-reset mutation: row i gets gene ``gene[i]`` set to ``value[i]`` (IBOA (Kent) section 4.1)."""
     out = X.copy()
     out[np.arange(len(X)), gene] = value
     return out

@@ -1,6 +1,6 @@
 """Every tunable and every ambiguity of the BOA family as one validated, frozen parameter set.
 
-Each field is one of the decisions in reference/boa.md section 6 (numbers in brackets below) or a paper
+Each field is one of the decisions in docs/boa.md section 6 (numbers in brackets below) or a paper
 constant; the default is the recommended reading. ``"variant"`` means "what the variant's own definition
 says" (see ``variants.py``).
 """
@@ -17,7 +17,7 @@ class BOAParams:
     """Parameters of one BOA-family optimiser run (the population size and generation budget are given to
     the engine separately, see ``engine.Optimizer``)."""
 
-    # Paper 000 Eq. 1 / code defaults (params.yaml): sensor modality, power exponent, switch probability.
+    # xBOA paper Eq. 1 / code defaults (params.yaml): sensor modality, power exponent, switch probability.
     c: float = 0.01
     a: float = 0.1
     p: float = 0.8
@@ -42,7 +42,7 @@ class BOAParams:
     # [6] acceptance of the local move: "variant" (xBOA: always, as the paper says, with the true fitness;
     #     others greedy) | "greedy" | "always". The reference code's stale-fitness bug is never reproduced.
     local_accept: str = "variant"
-    # [9] what ABOA's sine rule drives: "c" (code, README) | "a" (paper 000 section 3.3).
+    # [9] what ABOA's sine rule drives: "c" (code, README) | "a" (the xBOA paper, section 3.3).
     aboa_target: str = "c"
     # [18] IBOA-Kent: Kent parameter u, chaotic fraction of the run, adaptive weight amplitude/power
     #      (sin^3 reading of Eq. 6), convex-lens scale eta (not given by the paper; 2 chosen, see engine).
@@ -66,7 +66,7 @@ class BOAParams:
     inertia_form: str = "corrected"
     # SABOA global move: "fixed" (g* + f(x - g*)) | "code" (x + g* + f(x - g*), the reference's form).
     saboa_global: str = "fixed"
-    # GA mutation per individual per generation (IBOA path planning, paper 001 4.1; operator not given):
+    # GA mutation per individual per generation (IBOA path planning, IBOA (Kent) section 4.1; operator not given):
     # "reset" = one gene redrawn uniformly in its bounds; "smooth" = one gene set to the mean of its
     # neighbouring genes (removes a detour when genes are consecutive waypoints).
     mutation_rate: float = 0.0

@@ -1,4 +1,4 @@
-"""IBOA grid path planning (paper 001 section 4, Zhai et al. 2023): one free cell per grid row between start
+"""IBOA grid path planning (the IBOA (Kent) paper, section 4, Zhai et al. 2023): one free cell per grid row between start
 and goal, interpolated into a connected 8-connected path, path length as fitness, IBOA-Kent with GA
 mutation, then the two path-simplification strategies.
 
@@ -11,9 +11,9 @@ Interpolation (the paper's is unspecified beyond "until all adjacent grids in th
 consecutive waypoints are in adjacent lines; they are joined by the shortest 8-connected path (no corner
 cutting). When the two-row band between them holds an octile-optimal connection (one diagonal step plus
 straight steps, checked in O(1) from free-run tables) that is it; otherwise an A* leg is computed and
-memoised (legs around walls cost about 0.2 ms each on a 100 x 100 grid: a 100 x 100 building plan takes
-several seconds, a 50 x 50 one about 0.3 s). Deliberate departure: the paper discards individuals that cannot be interpolated inside the band;
-our legs may leave the band, so the encoding can represent every path (its optimum is the optimal grid
+memoised (a plan's cost grows with the legs it needs around walls; figures in
+docs/performance-history.md, "Figures moved out of module docstrings"). Deliberate departure: the paper
+discards individuals that cannot be interpolated inside the band; our legs may leave the band, so the encoding can represent every path (its optimum is the optimal grid
 path: the last visits of each row form a valid waypoint sequence) and maps that need detours (buildings)
 are still solved. Disconnected legs get a large finite penalty (the engine needs finite fitness).
 
@@ -21,8 +21,9 @@ Mutation ("the mutation process of GA ... to avoid the detour path", operator an
 default one gene is set to the mean of its two neighbours (a waypoint moved between the waypoints of the
 rows above and below, which removes a detour), with probability 0.5 per individual and generation; the
 GA random-reset mutation is the alternative (``mutation_kind="reset"``). Either way the mutant is
-evaluated and accepted greedily like any other trial, so x and fitness stay consistent. Measured on 10
-building/cave maps: smooth 0.5 gives grid paths 1.43x the A* length on average, reset 0.2 1.49x.
+evaluated and accepted greedily like any other trial, so x and fitness stay consistent. The smoothing
+mutation gave the shorter grid paths when both were measured (docs/performance-history.md, "Figures
+moved out of module docstrings").
 
 Simplification (section 4.2), applied to the best path's cell centres:
 
@@ -60,7 +61,7 @@ from .shortest import SQRT2, _segment_free, astar, path_length
 
 @dataclass(frozen=True)
 class IBOAPlannerParams:
-    """Paper 001 uses population 200 (20 x 20 map) or 4000 (40 x 40) and 50 iterations; its flow chart says
+    """The IBOA (Kent) paper uses population 200 (20 x 20 map) or 4000 (40 x 40) and 50 iterations; its flow chart says
     50 individuals. Our default (60 x 50) keeps a 50 x 50 map under a second; raise it for quality."""
 
     variant: str = "IBOA-Kent"

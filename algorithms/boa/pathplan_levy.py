@@ -1,18 +1,18 @@
-"""IBOA-Levy continuous path planning around circular obstacles (paper 004 section 2.3, Dash et al. 2025).
+"""IBOA-Levy continuous path planning around circular obstacles (IBOA (Lévy) section 2.3, Dash et al. 2025).
 
 An individual is K intermediate waypoints (x1, y1, ..., xK, yK) inside the workspace box; the path is the
 polyline start -> waypoints -> goal. Fitness, Eqs. 11-14: ``PL = D * (1 + w * P)`` with D the polyline
 length (Eq. 11) and P the obstacle penalty summed over obstacles of the mean over sampled path points of
 the penetration depth, O_b = |z - c_o| / R_o - 1 (Eq. 12; O_b < 0 inside obstacle o), w = 10.
 
-Deliberate departure (reference/boa.md section 3.7): Eq. 13 as printed, ``P = P + mean(min(O_b, 0))``,
+Deliberate departure (docs/boa.md section 3.7): Eq. 13 as printed, ``P = P + mean(min(O_b, 0))``,
 accumulates *negative* values, so a path through an obstacle would score better than the same path
 outside. We use ``P = P + mean(max(-O_b, 0))`` (penetration counted positive). Eq. 10's typo (Y_st - X_go)
 does not matter (F_D is not used by the fitness). Points are sampled uniformly along each segment
 (``samples_per_segment`` per segment, both ends included); the paper's "any point" is not specified.
 
 The optimiser is IBOA-Levy (Levy local moves, corrected nonlinear inertia weight; ``variants.py``) with
-the paper's switch convention. Paper 004 gives no population size, iteration count, a, c0 or beta; our
+the paper's switch convention. The IBOA (Lévy) paper gives no population size, iteration count, a, c0 or beta; our
 defaults are BOA's constants (a = 0.1, c0 = 0.01, p = 0.8) with 40 butterflies and 200 generations.
 Note the origin bias of Eq. 9 (``W * Z`` shrinks every coordinate towards 0, section 1 item 5): the
 planner works in coordinates relative to the workspace centre so that the pull goes towards the middle of

@@ -1,4 +1,4 @@
-"""The IBOA grid planner (paper 001, ``pathplan.plan_iboa``) as a navigation planner for the runtime.
+"""The IBOA grid planner (IBOA (Kent), ``pathplan.plan_iboa``) as a navigation planner for the runtime.
 
 Registered under the ``swarm.planners`` entry-point group as ``iboa``, so a run spec selects it with
 ``navigation = {planner = "iboa"}``. The navigator calls ``plan(space, start, goal, rng)`` with the robot's
@@ -8,15 +8,16 @@ int[N, 2] cells, consecutive ones 8-adjacent and every one inside ``space``.
 Choices, and why:
 
 * **Window, not the whole map.** IBOA's cost grows with the number of grid lines between start and goal
-  (one gene each) and with the A* legs it runs around walls on the whole grid (measured by the
-  planner's author: ~0.3 s on a 50 x 50 grid, several seconds on 200 x 200). So the plan runs on the
+  (one gene each) and with the A* legs it runs around walls on the whole grid (seconds on a large
+  grid; docs/performance-history.md, "Figures moved out of module docstrings"). So the plan runs on the
   bounding box of start and goal grown by ``margin_cells`` on every side; detours outside that box are
   not representable. A box larger than ``max_window_cells``, or no path inside it, falls back to the
   runtime's A* (:func:`swarm.grid.plan`) on the whole space. The fallback is decided by sizes, never by
   the clock, so runs stay reproducible.
-* **Smaller budget.** Population 30, 30 generations, early stop after 10 (paper 001: 200-4000 x 50):
+* **Smaller budget.** Population 30, 30 generations, early stop after 10 (IBOA (Kent): 200-4000 x 50):
   the runtime plans every time a goal changes, and the measured lengths are within a few percent of the
-  paper-size budget after the navigator's shortcutting (see notes/issue8-runtime.md).
+  paper-size budget after the navigator's shortcutting (``benchmarks/experiments/bench_xboa_runtime.py
+  planner``).
 * **Output shape.** IBOA's result is its simplified polyline (paper strategies 1 and 2), whose segments
   are collision-free by the planner's supercover test. The navigator wants cells, consecutive ones
   8-adjacent (``grid.simplify`` rejects longer steps), so each segment is expanded to the cells of its

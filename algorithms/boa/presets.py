@@ -1,11 +1,11 @@
 """Named parameter presets: the xBOA paper's Table 2 (Hyperopt-tuned for exploration) and the code defaults.
 
 Table 2 was tuned on the reference code, so its presets use the code's switch convention (u > p triggers
-the global move / crossover; decision 1 of reference/boa.md section 6): the *effective* global or
-crossover probability is 1 - p (last column of section 3.8). Paper 000 tuned only pop-5 values for mBOA,
+the global move / crossover; decision 1 of docs/boa.md section 6): the *effective* global or
+crossover probability is 1 - p (last column of section 3.8). The xBOA paper tuned only pop-5 values for mBOA,
 ABOA and SABOA and only BOA/xBOA at pop 20; the ``-pop20`` names of the others reuse the pop-5 values
 (our extension, for the Tables 3-6 style benchmark). IBOA-Kent/-Levy have no Table-2 entry; their presets
-are the base BOA constants (paper 001: a = 0.1, c0 = 0.01, p assumed 0.8) with the paper switch.
+are the base BOA constants (IBOA (Kent): a = 0.1, c0 = 0.01, p assumed 0.8) with the paper switch.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The xBOA paper's exploration experiment (paper 000 sections 4-5; reference/boa.md sections 4 and 8.1).
+"""The xBOA paper's exploration experiment (its sections 4-5; docs/boa.md sections 4 and 8.1).
 
 One or more robots on the paper's 24 x 24 grid of 1 m cells, each starting at (x, y) = (1 + i, 1) facing
 north, with a 180 degree / 4 m / 1 degree noisy lidar (``gridworld.scan``) and a battery counted in steps
@@ -37,7 +37,7 @@ from .tree import StateTree
 
 @dataclass(frozen=True)
 class PaperSetup:
-    """The experiment's fixed conditions (paper 000 section 5.2; battery 300 as in reference/boa.md 8.1)."""
+    """The experiment's fixed conditions (xBOA paper section 5.2; battery 300 as in docs/boa.md section 8.1)."""
 
     battery: int = 300
     n_robots: int = 1

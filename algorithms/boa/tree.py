@@ -1,7 +1,7 @@
 """Energy-optimal paths from the robot: a breadth-first tree over (cell, heading) states.
 
 Energy is counted in steps as in the xBOA paper (section 5.2, "Step number: number of moves and
-rotations"; reference/boa.md decision 12): a 45 degree rotation in place is one step, a move to the
+rotations"; docs/boa.md decision 12): a 45 degree rotation in place is one step, a move to the
 neighbouring cell in the current heading is one step. Every edge costs 1, so breadth-first search gives
 exact minimum-energy paths, and the path to a goal is the chain of parents in one tree - the robot later
 executes *that* path, so the fitness it was chosen for is the fitness it gets (section 11.1, "path identity

@@ -2,7 +2,7 @@
 
 A variant is a frozen record of slot names; the engine (``engine.py``) maps the names to the operators in
 ``operators.py``, the r-sources in ``draws.py`` and the schedules in ``schedules.py``. Adding a variant is
-adding one entry to :data:`VARIANTS`. Slots follow reference/boa.md section 10.3.
+adding one entry to :data:`VARIANTS`. Slots follow docs/boa.md section 10.3.
 
 | variant   | global move        | local move      | fragrance | schedule | r     | local accept | extra        |
 |-----------|--------------------|-----------------|-----------|----------|-------|--------------|--------------|

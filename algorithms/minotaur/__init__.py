@@ -1,5 +1,5 @@
-"""Minotaur (Schmidt et al., ``seeds/002``): wall following, spiralling, doorway detection and doorway
-auctions. The explorer is :class:`.explorer.Minotaur`; see its module docstring for the state machine
+"""Minotaur (Schmidt et al., the Minotaur paper in docs/papers.md): wall following, spiralling, doorway
+detection and doorway auctions. The explorer is :class:`.explorer.Minotaur`; see its module docstring for the state machine
 and every departure from the paper and from MAES.
 
 Modules: :mod:`.params` (parameters), :mod:`.doorways` (doorway records), :mod:`.detection` (Alg. 3),

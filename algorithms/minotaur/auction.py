@@ -16,7 +16,7 @@ a lost result is a winner that stays in the room. Nobody ever waits for a messag
 Two robots that find the same doorway at once both open an auction; when one hears the other's, the
 higher id withdraws and bids in the lower id's auction.
 
-Departures from MAES (reference/maes.md 7.2): MAES's auctioneer never bids, lets ``ceil(n/2)`` win and
+Departures from MAES (docs/maes.md section 7.2): MAES's auctioneer never bids, lets ``ceil(n/2)`` win and
 goes through itself when n = 2; we follow the paper and the issue (the auctioneer bids, ``floor(n/2)``
 win, ties broken by robot id).
 """

@@ -1,7 +1,7 @@
 """Doorways as a robot knows them: geometry, which sides they were seen from, whether anyone passed.
 
 Alg. 3 ends with "if any doorway is seen from both sides or was passed through, mark it as explored";
-MAES (reference/maes.md 7.2) marks a doorway explored when a heartbeat brings the same doorway seen with
+MAES (docs/maes.md section 7.2) marks a doorway explored when a heartbeat brings the same doorway seen with
 the opposite exit direction. We keep the two facts separately (``sides`` bitmask, ``passed``) so they
 merge by OR when doorway lists meet, whatever order messages arrive in.
 

@@ -1,10 +1,10 @@
 """Minotaur: wall following, spiralling, doorway detection and doorway auctions.
 
 Follows Schmidt, Sørensen, Beregaard and Albano, "Spiralling Human-Inspired Exploration Algorithm with
-Doorway Detection" (``seeds/002``): section 3.1 and Alg. 1 (single robot), section 3.2 and Alg. 2 (many
-robots), section 3.3 and Alg. 3 (doorway detection, :mod:`.detection`), section 3.4 and Alg. 4 (doorway
+Doorway Detection" (the Minotaur paper, docs/papers.md): section 3.1 and Alg. 1 (single robot), section
+3.2 and Alg. 2 (many robots), section 3.3 and Alg. 3 (doorway detection, :mod:`.detection`), section 3.4 and Alg. 4 (doorway
 auction, :mod:`.auction`), section 3.5 (the Greed fallback), section 4.2 (spiralling, :mod:`.walls`) and
-4.3 (doorway detection details); and MAES's implementation (``reference/maes.md`` section 7.2).
+4.3 (doorway detection details); and MAES's implementation (docs/maes.md section 7.2).
 
 States (``debug["state"]``):
 
@@ -28,7 +28,7 @@ Departures from the paper and from MAES, on purpose (details in each module's do
 
 1. **Map sharing** is the runtime's service (``comm.map_sharing``), which merges every update into the
    receiver's map: MAES's heartbeat merge (only with two heartbeats in one tick, senders' maps only,
-   maes.md section 2 item 4) is not reproduced. Doorway lists travel in their own message at the same
+   docs/maes.md section 2 item 4) is not reproduced. Doorway lists travel in their own message at the same
    cadence (the map message type is the runtime's); the parameter ``share_every`` should match
    ``comm.share_every`` (both 10 by default), the algorithm cannot read the run's comm section.
 2. **Spiral** (section 4.2) exists here; MAES has none. It is not a separate state: the wall-following

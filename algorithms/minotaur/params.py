@@ -1,5 +1,5 @@
 """Minotaur's parameters, each tied to the paper (Schmidt et al., "Spiralling Human-Inspired Exploration
-Algorithm with Doorway Detection", ``seeds/002``) or to MAES's implementation (``reference/maes.md`` 7.2).
+Algorithm with Doorway Detection", docs/papers.md) or to MAES's implementation (docs/maes.md section 7.2).
 
 Lengths are metres; the knowledge map has 0.5 m cells, so door widths are rounded to whole cells when the
 detector runs (a 2 m building door is exactly 4 cells).

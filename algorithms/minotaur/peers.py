@@ -6,7 +6,7 @@ location". Positions come from the runtime's map updates (``MapUpdate.pose``) an
 targets and doorway claims from Minotaur's :class:`~.messages.DoorwayList` heartbeats and
 :class:`~.messages.Heading` messages. A robot uses them to split the spin (Alg. 2), to leave a doorway
 another robot is going through to it, and to keep its greedy targets away from other robots' targets
-(MAES's Minotaur excludes other robots' destinations when it re-targets, reference/maes.md 7.2).
+(MAES's Minotaur excludes other robots' destinations when it re-targets, docs/maes.md section 7.2).
 """
 
 from __future__ import annotations

@@ -4,9 +4,9 @@ Alg. 1-2 loop "while unexplored area is reachable without passing doorways", and
 asks who "can reach the doorway on the same side without passing any doorway". Both are searches on
 the configuration space with every known doorway's opening closed (:meth:`Doorway.cut`): a room is a
 connected component of that space. MAES does the same with a flood fill that treats doorway tiles as
-blocked (reference/maes.md 7.2).
+blocked (docs/maes.md section 7.2).
 
-Everything here is a search on the whole map (0.3-1.5 ms on 300 x 300 cells), so the explorer calls it
+Everything here is a search on the whole map (the costly kind; docs/performance-history.md), so the explorer calls it
 only when the local follow step has nothing in range, when a room is finished, or to bid.
 """
 

@@ -4,7 +4,7 @@ waypoint around the robot.
 Section 4.2: the robot looks at the walls it sees, keeps following one while "there are unseen tiles in
 front of it", prefers to keep moving the way it is moving, stays "a little less than max vision range"
 from the wall, follows a wall around a bend, and after a lap "spirals around the edge of the previously
-explored area". MAES (reference/maes.md 7.2) does this with wall segments fitted to lidar hits, targets
+explored area". MAES (docs/maes.md section 7.2) does this with wall segments fitted to lidar hits, targets
 offset by VisionRadius - 2 tiles perpendicular to the wall, and an edge ring at VisionRadius + 1..2
 swept counter-clockwise from the robot's right.
 
@@ -27,7 +27,7 @@ the same sweep follows the edge of the explored area inwards, lap after lap (sec
 candidate is in range the caller falls back to the nearest unseen cell in the room (Alg. 1's "else").
 
 Departure: MAES drives straight to its targets with no planning and sweeps edges from behind the robot
-(an operator-precedence bug, maes.md 7.2); we hand targets to the runtime's planner and start the sweep at
+(an operator-precedence bug, docs/maes.md section 7.2); we hand targets to the runtime's planner and start the sweep at
 the robot's side as the paper describes.
 """
 

@@ -1,7 +1,7 @@
 """Export runs as MAES statistics CSVs, so MAES's own tools (maes-csv-reader's cactus plots and tables,
 ``sort-files.sh``) read swarm campaigns unchanged.
 
-The format is MAES's ``ExplorationStatisticsCSVWriter`` (reference/maes.md section 8.5):
+The format is MAES's ``ExplorationStatisticsCSVWriter`` (docs/maes.md section 8.5):
 
 - header, verbatim, with its space before "Biggest":
   ``Tick,Covered,Explored,Average Agent Distance,Agents Interconnected, Biggest Cluster %``

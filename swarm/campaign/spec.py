@@ -39,7 +39,7 @@ algorithm = "greed"
 radio = "global"
 ```
 
-Seeds (reference/maes.md section 13 says what not to copy): a run's map seed, spawn seed and master
+Seeds (docs/maes.md section 10.1 says what not to copy): a run's map seed, spawn seed and master
 seed derive from (campaign seed, map kind, size, replicate) only, through :func:`swarm.spec.derive_seed`.
 Every algorithm, robot count and comm model therefore meets the same worlds and starting points (paired
 comparisons), and nothing depends on the order runs execute in. Each run is keyed by the hash of its

@@ -5,8 +5,8 @@ step sqrt(2)); bucket ``k`` holds cells whose tentative distance is in ``[k, k +
 costs at least 1, no cell in bucket ``k`` can improve another cell of bucket ``k``: when the search
 reaches a bucket, all its cells are final and can be settled in any order. A step costs at most
 sqrt(2) < 2, so only buckets k, k+1 and k+2 are ever live and three ring slots suffice. This gives an
-exact octile shortest path with O(1) queue operations (no heap): about 1 ms for the 63 000 drivable cells
-of a fully known 300 x 300 building (benchmarks/bench_grid.py).
+exact octile shortest path with O(1) queue operations (no heap; its cost per call:
+``benchmarks/speed/bench_grid.py``, docs/performance-history.md).
 
 Grids arrive padded with one blocked cell on every side and flattened, so neighbours are fixed index
 offsets and no bounds checks are needed.

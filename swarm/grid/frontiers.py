@@ -2,7 +2,7 @@
 
 A frontier cell is FREE with at least one UNSEEN **4-neighbour** (documented choice). Four, not eight,
 because a cell that touches the unseen only at a corner is not a place from which the unseen cell is in
-plain view past the corner, and because MAES's Greed uses 4-neighbours (reference/maes.md section 7.4).
+plain view past the corner, and because MAES's Greed uses 4-neighbours (docs/maes.md section 7.4).
 Cells outside the map are not UNSEEN. Clusters join frontier cells that touch in any of the **8**
 directions (as TNF's frontiers do, section 7.3): a diagonal staircase of frontier cells along a slanted
 wall is one frontier, not many.

@@ -2,9 +2,8 @@
 
 A whole-map search (:func:`swarm.grid.nearest_reachable_unseen` when the nearest unknown is far) needs the
 map's configuration space, its view cells and the mask of targets (view cells in the space). Built from
-scratch they cost ~105 us of a ~330 us search on a 300 x 300 map, yet a robot's map changes little between
-two of its searches: on the 16-robot benchmark 9 % of the rows and 0.4 % of the cells differ between a
-robot's consecutive whole-map searches.
+scratch they are about a third of a search, yet a robot's map changes little between two of its
+searches: only a few percent of its rows differ (figures: docs/performance-history.md).
 
 So each map keeps :class:`KeptInputs`: a copy of the map the arrays describe, the space (also padded as the
 search reads it) and the targets (its view cells in the space). :func:`refresh` compares the map with the

@@ -1,6 +1,6 @@
 """Local-first planning: the navigator's plan computed on a window around the robot, when that is exact.
 
-Most plans are short (on the 16-robot benchmark 78 % of them are at most 17 m), yet a whole-map plan pays
+Most plans are short (the share on the runtime benchmark: docs/performance-history.md), yet a whole-map plan pays
 for the whole map: the configuration space of all 90 000 cells, a padded copy and a distance array of the
 same size. :func:`plan_local_first` first plans on the window of half-width ``half_cells`` around the
 robot's cell and accepts the answer only when it is provably the whole-map answer, bit for bit:

@@ -2,7 +2,8 @@
 
 When the nearest unknown is far, :func:`swarm.grid.nearest_reachable_unseen` runs an exact search over
 the whole map from the robot to the nearest view cell, and in the same tick the navigator plans from the
-robot to that cell on the same map: the same search again (on the benchmark ~1,400 such plans at ~200 us).
+robot to that cell on the same map: the same search again (how often, and its cost:
+docs/performance-history.md).
 Both are :func:`swarm.grid._kernels.grid_bucket_search` from the same seed on the same configuration
 space, and both stop at the start of the target's distance bucket (the target search when the bucket
 holds a target, the plan when the goal's distance is final, which happens at that same bucket). So their

@@ -1,6 +1,6 @@
 """The Greed target: the nearest place, by path length, from which an unseen cell can be looked at.
 
-MAES's Greed (reference/maes.md section 7.4) drives to the nearest free cell next to an unseen one. On a
+MAES's Greed (docs/maes.md section 7.4) drives to the nearest free cell next to an unseen one. On a
 planning grid with the robot's radius that cell is usually **not** in the configuration space: a frontier
 cell has an unseen 4-neighbour, which is not passable when planning pessimistically, so the frontier cell
 lies in inflated space.

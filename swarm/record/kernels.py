@@ -2,7 +2,7 @@
 
 The recorder runs every tick on small arrays (an R x R link matrix) and one big one (the R x H x W
 knowledge maps). With numpy, per-call overhead dominated: ~40 calls of a few microseconds each cost more
-than the arithmetic (350 us per tick for 4 robots, half a 100 x 100 tick). One pass per stream in numba
+than the arithmetic (figures: docs/performance-history.md). One pass per stream in numba
 does the compare, the mirror update and the output in a single loop.
 """
 

@@ -15,8 +15,8 @@ per-tick work does not depend on how much the robots did:
 - knowledge maps: every robot's whole map against its mirror, 8 cells at a time as uint64 words. We chose
   this over comparing only the lidar windows plus the cells of delivered map updates (what the zenoh
   transport does) because it is exact by construction: nothing the simulator writes, now or in a future
-  sensor or merge path, can escape the recording. It is about half of the recorder's cost, which is
-  10-12 % of a 16-robot 150 x 150 run's CPU time in all (figures: ``benchmarks/bench_record.py``).
+  sensor or merge path, can escape the recording. It is about half of the recorder's cost (figures:
+  ``benchmarks/speed/bench_record.py``, docs/performance-history.md).
 - the union ``seen`` raster the same way; the link matrix by toggles; RSSI quantised (see below).
 - messages and actions are Python loops over what was sent/decided this tick (a handful per robot);
   an action is stored only when its packed form differs from the robot's previous one.

@@ -1,7 +1,7 @@
 """Every live robot's obs packet of a tick, written in one compiled pass (the zenoh transport's hot path).
 
 :func:`~swarm.transport.wire.encode_obs` packs one robot from Python objects: a struct, the changed cells,
-the neighbour records and a msgpack list, about 5 us a robot, 16 robots a tick. :class:`ObsEncoder` writes
+the neighbour records and a msgpack list, in Python for every robot every tick. :class:`ObsEncoder` writes
 the same bytes for all robots from the tick's arrays (poses, counters, the changed cells of every map, the
 near mask and distances) straight into one buffer: msgpack framing, the state struct, uint32 gaps and
 values, and neighbour records with their bearings computed per neighbour pair. Python then only cuts the

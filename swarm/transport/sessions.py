@@ -1,7 +1,7 @@
 """zenoh sessions as swarm opens them: loopback-only peers, checked endpoints, clear errors.
 
 Every session is a peer with multicast scouting off and only the endpoints it is given
-(reference/zenoh-pymunk.md A1, A5), so parallel runs never meet. A runtime that listens requires zenoh's
+(docs/measurements.md A1, A5), so parallel runs never meet. A runtime that listens requires zenoh's
 usrpwd authentication and applies an access-control policy (:mod:`swarm.transport.auth`); an agent
 connects with its robot's user and password. A bad endpoint or one that cannot be opened is an
 :class:`~maps.errors.InvalidInput` naming the flag, never a zenoh traceback.

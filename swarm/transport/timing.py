@@ -1,8 +1,8 @@
-"""Where a transport's ticks go, measured only when asked (``benchmarks/bench_transport.py --split``).
+"""Where a transport's ticks go, measured only when asked (``benchmarks/speed/bench_transport.py --split``).
 
 A :class:`PhaseTimes` accumulates wall seconds per named phase. Code that supports it wraps a callable once,
 at set-up, with :func:`timed`, which returns the callable itself when no ``PhaseTimes`` is given: runs that do
-not ask pay nothing per tick. A wrapped call costs about half a microsecond more, so measured runs are a
+not ask pay nothing per tick. A wrapped call costs a clock read more, so measured runs are a
 little slower than plain ones; the benchmark reports both.
 
 Phases nest where calls nest: over zenoh an agent in the runtime's session answers inside the obs ``put``,

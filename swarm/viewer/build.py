@@ -1,7 +1,7 @@
 """Build the self-contained replay page: the template with the CSS, the script and the recording inlined.
 
 The page embeds the ``.swr`` bytes unchanged (base64, 4/3 of the file) rather than a JSON rendering of them:
-one format, one decoder per language, and the page is only ~1.34x the recording. The script decodes it
+one format, one decoder per language, and the page is little larger than the recording. The script decodes it
 with the browser's own ``DecompressionStream``, so the page needs no server and no network.
 """
 

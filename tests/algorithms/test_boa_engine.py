@@ -1,4 +1,4 @@
-"""The BOA-family engine: reference/boa.md section 12, tests 1-5 and 9 (determinism, bounds, evaluation
+"""The BOA-family engine: docs/boa.md section 12, tests 1-5 and 9 (determinism, bounds, evaluation
 accounting, x/f consistency, crossover, lens opposition and optimisation quality on shifted functions).
 Thresholds were re-measured on this implementation (numbers in comments)."""
 
@@ -141,7 +141,7 @@ def test_population_x_and_f_never_out_of_step(variant: str, sync: bool) -> None:
 
 
 def test_xboa_local_move_is_always_accepted() -> None:
-    """Paper 000 section 3.2: Eq. 3 is applied even if it decreases the quality (with the true fitness)."""
+    """The xBOA paper, section 3.2: Eq. 3 is applied even if it decreases the quality (with the true fitness)."""
     opt = Optimizer("xBOA", [(-5.12, 5.12)] * 4, rng=np.random.default_rng(1), pop_size=10, max_gen=40,
                     early_stop=None, params=BOAParams(c=0.3, a=0.8))
     worsened = 0

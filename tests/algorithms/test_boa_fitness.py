@@ -1,4 +1,4 @@
-"""Exploration fitness: reference/boa.md section 12 test 10, and the issue's "gain table equals per-candidate
+"""Exploration fitness: docs/boa.md section 12 test 10, and the issue's "gain table equals per-candidate
 evaluation for every goal of a fixed belief on the house map" (plus the same on a synthetic map, so CI
 tests it without the paper's files)."""
 
@@ -207,7 +207,7 @@ def search_hits(pop: int, **kw) -> float:
 
 def test_xboa_grid_search_gets_near_the_exhaustive_optimum() -> None:
     """Measured (50 seeds, c = 0.01, a = 0.1, p = 0.8, code switch): pop 20 96 %, pop 5 58 % within 5 % of
-    the exhaustive optimum (indicative values in reference/boa.md, on an unspecified table: 100 % / 82 %).
+    the exhaustive optimum (indicative values in docs/boa.md section 12 test 10, on an unspecified table: 100 % / 82 %).
 
     Documented, not asserted: the Table-2 presets reach 70 % (pop 20) and 24 % (pop 5) here, because the
     fragrance c|F|^a on raw fitness makes moves jump to the border (section 1 item 3); plain random

@@ -1,4 +1,4 @@
-"""IBOA path planning (paper 001 grid planner, paper 004 continuous planner) and the reference shortest paths."""
+"""IBOA path planning (IBOA (Kent) grid planner, IBOA (Lévy) continuous planner) and the reference shortest paths."""
 
 from __future__ import annotations
 

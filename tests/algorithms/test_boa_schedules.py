@@ -1,4 +1,4 @@
-"""Schedules, Kent map and Levy steps: reference/boa.md section 12, tests 6, 7 and 8."""
+"""Schedules, Kent map and Levy steps: docs/boa.md section 12, tests 6, 7 and 8."""
 
 from __future__ import annotations
 

@@ -2,7 +2,7 @@
 
 Each fixture is checked twice: the detector on the fully known map (exact, fast), and a whole
 single-robot Minotaur run that must end with exactly the expected number of doorways, as MAES's
-``MinotaurDoorwayTest`` does (reference/maes.md section 9/10 item 10).
+``MinotaurDoorwayTest`` does (docs/maes.md section 9, item 16).
 """
 
 from __future__ import annotations

@@ -1,6 +1,7 @@
 """Minotaur explores whole maps (issue 7): 99 % of seeded buildings with 1, 4 and 16 robots, and of a
 cave (where the paper finds it slow, but it must finish). One seed per cell keeps CI affordable; the
-20-seed comparison with Greed and TNF is in the issue note."""
+many-seed comparison with Greed and TNF is ``benchmarks/experiments/compare.py`` (and, on the paper's grid,
+docs/results/minotaur-paper/README.md)."""
 
 from __future__ import annotations
 

@@ -1,5 +1,5 @@
 """MAES CSV export: the header, row format, float printing and file naming of MAES's
-StatisticsCSVWriter (reference/maes.md section 8.5), exactly."""
+StatisticsCSVWriter (docs/maes.md section 8.5), exactly."""
 
 from __future__ import annotations
 

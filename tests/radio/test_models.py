@@ -108,7 +108,7 @@ def test_verdict_flips_where_the_budget_says():
 
 
 @pytest.mark.parametrize("material, tiles, rssi", [
-    ("concrete", 1, -45.0),   # 15 - 4 x 15: reference/maes.md 6.5
+    ("concrete", 1, -45.0),   # 15 - 4 x 15: docs/maes.md section 6.5
     ("concrete", 2, -105.0),  # 15 - 8 x 15
     ("wood", 1, -11.8),       # 15 - 4 x 6.7
     ("wood", 2, -38.6),       # 15 - 8 x 6.7

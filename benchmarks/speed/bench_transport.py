@@ -1,6 +1,6 @@
 """Transport and map-sharing costs on the issue-3 workload (16 robots, 150 x 150 building, frontier).
 
-    python benchmarks/bench_transport.py [--ticks 3000] [--robots 16] [--split] [--no-sharing]
+    python benchmarks/speed/bench_transport.py [--ticks 3000] [--robots 16] [--split] [--no-sharing]
 
 Prints, for the same spec: ticks per wall and CPU second with the in-process and the zenoh transport
 (agents in the runtime's process, so every observation and action goes through a real zenoh session),

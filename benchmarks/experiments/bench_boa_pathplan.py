@@ -1,4 +1,4 @@
-"""IBOA path planning quality (paper 001 grid planner, paper 004 continuous planner).
+"""IBOA path planning quality (IBOA (Kent) grid planner, IBOA (Lévy) continuous planner; docs/papers.md).
 
 Grid planner: on N seeded maps (half ``building``, half ``cave``, 50 x 50 tiles: a tile is blocked when any
 of its 0.5 m cells is solid), one random start/goal pair per map in the largest 4-connected free region
@@ -9,8 +9,8 @@ line-of-sight-pulled path, as ratios to the any-angle optimum; milliseconds and 
 Continuous planner: random scenes of circular obstacles, IBOA-Levy (and BOA, xBOA) with the sign-fixed
 penalty at w = 10 (paper), 100 and 1000: mean length, fraction of collision-free results, min clearance.
 
-    python benchmarks/bench_boa_pathplan.py            # 20 maps, ~1 min
-    python benchmarks/bench_boa_pathplan.py --quick    # 6 maps
+    python benchmarks/experiments/bench_boa_pathplan.py            # 20 maps, ~1 min
+    python benchmarks/experiments/bench_boa_pathplan.py --quick    # 6 maps
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Compare algorithms over seeded maps: mean ticks to an explored target per grid cell.
 
-    python benchmarks/compare.py --algorithms greed tnf --kinds building cave --sizes 50 100 \\
+    python benchmarks/experiments/compare.py --algorithms greed tnf --kinds building cave --sizes 50 100 \\
         --robots 2 8 --radios global los multiwall --seeds 10 --workers 2 [--target 0.99] [--out table.md]
 
 Every (kind, size, seed) uses the same map and spawn for every algorithm and radio (paired comparisons).

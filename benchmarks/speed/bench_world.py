@@ -1,4 +1,4 @@
-"""Physics cost per logic tick: ``python benchmarks/bench_world.py [--size 150] [--robots 16] [--ticks 5000]``.
+"""Physics cost per logic tick: ``python benchmarks/speed/bench_world.py [--size 150] [--robots 16] [--ticks 5000]``.
 
 Spawns the robots on free cells of ``generate("building", size, seed)`` and drives them with random-ish
 commands (each robot holds a random (v, omega) for 5-30 ticks, mostly forward, so robots keep running

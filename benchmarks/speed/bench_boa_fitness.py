@@ -10,8 +10,8 @@ For each: gain-table construction alone, then whole decisions (xBOA pop 20 / pop
 (every work array is allocated in Python, so the kernels' memory is included); times are taken without
 tracing.
 
-    python benchmarks/bench_boa_fitness.py            # ~1 min
-    python benchmarks/bench_boa_fitness.py --reps 5
+    python benchmarks/speed/bench_boa_fitness.py            # ~1 min
+    python benchmarks/speed/bench_boa_fitness.py --reps 5
 """
 
 from __future__ import annotations

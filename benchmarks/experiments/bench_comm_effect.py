@@ -1,7 +1,7 @@
 """Communication effect: ticks to 99 % for one algorithm under global, los, multiwall radio and no communication.
 
-    python benchmarks/bench_comm_effect.py ALGORITHMS SEEDS RADIOS [KIND SIZE ROBOTS]
-    python benchmarks/bench_comm_effect.py greed 10 global,los,multiwall,none building 100 8
+    python benchmarks/experiments/bench_comm_effect.py ALGORITHMS SEEDS RADIOS [KIND SIZE ROBOTS]
+    python benchmarks/experiments/bench_comm_effect.py greed 10 global,los,multiwall,none building 100 8
 
 "none" = no links (LOS with a 1 mm range) and map sharing off. Seeds are the run seeds 0..SEEDS-1; 2 workers.
 """

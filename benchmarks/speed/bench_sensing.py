@@ -1,4 +1,4 @@
-"""Lidar cost per tick: ``python benchmarks/bench_sensing.py [--kind building] [--size 150] [--calls 1000]
+"""Lidar cost per tick: ``python benchmarks/speed/bench_sensing.py [--kind building] [--size 150] [--calls 1000]
 [--repeats 3]``.
 
 16 robots at random free positions and headings (50 such swarms, cycled) on ``maps.generate(kind, size, 1)``.
@@ -6,7 +6,7 @@ Prints milliseconds per ``Lidar.scan`` call for R = 1 and R = 16, in ternary, no
 noisy log-odds mode (mean over ``--calls`` calls after warm-up; best and worst of ``--repeats``
 repetitions), plus the coverage update. Times are this process's CPU time (``time.process_time``): the
 kernels are single-threaded, so on an idle machine that equals wall time, and on a shared machine it is
-much less noisy. Goal (DESIGN.md): about 0.3 ms per tick for 16 robots.
+much less noisy. Goal: about 0.3 ms per tick for 16 robots (the numba DDA of docs/measurements.md C1).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Radio cost: ``python benchmarks/bench_radio.py [--size 150] [--robots 16] [--seeds 5] [--calls 2000]``.
+"""Radio cost: ``python benchmarks/speed/bench_radio.py [--size 150] [--robots 16] [--seeds 5] [--calls 2000]``.
 
 Prints, for building maps of the given size:
 

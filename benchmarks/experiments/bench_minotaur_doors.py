@@ -1,6 +1,6 @@
 """Minotaur's doorway detection scored against the true doors of generated buildings (issue 7).
 
-    python benchmarks/bench_minotaur_doors.py --seeds 20 --sizes 50 100 --robots 1 4 --workers 2
+    python benchmarks/experiments/bench_minotaur_doors.py --seeds 20 --sizes 50 100 --robots 1 4 --workers 2
 
 Every run explores a seeded building to ``--explored`` (99 %) with Minotaur; the doorways all robots
 know at the end (their ``debug["doorways"]``, merged by position) are matched to the building
@@ -9,7 +9,7 @@ door of the same axis has its centre within ``--match-m`` (1.5 m) and is not mat
 Precision = matched detections / detections; recall = matched doors / true doors. The row "detector on
 the true map" runs the detector alone on each fully known map: what the robots could find at best.
 
-Maps and spawns are those of ``benchmarks/compare.py`` for the same seed (``derive_seed``).
+Maps and spawns are those of ``benchmarks/experiments/compare.py`` for the same seed (``derive_seed``).
 """
 
 from __future__ import annotations

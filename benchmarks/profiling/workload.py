@@ -1,7 +1,9 @@
 """The issue-3 workload as the profiling scripts take it, and the timer they wrap functions in.
 
 16 robots spawned together on a seeded building map, the frontier explorer, until 99 % explored (as
-``bench_runtime.py`` runs it), with ``--robots``, ``--size``, ``--seed`` and ``--max-ticks`` to vary it.
+``benchmarks/speed/bench_runtime.py`` runs it), with ``--robots``, ``--size``, ``--seed`` and
+``--max-ticks`` to vary it. The profiling scripts beside it import it (``from workload import ...``: run
+them as ``python benchmarks/profiling/SCRIPT.py``, which puts this folder on ``sys.path``).
 """
 
 from __future__ import annotations

@@ -1,9 +1,9 @@
-"""Where a run's time goes by the kind of code running: ``python benchmarks/profile_kinds.py PROFILE``.
+"""Where a run's time goes by the kind of code running: ``python benchmarks/profiling/profile_kinds.py PROFILE``.
 
 ``PROFILE`` is a raw py-spy profile with native frames of a benchmark, for instance::
 
-    taskset -c 0 py-spy record --native -r 200 -f raw -o prof.txt -- python benchmarks/bench_runtime.py
-    python benchmarks/profile_kinds.py prof.txt
+    taskset -c 0 py-spy record --native -r 200 -f raw -o prof.txt -- python benchmarks/speed/bench_runtime.py
+    python benchmarks/profiling/profile_kinds.py prof.txt
 
 Only samples inside ``Simulation._loop`` count (set-up and imports are left out). Each is classed by its
 leaf frame: numba's compiled kernels (frames without symbols, ``?`` in py-spy, are nearly all JIT code),

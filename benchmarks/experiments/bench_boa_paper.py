@@ -1,4 +1,4 @@
-"""The xBOA paper's exploration experiment, Tables 3-6 style (paper 000 section 5; reference/boa.md 8-9).
+"""The xBOA paper's exploration experiment, Tables 3-6 style (its section 5; docs/boa.md sections 8-9).
 
 For every BOA-family variant, short-term (1 goal) and long-term (K = 3 goals) strategies, population 5
 and 20, N repetitions (seeds 0..N-1) on the paper's maps: exploration rate after 100, 200 and 300 steps
@@ -6,9 +6,9 @@ and 20, N repetitions (seeds 0..N-1) on the paper's maps: exploration rate after
 Baselines: the exhaustive per-decision optimum (argmax of the gain table) and best-of-5 random goals. Then
 the multi-robot runs (3 robots on one shared central map, with and without the overlap penalty).
 
-    python benchmarks/bench_boa_paper.py --quick            # ~20 s: house map, 3 repetitions, pop 5 & 20 short-term
-    python benchmarks/bench_boa_paper.py                    # full: both maps, all variants, 10 repetitions
-    python benchmarks/bench_boa_paper.py --json out.json    # also write every row as JSON
+    python benchmarks/experiments/bench_boa_paper.py --quick            # ~20 s: house map, 3 repetitions, pop 5 & 20 short-term
+    python benchmarks/experiments/bench_boa_paper.py                    # full: both maps, all variants, 10 repetitions
+    python benchmarks/experiments/bench_boa_paper.py --json out.json    # also write every row as JSON
 
 The maps are read from $XBOA_MAPS or ../shared/data/xboa-maps (not part of this repository).
 """

@@ -1,7 +1,7 @@
-"""Time per compiled kernel: ``python benchmarks/profile_kernels.py [--robots 16 --size 150 --seed 1] [--top 30]``.
+"""Time per compiled kernel: ``python benchmarks/profiling/profile_kernels.py [--robots 16 --size 150 --seed 1] [--top 30]``.
 
-Runs the issue-3 workload (as ``bench_runtime.py``) with every numba kernel that Python code calls wrapped
-in a timer, and prints per kernel the share of the run, the time per call and the calls. A sampling
+Runs the issue-3 workload (as ``benchmarks/speed/bench_runtime.py``) with every numba kernel that Python
+code calls wrapped in a timer, and prints per kernel the share of the run, the time per call and the calls. A sampling
 profiler cannot name compiled code (py-spy shows it as one anonymous block); this can, and it sees a kernel
 regress inside the run, where its inputs, its calls and the caches are the run's own (it caught a corridor
 kernel that took 24.6 us per plan against 9.2 before, which the whole run's noise hid).
@@ -10,7 +10,7 @@ Kernels are looked up as module attributes in ``swarm``, ``radio`` and ``algorit
 the same workload, so every kernel is compiled or loaded before it is wrapped (the script takes two runs'
 time); calls from one kernel to another stay compiled and are counted in the caller. The timer adds about
 1 us per call (a kernel called 170,000 times carries ~0.2 s of it), so compare shares and per-call times
-between versions, not with ``bench_runtime.py``.
+between versions, not with ``benchmarks/speed/bench_runtime.py``.
 """
 
 from __future__ import annotations

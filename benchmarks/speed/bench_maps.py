@@ -1,4 +1,4 @@
-"""Map generation time: ``python benchmarks/bench_maps.py [--size 150] [--seeds 20]``.
+"""Map generation time: ``python benchmarks/speed/bench_maps.py [--size 150] [--seeds 20]``.
 
 Prints mean / min / max milliseconds per map for cave and building at the given size.
 """

@@ -1,9 +1,9 @@
 """xBOA and the IBOA planner inside the runtime (issue 8): decision cost, planner quality, parameter sweeps.
 
-    python benchmarks/bench_xboa_runtime.py decisions --size 50 --robots 1 4 --seeds 3 [--ticks N] [--param k=v]
-    python benchmarks/bench_xboa_runtime.py planner --size 50 --seeds 3
-    python benchmarks/bench_xboa_runtime.py navrun --size 50 --seeds 3
-    python benchmarks/bench_xboa_runtime.py sweep --robots 4 --param overlap_penalty=false
+    python benchmarks/experiments/bench_xboa_runtime.py decisions --size 50 --robots 1 4 --seeds 3 [--ticks N] [--param k=v]
+    python benchmarks/experiments/bench_xboa_runtime.py planner --size 50 --seeds 3
+    python benchmarks/experiments/bench_xboa_runtime.py navrun --size 50 --seeds 3
+    python benchmarks/experiments/bench_xboa_runtime.py sweep --robots 4 --param overlap_penalty=false
 
 ``decisions``: xBOA runs; per-decision wall time from ``Action.debug["decision_ms"]`` (mean, p95, max) and
 the modes. ``planner``: every plan request the navigator makes in frontier runs (first 4000 ticks) is
@@ -28,7 +28,7 @@ from swarm.spec import derive_seed
 
 def spec(size: int, robots: int, seed: int, algorithm: str = "xboa", params: dict | None = None,
          max_ticks: int = 36000, **extra) -> dict:
-    """The same maps and spawns as benchmarks/compare.py."""
+    """The same maps and spawns as benchmarks/experiments/compare.py."""
     return {"seed": derive_seed(seed, "run"),
             "map": {"kind": "building", "size": size, "seed": derive_seed(seed, "building", size)},
             "robots": {"count": robots, "spawn": "together",
@@ -138,11 +138,12 @@ def navrun(args: argparse.Namespace) -> None:
 
 
 def sweep(args: argparse.Namespace) -> None:
-    """Ticks to 99 % per seed with benchmarks/compare.py's run_one (same maps and spawns), 2 workers."""
+    """Ticks to 99 % per seed with benchmarks/experiments/compare.py's run_one (same maps and spawns), 2 workers."""
     import sys
     from multiprocessing import Pool
+    from pathlib import Path
 
-    sys.path.insert(0, "benchmarks")
+    sys.path.insert(0, str(Path(__file__).resolve().parent))  # compare.py sits beside this script
     from compare import run_one
 
     params = parse_params(tuple(args.param))

@@ -1,11 +1,11 @@
-"""Where map sharing's time goes: ``python benchmarks/profile_sharing.py [--robots 16 --size 150 --seed 1]``.
+"""Where map sharing's time goes: ``python benchmarks/profiling/profile_sharing.py [--robots 16 --size 150 --seed 1]``.
 
-Runs the issue-3 workload (as ``bench_runtime.py``) with the map-sharing steps wrapped in timers and
-prints, per step, the calls, the time per call and the share of the run: finding each robot's changed
+Runs the issue-3 workload (as ``benchmarks/speed/bench_runtime.py``) with the map-sharing steps wrapped
+in timers and prints, per step, the calls, the time per call and the share of the run: finding each robot's changed
 cells for its delta (``sync_box``, or ``sync_changes`` after a full map was merged), building deltas and
 full maps (most of it zlib), encoding envelopes, delivering, decoding (zlib, cells, dense maps) and
 merging. The timers add about 1 us per call, so the run itself is a little slower than in
-``bench_runtime.py``; the shares are what matters.
+``benchmarks/speed/bench_runtime.py``; the shares are what matters.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Grid helper speed: ``python benchmarks/bench_grid.py [--size 150] [--seed 1] [--repeats 50]``.
+"""Grid helper speed: ``python benchmarks/speed/bench_grid.py [--size 150] [--seed 1] [--repeats 50]``.
 
 Builds a knowledge map from ``maps.generate("building", size, seed)`` (0.5 m cells, so 300 x 300 for
 size 150) in two variants -- fully known (truth: FREE where free, SOLID where solid) and half known (the

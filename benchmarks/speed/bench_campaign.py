@@ -1,7 +1,7 @@
 """Campaign throughput, scaling, results size and worker memory (issue 9).
 
-    python benchmarks/bench_campaign.py                  # quick campaign with 1 and 2 workers + leak check
-    python benchmarks/bench_campaign.py --leak-runs 1000 # longer leak check (runs per campaign, all workers)
+    python benchmarks/speed/bench_campaign.py                  # quick campaign with 1 and 2 workers + leak check
+    python benchmarks/speed/bench_campaign.py --leak-runs 1000 # longer leak check (runs per campaign, all workers)
 
 1. Throughput: the built-in quick campaign (48 runs) into a fresh folder with 1 worker, then with 2; runs
    per minute of wall time (pool start-up included) and the speed-up.

@@ -5,8 +5,8 @@ reports wall and CPU time (the machine is shared: CPU time is the steadier figur
 the recorder itself (summed per tick, the least noisy measure of its cost), the ``.swr`` size with a
 per-stream breakdown, the viewer page size, and how long loading and reconstructing take.
 
-    python benchmarks/bench_record.py                      # 150 x 150 building, 16 robots, seed 1, to 99 %
-    python benchmarks/bench_record.py --size 50 --robots 4 # a quick check
+    python benchmarks/speed/bench_record.py                      # 150 x 150 building, 16 robots, seed 1, to 99 %
+    python benchmarks/speed/bench_record.py --size 50 --robots 4 # a quick check
 """
 
 from __future__ import annotations

@@ -1,9 +1,9 @@
-"""Runtime throughput: ``python benchmarks/bench_runtime.py [--robots 16 --size 150 --seed 1 --profile]``.
+"""Runtime throughput: ``python benchmarks/speed/bench_runtime.py [--robots 16 --size 150 --seed 1 --profile]``.
 
 The issue-3 workload: 16 robots spawned together on a seeded 150 x 150 building, the frontier explorer,
 until 99 % explored (or ``--max-ticks``). Prints simulated ticks per wall second (run loop only, set-up
 reported separately), peak RSS, and with ``--profile`` where the time goes (cProfile, top functions).
-Pin to one core for the reference figure: ``taskset -c 0 python benchmarks/bench_runtime.py``.
+Pin to one core for the reference figure: ``taskset -c 0 python benchmarks/speed/bench_runtime.py``.
 
 ``--repeat N`` runs the workload N times, each in a fresh process (so every run pays the same imports and
 kernel loads), and reports each run, the best and the median: the project's shared virtual machine
