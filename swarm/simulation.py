@@ -1,6 +1,6 @@
 """The simulation loop: ``Simulation(spec).run() -> RunResult``.
 
-One logic tick (0.1 s, DESIGN.md section 4):
+One logic tick (0.1 s, docs/design.md section 4):
 
 1. ``world.step``: pymunk moves the robots under last tick's commands (sub-stepped), reports collisions;
 2. ``lidar.scan``: every robot's lidar writes what it sees into its own knowledge map; truth tracker;
@@ -28,29 +28,26 @@ from typing import Any, Callable, Mapping, Sequence
 import numpy as np
 
 from maps import CELL_M, Map, generate
-from maps.params import from_mapping
-from radio import build_link_model, config_from_mapping
+from radio import build_link_model
 
-from .api import Action, Neighbour, Neighbours, Observation, Pose, RobotInfo, frozen_builder
-from .comm import CommSpec, Envelope, MapSharing, Medium
+from .api import Action, Pose, RobotInfo
+from .comm import Envelope, MapSharing, Medium
 from .grid._validate import vouch_known
 from .knowledge import sync_changes, sync_regions_flat
 from .metrics import Metrics
 from .navigation import NavigationFleet
-from .neighbours import bearings
 from .result import RunResult
-from .sensing import ExplorationTracker, Lidar, LidarParams
+from .sensing import ExplorationTracker, Lidar
 from .spawn import spawn
 from .spec import ROBOT_STREAM, RunSpec, planner_rng, seed_streams
 from .transport import AgentHost, PhaseTimes, TickBatch, make_host
 from .transport.auth import RunSecret
 from .transport.base import ACT_COUNTS
 from .transport.wire import ResetPacket
-from .world import MotionParams, World
+from .world import World
 
 MAX_DROP_EVENTS = 100
 """Malformed messages get an event each up to this many per run (a flooding agent must not grow the result)."""
-_observation = frozen_builder(Observation)  # Observation(...) without the frozen __init__'s cost (16 a tick)
 _pose = tuple.__new__  # _pose(Pose, row) is Pose(*row) without NamedTuple's argument handling (16 a tick)
 
 
@@ -103,8 +100,8 @@ class Simulation:
         self.streams = seed_streams(self.spec)
         self.truth = truth if truth is not None else build_map(self.spec, self.streams.map_seed)
         n = self.spec.robots.count
-        self.motion = from_mapping(MotionParams, self.spec.motion)
-        self.lidar_params = from_mapping(LidarParams, self.spec.lidar)
+        self.motion = self.spec.motion
+        self.lidar_params = self.spec.lidar
         self.start_poses = (np.array(start_poses, dtype=np.float64) if start_poses is not None
                             else spawn(self.truth, self.spec.robots.spawn, n, self.streams.spawn))
         self.world = World(self.truth, self.start_poses, self.motion)
@@ -115,8 +112,8 @@ class Simulation:
         self.fleet = NavigationFleet(self.spec.navigation, self.motion,
                                      [planner_rng(self.spec.seed, i) for i in range(n)])
         self.navigators = self.fleet.navigators
-        self.links = build_link_model(self.truth, config_from_mapping(self.spec.radio))
-        self.comm = from_mapping(CommSpec, self.spec.comm)
+        self.links = build_link_model(self.truth, self.spec.radio)
+        self.comm = self.spec.comm
         self.medium = Medium(n, self.comm, self.streams.radio, map_shape=self.truth.shape)
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach)  # told of every scan
@@ -160,7 +157,7 @@ class Simulation:
             self._time_phases(opts.times)
         try:
             host.start(self.resets())
-            if host.batched:
+            if host.mirrors:
                 self._mirror = np.zeros_like(self.known)
             return self._loop(host)
         finally:
@@ -169,8 +166,8 @@ class Simulation:
     def _time_phases(self, times: PhaseTimes) -> None:
         """Time the steps that build observations for the transport into ``times``: instance attributes
         that shadow the methods, so an unmeasured run calls the methods directly."""
-        for name, phase in (("_inputs", "host: inputs"), ("_batch", "host: batch"),
-                            ("_changed_cells", "host: changed cells"), ("_sight", "host: neighbours")):
+        for name, phase in (("_batch", "host: batch"), ("_changed_cells", "host: changed cells"),
+                            ("_sight", "host: neighbours")):
             setattr(self, name, times.wrap(phase, getattr(self, name)))
 
     def _loop(self, host: AgentHost) -> RunResult:
@@ -211,10 +208,7 @@ class Simulation:
             if stop_reason:
                 break
             pose_tuples = [_pose(Pose, row) for row in poses.tolist()]  # shared by observations and navigation
-            if host.batched:
-                actions = host.act(tick, self._batch(poses, collided, inboxes, merged))
-            else:
-                actions = host.act(tick, self._inputs(tick, poses, pose_tuples, collided, inboxes))
+            actions = host.act(self._batch(tick, poses, pose_tuples, collided, inboxes, merged))
             self._note_failures(tick, host)
             sent = self._send(tick, poses, actions, links)
             commands = self._commands(actions, poses, pose_tuples)
@@ -288,56 +282,21 @@ class Simulation:
         return outboxes
 
     # ------------------------------------------------------------------------------- observations ----
-    def _neighbours(self, poses: np.ndarray) -> list[Sequence[Neighbour]]:
-        """Robots within ``neighbour_range`` and in line of sight (no wall crossed), per robot (lazy)."""
-        n = len(poses)
-        if n == 1:
-            return [()]
-        p = poses.copy()
-        sight = _Lazy(lambda: self._sight(p))
-        near = _Lazy(lambda: sight.value()[1])
-        distance = _Lazy(lambda: sight.value()[0])
-        bearing = _Lazy(lambda: bearings(p))
-        xy = p[:, :2].copy()
-        return [Neighbours(i, near, distance, bearing, xy) for i in range(n)]
-
     def _sight(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(distance, near)``: the radio's pair distances and who is within ``neighbour_range`` with no wall
         crossed, walking only the pairs in range (the tick's all-pairs radio picture is not needed)."""
         return self.links.in_sight(poses[:, :2], self.neighbour_range)
 
-    def _inputs(self, tick: int, pose_array: np.ndarray, poses: list[Pose], collided: np.ndarray,
-                inboxes: list[list[Envelope]]) -> list[Observation | None]:
-        distance = self.world.distance.tolist()
-        energy = [d + r for d, r in zip(distance, self.world.rotation.tolist())]  # float64 sums, as numpy's
-        neighbours = self._neighbours(pose_array)
-        hit = collided.tolist()
-        failed = self.failed.tolist()
-        inputs: list[Observation | None] = []
-        for i, pose in enumerate(poses):
-            if failed[i]:
-                inputs.append(None)
-                continue
-            inbox = inboxes[i]
-            inputs.append(_observation(tick=tick, robot_id=i, pose=pose, known=self._views[i],
-                                       inbox=tuple([env.message for env in inbox]) if inbox else (),
-                                       neighbours=neighbours[i], collided=hit[i], nav=self.navigators[i].status(),
-                                       distance_travelled=distance[i], energy_used=energy[i]))
-        return inputs
-
-    def _batch(self, poses: np.ndarray, collided: np.ndarray, inboxes: list[list[Envelope]],
-               merged: list[list[np.ndarray | None]]) -> TickBatch:
-        """The tick's observations as arrays for a batched host (zenoh): the same numbers as :meth:`_inputs`,
-        plus each robot's knowledge cells changed since its last observation, inboxes as wire bytes."""
+    def _batch(self, tick: int, poses: np.ndarray, pose_tuples: list[Pose], collided: np.ndarray,
+               inboxes: list[list[Envelope]], merged: list[list[np.ndarray | None]]) -> TickBatch:
+        """The tick's observations as arrays, for any host: neighbours (and, for a host with mirrors, the
+        knowledge cells changed since each robot's last observation) are computed when first read."""
         live = ~self.failed
-        cells, ends = self._changed_cells(poses, merged)
-        distance, near = self._sight(poses)
         navs = [nav.status() if ok else None for nav, ok in zip(self.navigators, live.tolist())]
-        return TickBatch(live=live, poses=poses, collided=collided, travelled=self.world.distance,
-                         energy=self.world.distance + self.world.rotation, navs=navs, known=self.known,
-                         cells=cells, ends=ends,
-                         inboxes=[tuple([env.data for env in inbox]) if inbox else () for inbox in inboxes],
-                         near=near, distance=distance)
+        at = poses.copy()  # the world moves these in place next tick; a late read must see this tick's
+        changed = (lambda: self._changed_cells(at, merged)) if self._mirror is not None else None
+        return TickBatch(tick, live, poses, pose_tuples, collided, self.world.distance, self.world.rotation, navs,
+                         self.known, self._views, inboxes, lambda: self._sight(at), changed)
 
     def _changed_cells(self, poses: np.ndarray, merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:
         """``(cells, ends)``: per robot, flat indices (ascending) of its knowledge cells changed since its last
@@ -462,22 +421,3 @@ class _TickLinks:
 
     def __getattr__(self, name: str) -> Any:  # only for names not in __slots__: the LinkState's fields
         return getattr(self.state(), name)
-
-
-class _Lazy:
-    """A tick's (R, R) matrix computed on first read and then shared by every robot's
-    :class:`~swarm.api.Neighbours` (most algorithms never read their neighbours), which only index it."""
-
-    __slots__ = ("_make", "_value")
-
-    def __init__(self, make: Callable[[], np.ndarray]) -> None:
-        self._make = make
-        self._value: np.ndarray | None = None
-
-    def value(self) -> np.ndarray:
-        if self._value is None:
-            self._value = self._make()
-        return self._value
-
-    def __getitem__(self, key: Any) -> np.ndarray:
-        return self.value()[key]

@@ -143,18 +143,20 @@ def _section(cls: type, name: str, value: Any) -> Any:
 
 @dataclass(frozen=True)
 class RunSpec:
-    """One run. Sections owned by other modules (``lidar``, ``motion``, ``radio``, ``comm``) are stored as
-    validated, fully-resolved plain dicts so the spec stays a pure value."""
+    """One run, every section typed: the spec's own dataclasses, and the sections other modules own
+    (:class:`~swarm.sensing.LidarParams`, :class:`~swarm.world.MotionParams`, :class:`radio.RadioConfig`,
+    :class:`~swarm.comm.CommSpec`), each built once from its fully-resolved table. A section may be given
+    as a mapping or as its dataclass."""
 
     seed: int = 0
     map: MapSpec = field(default_factory=MapSpec)
     robots: RobotsSpec = field(default_factory=RobotsSpec)
     algorithm: AlgorithmSpec = field(default_factory=AlgorithmSpec)
-    lidar: Mapping[str, Any] = field(default_factory=dict)
-    motion: Mapping[str, Any] = field(default_factory=dict)
+    lidar: Any = field(default_factory=dict)        # LidarParams
+    motion: Any = field(default_factory=dict)       # MotionParams
     navigation: NavigationSpec = field(default_factory=NavigationSpec)
-    radio: Mapping[str, Any] = field(default_factory=dict)
-    comm: Mapping[str, Any] = field(default_factory=dict)
+    radio: Any = field(default_factory=dict)        # radio.RadioConfig
+    comm: Any = field(default_factory=dict)         # CommSpec
     transport: str = "inprocess"
     stop: StopSpec = field(default_factory=StopSpec)
     record_every: int = 10
@@ -166,11 +168,8 @@ class RunSpec:
         object.__setattr__(self, "algorithm", _section(AlgorithmSpec, "algorithm", self.algorithm))
         object.__setattr__(self, "navigation", _section(NavigationSpec, "navigation", self.navigation))
         object.__setattr__(self, "stop", _section(StopSpec, "stop", self.stop))
-        for name, resolver in _EXTERNAL_SECTIONS.items():
-            value = getattr(self, name)
-            if not isinstance(value, Mapping):
-                raise InvalidInput(name, value, f"a table of {name} settings")
-            object.__setattr__(self, name, resolver(dict(value)))
+        for name in _EXTERNAL_SECTIONS:
+            object.__setattr__(self, name, _typed_section(name, getattr(self, name)))
         check_choice("transport", self.transport, TRANSPORTS)
         check_int("record_every", self.record_every, 1, 100_000)
         _check_override_ids(self.radio, self.robots.count)
@@ -203,7 +202,7 @@ class RunSpec:
         out: dict[str, Any] = {"version": SPEC_VERSION}
         for f in fields(self):
             value = getattr(self, f.name)
-            out[f.name] = to_mapping(value) if hasattr(value, "__dataclass_fields__") else _plain(value)
+            out[f.name] = _plain(to_mapping(value)) if hasattr(value, "__dataclass_fields__") else _plain(value)
         return json.dumps(out, sort_keys=True, separators=(",", ":"))
 
     def to_json(self) -> str:
@@ -226,11 +225,11 @@ def _plain(v: Any) -> Any:
     return v
 
 
-def _check_override_ids(radio: Mapping[str, Any], count: int) -> None:
+def _check_override_ids(radio: Any, count: int) -> None:
     """Per-robot radio overrides must name robots of this run: an override for robot 999 of 4 would be
     silently unused (the radio config itself validated the keys as integers and the powers as finite)."""
     for section in ("tx_power_overrides", "sensitivity_overrides"):
-        for key in radio.get(section) or {}:
+        for key in getattr(radio, section) or {}:
             if int(key) >= count:
                 raise InvalidInput(f"radio.{section}.{key}", int(key),
                                    f"a robot id in 0..{count - 1} (robots.count is {count})")
@@ -261,23 +260,54 @@ def _resolve_comm(d: dict[str, Any]) -> dict[str, Any]:
     return to_mapping(from_mapping(CommSpec, d, prefix="comm."))
 
 
-def _memo(resolve):  # noqa: ANN001, ANN202 - a pure resolver cached on its input's canonical JSON
-    @lru_cache(maxsize=256)
-    def cached(text: str) -> str:
-        return json.dumps(resolve(json.loads(text)), sort_keys=True)
+def _section_class(name: str) -> type:
+    if name == "lidar":
+        from .sensing import LidarParams
+        return LidarParams
+    if name == "motion":
+        from .world import MotionParams
+        return MotionParams
+    if name == "radio":
+        from radio import RadioConfig
+        return RadioConfig
+    from .comm import CommSpec
+    return CommSpec
 
-    def wrapper(d: dict[str, Any]) -> dict[str, Any]:
-        try:
-            text = json.dumps(d, sort_keys=True)
-        except TypeError:  # not JSON-able: let the resolver report it
-            return resolve(d)
-        return json.loads(cached(text))
 
-    return wrapper
+@lru_cache(maxsize=256)
+def _resolved_text(name: str, text: str) -> str:
+    """The fully-resolved table of a section given as canonical JSON, as canonical JSON (cached: a campaign
+    builds thousands of specs from a handful of distinct sections)."""
+    return json.dumps(_EXTERNAL_SECTIONS[name](json.loads(text)), sort_keys=True)
 
 
-_EXTERNAL_SECTIONS = {name: _memo(fn) for name, fn in {"lidar": _resolve_lidar, "motion": _resolve_motion,
-                                                       "radio": _resolve_radio, "comm": _resolve_comm}.items()}
+@lru_cache(maxsize=256)
+def _section_from_text(name: str, resolved: str) -> Any:
+    """The section's dataclass, built from its resolved table (frozen, so one instance serves every spec
+    with this section)."""
+    data = json.loads(resolved)
+    if name == "radio":
+        from radio import config_from_mapping
+        return config_from_mapping(data)
+    return from_mapping(_section_class(name), data, prefix=f"{name}.")
+
+
+def _typed_section(name: str, value: Any) -> Any:
+    """A section (a mapping or its dataclass) validated, resolved and typed."""
+    cls = _section_class(name)
+    if isinstance(value, cls):
+        value = _plain(to_mapping(value))
+    if not isinstance(value, Mapping):
+        raise InvalidInput(name, value, f"a table of {name} settings")
+    try:
+        text = json.dumps(dict(value), sort_keys=True)
+    except (TypeError, ValueError):  # not JSON-able: let the resolver report what is wrong
+        return _section_from_text(name, json.dumps(_EXTERNAL_SECTIONS[name](dict(value)), sort_keys=True))
+    return _section_from_text(name, _resolved_text(name, text))
+
+
+_EXTERNAL_SECTIONS = {"lidar": _resolve_lidar, "motion": _resolve_motion, "radio": _resolve_radio,
+                      "comm": _resolve_comm}
 
 
 # ---------------------------------------------------------------------------------------- seeds ----

@@ -66,7 +66,7 @@ def runs_row(campaign: CampaignSpec, run: Run, result: dict[str, Any]) -> dict[s
         "map": run.cell["map"], "size": run.cell["size"], "robots": spec.robots.count, "spawn": spec.robots.spawn,
         "algorithm": run.cell["algorithm"], "radio": run.cell["radio"], "comm": run.cell.get("comm", "default"),
         "transport": spec.transport, "map_kind": spec.map.kind, "algorithm_name": spec.algorithm.name,
-        "radio_model": spec.radio["model"], **run.seeds, "status": result["status"], "error": result["error"],
+        "radio_model": spec.radio.model, **run.seeds, "status": result["status"], "error": result["error"],
         "explored_target": spec.stop.explored, "max_ticks": spec.stop.max_ticks,
     }
     s = result["summary"]

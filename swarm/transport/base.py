@@ -1,39 +1,66 @@
 """The transport interface: how the runtime hands observations to agents and gets their actions back.
 
-Two implementations with identical semantics (DESIGN.md section 5): :class:`~swarm.transport.inprocess.
+Two implementations with identical semantics (docs/design.md section 5): :class:`~swarm.transport.inprocess.
 InProcessHost` calls the algorithms directly; :class:`~swarm.transport.zenoh_host.ZenohHost` sends every
-observation and action through real zenoh sessions, to agents in this process or in others. Either way the
-runtime is the radio medium and steps in lockstep, so the transport never changes a result.
+observation and action through real zenoh sessions, to agents in this process or in others. Both get the
+same :class:`TickBatch` of the tick's arrays and build what they ship from it. Either way the runtime is
+the radio medium and steps in lockstep, so the transport never changes a result.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol, Sequence
+from typing import Any, Callable, Protocol, Sequence
 
 import numpy as np
 
-from ..api import Action, NavStatus, Observation
+from ..api import Action, NavStatus, Pose
 from .wire import ResetPacket
 
 
-@dataclass
 class TickBatch:
-    """Every robot's observation of a tick as the runtime's arrays, row i = robot i, for hosts that pack all
-    robots at once (zenoh): nothing per robot is built on the runtime's side. Read-only for the host."""
+    """Every robot's observation of a tick as the runtime's arrays, row i = robot i: the one thing the
+    runtime hands any host. A host reads what it needs; the parts that cost work (neighbours, the cells
+    changed since the last observation) are computed on first read and then shared. Read-only for hosts."""
 
-    live: np.ndarray                          # bool[R]: robots to ask (not failed)
-    poses: np.ndarray                         # float64[R, 3]
-    collided: np.ndarray                      # bool[R]: touched something since the last observation
-    travelled: np.ndarray                     # float64[R]: metres travelled
-    energy: np.ndarray                        # float64[R]: energy used
-    navs: list[NavStatus | None]              # the navigators' status (None for robots not live)
-    known: np.ndarray                         # uint8[R, H, W]: the knowledge maps
-    cells: np.ndarray                         # int64: knowledge cells changed since the last observation,
-    ends: np.ndarray                          # robot after robot: robot i's are cells[ends[i-1]:ends[i]]
-    inboxes: list[tuple[bytes, ...]]          # the inbox messages' wire bytes
-    near: np.ndarray                          # bool[R, R]: sensed neighbours (in range, line of sight)
-    distance: np.ndarray                      # float64[R, R]: pair distances
+    __slots__ = ("tick", "live", "poses", "pose_tuples", "collided", "travelled", "rotation", "navs", "known",
+                 "views", "inboxes", "_sight", "_sight_value", "_changed", "_changed_value")
+
+    def __init__(self, tick: int, live: np.ndarray, poses: np.ndarray, pose_tuples: list[Pose],
+                 collided: np.ndarray, travelled: np.ndarray, rotation: np.ndarray, navs: list[NavStatus | None],
+                 known: np.ndarray, views: Sequence[np.ndarray], inboxes: list[list[Any]],
+                 sight: Callable[[], tuple[np.ndarray, np.ndarray]],
+                 changed: Callable[[], tuple[np.ndarray, np.ndarray]] | None = None) -> None:
+        self.tick = tick
+        self.live = live                # bool[R]: robots to ask (not failed)
+        self.poses = poses              # float64[R, 3]
+        self.pose_tuples = pose_tuples  # the same poses as Pose tuples
+        self.collided = collided        # bool[R]: touched something since the last observation
+        self.travelled = travelled      # float64[R]: metres travelled
+        self.rotation = rotation        # float64[R]: radians turned; energy used = travelled + rotation
+        self.navs = navs                # the navigators' status (None for robots not live)
+        self.known = known              # uint8[R, H, W]: the knowledge maps
+        self.views = views              # robot i's map as its algorithm sees it (read-only)
+        self.inboxes = inboxes          # the envelopes delivered to each robot (.message, .data: wire bytes)
+        self._sight, self._sight_value = sight, None
+        self._changed, self._changed_value = changed, None
+
+    def sight(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(distance, near)``: pair distances (m, float64[R, R]) and who senses whom (bool[R, R]: in range,
+        in line of sight)."""
+        if self._sight_value is None:
+            self._sight_value = self._sight()
+        return self._sight_value
+
+    def changed(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(cells, ends)``: per robot, the flat indices of its knowledge cells changed since its last
+        observation, robot i's at ``cells[ends[i-1]:ends[i]]``; only for a host that keeps map mirrors
+        (:attr:`AgentHost.mirrors`)."""
+        if self._changed is None:
+            raise RuntimeError("changed cells are tracked only for a host with mirrors = True")
+        if self._changed_value is None:
+            self._changed_value = self._changed()
+        return self._changed_value
 
 
 ACT_COUNTS = ("malformed", "refused", "late", "duplicate")
@@ -62,14 +89,14 @@ class HostStats:
 
 
 class AgentHost(Protocol):
-    batched: bool  # act() takes a TickBatch instead of one Observation per robot
+    mirrors: bool  # the host ships map changes, so the runtime tracks each robot's cells since its last tick
     stats: HostStats
 
     def start(self, resets: Sequence[ResetPacket]) -> None: ...
 
-    def act(self, tick: int, inputs: Sequence[Observation | None] | TickBatch) -> list[Action | None]:
-        """Actions for the robots given their observations (None for failed robots), or a TickBatch for a
-        batched host; None where a robot failed now."""
+    def act(self, batch: TickBatch) -> list[Action | None]:
+        """Every live robot's action for the tick's observations; None for robots not live and for those
+        whose agent failed now (recorded in :attr:`stats`)."""
         ...
 
     def close(self) -> None: ...

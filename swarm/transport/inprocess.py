@@ -1,24 +1,35 @@
-"""Agents as plain Python objects in the runtime's process: the fastest transport."""
+"""Agents as plain Python objects in the runtime's process: the fastest transport.
+
+Builds each live robot's :class:`~swarm.api.Observation` from the tick's :class:`TickBatch` and calls its
+algorithm directly. Neighbours are handed over lazily (:class:`~swarm.api.Neighbours` over the tick's
+shared matrices): most algorithms never read them.
+"""
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Callable, Sequence
+
+import numpy as np
 
 from .. import registry
-from ..api import Action, Observation
-from .base import HostStats
+from ..api import Action, Neighbours, Observation, frozen_builder
+from ..neighbours import bearings
+from .base import HostStats, TickBatch
 from .timing import PhaseTimes, timed
 from .wire import ResetPacket
 
+_observation = frozen_builder(Observation)  # Observation(...) without the frozen __init__'s cost (16 a tick)
+
 
 class InProcessHost:
-    batched = False
+    mirrors = False
 
     def __init__(self, times: PhaseTimes | None = None) -> None:
         self.stats = HostStats()
         self.agents: list = []
         self._acts: list = []
         self._times = times
+        self._observations = timed(times, "host: inputs", observations)
 
     def start(self, resets: Sequence[ResetPacket]) -> None:
         for reset in resets:
@@ -27,13 +38,68 @@ class InProcessHost:
             self.agents.append(agent)
             self._acts.append(timed(self._times, "agent: algorithm", agent.act))
 
-    def act(self, tick: int, inputs: Sequence[Observation | None]) -> list[Action | None]:
+    def act(self, batch: TickBatch) -> list[Action | None]:
         acts = self._acts
-        return [None if obs is None else check_action(acts[i](obs), i) for i, obs in enumerate(inputs)]
+        return [None if obs is None else check_action(acts[i](obs), i)
+                for i, obs in enumerate(self._observations(batch))]
 
     def close(self) -> None:
         self.agents = []
         self._acts = []
+
+
+def observations(batch: TickBatch) -> list[Observation | None]:
+    """Each live robot's Observation of the tick (None for the others)."""
+    distance = batch.travelled.tolist()
+    energy = [d + r for d, r in zip(distance, batch.rotation.tolist())]  # float64 sums, as numpy's
+    neighbours = _neighbours(batch)
+    hit = batch.collided.tolist()
+    live = batch.live.tolist()
+    out: list[Observation | None] = []
+    tick, views, navs = batch.tick, batch.views, batch.navs
+    for i, pose in enumerate(batch.pose_tuples):
+        if not live[i]:
+            out.append(None)
+            continue
+        inbox = batch.inboxes[i]
+        out.append(_observation(tick=tick, robot_id=i, pose=pose, known=views[i],
+                                inbox=tuple([env.message for env in inbox]) if inbox else (),
+                                neighbours=neighbours[i], collided=hit[i], nav=navs[i],
+                                distance_travelled=distance[i], energy_used=energy[i]))
+    return out
+
+
+def _neighbours(batch: TickBatch) -> list[Sequence[Any]]:
+    """Robots in sensing range and line of sight, per robot, built when first read (the tick's matrices are
+    computed once and shared by every robot's :class:`~swarm.api.Neighbours`)."""
+    n = len(batch.pose_tuples)
+    if n == 1:
+        return [()]
+    p = batch.poses.copy()
+    near = _Lazy(lambda: batch.sight()[1])
+    distance = _Lazy(lambda: batch.sight()[0])
+    bearing = _Lazy(lambda: bearings(p))
+    xy = p[:, :2].copy()
+    return [Neighbours(i, near, distance, bearing, xy) for i in range(n)]
+
+
+class _Lazy:
+    """A tick's (R, R) matrix computed on first read and then shared by every robot's
+    :class:`~swarm.api.Neighbours` (most algorithms never read their neighbours), which only index it."""
+
+    __slots__ = ("_make", "_value")
+
+    def __init__(self, make: Callable[[], np.ndarray]) -> None:
+        self._make = make
+        self._value: np.ndarray | None = None
+
+    def value(self) -> np.ndarray:
+        if self._value is None:
+            self._value = self._make()
+        return self._value
+
+    def __getitem__(self, key: Any) -> np.ndarray:
+        return self.value()[key]
 
 
 def check_action(action: object, robot: int) -> Action:

@@ -9,7 +9,7 @@ Key expressions (``<run>`` is unique per run, so parallel runs never cross-talk)
 * ``swarm/<run>/end``               runtime -> agents: the run is over
 
 Agents in the runtime's process share its session with ``Callback(indirect=False)`` subscribers, so a
-put runs the agent synchronously (about 10 us per round trip, reference/zenoh-pymunk.md A4). Remote
+put runs the agent synchronously (docs/measurements.md A4 has the cost of each layout). Remote
 agents connect to the runtime's ``listen`` endpoint; the runtime waits for every live agent's action for
 tick t before advancing, so thread timing never changes a result. A remote agent that loses its
 liveliness token or stays silent for ``timeout_s`` is marked failed at that tick and its robot stops.
@@ -64,7 +64,7 @@ def robot_of(key_expr: object) -> int | None:
 
 
 class ZenohHost:
-    batched = True
+    mirrors = True  # obs packets carry each map's changed cells
 
     def __init__(self, run_id: str, listen: Sequence[str] = (), remote: Sequence[int] = (),
                  timeout_s: float = 10.0, join_timeout_s: float = 60.0, times: PhaseTimes | None = None,
@@ -213,7 +213,8 @@ class ZenohHost:
                     self.session.put(f"{self.prefix}/robot/{reset.robot.id}/reset", encode_reset(reset),
                                      congestion_control=BLOCK)
 
-    def act(self, tick: int, batch: TickBatch) -> list[Action | None]:
+    def act(self, batch: TickBatch) -> list[Action | None]:
+        tick = batch.tick
         asked = batch.live
         if self.stats.failures:  # failed here, not yet in the runtime's live mask (e.g. never joined)
             asked = asked.copy()
@@ -221,8 +222,12 @@ class ZenohHost:
         with self._cond:
             self._replies.clear()
             self._tick = tick
-        packets = self._encode(tick, asked, batch.poses, batch.collided, batch.travelled, batch.energy, batch.navs,
-                               batch.known, batch.cells, batch.ends, batch.inboxes, batch.near, batch.distance)
+        cells, ends = batch.changed()
+        distance, near = batch.sight()
+        inboxes = [tuple([env.data for env in inbox]) if inbox else () for inbox in batch.inboxes]
+        packets = self._encode(tick, asked, batch.poses, batch.collided, batch.travelled,
+                               batch.travelled + batch.rotation, batch.navs, batch.known, cells, ends, inboxes, near,
+                               distance)
         puts = self._puts
         live = []
         for i, packet in enumerate(packets):

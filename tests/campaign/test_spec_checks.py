@@ -215,4 +215,4 @@ def test_a_radio_override_is_checked_against_each_cells_robot_count():
     err = error_of(grid)
     assert err.field == "radio.tx_power_overrides.6" and "robots=2" in str(err) and "radio=weak6" in str(err)
     ok = parse_campaign(grid + '\n[[exclude]]\nrobots = 2\nradio = "weak6"\n')
-    assert all(r.spec.radio["tx_power_overrides"] == {"6": 10.0} for r in ok.runs() if r.cell["radio"] == "weak6")
+    assert all(r.spec.radio.tx_power_overrides == {6: 10.0} for r in ok.runs() if r.cell["radio"] == "weak6")

@@ -36,7 +36,7 @@ def test_override_for_a_robot_that_does_not_exist_is_refused(section):
     assert info.value.field == f"radio.{section}.999"
     assert "0..3" in info.value.allowed
     spec = RunSpec.from_mapping({"robots": {"count": 4}, "radio": {section: {"3": 10.0}}})
-    assert spec.radio[section] == {"3": 10.0}
+    assert getattr(spec.radio, section) == {3: 10.0} and spec.canonical()["radio"][section] == {"3": 10.0}
 
 
 def test_cli_run_with_an_override_for_robot_999(capfd):
@@ -123,4 +123,4 @@ def test_fuzz_radio_sections_of_a_run_spec(config, overrides, robots, section):
     except InvalidInput as exc:
         assert len(str(exc).splitlines()) == 1 and len(str(exc)) < 600
     else:
-        assert all(int(k) < robots for k in spec.radio[section])
+        assert all(int(k) < robots for k in getattr(spec.radio, section))
