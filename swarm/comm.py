@@ -30,6 +30,7 @@ from maps.params import check_choice, check_float, check_int
 from .api import CELL_M
 from .knowledge import check_writable_map, merge_cells_many, sync_box_unchecked, sync_changes
 from .messages import MAX_MESSAGE_BYTES, MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
+from .schema import DROP_CAUSES
 
 SHARING_MODES = ("delta", "full", "off")
 
@@ -94,6 +95,11 @@ class CommStats:
                 "dropped_loss": self.dropped_loss, "dropped_bandwidth": self.dropped_bandwidth,
                 "malformed": self.malformed, "malformed_by_robot": list(self.malformed_by_robot),
                 "map_bytes_sent": self.map_bytes_sent, "last_contact": list(self.last_contact)}
+
+    @property
+    def dropped(self) -> int:
+        """Messages dropped on the way, all causes (:data:`swarm.schema.DROP_CAUSES`)."""
+        return sum(getattr(self, cause) for cause in DROP_CAUSES)
 
     def count_malformed(self, robot: int, n: int = 1) -> None:
         self.malformed += n

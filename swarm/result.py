@@ -5,7 +5,10 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .schema import Summary
 
 NONDETERMINISTIC_SUFFIX = "_time_s"
 """Fields ending like this (wall-clock times) are the only ones allowed to differ between identical runs."""
@@ -15,7 +18,7 @@ NONDETERMINISTIC_SUFFIX = "_time_s"
 class RunResult:
     spec: dict[str, Any]
     key: str
-    summary: dict[str, Any]
+    summary: Summary  # swarm.schema: what a run computed
     timeseries: dict[str, list[Any]]
     events: list[dict[str, Any]] = field(default_factory=list)
 

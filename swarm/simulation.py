@@ -345,7 +345,7 @@ class Simulation:
                             distance_m=float(self.world.distance.sum()), collisions=collisions,
                             msgs_sent=stats.sent, bytes_sent=stats.bytes_sent, msgs_delivered=stats.delivered,
                             bytes_delivered=stats.bytes_delivered,
-                            msgs_dropped=stats.dropped_link + stats.dropped_loss + stats.dropped_bandwidth,
+                            msgs_dropped=stats.dropped,
                             comm_groups=len(groups), biggest_group=max(len(g) for g in groups) / n,
                             all_connected=len(groups) == 1,
                             mean_pair_distance_m=float(links.distance.mean()) if n > 1 else 0.0)

@@ -15,13 +15,11 @@ from maps.errors import InvalidInput
 
 from .executors import Executor, make_executor
 from .spec import CampaignSpec, Run, parse_campaign
-from .store import THRESHOLD_COLUMNS, ResultsStore
+from ..schema import NONDETERMINISTIC_COLUMNS, TIMESERIES_COLUMNS, summary_columns
+from .store import ResultsStore
 from .writers import Writer, live_writers
 
-NONDETERMINISTIC_COLUMNS = ("wall_time_s", "worker_pid", "worker_rss_mb", "part", "swarm_version")
-TIMESERIES_COLUMNS = ("tick", "explored", "coverage", "distance_m", "collisions", "msgs_sent", "bytes_sent",
-                      "msgs_delivered", "bytes_delivered", "msgs_dropped", "comm_groups", "biggest_group",
-                      "all_connected", "mean_pair_distance_m")
+
 
 
 def swarm_version() -> str:
@@ -69,23 +67,11 @@ def runs_row(campaign: CampaignSpec, run: Run, result: dict[str, Any]) -> dict[s
         "radio_model": spec.radio.model, **run.seeds, "status": result["status"], "error": result["error"],
         "explored_target": spec.stop.explored, "max_ticks": spec.stop.max_ticks,
     }
-    s = result["summary"]
-    if s is not None:
-        msgs = s["messages"]
-        row.update(ticks=s["ticks"], stop_reason=s["stop_reason"], explored=s["explored"], coverage=s["coverage"],
-                   **{col: s["ticks_to"].get(t) for t, col in THRESHOLD_COLUMNS.items()},
-                   distance_m=float(sum(s["distance_m"])), collisions=s["collisions"], msgs_sent=msgs["sent"],
-                   bytes_sent=msgs["bytes_sent"], msgs_delivered=msgs["delivered"],
-                   bytes_delivered=msgs["bytes_delivered"],
-                   msgs_dropped=msgs["dropped_link"] + msgs["dropped_loss"] + msgs["dropped_bandwidth"],
-                   failed_robots=len(s["failed_robots"]))
-    else:
-        row.update(ticks=None, stop_reason="error", explored=None, coverage=None,
-                   **{col: None for col in THRESHOLD_COLUMNS.values()}, distance_m=None, collisions=None,
-                   msgs_sent=None, bytes_sent=None, msgs_delivered=None, bytes_delivered=None, msgs_dropped=None,
-                   failed_robots=None)
+    row.update(summary_columns(result["summary"]))
+    dist = result.get("algorithm_dist") or (None, None)
     row.update(spec_json=spec.to_json(), wall_time_s=result["wall_time_s"], worker_pid=result["worker_pid"],
-               worker_rss_mb=result["worker_rss_mb"], swarm_version=swarm_version())
+               worker_rss_mb=result["worker_rss_mb"], swarm_version=swarm_version(), algorithm_dist=dist[0],
+               algorithm_version=dist[1])
     return row
 
 

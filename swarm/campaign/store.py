@@ -33,6 +33,7 @@ import pyarrow.parquet as pq
 
 from maps.errors import InvalidInput
 
+from ..schema import THRESHOLD_COLUMNS, runs_table, timeseries_table  # noqa: F401  (THRESHOLD_COLUMNS: re-exported)
 from .identity import difference
 from .text import clip
 
@@ -40,7 +41,6 @@ PARTS = "parts"
 RUNS_SUFFIX = ".runs.parquet"
 TS_SUFFIX = ".timeseries.parquet"
 SPEC_FILE = "campaign.toml"
-THRESHOLD_COLUMNS = {"0.5": "t50", "0.75": "t75", "0.9": "t90", "0.95": "t95", "0.98": "t98", "0.99": "t99"}
 WRITER_ID = r"[A-Za-z0-9_-]{1,40}-[0-9]{1,10}-[0-9a-f]{8}"
 """``<host>-<pid>-<nonce>`` (see :func:`swarm.campaign.writers.new_writer_id`)."""
 _OWNED = re.compile(rf"^\.?[0-9]{{20}}-[0-9]{{6}}\.(?P<writer>{WRITER_ID})\.")
@@ -155,8 +155,8 @@ class ResultsStore:
         runs_path = self.parts / f"{part}{RUNS_SUFFIX}"
         try:
             if timeseries:
-                _write_table(ts_path, pa.Table.from_pylist(timeseries), owned=writer is not None)
-            _write_table(runs_path, pa.Table.from_pylist(runs), owned=writer is not None)
+                _write_table(ts_path, timeseries_table(timeseries), owned=writer is not None)
+            _write_table(runs_path, runs_table(runs), owned=writer is not None)
         except OSError as exc:
             if not runs_path.exists():
                 with contextlib.suppress(OSError):

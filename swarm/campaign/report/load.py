@@ -18,6 +18,7 @@ import pandas as pd
 
 from maps.errors import InvalidInput
 
+from ...schema import RUNS, THRESHOLD_COLUMNS
 from ..spec import CampaignSpec, campaign_from_mapping
 from ..store import ResultsStore
 
@@ -26,8 +27,9 @@ DIMS = ("map", "size", "robots", "spawn", "algorithm", "radio", "comm", "transpo
 ALWAYS_SHOWN = ("map", "size", "robots", "spawn", "algorithm", "radio")
 """Shown in names and tables even when constant, so a figure name says which world it shows."""
 RUN_COLUMNS = ("key", *DIMS, "replicate", "map_kind", "radio_model", "map_seed", "status", "error", "stop_reason",
-               "ticks", "max_ticks", "explored_target", "explored", "coverage", "t50", "t75", "t90", "t95", "t98",
-               "t99", "part")
+               "ticks", "max_ticks", "explored_target", "explored", "coverage", *THRESHOLD_COLUMNS.values(), "part")
+"""The runs-table columns the report reads (:data:`swarm.schema.RUNS`, plus the store's ``part``)."""
+assert set(RUN_COLUMNS) <= {*RUNS, "part"}
 
 
 @dataclass

@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats as sps
 
-from ..store import THRESHOLD_COLUMNS
+from ...schema import THRESHOLD_COLUMNS
 
 MIN_WILCOXON_PAIRS = 6
 EXPECTED_RANK = {"global": 0, "multiwall": 1, "maes": 1, "los": 2}

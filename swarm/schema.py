@@ -1,0 +1,156 @@
+"""The shape of results, defined once: a run's summary, its time series, and a campaign's runs table.
+
+Used by the metrics (time-series columns, thresholds), the simulation (the summary it builds), the
+campaign runner and results store (runs rows, Parquet schemas) and the report loader (which columns it
+reads). A result is plain JSON-able data (``swarm run --json``, Parquet parts); these types say what it
+holds.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping, TypedDict
+
+import pyarrow as pa
+
+# ------------------------------------------------------------------------------------- thresholds ----
+THRESHOLDS: tuple[float, ...] = (0.5, 0.75, 0.9, 0.95, 0.98, 0.99)
+"""Explored fractions whose first tick every run records exactly (``summary["ticks_to"]``)."""
+
+
+def threshold_key(threshold: float) -> str:
+    """``"0.5"``, ``"0.99"``: how a threshold is written in ``ticks_to``."""
+    return f"{threshold:g}"
+
+
+THRESHOLD_COLUMNS: dict[str, str] = {threshold_key(t): f"t{round(t * 100)}" for t in THRESHOLDS}
+"""``ticks_to`` key -> runs-table column (``"0.5" -> "t50"``)."""
+
+# -------------------------------------------------------------------------------------- messages ----
+DROP_CAUSES = ("dropped_link", "dropped_loss", "dropped_bandwidth")
+"""Why a message did not reach a receiver: out of radio reach, lost (``comm.loss``), over the link's byte
+budget (``comm.bandwidth``). "Dropped" always means their sum."""
+
+
+def dropped(counts: Mapping[str, int]) -> int:
+    """Messages dropped on the way, all causes (a summary's ``messages`` table or a time-series row)."""
+    return sum(int(counts[cause]) for cause in DROP_CAUSES)
+
+
+class MessageCounts(TypedDict):
+    """``summary["messages"]``: what the radio carried over the run (counts are per receiver for delivered
+    and dropped messages, per broadcast for sent ones)."""
+
+    sent: int
+    bytes_sent: int
+    delivered: int
+    bytes_delivered: int
+    dropped_link: int
+    dropped_loss: int
+    dropped_bandwidth: int
+    malformed: int                  # messages an algorithm tried to send that were not fit to (dropped)
+    malformed_by_robot: list[int]
+    map_bytes_sent: int
+    last_contact: list[int]         # per robot: the last tick it received anything (-1: never)
+
+
+class ActCounts(TypedDict):
+    """``summary["acts"]``: per robot, act packets a remote agent's host did not take."""
+
+    malformed: list[int]
+    refused: list[int]
+    late: list[int]
+    duplicate: list[int]
+
+
+class Summary(TypedDict):
+    """``RunResult.summary``: everything a run computed, deterministic except the ``*_time_s`` fields."""
+
+    ticks: int
+    stop_reason: str                # explored | max_ticks | stalled | all_failed
+    explored: float                 # fraction of the free cells some robot has seen
+    coverage: float                 # fraction of the free cells some robot's disc has covered
+    ticks_to: dict[str, int | None]  # threshold_key -> first tick explored reached it
+    distance_m: list[float]         # per robot
+    collisions: int
+    plans: list[int]                # per robot: path plans made
+    messages: MessageCounts
+    acts: ActCounts
+    failed_robots: list[int]
+    final_poses: list[list[float]]
+    map_seed: int | None
+    wall_time_s: float
+    setup_time_s: float
+
+
+# ------------------------------------------------------------------------------------ time series ----
+TIMESERIES: dict[str, tuple[pa.DataType, str]] = {
+    "tick": (pa.int64(), "the tick of the row (every record_every ticks, and the last)"),
+    "explored": (pa.float64(), "fraction of free cells seen by some robot"),
+    "coverage": (pa.float64(), "fraction of free cells covered by some robot's disc"),
+    "distance_m": (pa.float64(), "metres driven by all robots so far"),
+    "collisions": (pa.int64(), "contacts begun so far"),
+    "msgs_sent": (pa.int64(), "messages broadcast so far"),
+    "bytes_sent": (pa.int64(), "their bytes"),
+    "msgs_delivered": (pa.int64(), "deliveries so far (one per receiver)"),
+    "bytes_delivered": (pa.int64(), "their bytes"),
+    "msgs_dropped": (pa.int64(), "messages dropped on the way so far, all causes (DROP_CAUSES)"),
+    "comm_groups": (pa.int64(), "communication groups (strongly connected) at this tick"),
+    "biggest_group": (pa.float64(), "the biggest group's share of the robots"),
+    "all_connected": (pa.bool_(), "one group holds every robot"),
+    "mean_pair_distance_m": (pa.float64(), "mean distance between robots"),
+}
+"""Time-series columns (``RunResult.timeseries``, ``*.timeseries.parquet`` with a ``key`` column first)."""
+TIMESERIES_COLUMNS: tuple[str, ...] = tuple(TIMESERIES)
+
+# ------------------------------------------------------------------------------------- runs table ----
+RUNS: dict[str, pa.DataType] = {
+    "key": pa.string(), "campaign": pa.string(), "index": pa.int64(), "replicate": pa.int64(),
+    "map": pa.string(), "size": pa.string(), "robots": pa.int64(), "spawn": pa.string(), "algorithm": pa.string(),
+    "radio": pa.string(), "comm": pa.string(), "transport": pa.string(), "map_kind": pa.string(),
+    "algorithm_name": pa.string(), "radio_model": pa.string(), "map_seed": pa.int64(), "spawn_seed": pa.int64(),
+    "run_seed": pa.int64(), "status": pa.string(), "error": pa.string(), "explored_target": pa.float64(),
+    "max_ticks": pa.int64(), "ticks": pa.int64(), "stop_reason": pa.string(), "explored": pa.float64(),
+    "coverage": pa.float64(), **{col: pa.int64() for col in THRESHOLD_COLUMNS.values()}, "distance_m": pa.float64(),
+    "collisions": pa.int64(), "msgs_sent": pa.int64(), "bytes_sent": pa.int64(), "msgs_delivered": pa.int64(),
+    "bytes_delivered": pa.int64(), "msgs_dropped": pa.int64(), "failed_robots": pa.int64(), "spec_json": pa.string(),
+    "wall_time_s": pa.float64(), "worker_pid": pa.int64(), "worker_rss_mb": pa.float64(), "swarm_version": pa.string(),
+    "algorithm_dist": pa.string(), "algorithm_version": pa.string(),
+}
+"""One row per run (``*.runs.parquet``); the store adds ``part`` (the file a row came from) when reading."""
+RUNS_SCHEMA = pa.schema(list(RUNS.items()))
+NONDETERMINISTIC_COLUMNS = ("wall_time_s", "worker_pid", "worker_rss_mb", "part", "swarm_version")
+"""Columns that may differ between two executions of the same run."""
+
+
+def summary_columns(summary: Summary | Mapping[str, Any] | None) -> dict[str, Any]:
+    """The runs-table columns a run's summary fills (all None for a run that failed)."""
+    if summary is None:
+        return {"ticks": None, "stop_reason": "error", "explored": None, "coverage": None,
+                **{col: None for col in THRESHOLD_COLUMNS.values()}, "distance_m": None, "collisions": None,
+                "msgs_sent": None, "bytes_sent": None, "msgs_delivered": None, "bytes_delivered": None,
+                "msgs_dropped": None, "failed_robots": None}
+    msgs = summary["messages"]
+    return {"ticks": summary["ticks"], "stop_reason": summary["stop_reason"], "explored": summary["explored"],
+            "coverage": summary["coverage"],
+            **{col: summary["ticks_to"].get(t) for t, col in THRESHOLD_COLUMNS.items()},
+            "distance_m": float(sum(summary["distance_m"])), "collisions": summary["collisions"],
+            "msgs_sent": msgs["sent"], "bytes_sent": msgs["bytes_sent"], "msgs_delivered": msgs["delivered"],
+            "bytes_delivered": msgs["bytes_delivered"], "msgs_dropped": dropped(msgs),
+            "failed_robots": len(summary["failed_robots"])}
+
+
+def timeseries_table(rows: list[dict[str, Any]]) -> pa.Table:
+    """Time-series rows (``key`` first) as a table of the schema's types (extra columns inferred)."""
+    table = pa.Table.from_pylist(rows)
+    return _cast_known(table, {"key": pa.string(), **{c: t for c, (t, _) in TIMESERIES.items()}})
+
+
+def runs_table(rows: list[dict[str, Any]]) -> pa.Table:
+    """Runs rows as a table of :data:`RUNS`'s types, so a column that is None in every row of a part still
+    has its type (extra columns inferred)."""
+    return _cast_known(pa.Table.from_pylist(rows), RUNS)
+
+
+def _cast_known(table: pa.Table, types: Mapping[str, pa.DataType]) -> pa.Table:
+    fields = [pa.field(f.name, types.get(f.name, f.type)) for f in table.schema]
+    return table.cast(pa.schema(fields))
