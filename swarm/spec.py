@@ -209,10 +209,26 @@ class RunSpec:
         """Canonical JSON: sorted keys, no spaces (what :attr:`key` hashes)."""
         return self._json
 
+    def to_toml(self) -> str:
+        """The fully-resolved spec as a TOML run-spec file (``swarm run --spec`` reads it back to the same
+        :attr:`key`). TOML has no null: a setting that is None (a seed drawn from ``seed``, an automatic
+        ray count) is left out, which is what its default means."""
+        import tomli_w
+
+        return tomli_w.dumps(_without_none(self.canonical()))
+
     @cached_property
     def key(self) -> str:
         """16 hex digits of SHA-256 over the canonical JSON: stable across processes and dict order."""
         return hashlib.sha256(self._json.encode()).hexdigest()[:16]
+
+
+def _without_none(v: Any) -> Any:
+    if isinstance(v, dict):
+        return {k: _without_none(x) for k, x in v.items() if x is not None}
+    if isinstance(v, list):
+        return [_without_none(x) for x in v]
+    return v
 
 
 def _plain(v: Any) -> Any:

@@ -104,7 +104,9 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
               help="Write the animation as MP4 (needs the 'video' extra: imageio-ffmpeg).")
 @click.option("--record", "record_out", type=click.Path(dir_okay=False, path_type=Path),
               help="Record the run (.swr) for 'swarm view'.")
-@click.option("--print-spec", is_flag=True, help="Print the fully-resolved spec (TOML-ready JSON) and exit.")
+@click.option("--print-spec", is_flag=True,
+              help="Print the fully-resolved spec as a TOML run spec (every default filled in) and exit; "
+                   "--spec reads it back to the same run.")
 def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed: int | None,
             map_params: tuple[str, ...], robots: int | None, spawn: str | None, algorithm: str | None,
             algorithm_params: tuple[str, ...], seed: int | None, max_ticks: int | None, explored: float | None,
@@ -115,7 +117,6 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
 
     With no arguments: 4 robots with the frontier explorer on a 50 x 50 building, seed 0.
     """
-    import json
 
     from ..simulation import Simulation
     from ..spec import RunSpec
@@ -127,7 +128,7 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
     spec = RunSpec.from_mapping(build_spec_mapping(spec_file, flags, sets, algorithm_params, map_params))
     _check_transport_flags(spec, listen, remote, run_id, token_file)
     if print_spec:
-        click.echo(json.dumps(spec.canonical(), indent=1, sort_keys=True))
+        click.echo(spec.to_toml(), nl=False)
         return
     if mp4 is not None:
         try:
@@ -257,9 +258,13 @@ def agent_cmd(connect: str, run_id: str, robot: int, algorithm: str | None, time
         raise click.exceptions.Exit(code)
 
 
-@cli.command("algorithms")
-def algorithms_cmd() -> None:
-    """List the installed exploration algorithms and their parameters."""
+@cli.group("algorithms", invoke_without_command=True)
+@click.pass_context
+def algorithms_cmd(ctx: click.Context) -> None:
+    """List the installed exploration algorithms and their parameters ('swarm algorithms check NAME'
+    checks one against the plugin contract)."""
+    if ctx.invoked_subcommand is not None:
+        return
     from .. import registry
 
     for name, target in registry.available().items():
@@ -271,3 +276,36 @@ def algorithms_cmd() -> None:
             continue
         for param, default, typ in rows:
             click.echo(f"    {param} = {default!r}  [{typ}]")
+
+
+_CHECK_NAMES = ("contract", "params", "actions", "determinism", "messages", "observation", "robustness",
+                "transports")  # swarm.testing.CHECKS, named here so that --help needs no import
+
+
+@algorithms_cmd.command("check")
+@click.argument("name")
+@click.option("--param", "algorithm_params", multiple=True, metavar="KEY=VALUE", help="Algorithm parameter.")
+@click.option("--map", "map_kind", type=click.Choice(["building", "cave"]), default="building", show_default=True)
+@click.option("--size", type=click.IntRange(1, 10_000), default=20, show_default=True, help="Map size in tiles (1 m).")
+@click.option("--robots", type=click.IntRange(1, 1000), default=2, show_default=True)
+@click.option("--ticks", type=click.IntRange(1, 1_000_000), default=60, show_default=True,
+              help="Length of the check's runs.")
+@click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=0, show_default=True)
+@click.option("--check", "only", multiple=True, type=click.Choice(_CHECK_NAMES),
+              help="Run only this check (repeatable; default: all).")
+def algorithms_check_cmd(name: str, algorithm_params: tuple[str, ...], map_kind: str, size: int, robots: int,
+                         ticks: int, seed: int, only: tuple[str, ...]) -> None:
+    """Check algorithm NAME (registered, or package.module:Class) against the plugin contract: print each
+    check passed and exit 0, or the one failure and exit 1 (docs/plugins.md lists the checks)."""
+    from ..testing import ExplorerCheckError, check_explorer
+    from .compile_notice import compile_notice
+
+    params = parse_params(algorithm_params) if algorithm_params else None
+    try:
+        with compile_notice():
+            report = check_explorer(name, map_kind=map_kind, size=size, robots=robots, ticks=ticks, seed=seed,
+                                    params=params, checks=only or None, progress=lambda r: click.echo(str(r)))
+    except ExplorerCheckError as exc:
+        click.echo(f"FAIL {exc}", err=True)
+        raise click.exceptions.Exit(1) from None
+    click.echo(f"{name}: {len(report.results)} checks passed ({report.seconds:.1f} s)")
