@@ -41,6 +41,7 @@ class FrontierExplorer:
         self.target: tuple[int, int] | None = None
         self.chosen_at = -1
         self.excluded: dict[tuple[int, int], int] = {}
+        self._goal_action: tuple[tuple[int, int] | None, Action] = (None, _STOP)
 
     def act(self, obs: Observation) -> Action:
         if obs.nav.state in ("unreachable", "blocked") and self.target is not None:
@@ -51,7 +52,9 @@ class FrontierExplorer:
             self._choose(obs)
         if self.target is None:
             return _STOP
-        return Action(goal=cell_centre(*self.target))
+        if self._goal_action[0] != self.target:  # the same immutable Action while the target stands
+            self._goal_action = (self.target, Action(goal=cell_centre(*self.target)))
+        return self._goal_action[1]
 
     def _still_frontier(self, known: np.ndarray) -> bool:
         """Unseen space still within reach of the target (targets sit up to 3 cells from it, see
