@@ -21,10 +21,13 @@ class RunResult:
     summary: Summary  # swarm.schema: what a run computed
     timeseries: dict[str, list[Any]]
     events: list[dict[str, Any]] = field(default_factory=list)
+    provenance: dict[str, Any] = field(default_factory=dict)
+    """What computed it: ``{"swarm": version, "algorithm": {"name", "distribution", "version"}}`` (the
+    plugin's installed distribution; None for one loaded from a path outside any)."""
 
     def to_dict(self) -> dict[str, Any]:
         return {"key": self.key, "spec": self.spec, "summary": self.summary, "timeseries": self.timeseries,
-                "events": self.events}
+                "events": self.events, "provenance": self.provenance}
 
     def to_json(self, indent: int | None = None) -> str:
         return json.dumps(self.to_dict(), indent=indent, sort_keys=True)

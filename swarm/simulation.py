@@ -379,7 +379,22 @@ class Simulation:
             "setup_time_s": self.setup_time_s,
         }
         return RunResult(spec=self.spec.canonical(), key=self.spec.key, summary=summary,
-                         timeseries=self.metrics.series, events=self.events)
+                         timeseries=self.metrics.series, events=self.events, provenance=provenance(self.spec))
+
+
+def provenance(spec: RunSpec) -> dict[str, Any]:
+    """What computes runs of ``spec``: this swarm's version and the algorithm's distribution and version."""
+    from importlib.metadata import PackageNotFoundError, version
+
+    from .registry import distribution
+
+    try:
+        swarm_version = version("swarm-sim")
+    except PackageNotFoundError:  # a source tree that was never installed
+        swarm_version = None
+    dist = distribution(spec.algorithm.name)
+    return {"swarm": swarm_version, "algorithm": {"name": spec.algorithm.name, "distribution": dist and dist[0],
+                                                  "version": dist and dist[1]}}
 
 
 def run(spec: RunSpec | Mapping[str, Any]) -> RunResult:

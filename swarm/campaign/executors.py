@@ -34,8 +34,10 @@ def execute(task: Task) -> dict[str, Any]:
         from ..simulation import Simulation
 
         result = Simulation(spec).run()
+        algorithm = result.provenance["algorithm"]
         out: dict[str, Any] = {"key": key, "status": "ok", "error": "", "summary": result.summary,
-                               "timeseries": result.timeseries, "events": result.events}
+                               "timeseries": result.timeseries, "events": result.events,
+                               "algorithm_dist": (algorithm["distribution"], algorithm["version"])}
         if result.key != key:
             out.update(status="failed", error=f"spec key changed in the worker ({result.key} != {key})")
     except BaseException as exc:  # a broken algorithm must not stop the campaign

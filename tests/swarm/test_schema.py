@@ -39,3 +39,17 @@ def test_runs_rows_fill_exactly_the_runs_columns_with_their_types(tmp_path):
     assert {f.name: f.type for f in table.schema} == RUNS
     for col in THRESHOLD_COLUMNS.values():  # typed even where no run of the part reached the threshold
         assert table.schema.field(col).type == pa.int64()
+
+
+def test_results_record_the_algorithms_distribution(tmp_path):
+    """A run says which installed distribution and version computed it; a module loaded by path from a
+    folder outside any distribution says None."""
+    r = Simulation(SPEC).run()
+    assert r.provenance["algorithm"] == {"name": "frontier", "distribution": "swarm-sim",
+                                         "version": r.provenance["swarm"]}
+    local = Simulation({**SPEC, "algorithm": {"name": "tests.swarm.agents:Talker"}}).run()
+    assert local.provenance["algorithm"]["distribution"] is None
+    spec = parse_campaign(TINY)
+    run_campaign(spec, tmp_path, executor=make_executor(inline=True), progress=False, shard=(0, 24))
+    table = ResultsStore(tmp_path).runs_table()
+    assert table.column("algorithm_dist").to_pylist() == ["swarm-sim"]
