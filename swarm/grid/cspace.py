@@ -17,7 +17,7 @@ from all of ``c``'s square, hence from ``p``, unless ``b`` is diagonal to ``c``.
 neighbours of ``c`` flanking ``b`` are 4-adjacent to ``b`` (0.25 m < need, excluded), so the segment
 touches neither; it can only cross ``c`` between c's other two sides or end at c's centre, i.e. stay in
 the half of ``c`` away from ``b``, at least 0.5 / sqrt(2) = 0.354 m >= need from ``b``'s square.
-``tests/swarm/test_grid.py`` checks the guarantee exactly on random maps for several radii.
+``tests/swarm/grid/test_grid.py`` checks the guarantee exactly on random maps for several radii.
 
 For the default 0.3 m robot with 0.05 m margin the rule removes the passable cells 4-adjacent to a
 blocked cell and keeps the ones that touch one only diagonally; along any valid segment the robot's

@@ -11,7 +11,7 @@ copy row by row and recomputes only the rows within ``margin`` of a changed row,
 everything a row depends on (the erosion's row offsets for the space; ``reach`` steps plus the frontier
 test's neighbour for the view cells). It runs the same kernels on a slice of the map that extends
 ``margin`` rows beyond the band and keeps the band's rows, which the slice's edges cannot reach, so every
-kept row is what a whole-map computation gives, bit for bit (``tests/swarm/test_grid_kept.py`` checks it
+kept row is what a whole-map computation gives, bit for bit (``tests/swarm/grid/test_grid_kept.py`` checks it
 on growing maps).
 
 Entries are found by the map's buffer (a robot's knowledge map is one array for a whole run), but an entry

@@ -13,7 +13,7 @@ from swarm.campaign.store import ResultsStore
 from swarm.schema import RUNS, THRESHOLD_COLUMNS, TIMESERIES, MessageCounts, Summary, dropped, summary_columns
 from swarm.simulation import Simulation
 
-from tests.campaign.test_campaign import TINY
+from tests.swarm.campaign.test_campaign import TINY
 
 SPEC = {"map": {"kind": "building", "size": 20}, "robots": {"count": 2}, "seed": 3, "stop": {"max_ticks": 60},
         "comm": {"loss": 0.5}}

@@ -23,7 +23,7 @@ from swarm.testing import CHECKS, ExplorerCheckError, check_explorer
 if TYPE_CHECKING:
     from swarm.simulation import Simulation  # noqa: F401  (an annotation that does not resolve at run time)
 
-TEMPLATE = Path(__file__).resolve().parents[1] / "examples" / "plugin"
+TEMPLATE = Path(__file__).resolve().parents[2] / "examples" / "plugin"
 FAST = dict(ticks=30)   # the broken explorers fail early; a short run keeps the test quick
 
 

@@ -148,7 +148,7 @@ def test_bad_values_name_their_key(old, new, field):
 
 def test_broken_run_is_recorded_and_does_not_stop_the_campaign(tmp_path):
     text = TINY.replace('algorithm = ["frontier", {name = "frontier", params = {recheck_ticks = 5}, label = "frontier-eager"}]',
-                        'algorithm = ["frontier", {name = "tests.campaign.broken:Boom", label = "boom"}]'
+                        'algorithm = ["frontier", {name = "tests.swarm.campaign.broken:Boom", label = "boom"}]'
                         ).replace('map = ["building", "cave"]', 'map = ["building"]')
     spec = parse_campaign(text)
     out = run_campaign(spec, tmp_path, executor=make_executor(inline=True), progress=False)

@@ -146,7 +146,7 @@ def test_any_object_an_algorithm_returns_is_sent_or_dropped(sender, fields, kind
 def test_a_live_run_survives_an_agent_spraying_hostile_packets():
     """A remote agent that, every tick, puts random bytes, mutated acts (signed and unsigned) and acts
     carrying mutated messages around its honest reply: the run ends as a clean one does."""
-    from tests.swarm.test_trust import SPEC, Agent, remote_run, same_run
+    from tests.swarm.transport.test_trust import SPEC, Agent, remote_run, same_run
     from swarm.simulation import Simulation
 
     rng = np.random.default_rng(31)
@@ -184,7 +184,7 @@ def test_a_live_run_survives_an_agent_spraying_hostile_packets():
         return [*out, (act, sign_act(token, tick, act))]
 
     clean = Simulation({**SPEC, "transport": "inprocess"}).run()
-    from tests.swarm.test_trust import honest
+    from tests.swarm.transport.test_trust import honest
     r = remote_run({1: spray, 2: honest})
     same_run(r, clean)
     assert r.summary["acts"]["malformed"] == [0, 0, 0]

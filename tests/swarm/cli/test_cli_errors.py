@@ -168,7 +168,7 @@ def test_the_readme_remote_agent_commands_work(tmp_path):
     import subprocess
     import sys
 
-    from tests.swarm.test_transport import free_port
+    from tests.swarm.transport.test_transport import free_port
 
     endpoint = f"tcp/127.0.0.1:{free_port()}"
     token = tmp_path / "demo.token"

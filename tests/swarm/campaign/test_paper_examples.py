@@ -13,7 +13,7 @@ from swarm.campaign import load_campaign, make_executor, parse_campaign, run_cam
 from swarm.campaign.report import build_report
 from swarm.campaign.report.load import expected_runs
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 FULL = ROOT / "examples" / "minotaur-paper.toml"
 SMALL = ROOT / "examples" / "minotaur-paper-small.toml"
 

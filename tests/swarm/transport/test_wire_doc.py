@@ -15,7 +15,7 @@ import pytest
 from swarm.simulation import Simulation, TransportOptions
 from swarm.transport.auth import RunSecret
 
-DOC = Path(__file__).resolve().parents[2] / "docs" / "wire-format.md"
+DOC = Path(__file__).resolve().parents[3] / "docs" / "wire-format.md"
 
 
 @pytest.mark.timeout(180)

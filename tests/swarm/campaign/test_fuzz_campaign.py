@@ -26,7 +26,7 @@ from swarm.cli import main
 
 from .test_campaign import TINY
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 FIGURES = (ROOT / "examples" / "minotaur-paper-figures.toml").read_text()
 SMALL = (TINY.replace("replicates = 2", "replicates = 1").replace('map = ["building", "cave"]', 'map = ["building"]')
          .replace("robots = [1, 2]", "robots = [1]").replace("max_ticks = 250", "max_ticks = 30"))
@@ -106,7 +106,7 @@ def toml_text(doc: dict) -> str:
 
 NAMES = ["building", "cave", "file", "greed", "frontier", "tnf", "minotaur", "global", "los", "multiwall", "maes",
          "together", "random", "inprocess", "zenoh", "label", "kind", "name", "model", "params", "x" * 300, "",
-         "tests.campaign.broken:Boom", "os:system", "../../etc/passwd", "\u00e9\u00e8", "a\tb"]
+         "tests.swarm.campaign.broken:Boom", "os:system", "../../etc/passwd", "\u00e9\u00e8", "a\tb"]
 TEXT = st.text(st.characters(exclude_categories=["Cs"]), max_size=8)  # TOML strings cannot hold surrogates
 scalars = st.one_of(st.sampled_from(NAMES), st.integers(-3, 200), st.sampled_from([0, 1, 2**63, -2**63, 10**30]),
                     st.floats(allow_nan=True, allow_infinity=True), st.booleans(), TEXT)

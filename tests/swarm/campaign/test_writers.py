@@ -24,7 +24,7 @@ from swarm.campaign.writers import WRITERS, overlaps
 
 from .test_campaign import TINY
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def spec_file(tmp_path: Path, replicates: int = 4) -> Path:

@@ -17,7 +17,7 @@ from swarm.record.reader import Recording
 from swarm.simulation import Simulation
 
 SPEC = {"seed": 2, "map": {"kind": "building", "size": 30}, "robots": {"count": 4},
-        "algorithm": {"name": "tests.viewer.agents:DebugExplorer"}, "stop": {"max_ticks": 700},
+        "algorithm": {"name": "tests.swarm.viewer.agents:DebugExplorer"}, "stop": {"max_ticks": 700},
         "radio": {"tx_power_dbm": -30.0}}  # weak radios: links come and go as the robots move
 CHECK_TICKS = (0, 1, 2, 63, 64, 65, 200, 411)
 BLOCK_TICKS = 64  # several blocks, so block boundaries are exercised

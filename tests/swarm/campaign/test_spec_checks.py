@@ -22,7 +22,7 @@ from swarm.cli import main
 
 from .test_campaign import TINY
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 PAPER = ROOT / "examples" / "minotaur-paper.toml"
 
 

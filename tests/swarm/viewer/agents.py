@@ -1,5 +1,5 @@
 """A small explorer with rich debug info and its own messages, for recorder tests
-(loaded as ``tests.viewer.agents:DebugExplorer``)."""
+(loaded as ``tests.swarm.viewer.agents:DebugExplorer``)."""
 
 from __future__ import annotations
 

@@ -361,7 +361,7 @@ def test_example_paper_layout_is_valid_for_the_paper_campaign():
     from swarm.campaign import load_campaign
     from swarm.campaign.report.layout import check_layout, load_layout
 
-    root = Path(__file__).resolve().parents[2]
+    root = Path(__file__).resolve().parents[3]
     spec = load_campaign(root / "examples" / "minotaur-paper-small.toml")
     orders = {dim: [o.label for o in opts] for dim, opts in spec.grid.items()}
     layout = load_layout(root / "examples" / "minotaur-paper-figures.toml")
