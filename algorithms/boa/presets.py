@@ -25,7 +25,7 @@ class Preset:
     source: str = ""
 
 
-_T2 = "paper 000 Table 2"
+_T2 = "the xBOA paper, Table 2"
 _CODE = {"c": 0.01, "a": 0.1, "p": 0.8}
 
 PRESETS: dict[str, Preset] = {p.name: p for p in (
@@ -40,10 +40,10 @@ PRESETS: dict[str, Preset] = {p.name: p for p in (
     Preset("ABOA-pop20", "ABOA", 20, {"a": 0.992, "c": 0.98, "p": 0.983, "mu": 1.356, "switch": "code"},
            _T2 + " (pop-5 values)"),
     Preset("SABOA-pop20", "SABOA", 20, {"p": 0.237, "switch": "code"}, _T2 + " (pop-5 values)"),
-    Preset("IBOA-Kent-pop5", "IBOA-Kent", 5, dict(_CODE), "paper 001 section 3"),
-    Preset("IBOA-Kent-pop20", "IBOA-Kent", 20, dict(_CODE), "paper 001 section 3"),
-    Preset("IBOA-Levy-pop5", "IBOA-Levy", 5, dict(_CODE), "paper 004 (BOA constants)"),
-    Preset("IBOA-Levy-pop20", "IBOA-Levy", 20, dict(_CODE), "paper 004 (BOA constants)"),
+    Preset("IBOA-Kent-pop5", "IBOA-Kent", 5, dict(_CODE), "IBOA (Kent), section 3"),
+    Preset("IBOA-Kent-pop20", "IBOA-Kent", 20, dict(_CODE), "IBOA (Kent), section 3"),
+    Preset("IBOA-Levy-pop5", "IBOA-Levy", 5, dict(_CODE), "IBOA (Lévy), its BOA constants"),
+    Preset("IBOA-Levy-pop20", "IBOA-Levy", 20, dict(_CODE), "IBOA (Lévy), its BOA constants"),
     Preset("code-defaults", "xBOA", 5, {**_CODE, "switch": "code"}, "reference params.yaml"),
 )}
 
