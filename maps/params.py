@@ -184,9 +184,22 @@ def _describe(tp: Any) -> tuple[str, str] | None:
     return None
 
 
+OMIT_DEFAULT = "omit_default"
+"""Field metadata key: ``field(default=..., metadata={OMIT_DEFAULT: True})`` leaves the field out of
+:func:`to_mapping` while it holds its default. A setting added to an existing section carries it, so every
+spec written before it existed keeps its canonical form and its run key (campaign folders resume)."""
+
+
 def to_mapping(obj: Any) -> dict[str, Any]:
-    """JSON-able dict of a parameter dataclass (tuples become lists, nested mappings become dicts)."""
-    return {f.name: _plain(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+    """JSON-able dict of a parameter dataclass (tuples become lists, nested mappings become dicts); fields
+    marked :data:`OMIT_DEFAULT` are left out while they hold their default."""
+    out = {}
+    for f in dataclasses.fields(obj):
+        value = getattr(obj, f.name)
+        if f.metadata.get(OMIT_DEFAULT) and f.default is not dataclasses.MISSING and value == f.default:
+            continue
+        out[f.name] = _plain(value)
+    return out
 
 
 def _plain(v: Any) -> Any:

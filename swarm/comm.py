@@ -25,25 +25,29 @@ from typing import Any, Sequence
 import numpy as np
 from numba import njit
 
-from maps.params import check_choice, check_float, check_int
+from maps.params import OMIT_DEFAULT, check_choice, check_float, check_int
 
 from .api import CELL_M
 from .knowledge import check_writable_map, merge_cells_many, sync_box_unchecked, sync_changes
 from .messages import MAX_MESSAGE_BYTES, MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
 from .schema import DROP_CAUSES
 
-SHARING_MODES = ("delta", "full", "off")
+SHARING_MODES = ("delta", "full", "off", "maes_heartbeat", "maes_sync")
+LINK_TIMES = ("send", "receive")
 
 
 @dataclass(frozen=True)
 class CommSpec:
     """The ``[comm]`` section of a run spec.
 
-    ``map_sharing``: ``delta`` (default), ``full`` or ``off``; ``share_every`` ticks (MAES heartbeats every
-    10). ``loss``: probability that a message is lost on each link (seeded, independent per message and
-    receiver). ``bandwidth``: bytes per tick each link carries (0 = unlimited); what exceeds it is dropped
-    in send order. ``neighbour_range_m``: robots within this range and in line of sight appear in
-    ``Observation.neighbours`` (0 = the lidar range).
+    ``map_sharing``: ``delta`` (default), ``full`` or ``off``, or for MAES parity ``maes_heartbeat`` /
+    ``maes_sync`` (MAES's own merges, :mod:`swarm.maes_merge`); ``share_every`` ticks (MAES heartbeats
+    every 10, MAES's TNF syncs every 20). ``loss``: probability that a message is lost on each link
+    (seeded, independent per message and receiver). ``bandwidth``: bytes per tick each link carries
+    (0 = unlimited); what exceeds it is dropped in send order. ``neighbour_range_m``: robots within this
+    range and in line of sight appear in ``Observation.neighbours`` (0 = the lidar range). ``link_at``:
+    judge a message's link from the positions when it is sent (``send``, default, as a radio does) or when
+    it is read a tick later (``receive``, as MAES does, docs/maes.md section 6.1).
     """
 
     map_sharing: str = "delta"
@@ -51,9 +55,11 @@ class CommSpec:
     loss: float = 0.0
     bandwidth: int = 0
     neighbour_range_m: float = 0.0
+    link_at: str = field(default="send", metadata={OMIT_DEFAULT: True})
 
     def __post_init__(self) -> None:
         check_choice("comm.map_sharing", self.map_sharing, SHARING_MODES)
+        check_choice("comm.link_at", self.link_at, LINK_TIMES)
         check_int("comm.share_every", self.share_every, 1, 1_000_000)
         check_float("comm.loss", self.loss, 0.0, 1.0)
         check_int("comm.bandwidth", self.bandwidth, 0)
@@ -206,7 +212,7 @@ class MapSharing:
         (None) every delta compares the whole maps."""
         self.n = n
         self.spec = spec
-        self.enabled = spec.map_sharing != "off" and n > 1
+        self.enabled = spec.map_sharing in ("delta", "full") and n > 1  # the maes_* modes: swarm.maes_merge
         self.last_shared = np.zeros((n, *shape), dtype=np.uint8) if spec.map_sharing == "delta" else None
         self.seq = [0] * n
         self.seen_seq = [[0] * n for _ in range(n)]          # [receiver][sender] last seq merged

@@ -34,6 +34,7 @@ from .api import Action, Pose, RobotInfo
 from .comm import Envelope, MapSharing, Medium
 from .grid._validate import vouch_known
 from .knowledge import sync_changes, sync_regions_flat
+from .maes_merge import MODES as MAES_MODES, MaesMerge
 from .metrics import Metrics
 from .navigation import NavigationFleet
 from .result import RunResult
@@ -117,6 +118,9 @@ class Simulation:
         self.medium = Medium(n, self.comm, self.streams.radio, map_shape=self.truth.shape)
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach)  # told of every scan
+        self.maes_merge = (MaesMerge(n, self.comm.map_sharing, self.comm.share_every)
+                           if self.comm.map_sharing in MAES_MODES else None)
+        self._in_flight: list[list[Envelope]] | None = None  # link_at = "receive": last tick's outboxes
         self.inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         self._deliveries: list[tuple[Any, list[int]]] = []  # last tick's messages and who got each, in inbox order
         self.neighbour_range = self.comm.neighbour_range_m or self.lidar_params.range_m
@@ -192,7 +196,7 @@ class Simulation:
             self.sharing.scanned(poses)
             self.tracker.update_coverage(poses[:, :2], active=active)
             links = _TickLinks(self.links, poses[:, :2])
-            inboxes, merged = self._receive()
+            inboxes, merged = self._receive(tick, links)
             explored = self.tracker.explored
             self.metrics.check_thresholds(tick, explored)
             if explored >= spec.stop.explored:
@@ -242,20 +246,30 @@ class Simulation:
         return commands
 
     # ---------------------------------------------------------------------------------- messaging ----
-    def _receive(self) -> tuple[list[list[Envelope]], list[list[np.ndarray | None]]]:
+    def _receive(self, tick: int, links: Any) -> tuple[list[list[Envelope]], list[list[np.ndarray | None]]]:
         """This tick's inboxes (sent last tick); map updates are merged into the receivers' maps, each into
-        all its receivers at once (:meth:`MapSharing.receive_tick`). The merged cells per robot are listed
-        only for a batched host, which ships them."""
+        all its receivers at once (:meth:`MapSharing.receive_tick`), or MAES's merges done. The merged cells
+        per robot are listed only for a host with mirrors, which ships them (None: the whole map may have
+        changed). With ``comm.link_at = "receive"`` last tick's broadcasts are judged now, by this tick's
+        links."""
+        if self._in_flight is not None:
+            self._deliver(tick - 1, self._in_flight, links)
+            self._in_flight = None
         inboxes, self.inboxes = self.inboxes, [[] for _ in range(self.spec.robots.count)]
         deliveries, self._deliveries = self._deliveries, []
         if not deliveries:  # most ticks
             return inboxes, [[] for _ in inboxes]
         merged = self.sharing.receive_tick(deliveries, self.known, ~self.failed, cells=self._mirror is not None)
+        if self.maes_merge is not None:
+            for robot in sorted(self.maes_merge.receive(deliveries, self.known, ~self.failed)):
+                merged[robot].append(None)
         return inboxes, merged
 
     def _send(self, tick: int, poses: np.ndarray, actions: list[Action | None], links: Any) -> list[list[Envelope]]:
         """Collect this tick's broadcasts (map sharing + algorithms) and deliver them for next tick."""
         service = self.sharing.outgoing(tick, self.known, poses)
+        if self.maes_merge is not None:
+            service = self.maes_merge.outgoing(tick, lambda: self._sight(poses)[1])
         outboxes: list[list[Envelope]] = []
         for i, action in enumerate(actions):
             if self.failed[i]:
@@ -274,12 +288,20 @@ class Simulation:
         if self.medium.dropped:
             self._note_drops(tick)
         if any(outboxes):
-            link = links.senders_link([i for i, out in enumerate(outboxes) if out])
-            if np.count_nonzero(self.failed):
-                link = link & ~self.failed[:, None]
-            self.inboxes = self.medium.deliver(tick, outboxes, link)
-            self._deliveries = [(env.message, env.delivered_to) for out in outboxes for env in out if env.delivered_to]
+            if self.comm.link_at == "send":
+                self._deliver(tick, outboxes, links)
+            else:
+                self._in_flight = outboxes
         return outboxes
+
+    def _deliver(self, tick: int, outboxes: list[list[Envelope]], links: Any) -> None:
+        """Judge the broadcasts of ``tick`` by ``links`` (the positions of send or of receipt) into next tick's
+        inboxes; failed robots receive nothing."""
+        link = links.senders_link([i for i, out in enumerate(outboxes) if out])
+        if np.count_nonzero(self.failed):
+            link = link & ~self.failed[:, None]
+        self.inboxes = self.medium.deliver(tick, outboxes, link)
+        self._deliveries = [(env.message, env.delivered_to) for out in outboxes for env in out if env.delivered_to]
 
     # ------------------------------------------------------------------------------- observations ----
     def _sight(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
