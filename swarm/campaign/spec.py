@@ -30,7 +30,8 @@ timeseries_every = 10
 robots = 8
 size = 50
 
-[[include]]                              # add cells outside the cross product (one value per key)
+[[include]]                              # add cells outside the cross product: a value or a list per
+                                         # key; a key left out takes every grid value
 map = "building"
 size = 150
 robots = 16
@@ -56,6 +57,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+import itertools
 import json
 import tomllib
 from array import array
@@ -79,6 +81,8 @@ SECTIONS = ("campaign", "grid", "run", "stop", "output", "exclude", "include")
 SPEC_FORMAT = 1
 MAX_OPTIONS = 10_000
 """Values per grid dimension."""
+MAX_INCLUDED_CELLS = 100_000
+"""Cells all ``[[include]]`` rules may add (they are listed, not counted from the grid)."""
 
 
 @dataclass(frozen=True)
@@ -216,14 +220,26 @@ class CampaignSpec:
 
     @cached_property
     def _include_cells(self) -> tuple[dict[str, Option], ...]:
+        """The cells each ``[[include]]`` adds: per dimension its value, a list of values (each one), or, when
+        the dimension is left out, every value the grid has for it; crossed in grid order. So one include
+        can add a whole slice, e.g. one algorithm under another radio on every map of the grid."""
         extra = []
         for k, rule in enumerate(self.include):
-            cell = {}
+            choices = []
             for dim in self.grid:
                 if dim not in rule:
-                    raise InvalidInput(f"include[{k}].{dim}", None, "a value for every grid dimension")
-                cell[dim] = self._option(dim, rule[dim], f"include[{k}].{dim}")
-            extra.append(cell)
+                    choices.append(list(self.grid[dim]))
+                    continue
+                values = rule[dim] if isinstance(rule[dim], list) else [rule[dim]]
+                if not values:
+                    raise InvalidInput(f"include[{k}].{dim}", rule[dim], "a value, a non-empty list, or the key left "
+                                                                         "out (every grid value)")
+                choices.append([self._option(dim, v, f"include[{k}].{dim}") for v in values])
+            for combo in itertools.product(*choices):
+                extra.append(dict(zip(self.grid, combo)))
+                if len(extra) > MAX_INCLUDED_CELLS:
+                    raise InvalidInput(f"include[{k}]", None, f"at most {MAX_INCLUDED_CELLS} cells from all "
+                                                              "[[include]] rules together")
         return tuple(extra)
 
     def _coded_cells(self) -> Iterator[tuple[int, dict[str, Option]]]:

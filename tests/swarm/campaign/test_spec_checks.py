@@ -216,3 +216,18 @@ def test_a_radio_override_is_checked_against_each_cells_robot_count():
     assert err.field == "radio.tx_power_overrides.6" and "robots=2" in str(err) and "radio=weak6" in str(err)
     ok = parse_campaign(grid + '\n[[exclude]]\nrobots = 2\nradio = "weak6"\n')
     assert all(r.spec.radio.tx_power_overrides == {6: 10.0} for r in ok.runs() if r.cell["radio"] == "weak6")
+
+
+def test_an_include_adds_a_slice_keys_left_out_take_every_grid_value():
+    """One [[include]] adds the frontier algorithm under a third radio on every map, size and robot count of
+    the grid: a list is each of its values, a key left out every grid value."""
+    extra = '\n[[include]]\nalgorithm = "frontier"\nradio = {model = "multiwall", label = "mw"}\nrobots = [1, 2]\n'
+    spec = parse_campaign(TINY + extra)
+    added = [r for r in spec.runs() if r.cell["radio"] == "mw"]
+    grid = parse_campaign(TINY)
+    assert len(added) == 2 * 1 * 2 * 1 * 2  # maps x sizes x robots x spawns x replicates (one algorithm)
+    assert {(r.cell["map"], r.cell["robots"]) for r in added} == {(m, n) for m in ("building", "cave") for n in ("1", "2")}
+    assert len(spec.runs()) == len(grid.runs()) + len(added) == spec.run_count()
+    assert all(r.cell["algorithm"] == "frontier" and r.spec.algorithm.params["recheck_ticks"] == 20 for r in added)
+    with pytest.raises(InvalidInput, match=r"include\[0\]\.robots"):
+        parse_campaign(TINY + '\n[[include]]\nrobots = []\n')
