@@ -63,21 +63,77 @@ and, where marked, from the paper's description:
    no-progress watchdog and time-limited exclusions shared with Greed (:mod:`algorithms.recovery`); MAES
    TNF drops an unreachable frontier only for the current decision.
 8. ``forget_ticks`` (default 0 = never, as the paper) can make stored destinations expire (an addition).
+
+**``variant = "maes"``** puts back departures 1-3, MAES's utility with its bugs, for parity and ablation
+runs (the default ``"swarm"`` is all of the above). Line numbers are those of
+``Assets/Scripts/ExplorationAlgorithm/TheNextFrontier/TnfExplorationAlgorithm.cs`` in DEIS-Tools/MAES
+(commit 1bb0312, 2024-10-14) unless another file is named; the terms are in :mod:`algorithms.tnf_utility`
+(``maes_*``). It reproduces:
+
+- *U* = I + D - C, the best frontier first, the next best when there is no path to it (lines 159-161,
+  295-321: we score only frontiers with a reachable target, which picks the same one).
+- *I* (bug 2): the Gaussian ``exp(alpha x^2 + beta x + gamma)`` with A = 5, B = 0.5, C = 0.1 (lines
+  35-51) of cell values Unseen = 0.5, else 0 (``Utilities/ExtensionUtils.cs`` lines 39-46; a frontier
+  cell is explored, so 0, line 410), summed over each frontier cell and its 8 neighbours and divided by
+  the number of frontiers (lines 104-127), every frontier found counting, reachable or not (lines 109,
+  296). No normalisation: I is about ``2.5 x`` (unseen neighbour slots) / F.
+- *D* (bug 1): ``w^(alpha-1) (1-w)^(beta-1)`` with ``w = sqrt(sum_c |p - c| / Dmax)``, straight-line
+  distances from the robot's position ``p`` to every cell of the frontier (``Wavefront``, lines 129-142),
+  ``Dmax`` the largest robot-to-cell distance over all frontiers (line 301), ``w`` unclamped, so
+  ``(1 - w)^(beta-1)`` is large and negative for odd ``beta - 1`` and large and positive for even. MAES's
+  alpha and beta are ``int`` (lines 64-65, 97): the variant refuses non-integer values.
+- *C* (bug 3): ``sum over sensed robots r of sqrt(sum_c |p_r - c| / Dmax_r)``, ``Dmax_r`` from ``p_r``
+  over all frontiers, subtracted (lines 144-157, 160), so frontiers far from the others are penalised;
+  ``p_r = p + distance (cos b, sin b)`` with ``b`` the bearing relative to the robot's heading used as a
+  global angle (line 152; ``Robot/Robot2DController.cs`` lines 438-448 make the angle relative to the
+  robot's forward; ``Utilities/Geometry.cs`` lines 78-82). swarm's :class:`~swarm.api.Neighbour` bearing is
+  relative to the heading too, so ``p_r`` is placed exactly as MAES places it (right only when the robot
+  heads along +x). The sensed robots are the observation's ``neighbours``, read at the decision, as MAES
+  senses them while scoring (line 145); no sensed robot, no penalty (line 146).
+- *Destinations*: MAES's plain TNF stores the received ``(map, id, destination)`` tuples'
+  destinations in ``_currentDestinations`` (lines 83, 277-282) and never reads them. So the variant
+  neither uses nor **broadcasts** :class:`Destination` (and never yields, departure 5, which needs them):
+  sending them would change nothing the robots do, only add bytes to the message metrics and, under a
+  per-link byte budget, compete with the map updates. The map part of MAES's broadcast is the runtime's
+  map sharing, as for ``swarm`` (departure 4).
+
+It does not reproduce, keeping swarm's way:
+
+- *Resolution.* Frontiers are swarm's (0.5 m cells, FREE with an UNSEEN 4-neighbour, on the robot's own
+  map; departure 6), not MAES's 1 m tiles with an unseen 8-neighbour (lines 392-444). So that a frontier
+  ``L`` metres long weighs what its ``L`` tiles weigh in MAES, each cell counts for
+  ``MAES_CELL_WEIGHT = 0.5`` in the three per-cell sums (I, and the sums under the square roots of D and
+  C); the scale of each term and the sign flip then match MAES's up to the different cell rules.
+- *Geometry details.* Distances are to cell centres; MAES measures to a tile's integer corner (line 141
+  converts the ``Vector2Int`` tile, whose centre is at +0.5, ``Map/CoarseGrainedMap.cs`` line 87), a
+  constant (0.5, 0.5) m shift. ``p`` is the observation's pose, not MAES's SLAM position with its
+  random-walk error. Arithmetic is float64 (MAES: float32). When every frontier cell is at ``p``
+  (``Dmax = 0``, MAES: 0/0 = NaN) w is 0. Ties go to the lower target row, then column (MAES: its list
+  order).
+- *Who is sensed*: swarm's neighbours (within ``comm.neighbour_range_m``, default the lidar range, in line
+  of sight), not ``SenseNearbyRobots``'s range / wall / material-link rules
+  (``Robot/CommunicationManager.cs`` lines 313-331), nor its 45-degree angle nudge (lines 152-159).
+- *Everything around the utility*: targets, the navigator, when to decide (MAES re-decides only at the
+  end of its path, after a collision or a message, lines 205-222, 289-291), the exclusions and the
+  watchdog (departure 7; excluded cells and ``min_frontier_cells`` also leave F), the collision
+  mitigation, and the radio (departure 4). ``penalty_radius_m``, ``announce_every``, ``forget_ticks`` and
+  ``yield_on_conflict`` do nothing under ``maes``.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from swarm.api import CELL_M, Action, Observation, RobotInfo, cell_centre, cell_of, check_bool, check_float, check_int
+from swarm.api import (CELL_M, OMIT_DEFAULT, Action, InvalidInput, Observation, RobotInfo, cell_centre, cell_of,
+                       check_bool, check_choice, check_float, check_int)
 from swarm.api.grid import DEFAULT_MARGIN_M, configuration_space, default_view_reach_cells
 from swarm.api.messages import MessageError, message
 
 from .recovery import Backoff, Exclusions, Watchdog, check_recovery_params, unseen_near
-from .tnf_utility import FrontierScore, score_frontiers
+from .tnf_utility import VARIANTS, FrontierScore, maes_sensed_position, score_frontiers
 
 
 @message("tnf.destination")
@@ -97,6 +153,9 @@ class Destination:
 
 @dataclass(frozen=True)
 class TNFParams:
+    # "swarm" (the departures below) | "maes" (MAES's utility, bugs included); left out of the canonical spec
+    # at its default, so TNF runs specified before the variant existed keep their keys
+    variant: str = field(default="swarm", metadata={OMIT_DEFAULT: True})
     alpha: float = 1.0               # Beta-kernel shape of the distance term (MAES 2024 campaign: 1, 10;
     beta: float = 10.0               # the 2022 MAES paper: 8, 8)
     penalty_radius_m: float = 0.0    # coordination wavefront reach; 0 = the lidar range
@@ -116,6 +175,13 @@ class TNFParams:
     def __post_init__(self) -> None:
         check_float("alpha", self.alpha, 1.0, 100.0)
         check_float("beta", self.beta, 1.0, 100.0)
+        check_choice("variant", self.variant, VARIANTS)
+        if self.variant == "maes":
+            for name in ("alpha", "beta"):
+                value = getattr(self, name)
+                if value != int(value):
+                    raise InvalidInput(name, value, "a whole number with variant = 'maes' (MAES's alpha and beta "
+                                                    "are int; (1 - w)^(beta - 1) of a negative 1 - w needs one)")
         check_float("penalty_radius_m", self.penalty_radius_m, 0.0, 1000.0)
         check_int("announce_every", self.announce_every, 1, 1_000_000)
         check_int("forget_ticks", self.forget_ticks, 0, 10_000_000)
@@ -136,6 +202,7 @@ class TNF:
 
     name = "tnf"
     Params = TNFParams
+    maes_map_merge = ("maes_sync", 20)  # comm.map_sharing = "maes": MAES's TNF syncs maps every 20 ticks
 
     def reset(self, robot: RobotInfo, params: TNFParams, rng: np.random.Generator) -> None:
         self.robot = robot
@@ -143,6 +210,7 @@ class TNF:
         self.rng = rng
         self.reach = default_view_reach_cells(robot.radius, DEFAULT_MARGIN_M)
         self.penalty_radius = params.penalty_radius_m or robot.lidar_range
+        self.maes = params.variant == "maes"   # MAES's utility; no destinations sent or used (module docstring)
         self.destinations: dict[int, tuple[tuple[int, int], int]] = {}   # sender -> (cell, tick heard)
         self.target: tuple[int, int] | None = None
         self.goal: tuple[float, float] | None = None
@@ -195,7 +263,8 @@ class TNF:
             known_before = self.destinations.get(msg.sender)
             self.destinations[msg.sender] = (cell, obs.tick)
             news = known_before is None or known_before[0] != cell   # a re-announcement changes nothing
-            if (self.params.yield_on_conflict and news and self.may_yield and msg.sender < self.robot.id
+            if (self.params.yield_on_conflict and not self.maes and news and self.may_yield
+                    and msg.sender < self.robot.id
                     and self.target is not None
                     and CELL_M * math.dist(cell, self.target) < self.penalty_radius / 2):
                 self.may_yield = False
@@ -205,7 +274,7 @@ class TNF:
             self.destinations = {s: v for s, v in self.destinations.items() if v[1] > horizon}
 
     def _announce(self, tick: int) -> tuple[Destination, ...]:
-        if self.robot.n_robots < 2 or self.goal is None:
+        if self.robot.n_robots < 2 or self.goal is None or self.maes:
             return ()
         if self.announced_at >= 0 and tick - self.announced_at < self.params.announce_every:
             return ()
@@ -253,12 +322,22 @@ class TNF:
 
     def _best(self, obs: Observation) -> FrontierScore | None:
         p = self.params
+        start = _clip(cell_of(obs.pose.x, obs.pose.y), obs.known.shape)
+        exclude = self.exclusions.mask(obs.known.shape, obs.tick)
+        if self.maes:
+            # MAES's sensed robots, placed with their relative bearing as a global angle (its line 152).
+            sensed = [maes_sensed_position(obs.pose.x, obs.pose.y, n.distance, n.bearing) for n in obs.neighbours]
+            scores = score_frontiers(obs.known, start, np.zeros((0, 2), dtype=np.int64), alpha=p.alpha, beta=p.beta,
+                                     robot_radius_m=self.robot.radius, penalty_radius_m=0.0, reach=self.reach,
+                                     exclude=exclude, min_size=p.min_frontier_cells, variant="maes",
+                                     position_m=(obs.pose.x, obs.pose.y),
+                                     sensed_m=np.array(sensed, dtype=np.float64).reshape(-1, 2))
+            return scores[0] if scores else None
         dest = [cell for cell, _ in self.destinations.values()]
-        scores = score_frontiers(obs.known, _clip(cell_of(obs.pose.x, obs.pose.y), obs.known.shape),
+        scores = score_frontiers(obs.known, start,
                                  np.array(dest, dtype=np.int64).reshape(-1, 2), alpha=p.alpha, beta=p.beta,
                                  robot_radius_m=self.robot.radius, penalty_radius_m=self.penalty_radius,
-                                 reach=self.reach, exclude=self.exclusions.mask(obs.known.shape, obs.tick),
-                                 min_size=p.min_frontier_cells)
+                                 reach=self.reach, exclude=exclude, min_size=p.min_frontier_cells)
         return scores[0] if scores else None
 
     # ------------------------------------------------------------------------------------ collisions ----

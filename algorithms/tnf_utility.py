@@ -15,6 +15,20 @@ See :mod:`algorithms.tnf` for the paper, the MAES implementation and every depar
   ``C(f) = max(0, 1 - d_dest(f) / R)`` at the frontier's target: 1 at an announced destination, 0 from
   ``R`` on.
 
+With ``variant = "maes"`` (:func:`score_frontiers`) the three terms are MAES's instead, bugs included
+(``TnfExplorationAlgorithm.cs``; what is and is not reproduced is listed in :mod:`algorithms.tnf`):
+
+- ``I(f) = k sum_c [G(v_c) + sum_{n in N8(c)} G(v_n)] / F`` with ``F`` the number of frontiers
+  (:func:`maes_information`);
+- ``D(f) = w^(alpha-1) (1-w)^(beta-1)``, ``w = sqrt(k sum_c |p - c| / Dmax)`` from the robot's position
+  ``p`` in straight lines, ``Dmax`` the largest ``|p - c|`` over every frontier cell, ``w`` unclamped
+  (:func:`maes_wavefront`, :func:`maes_distance_term`);
+- ``C(f) = sum_r sqrt(k sum_c |p_r - c| / Dmax_r)`` over the sensed robots, ``p_r`` placed with the
+  relative bearing as a global angle (:func:`maes_sensed_position`, :func:`maes_coordination`);
+
+where ``k = MAES_CELL_WEIGHT`` turns a sum over our 0.5 m cells into MAES's sum over 1 m tiles (a frontier
+``L`` metres long has ``L`` tiles in MAES and about ``2 L`` cells here).
+
 A frontier's **target** is the cell the robot drives to: among the configuration-space cells from which
 the frontier is in view (at most ``reach`` 4-connected steps through FREE cells from one of its cells,
 the view rule of :mod:`swarm.grid.targets`) and that the robot can reach, the one nearest the frontier's
@@ -29,7 +43,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from swarm.api import FREE, SOLID, UNSEEN, grid
+from swarm.api import CELL_M, FREE, SOLID, UNSEEN, cell_centre, grid
 
 GAUSS_A, GAUSS_B, GAUSS_C = 5.0, 0.5, 0.1
 UNSEEN_VALUE = 0.5
@@ -45,6 +59,11 @@ def gaussian(x: float | np.ndarray) -> float | np.ndarray:
 
 G_UNSEEN = float(gaussian(UNSEEN_VALUE))
 G_KNOWN = float(gaussian(0.0))
+
+VARIANTS = ("swarm", "maes")
+MAES_TILE_M = 1.0
+MAES_CELL_WEIGHT = CELL_M / MAES_TILE_M
+"""What one of our cells counts for in MAES's per-tile sums (its coarse tiles are 1 m, our cells 0.5 m)."""
 
 
 def cell_information(known: np.ndarray, cells: np.ndarray) -> np.ndarray:
@@ -76,6 +95,54 @@ def coordination_penalty(distance_m: np.ndarray, radius_m: float) -> np.ndarray:
     return np.clip(1.0 - d / radius_m, 0.0, 1.0)
 
 
+# ------------------------------------------------------------------------ MAES's terms (variant maes) ----
+def maes_information(raw: np.ndarray, n_frontiers: int) -> np.ndarray:
+    """MAES's I: ``k raw / F`` (``TnfExplorationAlgorithm.cs`` lines 104-110: the Gaussian sum over each
+    frontier cell and its 8 neighbours, divided by ``_frontiers.Count``)."""
+    return MAES_CELL_WEIGHT * np.asarray(raw, dtype=np.float64) / n_frontiers
+
+
+def maes_wavefront(fr: Frontiers, point_m: tuple[float, float]) -> np.ndarray:
+    """MAES's ``WavefrontNormalized`` from ``point_m`` (x, y in metres) for every frontier of ``fr``:
+    ``sqrt(k sum_c |p - c| / Dmax)``, ``|p - c|`` the straight-line distance to each cell's centre and
+    ``Dmax`` the largest over all of ``fr``'s cells (lines 129-133, 140-142, and 153 / 301 for ``Dmax``).
+    Unclamped: above 1 for any frontier whose cells' normalised distances add up to more than one tile.
+    All zeros when every cell is at ``p`` (MAES divides 0 by 0 there)."""
+    xy = (fr.cells[:, ::-1].astype(np.float64) + 0.5) * CELL_M
+    d = np.hypot(xy[:, 0] - point_m[0], xy[:, 1] - point_m[1])
+    d_max = float(d.max()) if len(d) else 0.0
+    if d_max <= 0.0:
+        return np.zeros(fr.count)
+    return np.sqrt(MAES_CELL_WEIGHT * np.bincount(fr.owner, weights=d / d_max, minlength=fr.count))
+
+
+def maes_distance_term(w: np.ndarray, alpha: float, beta: float) -> np.ndarray:
+    """MAES's D, ``w^(alpha-1) (1-w)^(beta-1)`` on the unclamped ``w`` (lines 135-138): for ``w > 1`` the
+    second factor is ``(negative)^(beta-1)``, large and negative for an odd ``beta - 1`` (beta = 10),
+    large and positive for an even one. ``alpha`` and ``beta`` are whole numbers (MAES's are ``int``)."""
+    w = np.asarray(w, dtype=np.float64)
+    return np.power(w, alpha - 1.0) * np.power(1.0 - w, beta - 1.0)
+
+
+def maes_sensed_position(x: float, y: float, distance: float, bearing: float) -> tuple[float, float]:
+    """Where MAES's TNF puts a sensed robot: ``robot + distance (cos b, sin b)`` with ``b`` the bearing
+    *relative to the robot's heading* used as a global angle (line 152: ``_robotPos +
+    VectorFromDegreesAndMagnitude(neighbour.Angle, neighbour.Distance)``, where ``SenseNearbyRobots``
+    gives the angle relative to the robot's forward, ``Robot2DController.cs`` lines 438-448). The true
+    position is ``bearing + heading``; the two agree only when the robot heads along +x."""
+    return x + distance * math.cos(bearing), y + distance * math.sin(bearing)
+
+
+def maes_coordination(fr: Frontiers, sensed_m: np.ndarray) -> np.ndarray:
+    """MAES's C for every frontier: ``sum_r maes_wavefront(fr, p_r)[f]`` over the sensed robots'
+    positions ``sensed_m`` (float[K, 2], metres; K = 0: no penalty) (lines 144-157). It grows with the
+    distance from ``p_r``, so it penalises the frontiers *far* from the others."""
+    total = np.zeros(fr.count)
+    for px, py in np.asarray(sensed_m, dtype=np.float64).reshape(-1, 2).tolist():
+        total = total + maes_wavefront(fr, (px, py))
+    return total
+
+
 @dataclass(frozen=True)
 class FrontierScore:
     """One candidate frontier and the terms of its utility."""
@@ -83,22 +150,29 @@ class FrontierScore:
     target: tuple[int, int]     # configuration-space cell the robot would drive to
     size: int                   # frontier cells
     raw_gain: float             # sum of the Gaussian over the cells and their 8 neighbours
-    gain: float                 # I: raw_gain / the largest raw_gain among candidates
+    gain: float                 # I: raw_gain / the largest raw_gain among candidates (maes: k raw_gain / F)
     distance_m: float           # path length from the robot to ``target``
-    distance: float             # D
-    penalty: float              # C
+    distance: float             # D (maes: MAES's, from straight lines, unclamped w)
+    penalty: float              # C (maes: MAES's, from the sensed robots)
     utility: float              # I + D - C
 
 
 def score_frontiers(known: np.ndarray, start: tuple[int, int], destinations: np.ndarray, *, alpha: float,
                     beta: float, robot_radius_m: float, penalty_radius_m: float, reach: int,
                     exclude: np.ndarray | None = None, min_size: int = 1,
-                    margin_m: float = grid.DEFAULT_MARGIN_M) -> list[FrontierScore]:
+                    margin_m: float = grid.DEFAULT_MARGIN_M, variant: str = "swarm",
+                    position_m: tuple[float, float] | None = None, sensed_m: np.ndarray | None = None
+                    ) -> list[FrontierScore]:
     """Every reachable frontier's utility terms, best first (ties: lower target row, then column).
 
     ``start`` is the robot's cell (snapped into the configuration space when it lies in inflated space);
     ``destinations`` int[K, 2] the cells other robots announced (K may be 0: no penalty). ``exclude``
     (bool[H, W]) removes cells both as frontier cells and as targets.
+
+    ``variant = "maes"``: MAES's terms (the module docstring) from ``position_m`` (the robot's (x, y) in
+    metres; default the centre of ``start``) and ``sensed_m`` (float[K, 2]: the sensed robots where MAES
+    puts them, :func:`maes_sensed_position`); ``destinations``, ``penalty_radius_m`` are then unused. F and
+    ``Dmax`` count every frontier, reachable or not, as MAES scores them all before it looks for a path.
     """
     space = grid.configuration_space(known, robot_radius_m, margin_m)
     here = grid.nearest_in(space, start, reach + 1)
@@ -117,6 +191,13 @@ def score_frontiers(known: np.ndarray, start: tuple[int, int], destinations: np.
     raw = np.bincount(fr.owner, weights=cell_information(known, fr.cells), minlength=fr.count)[keep]
     cells = targets[keep]
     dist = field[cells[:, 0], cells[:, 1]].astype(np.float64)
+    if variant == "maes":
+        gain = maes_information(raw, fr.count)
+        here_m = cell_centre(*start) if position_m is None else position_m
+        dterm = maes_distance_term(maes_wavefront(fr, here_m)[keep], alpha, beta)
+        sensed = np.zeros((0, 2)) if sensed_m is None else sensed_m
+        penalty = maes_coordination(fr, sensed)[keep]
+        return _ranked(cells, fr, keep, raw, gain, dist, dterm, penalty)
     d_max = float(dist.max())
     w = dist / d_max if d_max > 0.0 else np.zeros_like(dist)
     gain = raw / raw.max()
@@ -125,6 +206,11 @@ def score_frontiers(known: np.ndarray, start: tuple[int, int], destinations: np.
     if len(destinations) and penalty_radius_m > 0.0:
         d_dest = _destination_distance(known, destinations, cells, penalty_radius_m)
         penalty = coordination_penalty(d_dest, penalty_radius_m)
+    return _ranked(cells, fr, keep, raw, gain, dist, dterm, penalty)
+
+
+def _ranked(cells: np.ndarray, fr: Frontiers, keep: np.ndarray, raw: np.ndarray, gain: np.ndarray,
+            dist: np.ndarray, dterm: np.ndarray, penalty: np.ndarray) -> list[FrontierScore]:
     utility = gain + dterm - penalty
     scores = [FrontierScore(target=(int(cells[j, 0]), int(cells[j, 1])), size=int(fr.sizes[i]),
                             raw_gain=float(raw[j]), gain=float(gain[j]), distance_m=float(dist[j]),

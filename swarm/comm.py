@@ -32,7 +32,7 @@ from .knowledge import check_writable_map, merge_cells_many, sync_box_unchecked,
 from .messages import MAX_MESSAGE_BYTES, MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
 from .schema import DROP_CAUSES
 
-SHARING_MODES = ("delta", "full", "off", "maes_heartbeat", "maes_sync")
+SHARING_MODES = ("delta", "full", "off", "maes", "maes_heartbeat", "maes_sync")
 LINK_TIMES = ("send", "receive")
 
 
@@ -41,8 +41,9 @@ class CommSpec:
     """The ``[comm]`` section of a run spec.
 
     ``map_sharing``: ``delta`` (default), ``full`` or ``off``, or for MAES parity ``maes_heartbeat`` /
-    ``maes_sync`` (MAES's own merges, :mod:`swarm.maes_merge`); ``share_every`` ticks (MAES heartbeats
-    every 10, MAES's TNF syncs every 20). ``loss``: probability that a message is lost on each link
+    ``maes_sync`` (MAES's own merges, :mod:`swarm.maes_merge`) or ``maes`` (the merge MAES's version of the
+    run's algorithm does, at its period: see :func:`swarm.maes_merge.resolve`); ``share_every`` ticks
+    (MAES heartbeats every 10, MAES's TNF syncs every 20). ``loss``: probability that a message is lost on each link
     (seeded, independent per message and receiver). ``bandwidth``: bytes per tick each link carries
     (0 = unlimited); what exceeds it is dropped in send order. ``neighbour_range_m``: robots within this
     range and in line of sight appear in ``Observation.neighbours`` (0 = the lidar range). ``link_at``:
@@ -212,7 +213,7 @@ class MapSharing:
         (None) every delta compares the whole maps."""
         self.n = n
         self.spec = spec
-        self.enabled = spec.map_sharing in ("delta", "full") and n > 1  # the maes_* modes: swarm.maes_merge
+        self.enabled = spec.map_sharing in ("delta", "full") and n > 1  # the maes modes: swarm.maes_merge
         self.last_shared = np.zeros((n, *shape), dtype=np.uint8) if spec.map_sharing == "delta" else None
         self.seq = [0] * n
         self.seen_seq = [[0] * n for _ in range(n)]          # [receiver][sender] last seq merged

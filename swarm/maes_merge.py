@@ -27,6 +27,23 @@ import numpy as np
 from .messages import message
 
 MODES = ("maes_heartbeat", "maes_sync")
+DEFAULT_MERGE = ("maes_heartbeat", 10)
+"""What ``map_sharing = "maes"`` means for an algorithm that declares no MAES merge of its own."""
+
+
+def resolve(map_sharing: str, share_every: int, algorithm: type) -> tuple[str, int] | None:
+    """The MAES merge mode and period of a run, or None when its map sharing is not a MAES one.
+    ``maes`` takes them from the algorithm class's ``maes_map_merge = (mode, period)`` (TNF syncs every
+    20 ticks; Greed and Minotaur heartbeat every 10; an algorithm MAES does not have gets
+    :data:`DEFAULT_MERGE`); ``maes_heartbeat``/``maes_sync`` are used as given with ``share_every``."""
+    if map_sharing in MODES:
+        return map_sharing, share_every
+    if map_sharing != "maes":
+        return None
+    mode, period = getattr(algorithm, "maes_map_merge", DEFAULT_MERGE)
+    if mode not in MODES or not isinstance(period, int) or period < 1:
+        raise ValueError(f"{algorithm.__name__}.maes_map_merge = {(mode, period)!r}; allowed: (one of {MODES}, a period >= 1)")
+    return mode, period
 
 
 @message("swarm.maes_heartbeat", version=1)

@@ -34,7 +34,9 @@ from .api import Action, Pose, RobotInfo
 from .comm import Envelope, MapSharing, Medium
 from .grid._validate import vouch_known
 from .knowledge import sync_changes, sync_regions_flat
-from .maes_merge import MODES as MAES_MODES, MaesMerge
+from . import registry
+from .maes_merge import MaesMerge
+from .maes_merge import resolve as resolve_maes_merge
 from .metrics import Metrics
 from .navigation import NavigationFleet
 from .result import RunResult
@@ -118,8 +120,8 @@ class Simulation:
         self.medium = Medium(n, self.comm, self.streams.radio, map_shape=self.truth.shape)
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach)  # told of every scan
-        self.maes_merge = (MaesMerge(n, self.comm.map_sharing, self.comm.share_every)
-                           if self.comm.map_sharing in MAES_MODES else None)
+        merge = resolve_maes_merge(self.comm.map_sharing, self.comm.share_every, registry.load(self.spec.algorithm.name))
+        self.maes_merge = MaesMerge(n, *merge) if merge is not None else None
         self._in_flight: list[list[Envelope]] | None = None  # link_at = "receive": last tick's outboxes
         self.inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         self._deliveries: list[tuple[Any, list[int]]] = []  # last tick's messages and who got each, in inbox order

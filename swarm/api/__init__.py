@@ -30,12 +30,13 @@ outside ``swarm.api`` is part of the contract; ``algorithms/`` imports nothing e
 
 from __future__ import annotations
 
-from .params import InvalidInput, check_bool, check_choice, check_float, check_int, from_mapping, to_mapping
+from .params import (OMIT_DEFAULT, InvalidInput, check_bool, check_choice, check_float, check_int, from_mapping,
+                     to_mapping)
 from .types import (CELL_M, FREE, ROBOT_RADIUS_M, SOLID, UNSEEN, Action, Explorer, NavStatus, Neighbour, Neighbours,
                     NoParams, Observation, Pose, RobotInfo, cell_centre, cell_of, frozen_builder)
 
 __all__ = [
-    "Action", "CELL_M", "Explorer", "FREE", "InvalidInput", "NavStatus", "Neighbour", "Neighbours", "NoParams",
+    "Action", "CELL_M", "Explorer", "FREE", "InvalidInput", "OMIT_DEFAULT", "NavStatus", "Neighbour", "Neighbours", "NoParams",
     "Observation", "Pose", "ROBOT_RADIUS_M", "RobotInfo", "SOLID", "UNSEEN", "cell_centre", "cell_of", "check_bool",
     "check_choice", "check_float", "check_int", "from_mapping", "frozen_builder", "to_mapping",
 ]

@@ -3,12 +3,15 @@
 Every check raises :class:`InvalidInput` naming the field, the value and what is allowed, which the
 command line prints as one line with exit status 2. Call them in your ``Params.__post_init__``;
 :func:`from_mapping` builds a ``Params`` dataclass from a table, refusing unknown keys and values of the
-wrong type.
+wrong type. A parameter added to a published explorer should be declared
+``field(default=..., metadata={OMIT_DEFAULT: True})``: left out of the canonical spec at its default, it keeps
+every earlier run's key (campaign folders resume).
 """
 
 from __future__ import annotations
 
 from maps.errors import InvalidInput
-from maps.params import check_bool, check_choice, check_float, check_int, from_mapping, to_mapping
+from maps.params import OMIT_DEFAULT, check_bool, check_choice, check_float, check_int, from_mapping, to_mapping
 
-__all__ = ["InvalidInput", "check_bool", "check_choice", "check_float", "check_int", "from_mapping", "to_mapping"]
+__all__ = ["InvalidInput", "OMIT_DEFAULT", "check_bool", "check_choice", "check_float", "check_int", "from_mapping",
+           "to_mapping"]

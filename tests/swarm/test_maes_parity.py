@@ -118,3 +118,15 @@ def test_new_parity_settings_keep_every_earlier_run_key():
     assert "link_at" not in RunSpec().canonical()["comm"]
     assert RunSpec.from_mapping({"comm": {"link_at": "receive"}}).canonical()["comm"]["link_at"] == "receive"
     assert CommSpec(link_at="send") == CommSpec()
+
+
+def test_map_sharing_maes_is_each_algorithms_own_merge():
+    """map_sharing = "maes" is what MAES's version of the run's algorithm does: TNF syncs every 20 ticks,
+    Greed (and Minotaur) heartbeat every 10."""
+    def merge_of(name: str) -> tuple[str, int]:
+        sim = Simulation({"map": {"kind": "building", "size": 20}, "robots": {"count": 3}, "algorithm": {"name": name},
+                          "comm": {"map_sharing": "maes"}, "stop": {"max_ticks": 5}})
+        return sim.maes_merge.mode, sim.maes_merge.share_every
+
+    assert merge_of("tnf") == ("maes_sync", 20)
+    assert merge_of("greed") == ("maes_heartbeat", 10) == merge_of("minotaur")
