@@ -38,7 +38,8 @@ Departures from the paper and from MAES, on purpose (details in each module's do
    front of it (from where the lidar sees through), then to ``pass_through_m`` beyond it.
 4. **Doorway detection** works on axis-aligned walls of the grid and accepts a gap as soon as the map
    shows it (:mod:`.detection`); partially seen gaps become ``inspect`` targets instead of the paper's
-   "move forward the door width" / "move to the intersection" manoeuvres.
+   "move forward the door width" / "move to the intersection" manoeuvres (``variant = "maes"`` makes
+   them: see below). Cave walls pass the test now and then (``wall_continue_m`` in :mod:`.params`).
 5. **Doorways that lead nowhere new**: before going through a doorway the robot checks that unseen
    space is reachable behind it without passing another doorway; if not it marks it resolved (locally)
    and skips it. The paper would walk through and back.
@@ -59,6 +60,43 @@ Departures from the paper and from MAES, on purpose (details in each module's do
     ``exclude_ticks`` (MAES re-targets after five unchanged coarse positions); a wall end or edge whose
     unseen cell is still unseen after the robot went to look (a corner the lidar cannot hit) is never
     chosen again.
+
+**variant = "maes"** (issue 33; :mod:`.maes` has the details) makes the robot do what MAES's
+``Assets/Scripts/ExplorationAlgorithm/Minotaur/MinotaurAlgorithm.cs`` does where that costs time, the
+overhead the paper blames for Minotaur's slowness (section 5.2, Figs. 10-11). It reproduces:
+
+- **Doorways are verified where they are, not read off the map** (departure 4 off): ``DoorwayDetection``
+  (lines 786-849) makes a gap in a wall (lines 795-821) or a crossing of two walls' lines (lines
+  825-847) a Door waypoint (mode ``check-door``, placed as lines 815-816 and 838-840 place it) that
+  replaces the robot's current target (lines 817, 842); each candidate cell is tried once
+  (``_previousIntersections``, lines 809-813, 830-836); none is looked for while a Door waypoint is
+  active (lines 251-252). Walls are what 360 rays from the robot hit (lines 769-784,
+  ``EdgeDetector.cs`` lines 112-153). On arrival ``AttemptAddDoorway`` (lines 286-289, 851-889) accepts
+  the doorway if the crossing is seen and the jambs are ``2 doorWidth`` or ``[3, 2 doorWidth]`` cells
+  apart (lines 863-864; ``maes_door_width``), and only then stores and auctions it; else it is dropped.
+  A wall within VisionRadius - 2 tiles on the bearing to a Door or Corner waypoint drops it (lines
+  264-283). Swarm's ``inspect`` targets are off (the Door waypoints replace them).
+- **Corner coverage** (``MoveToCornerCoverage``, lines 607-630, ``IsAheadExploreable`` 752-761), tried
+  after wall following and before edges, as lines 341-343 order them (mode ``corner``).
+- **The nearest doorway before Greed** (lines 336-338, 344-346, ``MovetoNearestDoorway`` 709-719,
+  ``GetNearestUnexploredDoorway`` 916-931): when the room is done, the unexplored doorway nearest by path,
+  in the room or not, always before the nearest unseen cell (``greedy_if_nearer`` is ignored; mode
+  ``door-nearest``), without swarm's skips of doorways with nothing new behind them or claimed by others
+  (departures 5 and 9 for doorways; Greed still avoids others' targets, as line 338 does).
+
+It does not reproduce, on purpose: the runtime's map sharing, navigator and messages stay (departures 1
+and 3; MAES's heartbeat merge is the comm option ``map_sharing = "maes"``), so the Door, Corner and
+doorway targets are planned, not driven to in a straight line, a Corner goal is the drivable cell next to
+the unseen one, and the remembered candidates are not shared (MAES unions them in heartbeats); wall
+following and edges stay swarm's (MAES's ``MoveAlongWall``, lines 393-461, fits segments to ray hits,
+``GetWalls`` 512-584, and its edge sweep starts behind the robot, lines 645-646: docs/maes.md section
+7.2), and so do the spiral (departure 2), the spin split (``spin = "ccw"`` is MAES's single direction; the
+corner arc is mirrored for clockwise robots), the paper's auction (departure 8, not MAES's lines 350-372)
+and the paper's explored facts (seen from both sides or passed, not MAES's lines 290-294 and heartbeat
+exit directions); the grid cannot reproduce MAES's line fitting, so candidates are tried as described
+in :mod:`.maes` (both cases every scan, nearest first, each checked as itself), scans follow
+``scan_every`` (1 is MAES's every tick), and a Door waypoint not reached in ``CHECK_TICKS`` is given up
+(MAES's deadlock timer, lines 204-224, is not reproduced).
 """
 
 from __future__ import annotations
@@ -72,7 +110,7 @@ from swarm.api import CELL_M, FREE, SOLID, Action, Observation, RobotInfo, cell_
 from swarm.api.messages import MapUpdate, MessageError
 
 from ..recovery import unseen_near
-from . import rooms, walls
+from . import maes, rooms, walls
 from .auction import Auctions
 from .cells import clip, line_of_sight, local, mask
 from .detection import Pending, cells, scan
@@ -100,6 +138,9 @@ VIEW_REACH = 2
 PASS_CHECK_M = 3.0
 """Passages through a doorway are watched while the robot is this close to it."""
 GREEDY_MODES = ("room-greedy", "greedy")
+CHECK_TICKS = 200
+"""``variant = "maes"``: a Door waypoint not reached in this many ticks is given up (MAES re-targets a robot
+whose position stops changing, its deadlock timer)."""
 
 
 class Minotaur:
@@ -138,6 +179,13 @@ class Minotaur:
         self.futile: set[tuple[int, int]] = set()                # anchors still unseen after a visit
         self.last_side: dict[int, int] = {}                      # doorway index -> side the robot was on
         self.passed_log: list[tuple[int, Doorway]] = []
+        # variant = "maes" (:mod:`.maes`)
+        self.maes = params.variant == "maes"
+        self.vision = int(robot.lidar_range)                     # MAES's VisionRadius (tiles = m)
+        self.check: maes.Candidate | None = None                 # the Door waypoint being driven to
+        self.check_since = 0
+        self.tried: set[tuple[int, int]] = set()                 # MAES's _previousIntersections
+        self.checks: list[tuple[int, maes.Candidate, bool]] = []  # (tick, candidate, accepted) on arrival
         # per tick
         self.outbox: list[Any] = []
         self.announce_now = False
@@ -215,12 +263,16 @@ class Minotaur:
 
     # ---------------------------------------------------------------------------------- doorways ----
     def _scan(self, obs: Observation) -> None:
-        """Alg. 3: find doorways around the robot, auction new ones, mark sides seen and passages."""
-        for door in self._detected(obs)[0]:
-            door.found_tick = obs.tick
-            stored, new = self.book.add(door)
-            if new:
-                self._announce(obs, stored)
+        """Alg. 3: find doorways around the robot, auction new ones, mark sides seen and passages
+        (``variant = "maes"``: find a candidate doorway to drive to and check, :meth:`_find_candidate`)."""
+        if self.maes:
+            self._find_candidate(obs)
+        else:
+            for door in self._detected(obs)[0]:
+                door.found_tick = obs.tick
+                stored, new = self.book.add(door)
+                if new:
+                    self._announce(obs, stored)
         x, y = obs.pose.x, obs.pose.y
         for k in self.book.near(x, y, self.robot.lidar_range):
             d = self.book.doors[k]
@@ -246,6 +298,71 @@ class Minotaur:
         if math.isfinite(own):
             self.outbox.append(self.auctions.start(obs.tick, door, side, own))
 
+    def _find_candidate(self, obs: Observation) -> None:
+        """MAES's ``DoorwayDetection`` (MinotaurAlgorithm.cs lines 786-849, run in every state while no Door
+        or NearestDoor waypoint is active, lines 231-252; here not while passing a doorway, the ``door``
+        state, nor in ``start``): the nearest candidate not tried before becomes the Door waypoint,
+        replacing whatever the robot was doing in its room (``StopCurrentTask``, lines 817 and 842)."""
+        if self.check is not None or self.state in ("start", "door"):
+            return
+        kw, origin = self._window(obs)
+        space, _ = self._spaces(obs)
+        for cand in maes.candidates(kw, origin, (obs.pose.x, obs.pose.y), self.vision, self.p.maes_door_width):
+            if cand.key in self.tried or self._in_doorway(cand.key):
+                continue
+            self.tried.add(cand.key)
+            if obs.known[cand.key] == SOLID:
+                continue                                   # remembered and skipped (line 834-836)
+            goal = rooms.snap(space, cand.goal)
+            if goal is None:
+                continue                                   # nowhere to drive to (MAES drives on regardless)
+            self.check = cand
+            self.check_since = obs.tick
+            self.state, self.mode = "room", "check-door"
+            self._set_target(cell_centre(*goal), None, 0, obs)
+            return
+
+    def _in_doorway(self, cell: tuple[int, int]) -> bool:
+        """The cell is inside a known doorway's opening (MAES lines 809 and 830: ``doorway.Tiles``)."""
+        x, y = cell_centre(*cell)
+        for k in self.book.near(x, y, 3.0):
+            r0, c0, r1, c1 = self.book.doors[k].cut()
+            if r0 <= cell[0] <= r1 and c0 <= cell[1] <= c1:
+                return True
+        return False
+
+    def _checking(self, obs: Observation) -> Action | None:
+        """Drive to the Door waypoint; on arrival ``AttemptAddDoorway`` (MAES lines 286-289, 851-884):
+        accept the doorway (store it and auction it, as the default variant does with what it detects) or
+        drop it. A SOLID cell ahead on the way (lines 264-283), the navigator giving up, or
+        :data:`CHECK_TICKS` without arriving drops it unchecked. None once the check is over."""
+        cand = self.check
+        assert cand is not None
+        x, y = obs.pose.x, obs.pose.y
+        if self.target is None or self.mode != "check-door":
+            self.check = None
+            return None
+        arrived = (obs.nav.state == "reached" and obs.nav.goal == self.target) or (
+            math.hypot(self.target[0] - x, self.target[1] - y) < APPROACH_REACH_M)
+        if arrived:
+            self.check = None
+            self.target = None
+            door = maes.check(obs.known, cand, self.p.maes_door_width)
+            self.checks.append((obs.tick, cand, door is not None))
+            if door is not None:
+                side = door.side_of(x, y)
+                door.sides = _bit(side) if side else 0
+                door.found_tick = obs.tick
+                stored, new = self.book.add(door)
+                if new:
+                    self._announce(obs, stored)
+            return None
+        if maes.wall_ahead(obs.known, (x, y), self.target, self.vision) or obs.tick - self.check_since > CHECK_TICKS:
+            self.check = None
+            self.target = None
+            return None
+        return Action(goal=self.target)
+
     def _passed(self, tick: int, door: Doorway) -> None:
         if not door.passed:
             door.passed = True
@@ -268,6 +385,7 @@ class Minotaur:
         self.door_side = side
         self.door_phase = "approach"
         self.announce_now = True
+        self.check = None
         self._set_target(door.point(side, APPROACH_M), None, 0)
 
     # --------------------------------------------------------------------------------- decisions ----
@@ -290,6 +408,15 @@ class Minotaur:
             action = self._through_door(obs)
             if action is not None:
                 return action
+        if self.check is not None:
+            action = self._checking(obs)
+            if action is not None:
+                return action
+        elif self.maes and self.mode == "corner" and self.target is not None and maes.wall_ahead(
+                obs.known, (obs.pose.x, obs.pose.y), self.target, self.vision):
+            if self.anchor is not None:
+                self.futile.add(self.anchor)            # MAES drops a direct waypoint with a wall ahead
+            self.target = None
         if self._needs_decision(obs):
             if self.anchor is not None and self.target is not None and self._anchor_unseen(obs.known):
                 self.futile.add(self.anchor)     # went to look and it is still unseen: an occluded corner
@@ -363,7 +490,13 @@ class Minotaur:
                 return
         choice = None
         start_any = rooms.snap(space, here)
-        if start_any is not None:
+        if self.maes:          # MAES: the nearest unexplored doorway by path, always before Greed (lines 336-338)
+            if start_any is not None:
+                near = rooms.nearest_door(space, start_any, self.book.unexplored(tick))
+                if near is not None:
+                    self._go_through(near[0], near[1], "door-nearest")
+                    return
+        elif start_any is not None:
             claimed = self.peers.claimed(tick, CLAIM_FRESH_TICKS)
             doors = [d for d in self.book.unexplored(tick) if not any(c.matches(d) for c in claimed)]
             choice = rooms.choose_door(space, cut if start is not None else space, start or start_any, doors, views)
@@ -395,15 +528,25 @@ class Minotaur:
         room_dist = grid.distance_field(cut_w, [start])
         inspect: list[tuple[int, int, int, int]] = []
         jambs: dict[tuple[int, int], tuple[int, int]] = {}
-        if self.p.inspect_doorways:
+        if self.p.inspect_doorways and not self.maes:
             for r, c, dr, dc, jamb in self._detected(obs)[1]:
                 if jamb not in self.inspected:
                     inspect.append((r - origin[0], c - origin[1], dr, dc))
                     jambs[(r - origin[0], c - origin[1])] = jamb
         assert self.travel is not None
-        ft = walls.choose(kw, cut_w, room_dist, start, self.travel, self.spin, self.radius_cells, self.follow_cells,
-                          self.edge_cells, inspect, mask(self.excluded, kw.shape, origin),
-                          mask(self.futile, kw.shape, origin))
+        blocked, futile = mask(self.excluded, kw.shape, origin), mask(self.futile, kw.shape, origin)
+        if self.maes:          # MAES: wall, else corner coverage, else edge (MinotaurAlgorithm.cs lines 341-343)
+            ft = walls.choose(kw, cut_w, room_dist, start, self.travel, self.spin, self.radius_cells,
+                              self.follow_cells, self.edge_cells, [], blocked, futile, kind=0)
+            if ft is None:
+                ft = self._corner_target(obs, kw, origin, cut_w, room_dist, blocked)
+                if ft is not None:
+                    return ft
+                ft = walls.choose(kw, cut_w, room_dist, start, self.travel, self.spin, self.radius_cells,
+                                  self.follow_cells, self.edge_cells, [], blocked, futile, kind=1)
+        else:
+            ft = walls.choose(kw, cut_w, room_dist, start, self.travel, self.spin, self.radius_cells,
+                              self.follow_cells, self.edge_cells, inspect, blocked, futile)
         if ft is None:
             return None
         if ft.kind == "inspect":
@@ -412,6 +555,28 @@ class Minotaur:
         cell = (ft.cell[0] + origin[0], ft.cell[1] + origin[1])
         self._set_target(cell_centre(*cell), (ft.anchor[0] + origin[0], ft.anchor[1] + origin[1]), 0, obs)
         return ft
+
+    def _corner_target(self, obs: Observation, kw: np.ndarray, origin: tuple[int, int], cut_w: np.ndarray,
+                       room_dist: np.ndarray, blocked: np.ndarray | None) -> walls.FollowTarget | None:
+        """MAES's ``MoveToCornerCoverage`` (lines 607-630, :func:`.maes.corner`): drive towards the first
+        UNSEEN cell a ray over the 30 degrees to the robot's right stops at. The navigator needs a known
+        goal, so the target is the drivable cell of the robot's room nearest that cell; rays whose way
+        has a wall within VisionRadius - 2 tiles are passed over (MAES would take the waypoint, drop it
+        the next tick, line 264-283, and wait for its deadlock timer)."""
+        here = (obs.pose.x, obs.pose.y)
+        for cell in maes.corner(obs.known, here, obs.pose.theta, self.vision, self.spin):
+            if cell in self.futile:
+                continue
+            at = grid.nearest_in(cut_w, local(cell, origin, kw.shape), rooms.SNAP_CELLS)
+            if at is None or not np.isfinite(room_dist[at]) or (blocked is not None and blocked[at]):
+                continue
+            goal = cell_centre(at[0] + origin[0], at[1] + origin[1])
+            if maes.wall_ahead(obs.known, here, goal, self.vision):
+                continue
+            self.state, self.mode = "room", "corner"
+            self._set_target(goal, cell, 0, obs)
+            return walls.FollowTarget(at, "corner", (cell[0] - origin[0], cell[1] - origin[1]))
+        return None
 
     def _set_greedy(self, state: str, mode: str, cell: tuple[int, int], obs: Observation) -> None:
         self.state, self.mode = state, mode
@@ -516,9 +681,12 @@ class Minotaur:
     def _debug(self) -> dict[str, Any]:
         """For the viewer: state and mode, spin, target, the doorway being passed, every known doorway
         (x, y, axis, width, explored) and the auctions this robot runs."""
-        return {"state": self.state, "mode": self.mode, "spin": "ccw" if self.spin > 0 else "cw",
-                "target": self.target, "door": self.door.wire() if self.state == "door" and self.door else None,
-                "doorways": self._doorways_view(), "auctions": sorted(self.auctions.open)}
+        out = {"state": self.state, "mode": self.mode, "spin": "ccw" if self.spin > 0 else "cw",
+               "target": self.target, "door": self.door.wire() if self.state == "door" and self.door else None,
+               "doorways": self._doorways_view(), "auctions": sorted(self.auctions.open)}
+        if self.maes:
+            out["check"] = None if self.check is None else (self.check.kind, self.check.key, self.target)
+        return out
 
 
 def _well_formed(m: Any) -> bool:

@@ -106,3 +106,24 @@ def choose_door(space: np.ndarray, cut: np.ndarray, start: tuple[int, int], door
             continue
         return d, side, rank == 0, dist
     return None
+
+
+def nearest_door(space: np.ndarray, start: tuple[int, int], doors: list[Doorway]) -> tuple[Doorway, int, float] | None:
+    """MAES's ``GetNearestUnexploredDoorway`` (MinotaurAlgorithm.cs lines 916-931): the unexplored doorway
+    nearest by path length anywhere, in or out of the robot's room, whatever lies behind it; with the side
+    to enter from (the nearer approach point) and the path length (m)."""
+    if not doors:
+        return None
+    field = grid.distance_field(space, [start])
+    best: tuple[float, int, int] | None = None
+    for k, d in enumerate(doors):
+        for side in (-1, 1):
+            cell = snap(space, d.point(side, 1.0))
+            if cell is None or not math.isfinite(float(field[cell])):
+                continue
+            cand = (float(field[cell]), k, side)
+            if best is None or cand < best:
+                best = cand
+    if best is None:
+        return None
+    return doors[best[1]], best[2], best[0]

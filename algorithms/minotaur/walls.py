@@ -50,7 +50,7 @@ class FollowTarget:
     it worth going (when that cell is seen, the target has done its job)."""
 
     cell: tuple[int, int]
-    kind: str                     # "wall" | "edge" | "inspect"
+    kind: str                     # "wall" | "edge" | "inspect" | "corner" (variant maes)
     anchor: tuple[int, int]
 
 
@@ -127,13 +127,15 @@ def offset_cell(known: np.ndarray, r: int, c: int, dr: int, dc: int, want: int) 
 def choose(known: np.ndarray, space: np.ndarray, room_dist: np.ndarray, at: tuple[int, int],
            travel: tuple[float, float], spin: int, radius: int, follow: int, edge: int,
            inspect: list[tuple[int, int, int, int]], blocked: np.ndarray | None,
-           futile: np.ndarray | None = None) -> FollowTarget | None:
+           futile: np.ndarray | None = None, kind: int | None = None) -> FollowTarget | None:
     """The next wall-following / spiralling waypoint in a window, or None (nothing in visual range).
 
     ``space`` is the window's configuration space, ``room_dist`` the door-cut distance from the robot
     (inf outside its room), ``at`` the robot's cell, ``inspect`` pending doorway gaps (row, col, drow,
     dcol) to look at first, ``blocked`` cells not to aim at (targets that failed), ``futile`` anchors that
-    stayed unseen when the robot went to look at them (occluded corners: never again)."""
+    stayed unseen when the robot went to look at them (occluded corners: never again), ``kind`` 0 or 1
+    only wall ends or only edges (MAES tries its wall following, its corner coverage and its edges in
+    turn, MinotaurAlgorithm.cs lines 341-343; None: both, in one sweep)."""
     h, w = known.shape
     r2 = radius * radius
 
@@ -164,6 +166,8 @@ def choose(known: np.ndarray, space: np.ndarray, room_dist: np.ndarray, at: tupl
     if not rows.size:
         return None
     near = (rows - at[0]) ** 2 + (cols - at[1]) ** 2 <= r2
+    if kind is not None:
+        near &= kinds == kind
     if futile is not None:
         inside = (ars >= 0) & (ars < h) & (acs >= 0) & (acs < w)
         near &= ~(inside & futile[np.clip(ars, 0, h - 1), np.clip(acs, 0, w - 1)])

@@ -1,0 +1,262 @@
+"""Minotaur's ``variant = "maes"`` (issue 33): MAES drives to a candidate doorway and checks it there
+(MinotaurAlgorithm.cs ``DoorwayDetection`` / ``AttemptAddDoorway``), covers corners, and takes the
+nearest doorway before Greed. Each case is one where the default variant does something else, so each
+test fails if the variant behaved like the default."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from algorithms.minotaur import maes, rooms
+from algorithms.minotaur.doorways import Doorway
+from algorithms.minotaur.explorer import Minotaur
+from algorithms.minotaur.params import MinotaurParams
+from swarm.api import FREE, SOLID, UNSEEN, InvalidInput, NavStatus, Observation, Pose, RobotInfo
+from swarm.simulation import Simulation
+from swarm.testing import check_explorer
+
+from .test_minotaur_doorways import as_map, blank, gap, hallway, known_of, wall, wall_with_door
+
+
+def agent(variant: str, shape: tuple[int, int], **params: object) -> Minotaur:
+    a = Minotaur()
+    a.reset(RobotInfo(id=0, n_robots=1, map_shape=shape, lidar_range=7.0),
+            MinotaurParams(variant=variant, **params), np.random.default_rng(0))
+    return a
+
+
+def obs(tick: int, known: np.ndarray, x: float, y: float, theta: float = 0.0,
+        nav: NavStatus = NavStatus()) -> Observation:
+    return Observation(tick=tick, robot_id=0, pose=Pose(x, y, theta), known=known, nav=nav)
+
+
+def visit(variant: str, known: np.ndarray, at: tuple[float, float], ticks: int = 80,
+          **params: object) -> tuple[Minotaur, list[dict], list[tuple[float, float]]]:
+    """A robot that stands at ``at`` except that it is on its goal, reported reached, the tick after it
+    got a Door waypoint: the debug and the pose of every tick."""
+    a = agent(variant, known.shape, **params)
+    debug, poses = [], []
+    pose, nav = at, NavStatus()
+    for tick in range(ticks):
+        poses.append(pose)
+        debug.append(dict(a.act(obs(tick, known, *pose, nav=nav)).debug))
+        if debug[-1]["mode"] == "check-door" and a.target is not None:
+            pose, nav = a.target, NavStatus(goal=a.target, state="reached")
+        else:
+            pose, nav = at, NavStatus()
+    return a, debug, poses
+
+
+# ---------------------------------------------------------------------------- the check on arrival ----
+def test_swarm_accepts_a_seen_door_from_the_map_maes_only_after_driving_to_it() -> None:
+    known = known_of(wall_with_door())
+    swarm, debug, _ = visit("swarm", known, (8.0, 6.0))
+    assert len(debug[0]["doorways"]) == 1 and swarm.book.doors[0].found_tick == 0   # the first scan, the map
+    assert all(d["mode"] != "check-door" for d in debug)
+
+    a, debug, poses = visit("maes", known, (8.0, 6.0))
+    first = next(t for t, d in enumerate(debug) if d["doorways"])
+    assert first > 10 and all(not d["doorways"] for d in debug[:first])
+    before = debug[first - 1]
+    assert before["mode"] == "check-door" and before["check"] is not None     # the goal was the Door waypoint
+    assert poses[first] == before["check"][2] == before["target"]             # and the robot stood on it
+    assert math.hypot(poses[first][0] - 8.0, poses[first][1] - 6.0) > 0.5
+    (door,) = a.book.doors
+    assert (door.x, door.y, door.axis, door.width) == pytest.approx((12.5, 6.0, 1, 2.0))
+    assert door.found_tick == first and (first, True) in [(t, ok) for t, _, ok in a.checks]
+
+
+def test_maes_drives_to_a_gap_too_wide_for_a_door_and_drops_it() -> None:
+    """The overhead of the paper's section 5.2: a 4 m hallway, which swarm's detector never considers,
+    is a candidate that MAES drives to and forgets on arrival (jambs 8 cells apart > 2 doorWidth)."""
+    known = known_of(hallway())
+    swarm, debug, _ = visit("swarm", known, (8.0, 6.0))
+    assert len(swarm.book) == 0 and all(d["mode"] != "check-door" for d in debug)
+
+    a, debug, poses = visit("maes", known, (8.0, 6.0))
+    assert len(a.book) == 0 and all(not d["doorways"] for d in debug)
+    gaps = [(t, c) for t, c, ok in a.checks if c.kind == "gap"]
+    assert gaps and not any(ok for *_, ok in a.checks)
+    t, cand = gaps[0]
+    assert debug[t - 1]["check"][:2] == ("gap", cand.key) and poses[t] == debug[t - 1]["target"]
+    assert len({c.key for _, c, _ in a.checks}) == len(a.checks)              # each candidate tried once
+    assert all(c.key in a.tried for _, c, _ in a.checks)
+
+
+def test_a_three_metre_gap_swarm_accepts_is_too_wide_for_maes() -> None:
+    """Swarm's ``max_door_width_m`` (3 m) against MAES's jamb rule, [3, 2 doorWidth] cells (1.5-2 m)."""
+    known = known_of(as_map(gap(wall(blank(24, 12), 12, 0, 13, 12), 12, 4.5, 13, 7.5)))
+    swarm, _, _ = visit("swarm", known, (8.0, 6.0))
+    assert [d.width for d in swarm.book] == [3.0]
+    a, _, _ = visit("maes", known, (8.0, 6.0))
+    assert len(a.book) == 0 and any(c.kind == "gap" for _, c, _ in a.checks)
+    wide, _, _ = visit("maes", known, (8.0, 6.0), maes_door_width=3)         # doorWidth = 3: up to 3 m
+    assert [d.width for d in wide.book] == [3.0]
+
+
+def test_an_unseen_far_side_is_not_a_door_yet() -> None:
+    """AttemptAddDoorway needs the crossing seen: a gap whose continuation is UNSEEN is dropped."""
+    known = known_of(wall_with_door())
+    cand = maes.Candidate("gap", (10, 24), (8.0, 6.75), axis=1, line=24, side=-1, end=9, step=1)
+    assert maes.check(known, cand, 2) is not None
+    known[14:16, 24:26] = UNSEEN
+    assert maes.check(known, cand, 2) is None
+
+
+def test_door_in_a_corner_is_a_crossing_candidate() -> None:
+    """The several-walls case: the dividing wall's line meets the floor's line short of the wall's end."""
+    solid = wall(blank(24, 12), 12, 3, 13, 12)                                # the wall stops 2 m above the floor
+    known = np.where(solid, SOLID, FREE).astype(np.uint8)
+    cands = maes.candidates(known, (0, 0), (8.0, 5.0), 7, 2)
+    cross = [c for c in cands if c.kind == "cross" and c.key == (2, 23)]
+    assert cross, [c.key for c in cands]
+    door = maes.check(known, cross[0], 2)
+    assert door is not None and door.axis == 1 and door.x == pytest.approx(12.5)
+    assert door.y == pytest.approx(2.0) and door.width == pytest.approx(2.0)
+    assert all(c.key != (2, 2) for c in cands)                                # a real corner is no candidate
+
+
+def test_a_wall_ahead_drops_the_door_waypoint_unchecked() -> None:
+    """MinotaurAlgorithm.cs lines 264-283: a SOLID cell within VisionRadius - 2 tiles on the way."""
+    known = known_of(wall_with_door())
+    a = agent("maes", known.shape)
+    a.act(obs(0, known, 8.0, 6.0))
+    cand = maes.Candidate("gap", (10, 24), (8.0, 10.5), axis=1, line=24, side=-1, end=9, step=1)
+    a.check, a.state, a.mode, a.target, a.check_since = cand, "room", "check-door", (8.0, 10.5), 0
+    d = a.act(obs(1, known, 8.0, 8.0)).debug                                 # the top wall 3 m ahead
+    assert d["check"] is None and a.checks == [] and len(a.book) == 0
+    a.check, a.state, a.mode, a.target = cand, "room", "check-door", (8.0, 7.0)
+    d = a.act(obs(2, known, 8.0, 3.0)).debug                                 # 8 m to the top wall: go on
+    assert d["check"] is not None and a.target == (8.0, 7.0)
+
+
+# --------------------------------------------------------------------------------- corner coverage ----
+def corner_room() -> tuple[np.ndarray, tuple[float, float]]:
+    """A known open area with no walls, an unseen patch to the robot's right front, known space ahead."""
+    known = np.full((60, 60), UNSEEN, np.uint8)
+    known[10:50, 10:56] = FREE
+    known[25:29, 40:44] = UNSEEN                                              # x 20-22, y 12.5-14.5 m: -6 to -20 deg
+    return known, (15.0, 15.0)
+
+
+def test_corner_rays_cover_thirty_degrees_to_the_right() -> None:
+    known, at = corner_room()
+    cells = maes.corner(known, at, 0.0, 7, 1)
+    assert cells and all(known[c] == UNSEEN for c in cells)
+    for r, c in cells:
+        bearing = math.degrees(math.atan2((r + 0.5) * 0.5 - at[1], (c + 0.5) * 0.5 - at[0]))
+        assert -31 <= bearing <= 0
+    assert maes.corner(known, at, 0.0, 7, -1) == []                         # mirrored: the left is all known
+    ahead = known.copy()
+    ahead[28:32, 44:50] = UNSEEN                                              # 8 and 9 m straight ahead unseen
+    assert maes.corner(ahead, at, 0.0, 7, 1) == []                          # IsAheadExploreable: no corner
+
+
+def test_maes_approaches_the_corner_where_swarm_follows_the_edge() -> None:
+    known, at = corner_room()
+    modes = {}
+    for variant in ("swarm", "maes"):
+        a = agent(variant, known.shape, spin="ccw")
+        d = a.act(obs(101, known, *at)).debug                               # past the start phase
+        modes[variant] = (d["mode"], a.anchor)
+    assert modes["swarm"][0] != "corner"
+    mode, anchor = modes["maes"]
+    assert mode == "corner" and known[anchor] == UNSEEN and 25 <= anchor[0] < 29 and 40 <= anchor[1] < 44
+
+
+# ------------------------------------------------------------------------------ doorway before Greed ----
+def three_rooms() -> tuple[np.ndarray, list[Doorway]]:
+    """Rooms A | B | C (x 1-10, 11-20, 21-29 m) through 2 m doors at y 5-7; A known, B known but for a
+    patch near the first door, C unseen; the first door explored, the second not."""
+    solid = blank(30, 12)
+    wall(solid, 10, 0, 11, 12)
+    wall(solid, 20, 0, 21, 12)
+    gap(solid, 10, 5, 11, 7)
+    gap(solid, 20, 5, 21, 7)
+    known = np.where(solid, SOLID, FREE).astype(np.uint8)
+    known[18:22, 22:28] = UNSEEN                                              # B: x 11-14, y 9-11
+    known[:, 42:] = UNSEEN                                                    # C
+    doors = [Doorway(10.5, 6.0, 1, 2.0, 1.0, sides=3), Doorway(20.5, 6.0, 1, 2.0, 1.0, sides=1)]
+    return known, doors
+
+
+def test_maes_takes_the_nearest_doorway_before_a_nearer_unseen_cell() -> None:
+    """swarm's greedy_if_nearer goes to the unseen cell in B, nearer than the unexplored door to C; MAES
+    goes to the door (MovetoNearestDoorway before MoveToNearestUnseen), whatever greedy_if_nearer says."""
+    known, doors = three_rooms()
+    choices = {}
+    for variant, nearer in (("swarm", True), ("swarm", False), ("maes", True)):
+        a = agent(variant, known.shape, greedy_if_nearer=nearer)
+        for d in doors:
+            a.book.add(Doorway(d.x, d.y, d.axis, d.width, d.depth, sides=d.sides))
+        dbg = a.act(obs(1, known, 8.0, 6.0)).debug
+        choices[(variant, nearer)] = (dbg["state"], dbg["mode"], dbg["door"])
+    assert choices[("swarm", True)][:2] == ("greedy", "greedy")
+    assert choices[("swarm", False)][:2] == ("door", "door-anywhere")
+    state, mode, door = choices[("maes", True)]
+    assert (state, mode) == ("door", "door-nearest") and door[:3] == (20.5, 6.0, 1)
+
+
+def test_nearest_door_ignores_rooms_and_what_lies_behind() -> None:
+    known, doors = three_rooms()
+    from swarm.api import grid
+    space = grid.configuration_space(known)
+    start = rooms.snap(space, (8.0, 6.0))
+    door, side, dist = rooms.nearest_door(space, start, doors)
+    assert door is doors[0] and side == -1 and 0 < dist < 3
+    assert rooms.nearest_door(space, start, []) is None
+
+
+# ------------------------------------------------------------------------------------------ runs ----
+def short_run(variant: str, ticks: int = 400) -> tuple[dict, list[list[dict]]]:
+    debug: list[list[dict]] = []
+
+    def watch(view) -> None:
+        debug.append([dict(a.debug) for a in view.actions])
+
+    spec = {"robots": {"count": 2}, "algorithm": {"name": "minotaur", "params": {"variant": variant}}, "seed": 5,
+            "stop": {"max_ticks": ticks}}
+    poses = np.array([[4.0 + i, 6.0, 0.0] for i in range(2)])
+    result = Simulation(spec, truth=wall_with_door(), observers=[watch], start_poses=poses).run()
+    return result.summary, debug
+
+
+def test_maes_runs_are_deterministic_and_not_the_default() -> None:
+    a, da = short_run("maes")
+    b, _ = short_run("maes")
+    assert (a["ticks"], a["final_poses"], a["explored"]) == (b["ticks"], b["final_poses"], b["explored"])
+    modes = {d["mode"] for tick in da for d in tick}
+    assert "check-door" in modes
+    s, ds = short_run("swarm")
+    assert "check-door" not in {d["mode"] for tick in ds for d in tick}
+    assert s["final_poses"] != a["final_poses"]
+
+
+def test_maes_explores_a_building_with_its_doors() -> None:
+    spec = {"map": {"kind": "building", "size": 30}, "robots": {"count": 2},
+            "algorithm": {"name": "minotaur", "params": {"variant": "maes"}}, "seed": 4, "stop": {"max_ticks": 8000}}
+    last: dict[int, dict] = {}
+
+    def watch(view) -> None:
+        for i, act in enumerate(view.actions):
+            last[i] = dict(act.debug)
+
+    summary = Simulation(spec, observers=[watch]).run().summary
+    assert summary["stop_reason"] == "explored"
+    assert any(last[i]["doorways"] for i in last)
+
+
+def test_variant_is_checked() -> None:
+    with pytest.raises(InvalidInput):
+        MinotaurParams(variant="unity")
+    with pytest.raises(InvalidInput):
+        MinotaurParams(maes_door_width=0)
+    assert MinotaurParams().variant == "swarm"
+
+
+def test_check_explorer_passes_for_the_maes_variant() -> None:
+    report = check_explorer("minotaur", params={"variant": "maes"})    # raises at the first failed check
+    assert "determinism" in report.checks and "transports" in report.checks
