@@ -8,7 +8,11 @@ Layout of the report folder::
     paired/algorithms__<cell>.png    per-replicate scatter for every pair of algorithms
     figures/<name>.png|.csv          with --figures: the multi-panel figures of a layout file (layout.py)
     tables/summary.md|.tex|.csv      per cell and algorithm: runs, successes, DNF, ticks to target
-    tables/paired.md|.tex|.csv       per cell and algorithm pair: wins, ties, differences, Wilcoxon p
+    tables/pooled.md|.tex|.csv       every cell pooled, per dimension and pair of values: paired statistics
+    tables/paired.md|.tex|.csv       per cell and algorithm pair: wins, ties, ratio a/b with its 95 % CI,
+                                     rank-biserial r, Wilcoxon p and Holm's p (effects.py)
+    tables/paired_<dim>.md|.tex|.csv the same for radio, comm, transport, robots, spawn when they vary
+    tables/pairs.csv, pairs_<dim>.csv every pair of runs compared
     tables/comm_effect.md|.tex|.csv  per cell: mean ticks per radio model and their ordering
     tables/runs.csv                  every run with its ticks to target
     tables/failed.csv                failed runs and their errors
@@ -33,7 +37,7 @@ import pandas as pd
 from maps.errors import InvalidInput
 
 from ..store import ResultsStore
-from . import figures, stats, tables
+from . import effects, figures, stats, tables
 from .load import DIMS, CampaignData, load
 from .layout import FigureLayout, check_layout, load_layout
 from .output import ReportWriter, slug
@@ -67,6 +71,26 @@ class LayoutFigure:
 
 
 @dataclass
+class PairedSection:
+    """One table of paired statistics: per cell for one dimension, or every cell pooled (``dim`` None)."""
+
+    dim: str | None
+    name: str
+    table: tables.Table
+    caption: str
+    family: str
+    """The caption's last sentence: which comparisons Holm's correction runs over."""
+    rows: int
+    tested: int
+    nominal: int
+    """Rows with p < 0.05 before correction."""
+    holm: int
+    """Rows with Holm's p < 0.05."""
+    single_robot_cells: int = 0
+    """1-robot cells left out (radio, comm, transport)."""
+
+
+@dataclass
 class Report:
     """What the README is rendered from (paths are relative to the report folder)."""
 
@@ -82,12 +106,14 @@ class Report:
     cell_figures: bool = True
     summary: tables.Table | None = None
     summary_rows: int = 0
-    paired: tables.Table | None = None
-    wins: tables.Table | None = None
+    paired: list[PairedSection] = field(default_factory=list)
+    pooled: PairedSection | None = None
     paired_figures: list[tuple[str, str]] = field(default_factory=list)
     comm: tables.Table | None = None
     comm_unexpected: int = 0
     comm_rows: int = 0
+    comm_compared: int = 0
+    comm_single: int = 0
     maes: dict[str, Any] | None = None
     notes: list[str] = field(default_factory=list)
     written: list[str] = field(default_factory=list)
@@ -293,23 +319,68 @@ def _summary(rep: Report, out: ReportWriter) -> None:
     rep.summary, rep.summary_rows = table, len(df)
 
 
+NOUN = {"algorithm": "algorithms", "radio": "radio models", "comm": "comm settings", "transport": "transports",
+        "robots": "robot counts", "spawn": "spawn modes"}
+READING = ("Pairs share map and start poses (same replicate). Ticks to target, a DNF counted at max_ticks; a "
+           "pair of two DNFs is a tie. a/b: median over maps of the ratio of ticks, a to b, with a 95 % percentile "
+           "bootstrap interval. r: matched-pairs rank-biserial correlation, +1 when a is slower on every map. p: "
+           "two-sided Wilcoxon signed-rank test on the log ratios, ties dropped, from "
+           f"{effects.MIN_UNITS} maps that differ.")
+
+
 def _paired(rep: Report, out: ReportWriter) -> None:
-    if "algorithm" not in rep.data.dims or not rep.data.varies("algorithm"):
-        return
+    """Per varying dimension: the per-cell table of paired statistics; then every cell pooled."""
     dims = list(rep.data.dims)
-    cell = [d for d in dims if d != "algorithm"]
-    pairs = stats.pair_runs(rep.runs_t, dims, "algorithm")
-    if pairs.empty:
-        return
-    df = stats.paired_table(pairs, cell)
-    rep.paired = tables.paired_table(df, cell)
-    rep.wins = tables.wins_table(stats.overall_wins(pairs))
-    _write_table(out, "paired", df, rep.paired, "Paired comparison of algorithms per cell (pairs share map and "
-                 "start poses; ticks to target with DNF counted at max ticks; Wilcoxon signed-rank, two-sided).")
-    out.write("tables/pairs.csv", tables.csv_text(pairs))
-    if not rep.cell_figures:
-        return
+    pooled = []
+    for k, dim in enumerate(d for d in effects.PAIRED_DIMS if d in dims and rep.data.varies(d)):
+        cell = [d for d in dims if d != dim]
+        pairs = stats.pair_runs(rep.runs_t, dims, dim)
+        single = 0
+        if dim in effects.COMM_DIMS and "robots" in cell and len(pairs):
+            lone = effects.single_robot(pairs)
+            single = len(pairs.loc[lone, cell].drop_duplicates())
+            pairs = pairs[~lone].reset_index(drop=True)
+        if pairs.empty:
+            continue
+        df = effects.summarise(pairs, [*cell, "a", "b"], cell=cell)
+        tested, nominal, holm = effects.tally(df)
+        name = "paired" if dim == "algorithm" else f"paired_{dim}"
+        family = (f"Holm family: the {tested or ''} tested comparisons of this table (every pair of {NOUN[dim]} "
+                  f"in every cell){'' if tested else '; none here'}.").replace("the  tested", "the tested")
+        if single:
+            family += f" The {single} 1-robot cells are left out: a lone robot talks to no one."
+        caption = f"Paired comparison of {NOUN[dim]} per cell. {READING} {family}"
+        table = effects.effects_table(df, [*cell, "a", "b"])
+        _write_table(out, name, df, table, caption)
+        out.write(f"tables/{'pairs' if dim == 'algorithm' else f'pairs_{dim}'}.csv", tables.csv_text(pairs))
+        rep.paired.append(PairedSection(dim, name, table, caption, family, len(df), tested, nominal, holm, single))
+        order = {lab: i for i, lab in enumerate(rep.data.orders[dim])}
+        pooled.append(pd.DataFrame({
+            "dimension": dim, "a": pairs["a"].astype(str).to_numpy(), "b": pairs["b"].astype(str).to_numpy(),
+            "cell": pairs.groupby(cell, observed=True, sort=False).ngroup().to_numpy(),
+            **{u: pairs[u].to_numpy() for u in effects.UNITS},
+            **{c: pairs[c].to_numpy() for c in ("t_a", "t_b", "ok_a", "ok_b", "winner")},
+            "_dim": k, "_a": pairs["a"].astype(str).map(order).to_numpy(),
+            "_b": pairs["b"].astype(str).map(order).to_numpy()}))
+        if dim == "algorithm" and rep.cell_figures:
+            _paired_figures(rep, out, pairs, cell)
+    if pooled:
+        frame = pd.concat(pooled, ignore_index=True).sort_values(["_dim", "_a", "_b"], kind="stable")
+        df = effects.summarise(frame, ["dimension", "a", "b"], cell=["dimension", "cell"], sort=False)
+        tested, nominal, holm = effects.tally(df)
+        family = (f"Holm family: the {tested or ''} tested comparisons of this table (every pair of values of "
+                  f"every dimension){'' if tested else '; none here'}.").replace("the  tested", "the tested")
+        caption = (f"Paired comparisons with every cell pooled, per dimension and pair of values. {READING} Each "
+                   "map (map, size, replicate) counts once, with the mean log ratio of its pairs: the cells that "
+                   f"share a map are not independent. {family}")
+        table = effects.effects_table(df, ["dimension", "a", "b"], cells=True, maps=True)
+        _write_table(out, "pooled", df, table, caption)
+        rep.pooled = PairedSection(None, "pooled", table, caption, family, len(df), tested, nominal, holm)
+
+
+def _paired_figures(rep: Report, out: ReportWriter, pairs: pd.DataFrame, cell: list[str]) -> None:
     names = _Names()
+    max_ticks = float(rep.runs_t["max_ticks"].max())
     for keys, grp in pairs.groupby(cell, observed=True, sort=True):
         values = dict(zip(cell, (str(k) for k in keys)))
         panels = []
@@ -318,7 +389,6 @@ def _paired(rep: Report, out: ReportWriter) -> None:
             panels.append(figures.PairPanel(str(a), str(b), pg["t_a"].to_numpy(float), pg["t_b"].to_numpy(float),
                                             (~pg["ok_a"] | ~pg["ok_b"]).to_numpy(bool), int((w == "a").sum()),
                                             int((w == "b").sum()), int((w == "tie").sum())))
-        max_ticks = float(rep.runs_t["max_ticks"].max())
         name = names("algorithms", values)
         path = f"paired/{name}.{rep.fmt}"
         out.write(path, figures.paired_figure(panels, describe(values), max_ticks, rep.fmt))
@@ -337,12 +407,15 @@ def _comm(rep: Report, out: ReportWriter) -> None:
     rep.comm = tables.comm_table(df, cell, labels)
     rep.comm_unexpected = sum(1 for v in df["as_expected"] if v is False)  # None: no expectation
     rep.comm_rows = len(df)
+    rep.comm_compared = sum(1 for v in df["as_expected"] if v in (True, False))
+    rep.comm_single = int(effects.single_robot(df).sum()) if "robots" in df else 0
     _write_table(out, "comm_effect", df, rep.comm, "Mean ticks to target per radio model (DNF counted at max "
-                 "ticks) and their ordering; expected: global <= material-aware (multiwall, maes) <= LOS.")
+                 "ticks) and their ordering; expected: global <= material-aware (multiwall, maes) <= LOS "
+                 "(not judged in 1-robot cells, where every model gives the same run).")
 
 
 def _write_table(out: ReportWriter, name: str, df: pd.DataFrame, table: tables.Table, caption: str) -> None:
-    out.write(f"tables/{name}.md", tables.markdown(table))
+    out.write(f"tables/{name}.md", f"*{caption}*\n\n" + tables.markdown(table))
     out.write(f"tables/{name}.tex", tables.latex(table, caption, f"tab:{name.replace('_', '-')}"))
     out.write(f"tables/{name}.csv", tables.csv_text(df))
 

@@ -3,12 +3,13 @@ were computed (so a reader can trust or dispute them without reading this code).
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING
 
-from . import tables
+from . import effects, tables
 
 if TYPE_CHECKING:
-    from .build import Report
+    from .build import PairedSection, Report
 
 INLINE_ROWS = 300
 """Tables longer than this are linked, not inlined (a 54,000-run campaign has ~1,600 summary rows)."""
@@ -143,19 +144,49 @@ def _cactus(rep: Report) -> str:
     return "\n".join(lines)
 
 
+PAIRED_TITLE = {"algorithm": "Algorithms", "radio": "Radio models", "comm": "Comm settings",
+                "transport": "Transports", "robots": "Robot counts", "spawn": "Spawn modes"}
+
+
+def _tally(sec: PairedSection) -> str:
+    if not sec.tested:
+        return ("No row has enough maps for a test (6 maps whose runs differ; with n maps the smallest "
+                "two-sided p is 2^(1−n)).")
+    text = (f"{sec.tested} of {sec.rows} rows tested; p < 0.05 in {sec.nominal} before correction, "
+            f"**{sec.holm} after Holm's correction** over those {sec.tested}.")
+    if not sec.holm and sec.tested > 1:  # say why: the smallest p n maps can give is 2^(1-n)
+        need = math.ceil(math.log2(2 * sec.tested / 0.05))
+        text += (f" (Holm's smallest threshold is 0.05 / {sec.tested}: a row needs at least {need} maps whose "
+                 "runs differ, all in one direction, to pass it.)")
+    return text
+
+
 def _paired(rep: Report) -> str:
-    if rep.paired is None or rep.wins is None:
+    if not rep.paired:
         return ""
-    lines = ["## Paired comparisons between algorithms", "",
-             "Runs pair when they share everything but the algorithm, replicate included: the same map and start "
-             "poses. *a faster* counts pairs where a reached the target and b did not or later. Differences are "
-             "a − b in ticks with DNF counted at `max_ticks`; Wilcoxon signed-rank p (two-sided, zero differences "
-             "dropped) from 6 pairs up.", "", "### All cells pooled", "", tables.markdown(rep.wins),
-             "### Per cell", ""]
-    lines += _inline(rep.paired, len(rep.paired.rows), "paired")
-    if rep.paired_figures:
-        lines += ["Per-replicate scatter plots (a point above the diagonal: b took longer than a on that map):", ""]
-        lines += [f"- [{title}]({path})" for title, path in rep.paired_figures]
+    lines = ["## Paired comparisons", "",
+             "Runs pair when they share everything but the compared dimension, replicate included: the same map "
+             "and start poses. *a faster* counts pairs where a reached the target and b did not or later; *DNF* "
+             "pairs with a run that did not reach it (counted at `max_ticks`, a lower bound). How to read a row: "
+             "*a/b* is the median ratio of ticks to target, a to b, over maps (0.80: a needed 20 % fewer ticks) "
+             "with its 95 % bootstrap interval; *r* is the rank-biserial correlation (−1: a faster on every map, "
+             "+1: slower on every map); a difference is established when *p (Holm)* < 0.05, i.e. it survives "
+             "Holm's correction over every tested comparison of its table (the family named above the table). "
+             f"*p* is a Wilcoxon signed-rank test on the log ratios, from {effects.MIN_UNITS} maps whose runs "
+             "differ. Details: [Method](#method).", ""]
+    if rep.pooled is not None:
+        sec = rep.pooled
+        lines += ["### All cells pooled", "", "Each map (map, size, replicate) counts once, with the mean log ratio "
+                  "of its pairs: the cells that share a map are not independent. " + sec.family + " " + _tally(sec),
+                  ""]
+        lines += _inline(sec.table, sec.rows, sec.name)
+    for sec in rep.paired:
+        lines += [f"### {PAIRED_TITLE[sec.dim]}, per cell", "", sec.family + " " + _tally(sec), ""]
+        lines += _inline(sec.table, sec.rows, sec.name)
+        if sec.dim == "algorithm" and rep.paired_figures:
+            lines += ["Per-replicate scatter plots (a point above the diagonal: b took longer than a on that map):",
+                      ""]
+            lines += [f"- [{title}]({path})" for title, path in rep.paired_figures] + [""]
     return "\n".join(lines) + "\n"
 
 
@@ -165,7 +196,9 @@ def _comm(rep: Report) -> str:
     lines = ["## Communication effect", "",
              "Mean ticks to target per radio model in each cell (DNF counted at `max_ticks`; *(k/n)* when only k "
              "of n runs reached the target). The paper expects global <= material-aware (multiwall, maes) <= LOS; "
-             f"**{rep.comm_unexpected} of {rep.comm_rows} cells** break that order (*As expected* = **no**).", ""]
+             f"**{rep.comm_unexpected} of {rep.comm_compared} cells** break that order (*As expected* = **no**)"
+             + (f"; the {rep.comm_single} 1-robot cells are not judged (*As expected* = –): a lone robot talks "
+                "to no one, so every model gives the same run." if rep.comm_single else "."), ""]
     return "\n".join(lines + _inline(rep.comm, rep.comm_rows, "comm_effect"))
 
 
@@ -211,7 +244,23 @@ def _method(rep: Report) -> str:
         "- **DNF** runs did not reach the target (timeout, stall, all robots failed, or a lower stop rule). "
         "Means over successes ignore them, which flatters cells with many DNFs: read them with the success "
         "rate, or use the DNF = max column (a lower bound).",
-        "- **Failed runs** (an exception in the run) are listed and excluded; **pending** runs are simply absent.",
+        "- **Paired statistics**: a pair gives the log ratio log(t_a / t_b) of its ticks to target, a DNF counted "
+        "at its `max_ticks` (so the ratio understates a DNF's loss; the *DNF* column counts such pairs) and a "
+        "pair where both runs are DNF a tie (ratio 1). Ratios, not tick differences, because ticks to target vary "
+        "many-fold between small and large maps and few and many robots: a ratio compares alike across cells. The "
+        "unit is the map (map, size, replicate): within a cell each pair is its own map; pooled over cells, a "
+        "map that appears in several cells counts once, with the mean log ratio of its pairs, because runs on "
+        "one map are not independent. *p* is the two-sided Wilcoxon signed-rank test of those values against "
+        "0: ties (value 0) are dropped and counted, tied magnitudes get mid-ranks, the p-value is exact (the "
+        f"permutation distribution of the signed ranks) up to {effects.EXACT_MAX} maps; no test below "
+        f"{effects.MIN_UNITS} maps that differ (with n maps the smallest two-sided p is 2^(1−n): 0.031 for 6). "
+        "*p (Holm)* is Holm's step-down correction over the tested rows of one table (the family named in its "
+        "caption). *a/b* is the median of the maps' ratios with a 95 % percentile bootstrap interval "
+        f"({effects.RESAMPLES} resamples of the maps from a generator seeded with {effects.SEED} and the row's "
+        f"labels: the same numbers every time; none below {effects.MIN_UNITS} maps); *r* is the matched-pairs "
+        "rank-biserial correlation (W+ − W−) / (W+ + W−) of the same signed ranks.",
+        "- **Failed runs** (an exception in the run) are listed and excluded, and so are the pairs they would "
+        "have formed; **pending** runs are simply absent.",
         ""])
 
 
@@ -219,7 +268,8 @@ def _files(rep: Report) -> str:
     written = rep.written
     tables_ = [f for f in written if f.startswith("tables/")]
     lines = ["## Files", "", "- [files.txt](files.txt): every file of this report"]
-    lines += [f"- [{f}]({f})" + FILE_NOTES.get(f, "") for f in tables_ if f.endswith(".csv")]
+    lines += [f"- [{f}]({f})" + FILE_NOTES.get(f, ": every pair of runs compared" if f.startswith("tables/pairs")
+                                              else "") for f in tables_ if f.endswith(".csv")]
     for folder in ("curves", "cactus", "paired", "maes-csv"):
         count = sum(1 for f in written if f.startswith(f"{folder}/"))
         if count:

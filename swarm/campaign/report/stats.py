@@ -11,16 +11,16 @@ Choices, each stated in the report's Method section:
   (a lower bound on its real time).
 - **Bands**: a two-sided Student-t interval of the mean across replicates (maps) at each time, n - 1
   degrees of freedom; none with fewer than two runs.
-- **Paired comparisons**: runs pair when everything but the algorithm is equal, replicate included (same map,
-  same start poses). The difference is a - b in ticks with DNF counted at ``max_ticks``; a wins a pair when it
-  reaches the target and b does not or does later. Wilcoxon signed-rank (two-sided, zero differences
-  dropped) from 6 pairs up.
+- **Paired comparisons**: runs pair when everything but the compared dimension is equal, replicate included
+  (same map, same start poses): :func:`pair_runs`. The tests, effect sizes and Holm's correction on those
+  pairs are in :mod:`.effects`.
+- **Radio ordering** (:func:`comm_effect`): not judged in 1-robot cells, where every radio model gives the
+  same run (a lone robot talks to no one).
 """
 
 from __future__ import annotations
 
 import itertools
-import warnings
 from collections.abc import Mapping, Sequence
 
 import numpy as np
@@ -29,7 +29,6 @@ from scipy import stats as sps
 
 from ...schema import THRESHOLD_COLUMNS
 
-MIN_WILCOXON_PAIRS = 6
 EXPECTED_RANK = {"global": 0, "multiwall": 1, "maes": 1, "los": 2}
 """Radio models from most to least permissive: the ordering of mean times the paper reports."""
 
@@ -136,38 +135,6 @@ def pair_runs(runs_t: pd.DataFrame, dims: Sequence[str], compare: str = "algorit
     return p.sort_values([*cell, "a", "b", "replicate"], kind="stable").reset_index(drop=True)
 
 
-def paired_table(pairs: pd.DataFrame, cell: Sequence[str]) -> pd.DataFrame:
-    """Per cell and algorithm pair: pairs, wins of each, ties, mean/median difference and Wilcoxon p."""
-    rows = []
-    for keys, grp in pairs.groupby([*cell, "a", "b"], observed=True, sort=True):
-        d = grp["diff"].to_numpy(dtype=float)
-        rows.append({**dict(zip([*cell, "a", "b"], keys)), "pairs": len(grp),
-                     "a_wins": int((grp["winner"] == "a").sum()), "b_wins": int((grp["winner"] == "b").sum()),
-                     "ties": int((grp["winner"] == "tie").sum()), "mean_diff": float(d.mean()),
-                     "median_diff": float(np.median(d)), "p_value": wilcoxon_p(d)})
-    return pd.DataFrame(rows, columns=[*cell, "a", "b", "pairs", "a_wins", "b_wins", "ties", "mean_diff",
-                                       "median_diff", "p_value"])
-
-
-def wilcoxon_p(diffs: np.ndarray) -> float:
-    """Two-sided Wilcoxon signed-rank p-value, NaN below ``MIN_WILCOXON_PAIRS`` pairs or when all are ties."""
-    d = np.asarray(diffs, dtype=float)
-    if len(d) < MIN_WILCOXON_PAIRS or not np.any(d != 0):
-        return float("nan")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        return float(sps.wilcoxon(d, zero_method="wilcox", alternative="two-sided").pvalue)
-
-
-def overall_wins(pairs: pd.DataFrame) -> pd.DataFrame:
-    """Wins and ties per algorithm pair pooled over every cell."""
-    g = pairs.groupby(["a", "b"], observed=True, sort=True)
-    out = g.agg(pairs=("winner", "size"), a_wins=("winner", lambda w: int((w == "a").sum())),
-                b_wins=("winner", lambda w: int((w == "b").sum())), ties=("winner", lambda w: int((w == "tie").sum())),
-                median_diff=("diff", "median")).reset_index()
-    return out
-
-
 # ---------------------------------------------------------------------------------- radio effect ----
 def comm_effect(runs_t: pd.DataFrame, dims: Sequence[str], models: Mapping[str, str],
                 compare: str = "radio") -> pd.DataFrame:
@@ -175,7 +142,8 @@ def comm_effect(runs_t: pd.DataFrame, dims: Sequence[str], models: Mapping[str, 
     the observed ordering and whether it follows global <= material-aware <= LOS.
 
     Columns: the cell's dimensions, then ``mean:<label>``, ``ok:<label>``, ``n:<label>`` per radio label,
-    ``ordering`` and ``as_expected`` (True/False, None when fewer than two labels have a known model).
+    ``ordering`` and ``as_expected`` (True/False; None when fewer than two labels have a known model, and in
+    1-robot cells).
     """
     cell = [d for d in dims if d != compare]
     ok = runs_t[runs_t["status"] == "ok"]
@@ -191,10 +159,12 @@ def comm_effect(runs_t: pd.DataFrame, dims: Sequence[str], models: Mapping[str, 
                 wide[f"{stat}:{lab}"] = np.nan
     wide = wide[[*cell, *[f"{s}:{lab}" for lab in labels for s in ("mean", "ok", "n")]]]
     orderings, expected = [], []
-    for _, row in wide.iterrows():
+    lone = (pd.to_numeric(wide["robots"].astype(str), errors="coerce") == 1).to_numpy() if "robots" in wide else (
+        np.zeros(len(wide), dtype=bool))
+    for (_, row), single in zip(wide.iterrows(), lone):
         means = {lab: row[f"mean:{lab}"] for lab in labels if pd.notna(row[f"mean:{lab}"])}
         orderings.append(_ordering(means, labels))
-        expected.append(_as_expected(means, models))
+        expected.append(None if single else _as_expected(means, models))
     wide["ordering"] = orderings
     wide["as_expected"] = expected
     return wide

@@ -56,23 +56,6 @@ def summary_table(df: pd.DataFrame, dims: Sequence[str]) -> Table:
     return Table(headers, rows, [False] * len(dims) + [True] * 10)
 
 
-def paired_table(df: pd.DataFrame, cell: Sequence[str]) -> Table:
-    headers = [HEADERS[d] for d in cell] + ["a", "b", "Pairs", "a faster", "b faster", "Ties", "Mean a − b",
-                                           "Median a − b", "Wilcoxon p"]
-    rows = [[str(r[d]) for d in cell] + [str(r["a"]), str(r["b"]), str(r["pairs"]), str(r["a_wins"]),
-                                         str(r["b_wins"]), str(r["ties"]), signed(r["mean_diff"]),
-                                         signed(r["median_diff"]), p_value(r["p_value"])]
-            for _, r in df.iterrows()]
-    return Table(headers, rows, [False] * (len(cell) + 2) + [True] * 7)
-
-
-def wins_table(df: pd.DataFrame) -> Table:
-    rows = [[str(r["a"]), str(r["b"]), str(r["pairs"]), str(r["a_wins"]), str(r["b_wins"]), str(r["ties"]),
-             signed(r["median_diff"])] for _, r in df.iterrows()]
-    return Table(["a", "b", "Pairs", "a faster", "b faster", "Ties", "Median a − b"], rows,
-                 [False, False] + [True] * 5)
-
-
 def comm_table(df: pd.DataFrame, cell: Sequence[str], labels: Sequence[str]) -> Table:
     """Mean ticks per radio label (DNF counted at max_ticks; '(k/n)' when not every run reached)."""
 

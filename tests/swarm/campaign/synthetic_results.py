@@ -47,6 +47,8 @@ class FakeRun:
     stop_reason: str = "explored"
     failed: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
+    cell: dict[str, str] = field(default_factory=dict)
+    """Labels of the other grid dimensions (``{"robots": "4"}``) when the spec has several values of them."""
 
 
 def series_to(t98: int | None, end: int, every: int = 10) -> list[tuple[int, float]]:
@@ -62,12 +64,14 @@ def series_to(t98: int | None, end: int, every: int = 10) -> list[tuple[int, flo
 
 def write(folder: Path, runs: Sequence[FakeRun], replicates: int = 6, spec_text: str | None = None) -> Path:
     spec = parse_campaign(spec_text or SPEC.format(replicates=replicates))
-    by_cell = {(r.cell["algorithm"], r.cell["radio"], r.replicate): r for r in spec.runs()}
+    by_cell = {(frozenset(r.cell.items()), r.replicate): r for r in spec.runs()}
+    defaults = {dim: opts[0].label for dim, opts in spec.grid.items()}
     store = ResultsStore(folder)
     store.open_for(spec.source)
     rows, ts_rows = [], []
     for fake in runs:
-        run = by_cell[(fake.algorithm, fake.radio, fake.replicate)]
+        labels = {**defaults, **fake.cell, "algorithm": fake.algorithm, "radio": fake.radio}
+        run = by_cell[(frozenset(labels.items()), fake.replicate)]
         result = _result(fake, int(spec.stop.get("max_ticks", 1000)))
         rows.append(runs_row(spec, run, result))
         ts_rows.extend(timeseries_rows(run.key, result["timeseries"]))
