@@ -324,7 +324,7 @@ NOUN = {"algorithm": "algorithms", "radio": "radio models", "comm": "comm settin
 READING = ("Pairs share map and start poses (same replicate). Ticks to target, a DNF counted at max_ticks; a "
            "pair of two DNFs is a tie. a/b: median over maps of the ratio of ticks, a to b, with a 95 % percentile "
            "bootstrap interval. r: matched-pairs rank-biserial correlation, +1 when a is slower on every map. p: "
-           "two-sided Wilcoxon signed-rank test on the log ratios, ties dropped, from "
+           "two-sided Wilcoxon signed-rank test on the log ratios, ties dropped; not tested (n/a) below "
            f"{effects.MIN_UNITS} maps that differ.")
 
 
