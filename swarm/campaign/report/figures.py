@@ -8,6 +8,7 @@ figures); cactus, ECDF and paired plots are in ticks (as MAES's maes-csv-reader)
 from __future__ import annotations
 
 import io
+import textwrap
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -19,6 +20,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import LogFormatter, MaxNLocator
 
 TICKS_PER_MINUTE = 600
+PANEL_TITLE_CHARS = 58  # a panel title longer than this wraps: 4.6-inch panels side by side
 FORMATS = ("png", "svg", "pdf")
 _METADATA = {"png": {"Software": None}, "svg": {"Date": None, "Creator": None},
              "pdf": {"CreationDate": None, "Creator": None, "Producer": None}}
@@ -210,11 +212,13 @@ def panels_figure(panels: Sequence[tuple[str, Sequence[Curve]]], title: str, tar
         n = len(panels)
         cols = min(columns or n, n)
         rows = -(-n // cols)
-        width, height = 4.6 * cols + 0.4, 3.9 * rows + 0.5
+        titles = [textwrap.fill(t, PANEL_TITLE_CHARS) for t, _ in panels]
+        lines = max((t.count("\n") + 1 for t in titles), default=1)
+        width, height = 4.6 * cols + 0.4, (3.7 + 0.2 * lines) * rows + 0.5
         fig = _figure(width, height, left=0.7 / width, right=1 - 0.15 / width, bottom=0.55 / height,
-                      top=1 - 0.6 / height, wspace=0.18, hspace=0.45)
+                      top=1 - (0.4 + 0.2 * lines) / height, wspace=0.18, hspace=0.35 + 0.1 * lines)
         fig.suptitle(_text(title))
-        for k, (panel_title, curves) in enumerate(panels):
+        for k, (panel_title, (_, curves)) in enumerate(zip(titles, panels)):
             ax = fig.add_subplot(rows, cols, k + 1)
             _draw_curves(ax, curves, target)
             if k // cols == rows - 1:
