@@ -33,7 +33,7 @@ from radio import build_link_model
 from .api import Action, Pose, RobotInfo
 from .comm import Envelope, MapSharing, Medium
 from .grid._validate import vouch_known
-from .knowledge import sync_changes, sync_regions_flat
+from .knowledge import sync_boxes_flat, sync_changes
 from . import registry
 from .maes_merge import MaesMerge
 from .maes_merge import resolve as resolve_maes_merge
@@ -74,6 +74,7 @@ class TransportOptions:
     run_id: str | None = None
     times: PhaseTimes | None = field(default=None, compare=False)  # benchmarks: where the ticks go
     secret: RunSecret | None = field(default=None, repr=False)  # remote agents' tokens derive from it (a fresh one if None)
+    share_maps: bool = True  # zenoh: local agents read the runtime's maps in place (False: ship them the changes)
 
 
 @dataclass
@@ -158,7 +159,8 @@ class Simulation:
     def run(self) -> RunResult:
         opts = self.transport
         host = make_host(self.spec.transport, self.spec.key, listen=opts.listen, remote=opts.remote,
-                         timeout_s=opts.timeout_s, run_id=opts.run_id, times=opts.times, secret=opts.secret)
+                         timeout_s=opts.timeout_s, run_id=opts.run_id, times=opts.times, secret=opts.secret,
+                         share_maps=opts.share_maps)
         if opts.times is not None:
             self._time_phases(opts.times)
         try:
@@ -318,23 +320,25 @@ class Simulation:
         live = ~self.failed
         navs = [nav.status() if ok else None for nav, ok in zip(self.navigators, live.tolist())]
         at = poses.copy()  # the world moves these in place next tick; a late read must see this tick's
-        changed = (lambda: self._changed_cells(at, merged)) if self._mirror is not None else None
+        changed = None
+        if self._mirror is not None:
+            boxes = self.lidar.changed.copy()  # what this tick's scan changed (the next scan overwrites them)
+            changed = lambda: self._changed_cells(boxes, merged)  # noqa: E731
         return TickBatch(tick, live, poses, pose_tuples, collided, self.world.distance, self.world.rotation, navs,
                          self.known, self._views, inboxes, lambda: self._sight(at), changed)
 
-    def _changed_cells(self, poses: np.ndarray, merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:
+    def _changed_cells(self, boxes: np.ndarray, merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:
         """``(cells, ends)``: per robot, flat indices (ascending) of its knowledge cells changed since its last
-        observation, robot i's at ``cells[ends[i-1]:ends[i]]`` (none for failed robots): the lidar only writes
-        within range of the robot, delta merges report their cells, so only those places are compared, all
-        robots in one compiled call; after a full-map merge the whole map is."""
+        observation, robot i's at ``cells[ends[i-1]:ends[i]]`` (none for failed robots): the lidar reports
+        the box of the cells it changed this tick, delta merges their cells, so only those places are
+        compared, all robots in one compiled call; after a full-map merge the whole map is."""
         assert self._mirror is not None
         windowed = ~self.failed
         full = []
         if any(merged):  # most ticks no map update arrives
             full = [i for i, cells in enumerate(merged) if cells and any(m is None for m in cells) and windowed[i]]
             windowed[full] = False
-        centres = (poses[:, 1::-1] / CELL_M).astype(np.int64)  # (row, col); truncation, as int() did
-        cells, ends = sync_regions_flat(self.known, self._mirror, centres, self._reach, merged, windowed)
+        cells, ends = sync_boxes_flat(self.known, self._mirror, boxes, merged, windowed)
         if not full:
             return cells, ends
         bounds = ends.tolist()

@@ -51,6 +51,23 @@ class InboxDecoder:
             out.append(msg)
         return tuple(out)
 
+    def decode_table(self, tick: int, blobs: Sequence[bytes]) -> list[Any]:
+        """Each of ``blobs`` decoded (an ``obs_batch``'s message table: every message once), None for those
+        that do not decode (counted in :attr:`undecodable`)."""
+        if tick != self._tick:
+            self._tick = tick
+            self._seen.clear()
+        seen, out = self._seen, []
+        for b in blobs:
+            msg = seen.get(b)
+            if msg is None:
+                try:
+                    msg = seen[b] = decode(b)
+                except MessageError:
+                    self.undecodable += 1
+            out.append(msg)
+        return out
+
 
 class AgentRunner:
     def __init__(self, reset: ResetPacket, algorithm: str | None = None, inbox: InboxDecoder | None = None,
