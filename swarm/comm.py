@@ -205,18 +205,23 @@ class Medium:
 class MapSharing:
     """The map-sharing service: builds each robot's MapUpdates and merges the ones it receives."""
 
-    def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None) -> None:
+    def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None,
+                 monotone: bool = False) -> None:
         """``lidar_reach``: the owner's promise that apart from this service's merges only a lidar writes into
         the maps, within ``lidar_reach`` cells (rows and columns) of each robot's cell, and that it reports
         every scan with :meth:`scanned` from the start. A delta then compares only the places written since the robot's
         last update (:func:`swarm.knowledge.sync_box`), not both whole maps: the same cells. Without it
-        (None) every delta compares the whole maps."""
+        (None) every delta compares the whole maps. ``monotone``: the owner's promise that no cell of a map
+        ever decreases (the ternary lidar; a log-odds lidar may turn SOLID back to FREE), which lets a
+        broadcast full map reach most receivers as a delta (:meth:`_merge_full`)."""
         self.n = n
         self.spec = spec
         self.enabled = spec.map_sharing in ("delta", "full") and n > 1  # the maes modes: swarm.maes_merge
         self.last_shared = np.zeros((n, *shape), dtype=np.uint8) if spec.map_sharing == "delta" else None
         self.seq = [0] * n
         self.seen_seq = [[0] * n for _ in range(n)]          # [receiver][sender] last seq merged
+        self._complete = [[True] * n for _ in range(n)]      # [receiver][sender] merged each of its updates so far
+        self.monotone = monotone
         self.full_requested = [False] * n
         self.requests: list[list[int]] = [[] for _ in range(n)]  # targets each robot will ask next tick
         self.lidar_reach = lidar_reach if self.enabled and self.last_shared is not None else None
@@ -250,17 +255,25 @@ class MapSharing:
                 continue
             self.full_requested[i] = False
             if full:
-                if self.last_shared is not None:
+                since = None
+                if self.last_shared is not None and self.monotone:  # the cells since the previous update: _merge_full
+                    changed = self._changed_since_update(i, known[i])  # last_shared[i] becomes known[i]
+                    since = (self.seq[i], changed, known[i].reshape(-1)[changed])
+                elif self.last_shared is not None:
                     self.last_shared[i] = known[i]
                     self._forget_writes(i)
                 self.seq[i] += 1
-                out[i].append(full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i])))
+                update = full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]))
+                update.__dict__["_since"] = since  # this process's note (see _take); never on the wire
+                out[i].append(update)
                 continue
             assert self.last_shared is not None
             changed = self._changed_since_update(i, known[i])  # ascending, as delta_update wants them
             if len(changed):
                 self.seq[i] += 1
-                out[i].append(delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed))
+                update = delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed)
+                update.__dict__["_since"] = None  # built here (see _take): never on the wire
+                out[i].append(update)
         return out
 
     def _changed_since_update(self, i: int, known: np.ndarray) -> np.ndarray:
@@ -332,31 +345,58 @@ class MapSharing:
         if not isinstance(msg, MapUpdate):
             return
         tracking = self.lidar_reach is not None
-        idx: np.ndarray | None = None
         if msg.full:
-            dense = msg.dense()
-            for row in rows.tolist():
-                flat = stack[row].reshape(-1)
-                np.maximum(flat, dense, out=flat)
+            carried = self._merge_full(msg, ids, stack, rows)
         else:
             idx, values = msg.cells()  # int64 and uint8, in range: checked when decoded
             merge_cells_many(stack, rows, idx, values)
+            carried = [idx] * len(ids)
         delta_gap = not msg.full and self.spec.map_sharing == "delta"
         sender, seq = msg.sender, msg.seq
+        ours = "_since" in msg.__dict__  # built by this service, not sent by an algorithm
         if lists is not None:
-            for carried in lists:
-                carried.append(idx)
-        for r in ids:
+            for cells, into in zip(carried, lists):
+                into.append(cells)
+        for r, cells in zip(ids, carried):
             if tracking:
-                if idx is None:
+                if cells is None:
                     self._whole[r] = True  # any cell may have changed: the next delta compares all
                 else:
-                    self._merged[r].append(idx)
+                    self._merged[r].append(cells)
             seen = self.seen_seq[r]
             last = seen[sender]
             if delta_gap and seq != last + 1 and sender not in self.requests[r]:
                 self.requests[r].append(sender)
+            if not ours or msg.full or seq != last + 1:  # an update an algorithm sent counts as a gap
+                self._complete[r][sender] = ours and msg.full
             seen[sender] = seq if msg.full else max(last, seq)
+
+    def _merge_full(self, msg: MapUpdate, ids: list[int], stack: np.ndarray, rows: np.ndarray) -> list[np.ndarray | None]:
+        """Merge a full map into robots ``ids`` (maps ``stack[rows]``); per receiver, the cells the merge may
+        have changed (None: any). A full map this service built in delta mode on monotone maps notes the cells
+        where it differs from its sender's previous update (``outgoing``). A receiver that merged every update
+        of the sender up to that one already holds at least the previous update everywhere (merges take
+        maxima and no cell decreases), so taking just those cells gives the same map: a broadcast full map
+        then costs its receivers a delta's work instead of the whole map's each, which grew with the square of
+        the team (docs/performance-history.md)."""
+        since = msg.__dict__.get("_since")
+        quick: list[int] = []
+        if since is not None:
+            prev, cells, values = since
+            sender = msg.sender
+            quick = [k for k, r in enumerate(ids) if self._complete[r][sender] and self.seen_seq[r][sender] == prev]
+        carried: list[np.ndarray | None] = [None] * len(ids)
+        if quick:
+            merge_cells_many(stack, rows[quick], cells, values)
+            for k in quick:
+                carried[k] = cells
+        if len(quick) < len(ids):
+            dense = msg.dense()
+            for k, row in enumerate(rows.tolist()):
+                if carried[k] is None:
+                    flat = stack[row].reshape(-1)
+                    np.maximum(flat, dense, out=flat)
+        return carried
 
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)

@@ -120,7 +120,8 @@ class Simulation:
         self.comm = self.spec.comm
         self.medium = Medium(n, self.comm, self.streams.radio, map_shape=self.truth.shape)
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
-        self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach)  # told of every scan
+        self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach,  # told of every scan
+                                  monotone=self.lidar_params.mode == "ternary")
         merge = resolve_maes_merge(self.comm.map_sharing, self.comm.share_every, registry.load(self.spec.algorithm.name))
         self.maes_merge = MaesMerge(n, *merge) if merge is not None else None
         self._in_flight: list[list[Envelope]] | None = None  # link_at = "receive": last tick's outboxes

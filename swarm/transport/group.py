@@ -86,7 +86,7 @@ class AgentGroup:
 
     def _observations(self, b: ObsBatch, rows: list[int]) -> list[Observation]:
         tick, views, navs, near, records = b.tick, self._views, self._navs, b.near, b.neighbours
-        messages = self._inbox.decode_table(tick, b.messages) if b.messages else ()
+        messages = self._inbox.decode_table(b.messages) if b.messages else ()
         out = []
         at = 0  # where robot k's neighbour records start
         for k, (x, y, theta, gx, gy, path_length, travelled, energy, stalled, state, flags) in enumerate(b.states):
