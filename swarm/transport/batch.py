@@ -201,6 +201,7 @@ class ObsBatch(NamedTuple):
     tick: int
     ids: tuple[int, ...]
     states: list[tuple]              # OBS_STATE fields per robot
+    state_bytes: bytes               # the same records as they came
     counts: np.ndarray | None        # uint32[m * COUNTS]: the counts column (None when no cell changed)
     cells: np.ndarray | None         # uint8: the cells column (gaps then values per robot); None if empty
     inbox: list[tuple[int, ...]]     # per robot: indices into ``messages`` (shared: read only)
@@ -277,7 +278,7 @@ class ObsBatchDecoder:
             for k, n in enumerate(counts[INBOX::COUNTS]):
                 inbox[k] = refs[at:at + n]
                 at += n
-        return _tuple_new(ObsBatch, (tick, ids, list(OBS_STATE.iter_unpack(states_b)), counts_a, cells, inbox,
+        return _tuple_new(ObsBatch, (tick, ids, list(OBS_STATE.iter_unpack(states_b)), states_b, counts_a, cells, inbox,
                                      messages, counts[NEIGHBOURS::COUNTS] if n_near else _no_near(m), near_b))
 
 

@@ -26,10 +26,11 @@ from .agent import InboxDecoder
 from .batch import ActBatchEncoder, ObsBatch, ObsBatchDecoder, apply_cells
 from .inprocess import check_action
 from .timing import PhaseTimes, timed
-from .wire import COLLIDED, HAS_GOAL, NAV_STATES, NEIGHBOUR, PackedNeighbours, ResetPacket, WireError
+from .wire import COLLIDED, HAS_GOAL, NAV_STATES, NEIGHBOUR, OBS_STATE, PackedNeighbours, ResetPacket, WireError
 
 _observation, _nav = frozen_builder(Observation), frozen_builder(NavStatus)
-_RECORD = NEIGHBOUR.size
+_RECORD, _STATE = NEIGHBOUR.size, OBS_STATE.size
+_NAV_FROM, _NAV_TO, _NAV_TAIL = 24, 48, 64  # OBS_STATE offsets: goal x .. path length, ticks since progress ..
 _tuple_new = tuple.__new__
 
 
@@ -85,13 +86,15 @@ class AgentGroup:
         return b.tick, b.ids, self._observations(b, rows[0])
 
     def _observations(self, b: ObsBatch, rows: list[int]) -> list[Observation]:
-        tick, views, navs, near, records = b.tick, self._views, self._navs, b.near, b.neighbours
+        tick, views, navs, near, records, raw = b.tick, self._views, self._navs, b.near, b.neighbours, b.state_bytes
         messages = self._inbox.decode_table(b.messages) if b.messages else ()
         out = []
         at = 0  # where robot k's neighbour records start
         for k, (x, y, theta, gx, gy, path_length, travelled, energy, stalled, state, flags) in enumerate(b.states):
             row = rows[k]
-            key = (gx, gy, path_length, stalled, state, flags & HAS_GOAL)
+            # the nav fields' bytes (goal, path length, ticks since progress, state, flags): compared as bytes,
+            # so a goal of -0.0 is not taken for 0.0 (the collided flag rides along: a rare miss)
+            key = raw[_STATE * k + _NAV_FROM:_STATE * k + _NAV_TO] + raw[_STATE * k + _NAV_TAIL:_STATE * (k + 1)]
             seen_key, nav = navs[row]
             if key != seen_key:  # the same NavStatus while nothing in it changed, as the runtime's navigator keeps
                 nav = _nav(goal=(gx, gy) if flags & HAS_GOAL else None, state=NAV_STATES[state],
