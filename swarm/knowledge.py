@@ -259,9 +259,8 @@ def sync_boxes_flat(current: np.ndarray, last: np.ndarray, boxes: np.ndarray,
                     cells: Sequence[Sequence[np.ndarray]], active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """:func:`sync_regions_flat` with a box per map instead of a window: map k is compared in rows
     ``boxes[k, 0]:boxes[k, 1]`` x columns ``boxes[k, 2]:boxes[k, 3]`` (clipped; empty when r0 >= r1) and at
-    its listed ``cells[k]``. For a caller that knows where each map was written, as the runtime knows the
-    cells its lidar changed (:attr:`swarm.sensing.Lidar.changed`): most ticks those boxes are a few cells
-    or empty, where a window around the robot is ~2,000 cells."""
+    its listed ``cells[k]``. For a caller that knows where each map was written: the runtime gives each
+    robot the window its lidar may have written, empty for a robot it did not cast."""
     if current.shape != last.shape or current.ndim != 3 or not (current.flags.c_contiguous and last.flags.c_contiguous):
         raise InvalidInput("last", getattr(last, "shape", None), f"a C-contiguous stack shaped like current {current.shape}")
     n, rows, cols = current.shape

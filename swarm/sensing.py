@@ -211,26 +211,13 @@ def _lidar_advance(t_x: float, t_y: float, d_x: float, d_y: float) -> tuple[bool
 
 
 @njit(cache=True, inline="always")
-def _grow_box(boxes: np.ndarray, r: int, row: int, col: int) -> None:  # pragma: no cover - compiled
-    """Widen robot r's box of changed cells (``boxes[r]`` = r0, r1, c0, c1; empty while r0 >= r1) by a cell."""
-    if boxes[r, 0] >= boxes[r, 1]:
-        boxes[r, 0], boxes[r, 1], boxes[r, 2], boxes[r, 3] = row, row + 1, col, col + 1
-    else:
-        boxes[r, 0] = min(boxes[r, 0], row)
-        boxes[r, 1] = max(boxes[r, 1], row + 1)
-        boxes[r, 2] = min(boxes[r, 2], col)
-        boxes[r, 3] = max(boxes[r, 3], col + 1)
-
-
-@njit(cache=True, inline="always")
 def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_base: int, write_known: bool,
                         seen: np.ndarray, x: float, y: float, dx: float, dy: float, range_m: float,
-                        cell: float, boxes: np.ndarray, r: int) -> tuple[float, int]:
+                        cell: float) -> tuple[float, int]:
     """Walk one ray by the exact rule (module docstring). ``solid``, ``seen`` and ``known`` are flat views
     of the rasters, ``cols`` wide (``known`` of all robots: this robot's map starts at ``known_base``).
-    Marks ``seen`` (and the robot's map with a maximum when ``write_known``, widening robot ``r``'s box of
-    changed cells in ``boxes`` by each cell whose value it changes); returns (entry distance of the first
-    solid cell or inf, newly seen free cells). Needs a solid outer edge, which :class:`maps.Map`
+    Marks ``seen`` (and the robot's map with a maximum when ``write_known``); returns (entry distance of
+    the first solid cell or inf, newly seen free cells). Needs a solid outer edge, which :class:`maps.Map`
     guarantees, to stay on the raster; indices are unsigned, so no negative-index code is compiled."""
     row, col, step_r, step_c, t_x, t_y, d_x, d_y = _lidar_ray_start(x, y, dx, dy, cell)
     r2 = range_m * range_m
@@ -243,9 +230,8 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
     while True:
         at = np.uint64(k)
         if solid[at]:
-            if write_known and known[np.uint64(known_base + k)] != SOLID:
+            if write_known:
                 known[np.uint64(known_base + k)] = SOLID
-                _grow_box(boxes, r, row, col)
             seen[at] = True
             return t_entry, new
         if t_entry <= sure:
@@ -257,7 +243,6 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
         if in_range:
             if write_known and known[np.uint64(known_base + k)] < FREE:
                 known[np.uint64(known_base + k)] = FREE
-                _grow_box(boxes, r, row, col)
             if not seen[at]:
                 seen[at] = True
                 new += 1
@@ -274,12 +259,12 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
 def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarray, cos_a: np.ndarray,
                           sin_a: np.ndarray, range_m: float, cell: float, known: np.ndarray,
                           seen: np.ndarray, ranges: np.ndarray, required: np.ndarray, half_widths: np.ndarray,
-                          cast: np.ndarray, boxes: np.ndarray) -> int:
+                          cast: np.ndarray) -> int:
     """One tick of the ternary lidar for every robot and ray. Returns the number of newly seen free
     cells, or ``-(r + 1)`` (nothing written) if robot r's pose is invalid. With a ``required`` raster
     (:func:`_required_raster`; empty: cast every robot) a robot whose scan would write nothing
     (:func:`_lidar_settled`) is not cast: its ranges are NaN and ``cast[r]`` is False (True for robots
-    cast). ``boxes[r]`` (emptied first) ends as the box of the cells robot r's scan changed."""
+    cast)."""
     rows, cols = solid.shape
     bad = _lidar_first_bad_pose(poses, active, rows, cols, cell)
     if bad >= 0:
@@ -290,7 +275,6 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     new = 0
     for r in range(poses.shape[0]):
         cast[r] = False
-        boxes[r, 0] = boxes[r, 1] = 0
         if not active[r]:
             for i in range(cos_a.shape[0]):
                 ranges[r, i] = np.nan
@@ -309,7 +293,7 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
             dx = ch * cos_a[i] - sh * sin_a[i]
             dy = sh * cos_a[i] + ch * sin_a[i]
             t_hit, n_new = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, True, seen_flat,
-                                               x, y, dx, dy, range_m, cell, boxes, r)
+                                               x, y, dx, dy, range_m, cell)
             new += n_new
             ranges[r, i] = t_hit
     return new
@@ -393,10 +377,9 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
                           noise_std: float, noise_per_metre: float, logodds: np.ndarray, hit: float,
                           miss: float, lo: float, hi: float, occupied_above: float, free_below: float,
                           known: np.ndarray, seen: np.ndarray, ranges: np.ndarray, votes: np.ndarray,
-                          mark: np.ndarray, touched: np.ndarray, boxes: np.ndarray) -> int:
+                          mark: np.ndarray, touched: np.ndarray) -> int:
     """One tick of the log-odds lidar for every robot and ray (``noise``: standard normals [R, n_rays],
-    ignored when both noise parameters are 0). Returns newly seen free cells or ``-(r + 1)``; ``boxes[r]``
-    ends as the box of the cells of robot r's map that changed."""
+    ignored when both noise parameters are 0). Returns newly seen free cells or ``-(r + 1)``."""
     rows, cols = solid.shape
     bad = _lidar_first_bad_pose(poses, active, rows, cols, cell)
     if bad >= 0:
@@ -411,7 +394,6 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     free32 = np.float32(free_below)
     new = 0
     for r in range(poses.shape[0]):
-        boxes[r, 0] = boxes[r, 1] = 0
         if not active[r]:
             for i in range(cos_a.shape[0]):
                 ranges[r, i] = np.nan
@@ -425,7 +407,7 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
             dx = ch * cos_a[i] - sh * sin_a[i]
             dy = sh * cos_a[i] + ch * sin_a[i]
             t_hit, n_new = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, False, seen_flat,
-                                               x, y, dx, dy, range_m, cell, boxes, r)
+                                               x, y, dx, dy, range_m, cell)
             new += n_new
             z = t_hit
             if noisy and t_hit <= range_m:
@@ -451,13 +433,10 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
             else:
                 value = max(value + miss32, lo32)
             logodds[r, row, col] = value
-            was = known[r, row, col]
             if value > occ32:
                 known[r, row, col] = SOLID
             elif value < free32:
                 known[r, row, col] = FREE
-            if known[r, row, col] != was:
-                _grow_box(boxes, r, row, col)
     return new
 
 
@@ -517,7 +496,6 @@ class Lidar:
         self._required = np.zeros((0, 0), dtype=np.uint8)   # built on the first scan that skips settled robots
         self._half_widths = _reach_half_widths(self.params.range_m, CELL_M)
         self._cast = np.zeros(0, dtype=np.bool_)
-        self._boxes = np.zeros((0, 4), dtype=np.int64)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -549,7 +527,6 @@ class Lidar:
         p = self.params
         if self._cast.shape[0] != n:
             self._cast = np.zeros(n, dtype=np.bool_)
-            self._boxes = np.zeros((n, 4), dtype=np.int64)
         if p.mode == "ternary":
             required = _CAST_EVERY_ROBOT
             if not measure:
@@ -557,8 +534,7 @@ class Lidar:
                     self._required = _required_raster(self.truth.solid)
                 required = self._required
             new = _lidar_ternary_kernel(self._solid, pose, act, self._cos, self._sin, p.range_m, CELL_M,
-                                        known, trk.seen_buffer, ranges, required, self._half_widths, self._cast,
-                                        self._boxes)
+                                        known, trk.seen_buffer, ranges, required, self._half_widths, self._cast)
         else:
             if p.noisy:
                 if not isinstance(rng, np.random.Generator):
@@ -572,7 +548,7 @@ class Lidar:
                                         p.logodds_miss, p.logodds_min, p.logodds_max,
                                         p.logodds_occupied_above, p.logodds_free_below, known,
                                         trk.seen_buffer, ranges, self._votes, self._mark,
-                                        self._touched, self._boxes)
+                                        self._touched)
             self._cast[:] = act
         if new < 0:
             r = -new - 1
@@ -581,16 +557,6 @@ class Lidar:
                                f"0 <= y < {self.truth.height_m:g} m)")
         trk.add_seen(new)
         return ranges if measure else None
-
-    @property
-    def changed(self) -> np.ndarray:
-        """Per robot of the last scan: the box of the cells of its map that the scan changed, rows
-        ``r0:r1`` x columns ``c0:c1`` (read-only ``int64[R, 4]``: r0, r1, c0, c1; ``r0 >= r1`` when none
-        changed). What a copy of the maps taken before the scan differs in, without comparing them
-        (the zenoh transport ships each robot the cells changed since its last observation)."""
-        view = self._boxes.view()
-        view.setflags(write=False)
-        return view
 
     @property
     def cast(self) -> np.ndarray:

@@ -323,22 +323,27 @@ class Simulation:
         at = poses.copy()  # the world moves these in place next tick; a late read must see this tick's
         changed = None
         if self._mirror is not None:
-            boxes = self.lidar.changed.copy()  # what this tick's scan changed (the next scan overwrites them)
-            changed = lambda: self._changed_cells(boxes, merged)  # noqa: E731
+            cast = self.lidar.cast.copy()  # whose lidar may have written this tick (the next scan overwrites it)
+            changed = lambda: self._changed_cells(at, cast, merged)  # noqa: E731
         return TickBatch(tick, live, poses, pose_tuples, collided, self.world.distance, self.world.rotation, navs,
                          self.known, self._views, inboxes, lambda: self._sight(at), changed)
 
-    def _changed_cells(self, boxes: np.ndarray, merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:
+    def _changed_cells(self, poses: np.ndarray, cast: np.ndarray,
+                       merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:
         """``(cells, ends)``: per robot, flat indices (ascending) of its knowledge cells changed since its last
-        observation, robot i's at ``cells[ends[i-1]:ends[i]]`` (none for failed robots): the lidar reports
-        the box of the cells it changed this tick, delta merges their cells, so only those places are
-        compared, all robots in one compiled call; after a full-map merge the whole map is."""
+        observation, robot i's at ``cells[ends[i-1]:ends[i]]`` (none for failed robots): the lidar only writes
+        within range of the robots it ``cast`` this tick, delta merges report their cells, so only those
+        places are compared, all robots in one compiled call; after a full-map merge the whole map is."""
         assert self._mirror is not None
         windowed = ~self.failed
         full = []
         if any(merged):  # most ticks no map update arrives
             full = [i for i, cells in enumerate(merged) if cells and any(m is None for m in cells) and windowed[i]]
             windowed[full] = False
+        centres = (poses[:, 1::-1] / CELL_M).astype(np.int64)  # (row, col); truncation, as int() did
+        boxes = np.column_stack((centres[:, 0] - self._reach, centres[:, 0] + self._reach + 1,
+                                 centres[:, 1] - self._reach, centres[:, 1] + self._reach + 1))
+        boxes[~cast, 1] = boxes[~cast, 0]  # a robot its lidar did not cast wrote nothing: an empty window
         cells, ends = sync_boxes_flat(self.known, self._mirror, boxes, merged, windowed)
         if not full:
             return cells, ends

@@ -653,33 +653,3 @@ def test_a_robot_inside_a_thick_wall_is_cast_although_no_ray_could_enter_its_cel
     assert not lidar.cast[0] and known[0, 1, 1] == UNSEEN
     lidar.scan(np.array([[0.7, 0.7, 0.0]]), known, measure=False)
     assert lidar.cast[0] and known[0, 1, 1] == SOLID
-
-
-@pytest.mark.parametrize("mode", ["ternary", "logodds"])
-def test_changed_boxes_are_the_tight_boxes_of_what_each_scan_changed(mode: str) -> None:
-    """``Lidar.changed``: per robot, the bounding box of the cells of its map its last scan changed (empty
-    when none did): the runtime ships and compares only those places."""
-    truth = generate("cave", 40, 3)
-    rng = np.random.default_rng(8)
-    n = 5
-    params = LidarParams(mode=mode, noise_std=0.1 if mode == "logodds" else 0.0)
-    lidar = Lidar(truth, params)
-    known = empty_knowledge(truth.shape, n)
-    empty = nonempty = 0
-    for step in range(40):
-        if step % 3 != 1:  # else the same poses again: most robots change nothing
-            poses = random_free_poses(truth, n, rng)
-        before = known.copy()
-        active = rng.random(n) > 0.2
-        lidar.scan(poses, known, rng, active=active, measure=False)
-        for r in range(n):
-            rows, cols = np.nonzero(known[r] != before[r])
-            r0, r1, c0, c1 = lidar.changed[r]
-            if not len(rows):
-                assert r0 >= r1
-                empty += 1
-                continue
-            nonempty += 1
-            assert (r0, r1, c0, c1) == (rows.min(), rows.max() + 1, cols.min(), cols.max() + 1)
-    assert empty > 5 and nonempty > 5
-    assert not lidar.changed.flags.writeable
