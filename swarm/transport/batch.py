@@ -31,8 +31,8 @@ from ..api import Action, NavStatus, frozen_builder
 from ..messages import MessageError, decode, encode
 from ..neighbours import _bearing
 from .packing import OBS_STATE_DTYPE
-from .wire import (COLLIDED, HAS_GOAL, MAX_PACKET_BYTES, NAV_STATES, NEIGHBOUR, NEIGHBOUR_DTYPE, OBS_STATE,
-                   WIRE_VERSION, WireError, _NAV_INDEX, _pack, _unpack)
+from .wire import (COLLIDED, HAS_GOAL, NAV_STATES, NEIGHBOUR, NEIGHBOUR_DTYPE, OBS_STATE, WIRE_VERSION, WireError,
+                   _NAV_INDEX, _pack, _unpack)
 
 OBS_BATCH, ACT_BATCH = "obs_batch", "act_batch"
 COUNTS = 3
@@ -45,7 +45,6 @@ ACT_GOAL, ACT_VELOCITY, ACT_CLEAR_GOAL, ACT_EXTRAS = 1, 2, 4, 8
 ACT_FLAGS = ACT_GOAL | ACT_VELOCITY | ACT_CLEAR_GOAL | ACT_EXTRAS
 
 _action = frozen_builder(Action)
-_nav_status = frozen_builder(NavStatus)
 _tuple_new = tuple.__new__
 
 

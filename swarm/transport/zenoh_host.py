@@ -11,16 +11,17 @@ Key expressions (``<run>`` is unique per run, so parallel runs never cross-talk)
 * ``swarm/<run>/end``               runtime -> agents: the run is over
 
 Agents in the runtime's process share its session and are served together
-(:class:`~swarm.transport.group.AgentGroup`): one batched put per tick, to a ``Callback(indirect=False)``
-subscriber, so the put runs all of them synchronously, and one batched reply (docs/measurements.md A4
-has the cost of each layout; :mod:`swarm.transport.batch` the packets). Remote
+(:class:`~swarm.transport.group.AgentGroup`): one batched put per tick to a ``Callback(indirect=False)``
+subscriber, which keeps the packet within the put; the group then decides for all of them and answers
+with one batched put (docs/measurements.md A4 has the cost of each layout; :mod:`swarm.transport.batch`
+the packets). They read their maps in the runtime's memory unless ``share_maps`` is False. Remote
 agents connect to the runtime's ``listen`` endpoint; the runtime waits for every live agent's action for
 tick t before advancing, so thread timing never changes a result. A remote agent that loses its
 liveliness token or stays silent for ``timeout_s`` is marked failed at that tick and its robot stops.
 Sessions open in peer mode with multicast scouting off and no endpoints unless given (loopback only).
 
-**Trust** (:mod:`swarm.transport.auth`). Local robots' keys never leave this session: their ``obs``
-publishers and ``act`` subscribers are session-local, so no packet from the network can act for them.
+**Trust** (:mod:`swarm.transport.auth`). Local robots' keys never leave this session: the ``local/obs`` and
+``local/act`` publishers and subscribers are session-local, so no packet from the network can act for them.
 A listening runtime admits only sessions that pass zenoh's usrpwd authentication as a remote robot's user
 and lets each see and send only its own robot's keys (zenoh access control). Every act packet of a
 remote robot must carry a valid HMAC tag for its tick under that robot's key; the first signed reply per
