@@ -182,18 +182,20 @@ class ZenohHost:
         """The local agents' act batch for the obs batch just delivered (None, the robots marked failed, if
         the group refused it or nothing arrived)."""
         delivered, replies = self._local_obs, self._local_act
-        if not delivered:
-            reason = "the local agents' observation was not delivered"
+        replies.clear()
+        if len(delivered) != 1:
+            reason = "the local agents' observation was not delivered once"
         else:
             try:
                 self._put_act_batch(self.group.handle(delivered.pop()))
             except WireError as exc:
                 reason = f"the local agents refused their observation ({str(exc)[:80]})"
             else:
-                if replies:
+                if len(replies) == 1:
                     return replies.pop()
-                reason = "no action from the local agents"
+                reason = "the local agents' action was not delivered once"
         delivered.clear()
+        replies.clear()
         for i in ids:
             self.stats.failures[i] = (tick, reason)
         return None
