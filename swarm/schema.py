@@ -8,7 +8,7 @@ holds.
 
 from __future__ import annotations
 
-from typing import Any, Mapping, TypedDict
+from typing import Any, Mapping, NotRequired, TypedDict
 
 import pyarrow as pa
 
@@ -28,7 +28,9 @@ THRESHOLD_COLUMNS: dict[str, str] = {threshold_key(t): f"t{round(t * 100)}" for 
 # -------------------------------------------------------------------------------------- messages ----
 DROP_CAUSES = ("dropped_link", "dropped_loss", "dropped_bandwidth")
 """Why a message did not reach a receiver: out of radio reach, lost (``comm.loss``), over the link's byte
-budget (``comm.bandwidth``). "Dropped" always means their sum."""
+budget (``comm.bandwidth``). "Dropped" always means their sum. Packet errors (``radio.per``) count as
+``dropped_loss`` when the receiver was within the sensitivity and ``dropped_link`` when it was below it
+(where a short message may still get through): the same split as without them (docs/radio.md)."""
 
 
 def dropped(counts: Mapping[str, int]) -> int:
@@ -51,7 +53,9 @@ class MessageCounts(TypedDict):
     malformed_by_robot: list[int]
     map_bytes_sent: int
     last_contact: list[int]         # per robot: the last tick it received anything (-1: never)
-
+    relayed: NotRequired[int]       # comm.relay = "flood" only: relayed copies (in sent too)
+    bytes_relayed: NotRequired[int]  # their bytes (in bytes_sent too)
+    duplicates: NotRequired[int]    # copies a robot received of a message it already had
 
 class ActCounts(TypedDict):
     """``summary["acts"]``: per robot, act packets a remote agent's host did not take."""
