@@ -44,6 +44,8 @@ from .pathloss import GLOBAL, LOS, MAES, MULTIWALL, _radio_link_budget
 from .per import PacketErrorCurve
 from .shadowing import ShadowingField, _radio_shadow_links
 
+_NO_ROWS = np.empty((0, 0))
+"""Tells :func:`radio.evaluate._radio_link_columns` that only the links are wanted."""
 MAES_CELL_M = 0.25
 """MAES charges a material once per mesh triangle; a tile crossed at right angles is 4 triangles (1 m / 4)."""
 
@@ -262,7 +264,14 @@ class LinkModel:
         tx, sens = self._radio_arrays(r)
         if self._last_state is not None and self._last_key == xy.tobytes() + tx.tobytes() + sens.tobytes():
             return self._last_state.link[:, which]
-        return self._columns(xy, which, tx, sens)[0]
+        if self.shadowing is not None:
+            return self._columns(xy, which, tx, sens)[0]
+        link = np.empty((r, which.size), dtype=np.bool_)
+        bad = _radio_link_columns(self.raster.blocks, xy, self._params, self.cross_db, self.metre_db,
+                                  self.per_metre, self.code, tx, sens, which, link, _NO_ROWS, _NO_ROWS)
+        if bad >= 0:
+            raise self._outside("positions", xy[bad])
+        return link
 
     def margin_columns(self, positions: np.ndarray, senders: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
         """``(link, margin)`` for the columns ``senders``: :meth:`link_columns` and each pair's margin, RSSI

@@ -9,7 +9,8 @@ One logic tick (0.1 s, docs/design.md section 4):
    sensing range and line of sight) walk only the pairs within range (``LinkModel.in_sight``);
 4. inboxes: messages sent last tick arrive; map updates are merged into the receiver's map;
 5. the transport hands each live robot its observation and gets its action (goal or velocity, messages);
-6. this tick's broadcasts are judged by this tick's links and queued for next tick;
+6. this tick's broadcasts (and, with ``comm.relay = "flood"``, the copies robots forward) are judged by
+   this tick's links and queued for next tick;
 7. navigation turns goals into (v, omega) commands on each robot's own map (every moving robot's step in
    one compiled call, :class:`swarm.navigation.NavigationFleet`);
 8. metrics: explored thresholds every tick, a time-series row every ``record_every`` ticks.
