@@ -50,10 +50,12 @@ class PacketErrorCurve:
         gamma = self.gamma_s * np.power(10.0, np.asarray(margin_db, dtype=np.float64) / 10.0)
         return 0.5 * erfc(np.sqrt(gamma))
 
+    def log_keep(self, margin_db: np.ndarray | float) -> np.ndarray:
+        """``log(1 - BER)`` at each margin: a message of ``L`` bytes survives with probability
+        ``exp(8 L log_keep)``. ``-inf`` where there is no signal (BER 1/2, or a NaN margin): a certain loss."""
+        ber = self.ber(margin_db)
+        return np.where(ber < 0.5, np.log1p(-np.minimum(ber, 0.5)), -np.inf)
+
     def per(self, margin_db: np.ndarray | float, nbytes: int) -> np.ndarray:
         """Probability that a message of ``nbytes`` bytes is lost, at each margin (dB)."""
-        return -np.expm1((8.0 * nbytes) * np.log1p(-self.ber(margin_db)))
-
-    def per_from_ber(self, ber: np.ndarray, nbytes: int) -> np.ndarray:
-        """:meth:`per` from bit error rates already computed (one link's BER serves all its messages)."""
-        return -np.expm1((8.0 * nbytes) * np.log1p(-ber))
+        return -np.expm1((8.0 * nbytes) * self.log_keep(margin_db))

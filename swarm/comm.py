@@ -169,7 +169,7 @@ class Medium:
         self.spec = spec
         self.rng = rng
         self.map_shape = tuple(map_shape) if map_shape is not None else None
-        self.relaying = spec.relay == "flood" and n > 1
+        self.relaying = spec.relay == "flood"
         self.stats = CommStats(last_contact=[-1] * n, malformed_by_robot=[0] * n, relaying=self.relaying)
         self.dropped: list[tuple[int, str]] = []  # (sender, reason) of messages dropped since last read
         self._seq = [0] * n
@@ -260,18 +260,18 @@ class Medium:
         stats = self.stats
         inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         budget = np.full((n, n), self.spec.bandwidth, dtype=np.int64) if self.spec.bandwidth else None
-        ber = None
+        log_keep = None
         if self.packet_errors is not None:
             if margin is None:
                 raise ValueError("packet errors need the pairs' margins")
-            ber = self.packet_errors.ber(margin)
+            log_keep = self.packet_errors.log_keep(margin)
         touched: set[tuple[int, int]] = set()
         for j in range(n):
             if not outboxes[j]:
                 continue
             others = self._others[j]
             linked = link[others, j]
-            ber_j = ber[others, j] if ber is not None else None
+            keep_j = log_keep[others, j] if log_keep is not None else None
             for env in outboxes[j]:
                 size = len(env.data)
                 stats.sent += 1
@@ -281,11 +281,11 @@ class Medium:
                 if env.hop > 1:
                     stats.relayed += 1
                     stats.bytes_relayed += size
-                if ber_j is None:
+                if keep_j is None:
                     reach = others[linked]
                     stats.dropped_link += (n - 1) - len(reach)
                 else:
-                    reach = self._survive_errors(others, linked, ber_j, size)
+                    reach = self._survive_errors(others, linked, keep_j, size)
                 if self.spec.loss > 0.0 and len(reach):
                     keep = self.rng.random(len(reach)) >= self.spec.loss
                     stats.dropped_loss += int((~keep).sum())
@@ -309,22 +309,17 @@ class Medium:
                 box.sort(key=_inbox_order)
         return inboxes
 
-    def _survive_errors(self, others: np.ndarray, linked: np.ndarray, ber: np.ndarray, size: int) -> np.ndarray:
-        """The robots of ``others`` that receive a ``size``-byte transmission despite packet errors, one draw
-        per robot whose PER is strictly between 0 and 1 (BER 1/2, no signal, is a certain loss); the lost
-        are counted as ``dropped_link`` below the sensitivity (not ``linked``), else ``dropped_loss``."""
-        assert self.packet_errors is not None and self.error_rng is not None
-        per = self.packet_errors.per_from_ber(ber, size)
-        per[~(ber < 0.5)] = 1.0
-        ok = per <= 0.0
-        draw = ~ok & (per < 1.0)
-        if draw.any():
-            ok[draw] = self.error_rng.random(int(np.count_nonzero(draw))) >= per[draw]
-        lost = ~ok
+    def _survive_errors(self, others: np.ndarray, linked: np.ndarray, log_keep: np.ndarray, size: int) -> np.ndarray:
+        """The robots of ``others`` that receive a ``size``-byte transmission despite packet errors: one
+        uniform draw per robot, kept when it is at least the robot's PER (``-expm1(8 size log_keep)``, as
+        :meth:`radio.per.PacketErrorCurve.per`: 1 without signal, 0 far above the sensitivity). The lost are
+        counted as ``dropped_link`` below the sensitivity (not ``linked``), else as ``dropped_loss``."""
+        assert self.error_rng is not None
+        lost = self.error_rng.random(len(others)) < -np.expm1((8.0 * size) * log_keep)
         below = int(np.count_nonzero(lost & ~linked))
         self.stats.dropped_link += below
         self.stats.dropped_loss += int(np.count_nonzero(lost)) - below
-        return others[ok]
+        return others[~lost]
 
     def _first_copies(self, env: Envelope, targets: list[int]) -> list[int]:
         """Relaying: the robots of ``targets`` that get ``env``'s message for the first time (the others are
