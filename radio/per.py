@@ -19,8 +19,8 @@ With ``RadioConfig.per = "bpsk"`` a message of ``L`` bytes reaching a receiver w
 
 Why this curve: it is physical where a logistic fit would only be a shape, and its length term matters
 here: a 4 KB full map is lost more often than a 30-byte request at the same margin. It ignores 802.11's
-convolutional code, which makes real curves steeper: the transition here spans about 2 dB for 4 KB
-messages and 4 dB for 100-byte ones (real receivers: 1-2 dB), so it errs on the side of a softer edge.
+convolutional code, which makes real curves steeper: from 99 % to 1 % lost takes about 3 dB here for
+4 KB messages and 4 dB for 100-byte ones (real receivers: 1-2 dB), so it errs on the side of a softer edge.
 docs/radio.md ("Packet errors") tabulates it.
 """
 

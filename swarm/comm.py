@@ -22,6 +22,7 @@ when the runtime reports its scans (``lidar_reach``), else over the whole map: t
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Sequence
 
@@ -315,11 +316,11 @@ class Medium:
         :meth:`radio.per.PacketErrorCurve.per`: 1 without signal, 0 far above the sensitivity). The lost are
         counted as ``dropped_link`` below the sensitivity (not ``linked``), else as ``dropped_loss``."""
         assert self.error_rng is not None
-        lost = self.error_rng.random(len(others)) < -np.expm1((8.0 * size) * log_keep)
-        below = int(np.count_nonzero(lost & ~linked))
+        kept = np.empty(len(others), dtype=np.bool_)
+        below, above = _kept_despite_errors(self.error_rng.random(len(others)), log_keep, 8.0 * size, linked, kept)
         self.stats.dropped_link += below
-        self.stats.dropped_loss += int(np.count_nonzero(lost)) - below
-        return others[~lost]
+        self.stats.dropped_loss += above
+        return others[kept]
 
     def _first_copies(self, env: Envelope, targets: list[int]) -> list[int]:
         """Relaying: the robots of ``targets`` that get ``env``'s message for the first time (the others are
@@ -536,6 +537,23 @@ class MapSharing:
             if delta_gap and seq != last + 1 and sender not in self.requests[r]:
                 self.requests[r].append(sender)
             seen[sender] = seq if msg.full else max(last, seq)
+
+
+@njit(cache=True)
+def _kept_despite_errors(u, log_keep, bits, linked, kept):  # pragma: no cover - compiled
+    """``kept[k]``: the draw ``u[k]`` is at least the PER ``-expm1(bits * log_keep[k])``; returns how many were
+    lost (below the sensitivity: not ``linked``, at or above it)."""
+    below = 0
+    above = 0
+    for k in range(u.shape[0]):
+        ok = u[k] >= -math.expm1(bits * log_keep[k])
+        kept[k] = ok
+        if not ok:
+            if linked[k]:
+                above += 1
+            else:
+                below += 1
+    return below, above
 
 
 def _inbox_order(env: Envelope) -> tuple[int, int]:
