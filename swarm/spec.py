@@ -359,13 +359,19 @@ def planner_rng(seed: int, robot: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(PLANNER_STREAM, robot)))
 
 
+def run_map_seed(seed: int, map_seed: int | None) -> int:
+    """The map seed a run uses: ``map.seed`` if set, else one derived from the master ``seed`` (it also seeds
+    the radio's shadowing field, so a recording's reader recomputes the run's radio picture from it)."""
+    return map_seed if map_seed is not None else derive_seed(seed, "map")
+
+
 def seed_streams(spec: RunSpec) -> SeedStreams:
     """Map seed and generators for spawning, sensor noise, radio loss, each robot's algorithm and packet
     errors. The first four are the root's first children (``spawn_key`` 0-3), packet errors
     :data:`CHANNEL_STREAM`; the shadowing field is drawn from the map seed (:mod:`radio.shadowing`)."""
     root = np.random.SeedSequence(spec.seed)
     spawn_ss, sensor_ss, radio_ss, robots_ss = root.spawn(ROBOT_STREAM + 1)
-    map_seed = spec.map.seed if spec.map.seed is not None else derive_seed(spec.seed, "map")
+    map_seed = run_map_seed(spec.seed, spec.map.seed)
     spawn_seed = spec.robots.spawn_seed if spec.robots.spawn_seed is not None else None
     spawn_rng = (np.random.default_rng(np.random.SeedSequence(spawn_seed)) if spawn_seed is not None
                  else np.random.default_rng(spawn_ss))

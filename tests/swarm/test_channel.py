@@ -228,3 +228,38 @@ def test_cli_sets_the_channel_and_refuses_bad_values(capsys):
         assert main(["run", "--size", "20", "--max-ticks", "2", "--set", flag]) == 2
         err = capsys.readouterr().err.strip().splitlines()
         assert len(err) == 1 and err[0].startswith("swarm: error: ") and name in err[0], err
+
+
+def test_a_recording_keeps_the_shadowed_radio_and_relays_signal_strength():
+    """A recording's reader rebuilds the run's shadowing field from the run's map seed (derived from its
+    seed here: the hand-made map has none of its own) and gets the exact RSSI back; a relayed copy's RSSI is
+    its relay's, not the original sender's."""
+    from swarm.record import Recorder
+    from swarm.record.reader import Recording
+
+    captured: dict[str, np.ndarray] = {}
+    relayed: list[tuple[int, int, int, int, float]] = []
+
+    def watch(view: TickView) -> None:
+        if view.tick == 7:
+            captured["rssi"] = view.links.rssi.copy()
+        for box in view.sent:
+            for env in box:
+                if env.hop > 1:
+                    relayed.extend((view.tick, env.sender, env.seq, i, float(view.links.rssi[i, env.transmitter]))
+                                   for i in env.delivered_to)
+
+    Talker.log = {}
+    spec = {"seed": 8, "algorithm": {"name": TALKER}, "robots": {"count": 4}, "map": {"kind": "file", "path": "x.npz"},
+            "radio": {"shadowing_sigma_db": 3.0, "tx_power_dbm": -20.0}, "comm": {"map_sharing": "off", "relay": "flood"},
+            "stop": {"max_ticks": 10, "explored": 1.0}}
+    sim = Simulation(spec, truth=long_box(), start_poses=chain(4), observers=[watch])
+    recorder = Recorder.attach(sim)
+    result = sim.run()
+    recorder.finish(sim, result)
+    rec = Recording(recorder.to_bytes(), "test.swr")
+    assert np.array_equal(rec.link_state(7).rssi, captured["rssi"], equal_nan=True)
+    assert relayed, "some copies were relayed"
+    got = {(m.tick, m.sender, m.seq, r): x for m in rec.messages() for r, x in zip(m.receivers, m.rssi_dbm)}
+    for tick, sender, seq, receiver, rssi in relayed:
+        assert abs(got[(tick, sender, seq, receiver)] - rssi) <= 0.125
