@@ -8,7 +8,7 @@ holds.
 
 from __future__ import annotations
 
-from typing import Any, Mapping, NotRequired, TypedDict
+from typing import Any, Mapping, TypedDict
 
 import pyarrow as pa
 
@@ -38,7 +38,15 @@ def dropped(counts: Mapping[str, int]) -> int:
     return sum(int(counts[cause]) for cause in DROP_CAUSES)
 
 
-class MessageCounts(TypedDict):
+class RelayCounts(TypedDict, total=False):
+    """The part of ``summary["messages"]`` present only when ``comm.relay = "flood"`` (docs/radio.md)."""
+
+    relayed: int                    # relayed copies (counted in sent too)
+    bytes_relayed: int              # their bytes (in bytes_sent too)
+    duplicates: int                 # copies a robot received of a message it already had
+
+
+class MessageCounts(RelayCounts):
     """``summary["messages"]``: what the radio carried over the run (counts are per receiver for delivered
     and dropped messages, per broadcast for sent ones)."""
 
@@ -53,9 +61,7 @@ class MessageCounts(TypedDict):
     malformed_by_robot: list[int]
     map_bytes_sent: int
     last_contact: list[int]         # per robot: the last tick it received anything (-1: never)
-    relayed: NotRequired[int]       # comm.relay = "flood" only: relayed copies (in sent too)
-    bytes_relayed: NotRequired[int]  # their bytes (in bytes_sent too)
-    duplicates: NotRequired[int]    # copies a robot received of a message it already had
+
 
 class ActCounts(TypedDict):
     """``summary["acts"]``: per robot, act packets a remote agent's host did not take."""
