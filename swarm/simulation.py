@@ -9,7 +9,8 @@ One logic tick (0.1 s, docs/design.md section 4):
    sensing range and line of sight) walk only the pairs within range (``LinkModel.in_sight``);
 4. inboxes: messages sent last tick arrive; map updates are merged into the receiver's map;
 5. the transport hands each live robot its observation and gets its action (goal or velocity, messages);
-6. this tick's broadcasts are judged by this tick's links and queued for next tick;
+6. this tick's broadcasts (and, with ``comm.relay = "flood"``, the copies robots forward) are judged by
+   this tick's links and queued for next tick;
 7. navigation turns goals into (v, omega) commands on each robot's own map (every moving robot's step in
    one compiled call, :class:`swarm.navigation.NavigationFleet`);
 8. metrics: explored thresholds every tick, a time-series row every ``record_every`` ticks.
@@ -115,9 +116,10 @@ class Simulation:
         self.fleet = NavigationFleet(self.spec.navigation, self.motion,
                                      [planner_rng(self.spec.seed, i) for i in range(n)])
         self.navigators = self.fleet.navigators
-        self.links = build_link_model(self.truth, self.spec.radio)
+        self.links = build_link_model(self.truth, self.spec.radio, field_seed=self.streams.map_seed)
         self.comm = self.spec.comm
-        self.medium = Medium(n, self.comm, self.streams.radio, map_shape=self.truth.shape)
+        self.medium = Medium(n, self.comm, self.streams.radio, map_shape=self.truth.shape,
+                             packet_errors=self.links.packet_errors, error_rng=self.streams.channel)
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach)  # told of every scan
         merge = resolve_maes_merge(self.comm.map_sharing, self.comm.share_every, registry.load(self.spec.algorithm.name))
@@ -289,6 +291,8 @@ class Simulation:
             outboxes.append(box)
         if self.medium.dropped:
             self._note_drops(tick)
+        if self.medium.relaying:
+            self.medium.add_relays(outboxes, self.failed)
         if any(outboxes):
             if self.comm.link_at == "send":
                 self._deliver(tick, outboxes, links)
@@ -298,12 +302,19 @@ class Simulation:
 
     def _deliver(self, tick: int, outboxes: list[list[Envelope]], links: Any) -> None:
         """Judge the broadcasts of ``tick`` by ``links`` (the positions of send or of receipt) into next tick's
-        inboxes; failed robots receive nothing."""
-        link = links.senders_link([i for i, out in enumerate(outboxes) if out])
+        inboxes; failed robots receive nothing. With packet errors the medium also reads the pairs' margins."""
+        senders = [i for i, out in enumerate(outboxes) if out]
+        margin = None
+        if self.medium.packet_errors is None:
+            link = links.senders_link(senders)
+        else:
+            link, margin = links.senders_margin(senders)
         if np.count_nonzero(self.failed):
             link = link & ~self.failed[:, None]
-        self.inboxes = self.medium.deliver(tick, outboxes, link)
-        self._deliveries = [(env.message, env.delivered_to) for out in outboxes for env in out if env.delivered_to]
+            if margin is not None:
+                margin = np.where(self.failed[:, None], -np.inf, margin)
+        self.inboxes = self.medium.deliver(tick, outboxes, link, margin)
+        self._deliveries = self.medium.deliveries(outboxes)
 
     # ------------------------------------------------------------------------------- observations ----
     def _sight(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -457,6 +468,15 @@ class _TickLinks:
         link = np.zeros((len(self._xy), len(self._xy)), dtype=np.bool_)
         link[:, senders] = self._model.link_columns(self._xy, senders)
         return link
+
+    def senders_margin(self, senders: list[int]) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`senders_link` and the same columns of the margins (RSSI minus the receiver's sensitivity,
+        dB; NaN elsewhere), for packet errors."""
+        r = len(self._xy)
+        link = np.zeros((r, r), dtype=np.bool_)
+        margin = np.full((r, r), np.nan)
+        link[:, senders], margin[:, senders] = self._model.margin_columns(self._xy, senders)
+        return link, margin
 
     def __getattr__(self, name: str) -> Any:  # only for names not in __slots__: the LinkState's fields
         return getattr(self.state(), name)
