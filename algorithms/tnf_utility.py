@@ -332,9 +332,11 @@ def _destination_distance(known: np.ndarray, destinations: np.ndarray, cells: np
     Destinations in a cell this robot knows as solid snap to the nearest non-solid cell within 2 m."""
     open_ = known != SOLID
     h, w = known.shape
+    dest = np.asarray(destinations, dtype=np.int64).reshape(-1, 2)
+    dest = np.column_stack((np.clip(dest[:, 0], 0, h - 1), np.clip(dest[:, 1], 0, w - 1)))
     sources = []
-    for r, c in np.asarray(destinations, dtype=np.int64).reshape(-1, 2).tolist():
-        snapped = grid.nearest_in(open_, (min(max(r, 0), h - 1), min(max(c, 0), w - 1)), 4)
+    for (r, c), fine in zip(dest.tolist(), open_[dest[:, 0], dest[:, 1]].tolist()):
+        snapped = (r, c) if fine else grid.nearest_in(open_, (r, c), 4)
         if snapped is not None:
             sources.append(snapped)
     if not sources:

@@ -123,13 +123,16 @@ def test_clusters_touching_at_a_corner_and_at_the_map_edge() -> None:
 
 @pytest.mark.parametrize("seed", range(4))
 def test_field_at_equals_the_distance_field(seed: int) -> None:
+    """Unbounded and bounded (searched per group of sources on windows), with limits just under a
+    whole number of cells, sources in clumps and alone, cells near and far."""
     known = grown_map(seed, 30, size=60)
     rng = np.random.default_rng(seed)
     for open_ in (grid.configuration_space(known), known != SOLID):
         cells = np.argwhere(open_)
-        sources = cells[rng.integers(len(cells), size=int(rng.integers(1, 4)))]
-        at = np.argwhere(np.ones(known.shape, bool))[rng.integers(known.size, size=50)]
-        for limit in (None, 3.0, 10.0):
+        sources = cells[rng.integers(len(cells), size=int(rng.integers(1, 16)))]
+        at = np.concatenate((np.argwhere(np.ones(known.shape, bool))[rng.integers(known.size, size=50)],
+                             np.clip(sources + rng.integers(-8, 9, size=sources.shape), 0, 119)))
+        for limit in (None, 1.0, 3.0, 7.0 - 1e-10, 7.0, 10.0, 500.0):
             field = grid.distance_field(open_, sources, max_dist_m=limit)
             got = grid.field_at(open_, sources, at, max_dist_m=limit)
             assert got.dtype == np.float32 and np.array_equal(got, field[at[:, 0], at[:, 1]])
