@@ -43,6 +43,7 @@ class Doorway:
     resolved: bool = False      # local: nothing unseen is left behind it (not shared, re-checked)
     failed_until: int = -1      # local: the navigator could not get through; skip until this tick
     _cut: tuple[int, int, int, int] | None = field(default=None, repr=False, compare=False)
+    _wire: tuple[tuple[int, bool], Wire] | None = field(default=None, init=False, repr=False, compare=False)
 
     # ---------------------------------------------------------------------------------- geometry ----
     @property
@@ -101,8 +102,13 @@ class Doorway:
 
     # --------------------------------------------------------------------------------------- wire ----
     def wire(self) -> Wire:
-        return (round(self.x, 3), round(self.y, 3), self.axis, round(self.width, 3), round(self.depth, 3),
-                self.sides, int(self.passed))
+        """The record as others receive it. Kept while its explored facts stay (the geometry never changes
+        after a record is made): every heartbeat sends the whole list."""
+        key = (self.sides, self.passed)
+        if self._wire is None or self._wire[0] != key:
+            self._wire = (key, (round(self.x, 3), round(self.y, 3), self.axis, round(self.width, 3),
+                                round(self.depth, 3), self.sides, int(self.passed)))
+        return self._wire[1]
 
     @classmethod
     def from_wire(cls, w: Wire, tick: int = 0) -> Doorway:
@@ -135,6 +141,7 @@ class DoorwayBook:
         self.version = 0
         self._xy = np.zeros((0, 2))
         self._wire: tuple[int, tuple[Wire, ...]] = (-1, ())
+        self._by_wire: dict[Wire, tuple[int, Doorway]] = {}
 
     def __iter__(self):
         return iter(self.doors)
@@ -169,6 +176,22 @@ class DoorwayBook:
             known.sides, known.passed = sides, passed
             self.version += 1
         return known, False
+
+    def add_wire(self, w: Wire, tick: int = 0) -> tuple[Doorway, bool]:
+        """``add(Doorway.from_wire(w, tick))`` for a valid wire tuple. Heartbeats bring the same tuples
+        over and over: the record a tuple matched is remembered while no record is added (a new record
+        could be an earlier match), so a repeat only merges its explored facts."""
+        hit = self._by_wire.get(w)
+        if hit is not None and hit[0] == len(self.doors):
+            known = hit[1]
+            sides, passed = known.sides | (int(w[5]) & 3), known.passed or bool(w[6])
+            if (sides, passed) != (known.sides, known.passed):
+                known.sides, known.passed = sides, passed
+                self.version += 1
+            return known, False
+        stored, new = self.add(Doorway.from_wire(w, tick))
+        self._by_wire[w] = (len(self.doors), stored)
+        return stored, new
 
     def touch(self) -> None:
         """A record's explored facts changed in place."""
