@@ -141,7 +141,8 @@ class DoorwayBook:
         self.version = 0
         self._xy = np.zeros((0, 2))
         self._wire: tuple[int, tuple[Wire, ...]] = (-1, ())
-        self._by_wire: dict[Wire, tuple[int, Doorway]] = {}
+        self._found: dict[tuple[int, float, float], tuple[int, Doorway | None]] = {}
+        self._boxes = np.zeros((0, 4), dtype=np.int64)
 
     def __iter__(self):
         return iter(self.doors)
@@ -154,13 +155,29 @@ class DoorwayBook:
         return door.axis, math.floor(door.x / MATCH_M), math.floor(door.y / MATCH_M)
 
     def find(self, door: Doorway) -> Doorway | None:
-        axis, bx, by = self._key(door)
+        return self._find_at(door.axis, door.x, door.y)
+
+    def _find_at(self, axis: int, x: float, y: float) -> Doorway | None:
+        """The first record (bucket by bucket) matching a doorway with this axis and centre. Heartbeats and
+        scans bring the same doorways over and over: an answer is remembered while no record is added
+        (only a new record can change it: records never move)."""
+        hit = self._found.get((axis, x, y))
+        if hit is not None and hit[0] == len(self.doors):
+            return hit[1]
+        bx, by = math.floor(x / MATCH_M), math.floor(y / MATCH_M)
+        found = None
         for dx in (-1, 0, 1):
             for dy in (-1, 0, 1):
                 for d in self._buckets.get((axis, bx + dx, by + dy), ()):
-                    if d.matches(door):
-                        return d
-        return None
+                    if d.axis == axis and math.hypot(d.x - x, d.y - y) < MATCH_M:   # Doorway.matches
+                        found = d
+                        break
+                if found is not None:
+                    break
+            if found is not None:
+                break
+        self._found[(axis, x, y)] = (len(self.doors), found)
+        return found
 
     def add(self, door: Doorway) -> tuple[Doorway, bool]:
         """Add or merge; returns (the stored record, whether it is new)."""
@@ -171,27 +188,23 @@ class DoorwayBook:
             self._xy = np.vstack([self._xy, [[door.x, door.y]]])
             self.version += 1
             return door, True
-        sides, passed = known.sides | door.sides, known.passed or door.passed
-        if (sides, passed) != (known.sides, known.passed):
-            known.sides, known.passed = sides, passed
-            self.version += 1
+        self._merge(known, door.sides, door.passed)
         return known, False
 
     def add_wire(self, w: Wire, tick: int = 0) -> tuple[Doorway, bool]:
-        """``add(Doorway.from_wire(w, tick))`` for a valid wire tuple. Heartbeats bring the same tuples
-        over and over: the record a tuple matched is remembered while no record is added (a new record
-        could be an earlier match), so a repeat only merges its explored facts."""
-        hit = self._by_wire.get(w)
-        if hit is not None and hit[0] == len(self.doors):
-            known = hit[1]
-            sides, passed = known.sides | (int(w[5]) & 3), known.passed or bool(w[6])
-            if (sides, passed) != (known.sides, known.passed):
-                known.sides, known.passed = sides, passed
-                self.version += 1
-            return known, False
-        stored, new = self.add(Doorway.from_wire(w, tick))
-        self._by_wire[w] = (len(self.doors), stored)
-        return stored, new
+        """``add(Doorway.from_wire(w, tick))`` for a valid wire tuple, without making the record unless it
+        is new."""
+        known = self._find_at(int(w[2]), float(w[0]), float(w[1]))
+        if known is None:
+            return self.add(Doorway.from_wire(w, tick))
+        self._merge(known, int(w[5]) & 3, bool(w[6]))
+        return known, False
+
+    def _merge(self, known: Doorway, sides: int, passed: bool) -> None:
+        sides, passed = known.sides | sides, known.passed or passed
+        if (sides, passed) != (known.sides, known.passed):
+            known.sides, known.passed = sides, passed
+            self.version += 1
 
     def touch(self) -> None:
         """A record's explored facts changed in place."""
@@ -206,6 +219,13 @@ class DoorwayBook:
             return []
         d2 = (self._xy[:, 0] - x) ** 2 + (self._xy[:, 1] - y) ** 2
         return np.flatnonzero(d2 <= radius * radius).tolist()
+
+    def cut_boxes(self) -> np.ndarray:
+        """Every record's :meth:`Doorway.cut` as int64[N, 4] rows (r0, c0, r1, c1), in record order (kept:
+        records are only added, and their geometry never changes)."""
+        if len(self._boxes) != len(self.doors):
+            self._boxes = np.array([d.cut() for d in self.doors], dtype=np.int64).reshape(-1, 4)
+        return self._boxes
 
     def wire(self) -> tuple[Wire, ...]:
         version, wire = self._wire

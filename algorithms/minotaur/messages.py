@@ -69,7 +69,12 @@ class Heading:
         _check(self.is_valid(), "minotaur.heading: bad fields")
 
     def is_valid(self) -> bool:
-        return _point(self.target) and (self.door == () or valid_wire(self.door))
+        return valid_heading(self.target, self.door)
+
+
+def valid_heading(target: Any, door: Any) -> bool:
+    """A heading's (and a doorway list's) target and doorway fields are safe to use."""
+    return _point(target) and (door == () or valid_wire(door))
 
 
 @message("minotaur.doorway_found")

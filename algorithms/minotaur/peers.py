@@ -13,6 +13,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
+from functools import lru_cache
+from itertools import compress
+from operator import is_not
 
 import numpy as np
 
@@ -98,8 +101,7 @@ class Peers:
         h, w = shape
         mask = np.zeros((h, w), dtype=bool)
         k = math.ceil(radius_m / CELL_M)
-        yy, xx = np.mgrid[-k:k + 1, -k:k + 1]
-        disc = yy * yy + xx * xx <= k * k
+        disc = _disc(k)
         for x, y in fresh:
             r, c = cell_of(x, y)
             r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
@@ -107,6 +109,15 @@ class Peers:
                 continue
             mask[r0:r1, c0:c1] |= disc[r0 - (r - k):r1 - (r - k), c0 - (c - k):c1 - (c - k)]
         return mask
+
+
+@lru_cache(maxsize=8)
+def _disc(k: int) -> np.ndarray:
+    """The cells within ``k`` of the centre of a (2k + 1)-square (read-only: shared by every call)."""
+    yy, xx = np.mgrid[-k:k + 1, -k:k + 1]
+    disc = yy * yy + xx * xx <= k * k
+    disc.flags.writeable = False
+    return disc
 
 
 class _ListState:
@@ -137,10 +148,8 @@ class _ListState:
         last, counts = self.doors, self.counts
         assert counts is not None
         n = min(len(doors), len(last))
-        if doors[:n] == last[:n]:                  # the usual case: entries added at the end
-            changed = []
-        else:
-            changed = [i for i in range(n) if doors[i] is not last[i] and doors[i] != last[i]]
+        # a sender's unchanged entries are the same objects (Doorway.wire is kept), so test identity in C
+        changed = [i for i in compress(range(n), map(is_not, doors, last)) if doors[i] != last[i]]
         gone = [last[i] for i in changed] + list(last[n:])
         came = [doors[i] for i in changed] + list(doors[n:])
         for w in gone + came:

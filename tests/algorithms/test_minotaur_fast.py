@@ -164,3 +164,118 @@ def test_a_doorway_wire_follows_its_explored_facts() -> None:
     d.sides |= 2
     d.passed = True
     assert d.wire() == (1.235, 2.0, 1, 1.0, 0.5, 2, 1)
+
+
+def find_plain(book: DoorwayBook, door: Doorway) -> Doorway | None:
+    """DoorwayBook.find before issue 35: the first match, bucket by bucket, looked up every time."""
+    axis, bx, by = book._key(door)
+    for dx in (-1, 0, 1):
+        for dy in (-1, 0, 1):
+            for d in book._buckets.get((axis, bx + dx, by + dy), ()):
+                if d.matches(door):
+                    return d
+    return None
+
+
+@settings(max_examples=200, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), steps=st.integers(1, 60))
+def test_remembered_matches_equal_a_fresh_lookup(seed: int, steps: int) -> None:
+    """Records added between two lookups of the same doorway (a new one can be an earlier match)."""
+    rng = random.Random(seed)
+    queries = [Doorway(x=rng.uniform(0, 5), y=rng.uniform(0, 5), axis=rng.randint(0, 1), width=1.0, depth=0.5)
+               for _ in range(8)]
+    book = DoorwayBook()
+    for _ in range(steps):
+        q = rng.choice(queries)
+        assert book.find(q) is find_plain(book, q)
+        if rng.random() < 0.3:
+            book.add(Doorway(x=rng.uniform(0, 5), y=rng.uniform(0, 5), axis=rng.randint(0, 1), width=1.0, depth=0.5))
+
+
+@settings(max_examples=100, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(0, 12))
+def test_cut_doors_closes_what_slicing_closed(seed: int, n: int) -> None:
+    from algorithms.minotaur.rooms import cut_doors
+    rng = np.random.default_rng(seed)
+    space = rng.random((30, 40)) < 0.8
+    book = DoorwayBook()
+    for _ in range(n):
+        book.add(Doorway(x=float(rng.uniform(-2, 22)), y=float(rng.uniform(-2, 17)), axis=int(rng.integers(2)),
+                         width=float(rng.choice([1.0, 1.5, 2.0])), depth=float(rng.choice([0.5, 1.0]))))
+    origin = (int(rng.integers(-5, 10)), int(rng.integers(-5, 10)))
+    want = space.copy()
+    h, w = want.shape
+    for d in book:
+        r0, c0, r1, c1 = d.cut()
+        r0, r1, c0, c1 = r0 - origin[0], r1 - origin[0], c0 - origin[1], c1 - origin[1]
+        if r1 < 0 or c1 < 0 or r0 >= h or c0 >= w:
+            continue
+        want[max(r0, 0):r1 + 1, max(c0, 0):c1 + 1] = False
+    assert np.array_equal(cut_doors(space, book, origin), want)
+    assert np.array_equal(cut_doors(space, list(book), origin), want)
+
+
+def choose_door_fields(space, cut, start, doors, views):
+    """algorithms.minotaur.rooms.choose_door before issue 35 (two whole distance fields)."""
+    from swarm.api import grid
+
+    from algorithms.minotaur.rooms import nearest_in_room, snap
+    if not doors:
+        return None
+    in_room = grid.distance_field(cut, [start])
+    anywhere = grid.distance_field(space, [start])
+    options = []
+    for k, d in enumerate(doors):
+        best = None
+        for side in (-1, 1):
+            cell = snap(space, d.point(side, 1.0))
+            if cell is None:
+                continue
+            room_d = float(in_room[cell]) if cut[cell] else math.inf
+            if math.isfinite(room_d):
+                cand = (0, room_d, side)
+            elif math.isfinite(float(anywhere[cell])):
+                cand = (1, float(anywhere[cell]), side)
+            else:
+                continue
+            if best is None or cand[:2] < best[:2]:
+                best = cand
+        if best is not None:
+            options.append((best[0], best[1], k, d, best[2]))
+    options.sort(key=lambda o: o[:3])
+    for rank, dist, _, d, side in options:
+        far = snap(cut, d.point(-side, 1.0))
+        if far is not None and nearest_in_room(cut, far, views) is None:
+            d.resolved = True
+            continue
+        return d, side, rank == 0, dist
+    return None
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10_000), steps=st.integers(3, 25))
+def test_choose_door_reads_the_fields_it_read(seed: int, steps: int) -> None:
+    from swarm.api import grid
+
+    from algorithms.minotaur.rooms import choose_door, cut_doors, view_cells
+    known = grown_map(seed, steps)
+    rng = np.random.default_rng(seed)
+    space = grid.configuration_space(known)
+    free = np.argwhere(space)
+    if not len(free):
+        return
+    start = tuple(int(v) for v in free[rng.integers(len(free))])
+
+    def doors() -> list[Doorway]:
+        r = np.random.default_rng(seed + 1)
+        return [Doorway(x=float(r.uniform(0, 40)), y=float(r.uniform(0, 40)), axis=int(r.integers(2)), width=1.0,
+                        depth=0.5) for _ in range(int(r.integers(1, 12)))]
+
+    a, b = doors(), doors()
+    cut = cut_doors(space, a)
+    views = view_cells(known, space, 2)
+    got, want = choose_door(space, cut, start, a, views), choose_door_fields(space, cut, start, b, views)
+    assert (got is None) == (want is None)
+    if got is not None:
+        assert (a.index(got[0]),) + got[1:] == (b.index(want[0]),) + want[1:]
+    assert [d.resolved for d in a] == [d.resolved for d in b]
