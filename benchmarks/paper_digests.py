@@ -9,8 +9,8 @@ decisions issue 35 made cheaper (TNF, Minotaur, Greed) as examples/minotaur-pape
 examples/minotaur-ablation.toml run them: the MAES motion preset, a 7 m lidar, TNF with alpha = 1 and
 beta = 10, both ``variant`` values of TNF and Minotaur, buildings and caves, 16 robots spawned together on
 150 tiles (the first ticks, where most decisions are), small teams to the end of exploration (98 %),
-spawned at random, under line-of-sight and material-aware radio. Same line format as result_digests.py.
-About 30 s of CPU.
+spawned at random, under line-of-sight and material-aware radio; and a few xBOA runs. Same line format
+as result_digests.py. About a minute of CPU.
 """
 
 from __future__ import annotations
@@ -52,6 +52,12 @@ SPECS: dict[str, dict[str, Any]] = {
     "minotaur_maes2_b50_los_end": paper(36, "building", 50, 2, "random", MINOTAUR_MAES, 36000, "los"),
     "greed16_b150": paper(41, "building", 150, 16, "together", {"name": "greed"}, 1500),
     "greed8_c100_end": paper(42, "cave", 100, 8, "random", {"name": "greed"}, 36000, "multiwall"),
+    # xBOA is not in the paper's campaign; its decisions were made cheaper too: 1 m tiles, decisions on the
+    # 0.5 m cells themselves, and a 180 degree fan with two goals per plan (headings count)
+    "xboa4_b50": paper(51, "building", 50, 4, "together", {"name": "xboa"}, 600),
+    "xboa4_b50_cells": paper(52, "building", 50, 4, "together", {"name": "xboa", "params": {"tile_cells": 1}}, 600),
+    "xboa3_c50_fov180_goals2": paper(53, "cave", 50, 3, "random",
+                                     {"name": "xboa", "params": {"fov_deg": 180.0, "n_goals": 2}}, 600),
 }
 
 
