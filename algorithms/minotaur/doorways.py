@@ -122,8 +122,11 @@ def valid_wire(w: object) -> bool:
     if not isinstance(w, tuple) or len(w) != 7:
         return False
     x, y, axis, width, depth, sides, passed = w
-    nums = (x, y, width, depth)
-    return (all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in nums)
+    finite, num = math.isfinite, (int, float)     # spelled out: every heartbeat entry that changed comes here
+    return (isinstance(x, num) and not isinstance(x, bool) and finite(x)
+            and isinstance(y, num) and not isinstance(y, bool) and finite(y)
+            and isinstance(width, num) and not isinstance(width, bool) and finite(width)
+            and isinstance(depth, num) and not isinstance(depth, bool) and finite(depth)
             and axis in (0, 1) and 0 < width <= 50 and 0 < depth <= 50 and isinstance(sides, int)
             and isinstance(passed, int) and 0 <= x <= 1e5 and 0 <= y <= 1e5)
 
@@ -230,6 +233,6 @@ class DoorwayBook:
     def wire(self) -> tuple[Wire, ...]:
         version, wire = self._wire
         if version != self.version:
-            wire = tuple(d.wire() for d in self.doors)
+            wire = tuple(map(Doorway.wire, self.doors))
             self._wire = (self.version, wire)
         return wire
