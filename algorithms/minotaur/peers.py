@@ -12,6 +12,8 @@ another robot is going through to it, and to keep its greedy targets away from o
 from __future__ import annotations
 
 import math
+import threading
+from collections import OrderedDict
 from collections.abc import Iterator
 from functools import lru_cache
 from itertools import compress
@@ -81,7 +83,7 @@ class Peers:
                 return [w for w in state.set_of_doors() - state.previous_set if valid_wire(w)]
         seen = state.set_of_doors()
         try:
-            entries = frozenset(doors)
+            entries = _SHARED.set_of(doors)
         except TypeError:                        # an unhashable (malformed) entry
             entries = frozenset(w for w in doors if valid_wire(w))
             state.reset(doors, entries, counted=False)
@@ -134,7 +136,7 @@ class _ListState:
         """The entries of the last list as ``Peers._new_entries`` has always taken them: ``frozenset`` of
         the list, or of its valid entries when one was unhashable."""
         if self._set is None:
-            self._set = frozenset(self.doors)
+            self._set = _SHARED.set_of(self.doors)
         return self._set
 
     def reset(self, doors: tuple, entries: frozenset, counted: bool) -> None:
@@ -147,9 +149,8 @@ class _ListState:
         unhashable entry, leaving the state as it was."""
         last, counts = self.doors, self.counts
         assert counts is not None
+        changed = _SHARED.changed(last, doors)
         n = min(len(doors), len(last))
-        # a sender's unchanged entries are the same objects (Doorway.wire is kept), so test identity in C
-        changed = [i for i in compress(range(n), map(is_not, doors, last)) if doors[i] != last[i]]
         gone = [last[i] for i in changed] + list(last[n:])
         came = [doors[i] for i in changed] + list(doors[n:])
         for w in gone + came:
@@ -170,6 +171,49 @@ class _ListState:
             counts[w] = counts.get(w, 0) + 1
         self.doors, self._set = doors, None
         return fresh
+
+
+class _Shared(threading.local):
+    """What every receiver of one heartbeat computes alike, computed once: in-process, all receivers of a
+    sender's list get the same tuple object, and all that heard its previous one hold that same object.
+    Entries hold the tuples they describe, so an id is never reused while its entry lives."""
+
+    SIZE = 64
+
+    def __init__(self) -> None:
+        self.diffs: OrderedDict[tuple[int, int], tuple[tuple, tuple, list[int]]] = OrderedDict()
+        self.sets: OrderedDict[int, tuple[tuple, frozenset]] = OrderedDict()
+
+    def changed(self, last: tuple, doors: tuple) -> list[int]:
+        """Positions below both lengths whose entries differ (a sender's unchanged entries are the same
+        objects, Doorway.wire is kept, so identity is tested first, in C)."""
+        key = (id(last), id(doors))
+        hit = self.diffs.get(key)
+        if hit is not None and hit[0] is last and hit[1] is doors:
+            return hit[2]
+        n = min(len(doors), len(last))
+        out = [i for i in compress(range(n), map(is_not, doors, last)) if doors[i] != last[i]]
+        _put(self.diffs, key, (last, doors, out), self.SIZE)
+        return out
+
+    def set_of(self, doors: tuple) -> frozenset:
+        """``frozenset(doors)`` (raises TypeError on an unhashable entry)."""
+        hit = self.sets.get(id(doors))
+        if hit is not None and hit[0] is doors:
+            return hit[1]
+        out = frozenset(doors)
+        _put(self.sets, id(doors), (doors, out), self.SIZE)
+        return out
+
+
+def _put(cache: OrderedDict, key: object, value: object, size: int) -> None:
+    cache[key] = value
+    cache.move_to_end(key)
+    while len(cache) > size:
+        cache.popitem(last=False)
+
+
+_SHARED = _Shared()
 
 
 def _counts(doors: tuple) -> dict:
