@@ -333,7 +333,7 @@ def _destination_distance(known: np.ndarray, destinations: np.ndarray, cells: np
     open_ = known != SOLID
     h, w = known.shape
     dest = np.asarray(destinations, dtype=np.int64).reshape(-1, 2)
-    dest = np.column_stack((np.clip(dest[:, 0], 0, h - 1), np.clip(dest[:, 1], 0, w - 1)))
+    dest = np.column_stack((np.minimum(np.maximum(dest[:, 0], 0), h - 1), np.minimum(np.maximum(dest[:, 1], 0), w - 1)))
     sources = []
     for (r, c), fine in zip(dest.tolist(), open_[dest[:, 0], dest[:, 1]].tolist()):
         snapped = (r, c) if fine else grid.nearest_in(open_, (r, c), 4)
