@@ -6,8 +6,8 @@ of these steps made several whole-map passes each (a frontier mask, a labelling,
 copy per neighbour direction...): 80 % of a decision besides its distance field (issue 35). Here one
 vectorised row pass finds the frontier cells, and everything after it touches only those cells and their
 few neighbours. The results are the numpy forms' bit for bit (same sums in the same order, same
-tie-breaks): ``tests/algorithms/test_tnf_kernels.py`` checks them against those forms, kept there as the
-oracle, on random maps.
+tie-breaks): ``tests/algorithms/test_tnf_kernels.py`` checks them on random maps against those forms, kept
+as the oracle in ``tests/algorithms/tnf_oracle.py``.
 
 The kernels take per-thread scratch arrays of the map's size that are all -1 between calls (they reset
 what they touched), so no call fills or allocates a whole map.

@@ -63,7 +63,7 @@ def candidates(known: np.ndarray) -> tuple[np.ndarray, ...]:
     face cell found one way is not looked at the other way), then the edge cells whose UNSEEN neighbour
     lies behind the normal (an edge cell found for one normal is FREE no longer for the next ones, so it
     has one normal and is no wall's free front for later normals); each group in row-major order. One
-    compiled pass per group (``tests/algorithms/test_minotaur_units.py`` checks it against the numpy
+    compiled pass per group (``tests/algorithms/test_minotaur_fast.py`` checks it against the numpy
     form it replaced)."""
     k = np.ascontiguousarray(known, dtype=np.uint8)
     return _candidates(k)
