@@ -27,7 +27,8 @@ def run(spec: Any = None, /, *, observers: Sequence[Callable[[Any], None]] = (),
     (``swarm run --print-spec`` writes one). ``overrides`` are applied on top as ``swarm run``'s flags are:
     ``map`` (``"building"``, ``"cave"`` or a map file), ``size``, ``map_seed``, ``robots``, ``spawn``,
     ``algorithm``, ``seed``, ``max_ticks``, ``explored``, ``transport``, ``params`` (the algorithm's),
-    ``map_params``, or any section as a table merged into the spec's (``lidar={"range_m": 4}``).
+    ``map_params``, or any section as a table merged into the spec's (``lidar={"range_m": 4}``;
+    ``radio="los"`` names the radio model alone).
     ``observers`` are called after every tick with a :class:`~swarm.simulation.TickView`.
 
     Bad input raises :class:`swarm.InvalidInput` with the one-line message the command line prints.

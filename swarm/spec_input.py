@@ -122,7 +122,8 @@ def resolve(spec: Any = None, overrides: Mapping[str, Any] | None = None, field:
     ``swarm run`` applies its flags: ``map`` (a kind or a file), ``size``, ``map_seed``, ``robots``,
     ``spawn``, ``algorithm``, ``seed``, ``max_ticks``, ``explored``, ``transport``, ``params`` (the
     algorithm's) and ``map_params``; a section name with a table (``lidar={"range_m": 4}``,
-    ``radio={"model": "los"}``) merges into that section. Unknown keywords are one-line errors."""
+    ``radio={"model": "los"}``, or ``radio="los"`` for the model alone) merges into that section. Unknown
+    keywords are one-line errors."""
     data = spec_source(spec, field)
     flags: dict[str, Any] = {}
     tables: dict[str, Any] = {}
@@ -131,6 +132,8 @@ def resolve(spec: Any = None, overrides: Mapping[str, Any] | None = None, field:
             raise InvalidInput(shorten(str(key), 60), value, f"a keyword of swarm.run: {', '.join(KEYWORDS)}")
         if key in SECTIONS and isinstance(value, Mapping):
             tables[key] = merge(tables.get(key, {}), value)
+        elif key == "radio" and isinstance(value, str):  # radio="los": the model alone
+            tables["radio"] = merge(tables.get("radio", {}), {"model": value})
         elif key == "params":
             tables.setdefault("algorithm", {})["params"] = _table(key, value)
         elif key == "map_params":

@@ -1,0 +1,301 @@
+"""One run driven step by step for learning: the engine under both environments (no Gymnasium needed).
+
+The run is an ordinary :class:`~swarm.simulation.Simulation` (pymunk world, lidar, radio-gated messaging
+and map sharing, knowledge maps) advanced with the same ``sense`` / ``observe`` / ``apply`` steps its
+:meth:`~swarm.simulation.Simulation.run` loop uses, so a tick here is a tick there. Learning robots take
+their action from the caller; every other robot (and a learner that delegates) runs the spec's explorer
+exactly as the in-process transport would run it. With every robot scripted, stepping reproduces
+:func:`swarm.run` of the same spec bit for bit (tested).
+
+Observation of learner ``i`` (arrays, :meth:`observation`): ``map`` the egocentric crop of its own
+knowledge map, ``pose``, ``neighbours``, ``inbox`` and in goal mode ``choices``; their layout is in
+docs/python-api.md ("Learning").
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Mapping
+
+import numpy as np
+
+from maps.errors import InvalidInput
+
+from ..api import Action, cell_centre
+from ..messages import MapUpdate
+from ..motion import TICK_S
+from ..result import RunResult
+from ..simulation import Simulation
+from ..spec import RunSpec
+from ..transport.inprocess import InProcessHost, check_action, observations
+from ._kernels import _env_observe, _env_window_counts
+from .config import SECTORS, EnvConfig
+
+CELL_AREA_M2 = 0.25
+"""A 0.5 m knowledge cell."""
+POSE_FIELDS = ("x", "y", "cos_theta", "sin_theta", "collided", "moving", "goal_failed", "known_fraction", "time")
+"""The ``pose`` vector: position scaled to [-1, 1] over the map, heading, whether a contact began during the
+step, whether the navigator drives to a goal, whether the last goal proved unreachable or blocked, the
+share of the map's cells the robot's own map knows, and the run's time as a share of ``stop.max_ticks``."""
+NEIGHBOUR_FIELDS = ("linked", "dx", "dy", "margin")
+"""Per other robot (in id order): 1 if its messages reach this robot this tick, its relative position (m,
+scaled by the map's longer side), and the link margin (RSSI minus this robot's sensitivity, dB, clipped to
++-``margin_db`` and scaled to [-1, 1]); all 0 for an unlinked robot unless ``observe_all``."""
+INBOX_FIELDS = ("messages", "map_updates", "bytes", "since_contact")
+"""Messages received during the step per other robot, map updates among them per other robot, log of the
+bytes received (1 = 64 KiB), ticks since anything was last received (1 = a minute or never); each in [0, 1]."""
+KEEP = Action()
+"""Keep driving to the current goal (if any)."""
+_LOG_BYTES = math.log1p(65536.0)
+_CONTACT_TICKS = 600.0
+
+
+class ExplorationCore:
+    """A run of ``spec`` stepped by :meth:`step`; :meth:`reset` starts it (again) from a seed."""
+
+    def __init__(self, spec: RunSpec, config: EnvConfig) -> None:
+        self.base = spec
+        self.config = config
+        n = spec.robots.count
+        self.n = n
+        self.learners = config.learner_ids(n)
+        self._learners = np.array(self.learners, dtype=np.int64)
+        self._slot = {robot: l for l, robot in enumerate(self.learners)}
+        self.scripted = tuple(i for i in range(n) if i not in self._slot)
+        self.half = config.crop_cells // 2
+        lcount = len(self.learners)
+        side = config.crop_cells
+        self.crop = np.zeros((lcount, side, side), dtype=np.uint8)
+        self.choices = np.zeros((lcount, SECTORS, 3), dtype=np.float32)
+        self.goals = np.full((lcount, SECTORS, 2), -1, dtype=np.int64)
+        self.pose = np.zeros((lcount, len(POSE_FIELDS)), dtype=np.float32)
+        self.neighbours = np.zeros((lcount, max(n - 1, 1), len(NEIGHBOUR_FIELDS)), dtype=np.float32)
+        self.inbox = np.zeros((lcount, len(INBOX_FIELDS)), dtype=np.float32)
+        self.rewards = np.zeros(lcount, dtype=np.float64)
+        self._others = np.array([[j for j in range(n) if j != i] for i in self.learners], dtype=np.int64).reshape(lcount, -1)
+        self._before = np.zeros(lcount, dtype=np.int64)
+        self._after = np.zeros(lcount, dtype=np.int64)
+        self._cells = np.zeros((lcount, 2), dtype=np.int64)
+        self.sim: Simulation | None = None
+        self.done = True
+
+    # ------------------------------------------------------------------------------ episode ----
+    def reset(self, seed: int) -> None:
+        """A new run of the spec with master seed ``seed`` (map unless ``map.seed`` pins it, spawn, noise,
+        radio loss, the explorers' generators), sensed at tick 0."""
+        spec = self.base.replace(seed=seed)
+        self.close()
+        sim = Simulation(spec)
+        host = InProcessHost()
+        host.start(sim.resets())
+        self.sim, self.host, self.state = sim, host, sim.start_state()
+        self._wall = 0.0
+        reach = sim._reach + int(math.ceil(sim.motion.max_speed * TICK_S / 0.5)) + 1
+        self._window = reach  # the lidar writes within sim._reach of the moved robot
+        self._map_cells = float(sim.truth.shape[0] * sim.truth.shape[1])
+        self._scale = 1.0 / max(sim.truth.width_m, sim.truth.height_m)
+        self._sensitivity = sim.links.config.sensitivity_array(self.n)
+        self._known = np.zeros(len(self.learners), dtype=np.int64)
+        self._last_contact = np.full(len(self.learners), -1, dtype=np.int64)
+        self._start_accumulators()
+        self.done = self._sense()
+        self._known[:] = np.count_nonzero(sim.known[self._learners].reshape(len(self.learners), -1), axis=1)
+        self._start_accumulators()  # tick 0's scan is the start, not a reward
+        self._features()
+
+    def close(self) -> None:
+        if self.sim is not None:
+            self.host.close()
+            self.sim = None
+
+    # --------------------------------------------------------------------------------- step ----
+    def step(self, actions: Mapping[int, Any]) -> None:
+        """Advance ``ticks_per_step`` ticks (fewer if the run stops) with ``actions`` (learner robot id ->
+        its action: a goal-mode index or a velocity pair in [-1, 1]); then :attr:`rewards` and the
+        observation arrays hold the step's outcome."""
+        if self.sim is None or self.done:
+            raise RuntimeError("step() after the episode ended: call reset()")
+        own = self._learner_actions(actions)
+        self._start_accumulators()
+        for k in range(self.config.ticks_per_step):
+            self.sim.apply(self.state, self._tick_actions(own, first=k == 0))
+            if self._sense():
+                self.done = True
+                break
+        self._features()
+
+    def _learner_actions(self, actions: Mapping[int, Any]) -> list[Any]:
+        """Each learner's action checked: a goal-mode index, ``"delegate"`` or an Action for velocities."""
+        out: list[Any] = []
+        cfg = self.config
+        for robot in self.learners:
+            if robot not in actions:
+                raise InvalidInput("actions", sorted(actions), f"an action for every learning robot ({list(self.learners)})")
+            a = actions[robot]
+            if cfg.action == "goal":
+                try:
+                    index = int(a)
+                except (TypeError, ValueError):
+                    raise InvalidInput(f"actions[{robot}]", a, f"an integer 0..{cfg.n_actions - 1}") from None
+                if index != a or not 0 <= index < cfg.n_actions:
+                    raise InvalidInput(f"actions[{robot}]", a, f"an integer 0..{cfg.n_actions - 1}")
+                out.append("delegate" if index == 1 + SECTORS else index)
+            else:
+                v = np.asarray(a, dtype=np.float64).reshape(-1)
+                if v.shape != (2,) or not np.isfinite(v).all():
+                    raise InvalidInput(f"actions[{robot}]", a, "two finite numbers in [-1, 1]: speed, turn rate")
+                v = np.clip(v, -1.0, 1.0)
+                m = self.sim.motion
+                out.append(Action(velocity=(float(v[0]) * m.max_speed, float(v[1]) * m.max_turn_rate)))
+        return out
+
+    def _tick_actions(self, own: list[Any], first: bool) -> list[Action | None]:
+        """The tick's action per robot: scripted robots' (and delegating learners') from their explorers on
+        this tick's observations, the learners' from ``own`` (a goal only at a step's first tick)."""
+        sim = self.sim
+        batch = sim.observe(self.state)
+        acts: list[Action | None] = [None] * self.n
+        asked = list(self.scripted)
+        for l, robot in enumerate(self.learners):
+            a = own[l]
+            if a == "delegate":
+                asked.append(robot)
+            elif isinstance(a, Action):
+                acts[robot] = a
+            elif not first or a == 0:
+                acts[robot] = KEEP
+            else:
+                row, col = self.goals[l, a - 1]
+                acts[robot] = Action(goal=cell_centre(int(row), int(col))) if row >= 0 else KEEP
+        if asked:
+            obs = observations(batch)
+            agents = self.host.agents
+            for robot in sorted(asked):
+                if obs[robot] is not None:
+                    acts[robot] = check_action(agents[robot].act(obs[robot]), robot)
+        return acts
+
+    # ------------------------------------------------------------------------------ sensing ----
+    def _start_accumulators(self) -> None:
+        self.rewards[:] = 0.0
+        self._own_new = np.zeros(len(self.learners), dtype=np.int64)
+        self._team_new = 0
+        self._began = np.zeros(len(self.learners), dtype=bool)
+        self._msgs = np.zeros(len(self.learners), dtype=np.int64)
+        self._updates = np.zeros(len(self.learners), dtype=np.int64)
+        self._bytes = np.zeros(len(self.learners), dtype=np.int64)
+        self._ticks = 0
+
+    def _sense(self) -> bool:
+        """One tick's sensing (:meth:`Simulation.sense`), measuring on the way what each learner's own lidar
+        revealed to it (before maps merged from others arrive) and what it received; True when the run stops."""
+        sim, state, learners = self.sim, self.state, self._learners
+        reward = self.config.reward
+        self._cells[:] = (sim.world.poses[learners, 1::-1] / 0.5).astype(np.int64)  # (row, col) before the move
+        _env_window_counts(sim.known, learners, self._cells, self._window, self._before)
+        seen0 = sim.tracker.seen_free_cells
+        sim.move_and_scan(state)
+        _env_window_counts(sim.known, learners, self._cells, self._window, self._after)
+        new = self._after - self._before
+        self._own_new += new
+        self._known += new
+        self._team_new += sim.tracker.seen_free_cells - seen0
+        stop = sim.communicate(state)
+        self._ticks += 1
+        self._began |= state.began[learners]
+        delivered = False
+        for l, robot in enumerate(self.learners):
+            inbox = state.inboxes[robot]
+            if inbox:
+                delivered = True
+                self._msgs[l] += len(inbox)
+                self._bytes[l] += sum(len(env.data) for env in inbox)
+                self._updates[l] += sum(isinstance(env.message, MapUpdate) for env in inbox)
+                self._last_contact[l] = state.tick
+        if delivered:  # merged maps: recount the whole of each learner's map
+            self._known[:] = np.count_nonzero(sim.known[learners].reshape(len(learners), -1), axis=1)
+        if reward.own:
+            self.rewards += (reward.own * CELL_AREA_M2) * new
+        self.rewards += reward.team * CELL_AREA_M2 * (sim.tracker.seen_free_cells - seen0) - reward.time_penalty
+        if reward.collision_penalty:
+            self.rewards -= reward.collision_penalty * state.began[learners]
+        return stop
+
+    def _features(self) -> None:
+        """The observation arrays of every learner for the current tick."""
+        sim, state, learners = self.sim, self.state, self._learners
+        poses = sim.world.poses
+        h, w = sim.truth.shape
+        cells = np.empty((self.n, 2), dtype=np.int64)
+        cells[:, 0] = np.clip((poses[:, 1] / 0.5).astype(np.int64), 0, h - 1)
+        cells[:, 1] = np.clip((poses[:, 0] / 0.5).astype(np.int64), 0, w - 1)
+        _env_observe(sim.known, cells, learners, self.half, 4.0, self.crop, self.choices, self.goals)
+        mine = poses[learners]
+        pose = self.pose
+        pose[:, 0] = mine[:, 0] / sim.truth.width_m * 2.0 - 1.0
+        pose[:, 1] = mine[:, 1] / sim.truth.height_m * 2.0 - 1.0
+        pose[:, 2] = np.cos(mine[:, 2])
+        pose[:, 3] = np.sin(mine[:, 2])
+        pose[:, 4] = self._began
+        navs = sim.navigators
+        for l, robot in enumerate(self.learners):
+            st = navs[robot].state
+            pose[l, 5] = st in ("moving", "planning")
+            pose[l, 6] = st in ("unreachable", "blocked")
+        pose[:, 7] = self._known / self._map_cells
+        pose[:, 8] = min(state.tick / sim.spec.stop.max_ticks, 1.0)
+        self._neighbour_features(poses)
+        others = max(self.n - 1, 1)
+        self.inbox[:, 0] = np.minimum(self._msgs / (others * max(self._ticks, 1)), 1.0)
+        self.inbox[:, 1] = np.minimum(self._updates / (others * max(self._ticks, 1)), 1.0)
+        self.inbox[:, 2] = np.minimum(np.log1p(self._bytes) / _LOG_BYTES, 1.0)
+        since = np.where(self._last_contact < 0, _CONTACT_TICKS, state.tick - self._last_contact)
+        self.inbox[:, 3] = np.minimum(since / _CONTACT_TICKS, 1.0)
+
+    def _neighbour_features(self, poses: np.ndarray) -> None:
+        if self.n == 1:
+            return
+        links = self.state.links
+        link = links.link[self._learners[:, None], self._others]          # does j reach i
+        rssi = links.rssi[self._learners[:, None], self._others]
+        margin = rssi - self._sensitivity[self._learners][:, None]
+        m = self.config.margin_db
+        shown = np.ones_like(link) if self.config.observe_all else link
+        out = self.neighbours
+        out[:, :, 0] = link
+        out[:, :, 1] = np.where(shown, (poses[self._others, 0] - poses[self._learners, 0][:, None]) * self._scale, 0.0)
+        out[:, :, 2] = np.where(shown, (poses[self._others, 1] - poses[self._learners, 1][:, None]) * self._scale, 0.0)
+        out[:, :, 3] = np.where(shown, np.clip(np.nan_to_num(margin, nan=-m, neginf=-m, posinf=m), -m, m) / m, 0.0)
+
+    # ------------------------------------------------------------------------------ outputs ----
+    def observation(self, l: int) -> dict[str, np.ndarray]:
+        """Learner slot ``l``'s observation (copies: the arrays are reused next step)."""
+        obs = {"map": self.crop[l].copy(), "pose": self.pose[l].copy(), "neighbours": self.neighbours[l].copy(),
+               "inbox": self.inbox[l].copy()}
+        if self.config.action == "goal":
+            obs["choices"] = self.choices[l].copy()
+        return obs
+
+    def action_mask(self, l: int) -> np.ndarray:
+        """Goal mode: which actions do something now (keep, sectors with a frontier, delegate)."""
+        mask = np.ones(self.config.n_actions, dtype=np.int8)
+        mask[1:1 + SECTORS] = self.choices[l, :, 0] > 0
+        return mask
+
+    @property
+    def truncated(self) -> bool:
+        """The run stopped for a limit (ticks, stall), not because the map was explored or robots failed."""
+        return self.done and self.state.stop_reason in ("max_ticks", "stalled")
+
+    def info(self) -> dict[str, Any]:
+        """Shared by every agent: the tick, the team's explored fraction and, at the end, why it stopped."""
+        sim = self.sim
+        return {"tick": self.state.tick, "explored": sim.tracker.explored, "stop_reason": self.state.stop_reason}
+
+    def result(self) -> RunResult:
+        """The run's :class:`RunResult` so far (as :func:`swarm.run` would report it at this tick)."""
+        sim = self.sim
+        return sim._result(self.state.tick, self.state.stop_reason, self.state.collisions, 0.0, self.host)
+
+
+__all__ = ["CELL_AREA_M2", "ExplorationCore", "INBOX_FIELDS", "KEEP", "NEIGHBOUR_FIELDS", "POSE_FIELDS"]
