@@ -12,49 +12,72 @@ UNSEEN, FREE, OUTSIDE = 0, 1, 3
 """Crop values: the knowledge map's UNSEEN / FREE / SOLID (0, 1, 2), and 3 for cells outside the map."""
 
 
+TAN_22_5 = 0.41421356237309503
+"""tan(22.5 degrees): sector boundaries, which no integer cell offset lies on."""
+
+
 @njit(cache=True)
-def _env_observe(known: np.ndarray, cells: np.ndarray, learners: np.ndarray, half: int, min_goal2: float,
+def _env_sector(dr: int, dc: int) -> int:  # pragma: no cover - compiled
+    """The 45-degree sector of the offset (dr rows up, dc columns right): 0 centred on +x (east), counting
+    counter-clockwise to 7 (south-east); ``floor((atan2(dr, dc) + pi / 8) / (pi / 4)) mod 8`` without the
+    arc tangent."""
+    adr = abs(dr)
+    adc = abs(dc)
+    if adr <= TAN_22_5 * adc:
+        return 0 if dc > 0 else 4
+    if adc <= TAN_22_5 * adr:
+        return 2 if dr > 0 else 6
+    if dr > 0:
+        return 1 if dc > 0 else 3
+    return 7 if dc > 0 else 5
+
+
+@njit(cache=True)
+def _env_observe(known: np.ndarray, poses: np.ndarray, learners: np.ndarray, half: int, min_goal2: float,
                  crop: np.ndarray, choices: np.ndarray, goals: np.ndarray) -> None:  # pragma: no cover - compiled
-    """For learner ``l`` (robot ``learners[l]`` at cell ``cells[robot]`` = (row, col)): ``crop[l]`` its
+    """For learner ``l`` (robot ``learners[l]`` at (row, col) = its pose's 0.5 m cell): ``crop[l]`` its
     knowledge map over rows/cols ``cell - half .. cell + half - 1`` (OUTSIDE beyond the map), and per
-    45-degree sector ``s`` (sector 0 centred on +x, counter-clockwise) the nearest frontier cell of the crop
-    at least ``sqrt(min_goal2)`` cells away: ``goals[l, s]`` = (row, col), ``choices[l, s]`` = (1, dcol /
-    half, drow / half), or zeros with ``goals = -1`` when the sector has none. A frontier cell is FREE with
-    an UNSEEN 4-neighbour inside the map; ties go to the first in row-major order."""
+    45-degree sector ``s`` (:func:`_env_sector`) the nearest frontier cell of the crop at least
+    ``sqrt(min_goal2)`` cells away: ``goals[l, s]`` = (row, col), ``choices[l, s]`` = (1, dcol / half,
+    drow / half), or zeros with ``goals = -1`` when the sector has none. A frontier cell is FREE with an
+    UNSEEN 4-neighbour inside the map; ties go to the first in row-major order."""
     h = known.shape[1]
     w = known.shape[2]
     side = 2 * half
-    sector_width = math.pi / 4.0
+    best = np.empty(8)
     for l in range(learners.shape[0]):
         r = learners[l]
-        row0 = cells[r, 0]
-        col0 = cells[r, 1]
-        best = np.full(8, np.inf)
+        kn = known[r]
+        out = crop[l]
+        row0 = min(max(int(poses[r, 1] * 2.0), 0), h - 1)
+        col0 = min(max(int(poses[r, 0] * 2.0), 0), w - 1)
         for s in range(8):
+            best[s] = np.inf
             goals[l, s, 0] = -1
             goals[l, s, 1] = -1
         for a in range(side):
             rr = row0 - half + a
+            if rr < 0 or rr >= h:
+                out[a, :] = OUTSIDE
+                continue
             for b in range(side):
                 cc = col0 - half + b
-                if rr < 0 or rr >= h or cc < 0 or cc >= w:
-                    crop[l, a, b] = OUTSIDE
+                if cc < 0 or cc >= w:
+                    out[a, b] = OUTSIDE
                     continue
-                v = known[r, rr, cc]
-                crop[l, a, b] = v
+                v = kn[rr, cc]
+                out[a, b] = v
                 if v != FREE:
                     continue
-                if not ((rr > 0 and known[r, rr - 1, cc] == UNSEEN) or (rr < h - 1 and known[r, rr + 1, cc] == UNSEEN)
-                        or (cc > 0 and known[r, rr, cc - 1] == UNSEEN) or (cc < w - 1 and known[r, rr, cc + 1] == UNSEEN)):
+                if not ((rr > 0 and kn[rr - 1, cc] == UNSEEN) or (rr < h - 1 and kn[rr + 1, cc] == UNSEEN)
+                        or (cc > 0 and kn[rr, cc - 1] == UNSEEN) or (cc < w - 1 and kn[rr, cc + 1] == UNSEEN)):
                     continue
                 dr = rr - row0
                 dc = cc - col0
                 d2 = float(dr * dr + dc * dc)
                 if d2 < min_goal2:
                     continue
-                s = int(math.floor((math.atan2(dr, dc) + sector_width / 2.0) / sector_width)) % 8
-                if s < 0:
-                    s += 8
+                s = _env_sector(dr, dc)
                 if d2 < best[s]:
                     best[s] = d2
                     goals[l, s, 0] = rr
@@ -71,14 +94,17 @@ def _env_observe(known: np.ndarray, cells: np.ndarray, learners: np.ndarray, hal
 
 
 @njit(cache=True)
-def _env_window_counts(known: np.ndarray, learners: np.ndarray, cells: np.ndarray, radius: int,
-                       out: np.ndarray) -> None:  # pragma: no cover - compiled
+def _env_window_counts(known: np.ndarray, learners: np.ndarray, poses: np.ndarray, set_cells: bool, cells: np.ndarray,
+                       radius: int, out: np.ndarray) -> None:  # pragma: no cover - compiled
     """``out[l]``: known (not UNSEEN) cells of robot ``learners[l]``'s map within ``radius`` cells (a square)
-    of ``cells[l]`` = (row, col)."""
+    of ``cells[l]`` = (row, col); with ``set_cells`` the cells are first set to the robots' pose cells."""
     h = known.shape[1]
     w = known.shape[2]
     for l in range(learners.shape[0]):
         r = learners[l]
+        if set_cells:
+            cells[l, 0] = int(poses[r, 1] * 2.0)
+            cells[l, 1] = int(poses[r, 0] * 2.0)
         r0 = max(cells[l, 0] - radius, 0)
         r1 = min(cells[l, 0] + radius + 1, h)
         c0 = max(cells[l, 1] - radius, 0)
@@ -89,3 +115,78 @@ def _env_window_counts(known: np.ndarray, learners: np.ndarray, cells: np.ndarra
                 if known[r, rr, cc] != UNSEEN:
                     n += 1
         out[l] = n
+
+
+@njit(cache=True)
+def _env_neighbours(poses: np.ndarray, link: np.ndarray, rssi: np.ndarray, sensitivity: np.ndarray,
+                    learners: np.ndarray, scale: float, margin_db: float, observe_all: bool,
+                    out: np.ndarray) -> None:  # pragma: no cover - compiled
+    """``out[l, k]`` for learner ``l`` (robot ``i = learners[l]``) and the k-th other robot ``j`` (ids in order,
+    ``i`` skipped): (linked, dx * scale, dy * scale, margin / margin_db) with ``linked = link[i, j]`` (j reaches
+    i) and the margin ``rssi[i, j] - sensitivity[i]`` clipped to +-margin_db (NaN and -inf: -margin_db); zeros
+    for an unlinked robot unless ``observe_all``."""
+    n = poses.shape[0]
+    for l in range(learners.shape[0]):
+        i = learners[l]
+        k = 0
+        for j in range(n):
+            if j == i:
+                continue
+            linked = link[i, j]
+            if linked or observe_all:
+                m = rssi[i, j] - sensitivity[i]
+                if not (m > -margin_db):  # NaN, -inf, or below
+                    m = -margin_db
+                elif m > margin_db:
+                    m = margin_db
+                out[l, k, 0] = 1.0 if linked else 0.0
+                out[l, k, 1] = (poses[j, 0] - poses[i, 0]) * scale
+                out[l, k, 2] = (poses[j, 1] - poses[i, 1]) * scale
+                out[l, k, 3] = m / margin_db
+            else:
+                out[l, k, 0] = 0.0
+                out[l, k, 1] = 0.0
+                out[l, k, 2] = 0.0
+                out[l, k, 3] = 0.0
+            k += 1
+
+
+@njit(cache=True)
+def _env_tick(before: np.ndarray, after: np.ndarray, began: np.ndarray, learners: np.ndarray, own_new: np.ndarray,
+              known_count: np.ndarray, began_any: np.ndarray, rewards: np.ndarray, own_weight: float, shared: float,
+              collision_penalty: float) -> None:  # pragma: no cover - compiled
+    """One tick's bookkeeping per learner: cells its lidar revealed (``after - before``), contacts begun, and
+    the reward: ``own_weight`` per revealed cell + ``shared`` (team area and time) - the collision penalty."""
+    for l in range(learners.shape[0]):
+        new = after[l] - before[l]
+        own_new[l] += new
+        known_count[l] += new
+        hit = began[learners[l]]
+        if hit:
+            began_any[l] = True
+        rewards[l] += own_weight * new + shared - (collision_penalty if hit else 0.0)
+
+
+@njit(cache=True)
+def _env_vectors(poses: np.ndarray, learners: np.ndarray, width: float, height: float, began: np.ndarray,
+                 moving: np.ndarray, failed: np.ndarray, known_count: np.ndarray, map_cells: float, time: float,
+                 msgs: np.ndarray, updates: np.ndarray, nbytes: np.ndarray, last_contact: np.ndarray, tick: int,
+                 per: float, log_bytes: float, contact_ticks: float, pose: np.ndarray,
+                 inbox: np.ndarray) -> None:  # pragma: no cover - compiled
+    """The ``pose`` and ``inbox`` vectors of every learner (fields: swarm.env.core.POSE_FIELDS, INBOX_FIELDS)."""
+    for l in range(learners.shape[0]):
+        r = learners[l]
+        pose[l, 0] = poses[r, 0] * (2.0 / width) - 1.0
+        pose[l, 1] = poses[r, 1] * (2.0 / height) - 1.0
+        pose[l, 2] = math.cos(poses[r, 2])
+        pose[l, 3] = math.sin(poses[r, 2])
+        pose[l, 4] = 1.0 if began[l] else 0.0
+        pose[l, 5] = 1.0 if moving[l] else 0.0
+        pose[l, 6] = 1.0 if failed[l] else 0.0
+        pose[l, 7] = known_count[l] / map_cells
+        pose[l, 8] = time
+        inbox[l, 0] = min(msgs[l] * per, 1.0)
+        inbox[l, 1] = min(updates[l] * per, 1.0)
+        inbox[l, 2] = min(math.log1p(nbytes[l]) / log_bytes, 1.0)
+        since = contact_ticks if last_contact[l] < 0 else tick - last_contact[l]
+        inbox[l, 3] = min(since / contact_ticks, 1.0)

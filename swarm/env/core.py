@@ -28,7 +28,7 @@ from ..result import RunResult
 from ..simulation import Simulation
 from ..spec import RunSpec
 from ..transport.inprocess import InProcessHost, check_action, observations
-from ._kernels import _env_observe, _env_window_counts
+from ._kernels import _env_neighbours, _env_observe, _env_tick, _env_vectors, _env_window_counts
 from .config import SECTORS, EnvConfig
 
 CELL_AREA_M2 = 0.25
@@ -72,7 +72,11 @@ class ExplorationCore:
         self.neighbours = np.zeros((lcount, max(n - 1, 1), len(NEIGHBOUR_FIELDS)), dtype=np.float32)
         self.inbox = np.zeros((lcount, len(INBOX_FIELDS)), dtype=np.float32)
         self.rewards = np.zeros(lcount, dtype=np.float64)
-        self._others = np.array([[j for j in range(n) if j != i] for i in self.learners], dtype=np.int64).reshape(lcount, -1)
+        self._own_new = np.zeros(lcount, dtype=np.int64)
+        self._began = np.zeros(lcount, dtype=np.bool_)
+        self._msgs = np.zeros(lcount, dtype=np.int64)
+        self._updates = np.zeros(lcount, dtype=np.int64)
+        self._bytes = np.zeros(lcount, dtype=np.int64)
         self._before = np.zeros(lcount, dtype=np.int64)
         self._after = np.zeros(lcount, dtype=np.int64)
         self._cells = np.zeros((lcount, 2), dtype=np.int64)
@@ -100,6 +104,7 @@ class ExplorationCore:
         self._start_accumulators()
         self.done = self._sense()
         self._known[:] = np.count_nonzero(sim.known[self._learners].reshape(len(self.learners), -1), axis=1)
+        self._last_contact[:] = -1
         self._start_accumulators()  # tick 0's scan is the start, not a reward
         self._features()
 
@@ -133,6 +138,9 @@ class ExplorationCore:
                 raise InvalidInput("actions", sorted(actions), f"an action for every learning robot ({list(self.learners)})")
             a = actions[robot]
             if cfg.action == "goal":
+                if type(a) is int and 0 <= a < cfg.n_actions:  # the common case, checked cheaply
+                    out.append("delegate" if a == 1 + SECTORS else a)
+                    continue
                 try:
                     index = int(a)
                 except (TypeError, ValueError):
@@ -177,13 +185,10 @@ class ExplorationCore:
 
     # ------------------------------------------------------------------------------ sensing ----
     def _start_accumulators(self) -> None:
-        self.rewards[:] = 0.0
-        self._own_new = np.zeros(len(self.learners), dtype=np.int64)
+        """Zero what a step sums over its ticks."""
+        for array in (self.rewards, self._own_new, self._began, self._msgs, self._updates, self._bytes):
+            array.fill(0)
         self._team_new = 0
-        self._began = np.zeros(len(self.learners), dtype=bool)
-        self._msgs = np.zeros(len(self.learners), dtype=np.int64)
-        self._updates = np.zeros(len(self.learners), dtype=np.int64)
-        self._bytes = np.zeros(len(self.learners), dtype=np.int64)
         self._ticks = 0
 
     def _sense(self) -> bool:
@@ -191,96 +196,73 @@ class ExplorationCore:
         revealed to it (before maps merged from others arrive) and what it received; True when the run stops."""
         sim, state, learners = self.sim, self.state, self._learners
         reward = self.config.reward
-        self._cells[:] = (sim.world.poses[learners, 1::-1] / 0.5).astype(np.int64)  # (row, col) before the move
-        _env_window_counts(sim.known, learners, self._cells, self._window, self._before)
-        seen0 = sim.tracker.seen_free_cells
+        _env_window_counts(sim.known, learners, sim.world.poses, True, self._cells, self._window, self._before)
+        seen0 = sim.tracker.seen_free_cells  # (row, col) before the move: the window covers the moved scan
         sim.move_and_scan(state)
-        _env_window_counts(sim.known, learners, self._cells, self._window, self._after)
-        new = self._after - self._before
-        self._own_new += new
-        self._known += new
-        self._team_new += sim.tracker.seen_free_cells - seen0
+        _env_window_counts(sim.known, learners, sim.world.poses, False, self._cells, self._window, self._after)
+        team = sim.tracker.seen_free_cells - seen0
+        self._team_new += team
         stop = sim.communicate(state)
         self._ticks += 1
-        self._began |= state.began[learners]
-        delivered = False
+        _env_tick(self._before, self._after, state.began, learners, self._own_new, self._known, self._began,
+                  self.rewards, reward.own * CELL_AREA_M2, reward.team * CELL_AREA_M2 * team - reward.time_penalty,
+                  reward.collision_penalty)
+        inboxes = state.inboxes
+        if any(inboxes):
+            self._received(inboxes)
+        return stop
+
+    def _received(self, inboxes: list[list[Any]]) -> None:
+        """Count the learners' deliveries of the tick; merged maps: recount each receiver's whole map."""
         for l, robot in enumerate(self.learners):
-            inbox = state.inboxes[robot]
+            inbox = inboxes[robot]
             if inbox:
-                delivered = True
                 self._msgs[l] += len(inbox)
                 self._bytes[l] += sum(len(env.data) for env in inbox)
                 self._updates[l] += sum(isinstance(env.message, MapUpdate) for env in inbox)
-                self._last_contact[l] = state.tick
-        if delivered:  # merged maps: recount the whole of each learner's map
-            self._known[:] = np.count_nonzero(sim.known[learners].reshape(len(learners), -1), axis=1)
-        if reward.own:
-            self.rewards += (reward.own * CELL_AREA_M2) * new
-        self.rewards += reward.team * CELL_AREA_M2 * (sim.tracker.seen_free_cells - seen0) - reward.time_penalty
-        if reward.collision_penalty:
-            self.rewards -= reward.collision_penalty * state.began[learners]
-        return stop
+                self._last_contact[l] = self.state.tick
+                self._known[l] = np.count_nonzero(self.sim.known[robot])
 
     def _features(self) -> None:
-        """The observation arrays of every learner for the current tick."""
+        """The observation arrays of every learner for the current tick, fresh arrays each step (handed out
+        as views: an observation is never overwritten later)."""
         sim, state, learners = self.sim, self.state, self._learners
+        cfg = self.config
+        lcount, side = len(self.learners), cfg.crop_cells
         poses = sim.world.poses
-        h, w = sim.truth.shape
-        cells = np.empty((self.n, 2), dtype=np.int64)
-        cells[:, 0] = np.clip((poses[:, 1] / 0.5).astype(np.int64), 0, h - 1)
-        cells[:, 1] = np.clip((poses[:, 0] / 0.5).astype(np.int64), 0, w - 1)
-        _env_observe(sim.known, cells, learners, self.half, 4.0, self.crop, self.choices, self.goals)
-        mine = poses[learners]
-        pose = self.pose
-        pose[:, 0] = mine[:, 0] / sim.truth.width_m * 2.0 - 1.0
-        pose[:, 1] = mine[:, 1] / sim.truth.height_m * 2.0 - 1.0
-        pose[:, 2] = np.cos(mine[:, 2])
-        pose[:, 3] = np.sin(mine[:, 2])
-        pose[:, 4] = self._began
+        self.crop = np.empty((lcount, side, side), dtype=np.uint8)
+        self.choices = np.empty((lcount, SECTORS, 3), dtype=np.float32)
+        _env_observe(sim.known, poses, learners, self.half, 4.0, self.crop, self.choices, self.goals)
         navs = sim.navigators
-        for l, robot in enumerate(self.learners):
-            st = navs[robot].state
-            pose[l, 5] = st in ("moving", "planning")
-            pose[l, 6] = st in ("unreachable", "blocked")
-        pose[:, 7] = self._known / self._map_cells
-        pose[:, 8] = min(state.tick / sim.spec.stop.max_ticks, 1.0)
-        self._neighbour_features(poses)
-        others = max(self.n - 1, 1)
-        self.inbox[:, 0] = np.minimum(self._msgs / (others * max(self._ticks, 1)), 1.0)
-        self.inbox[:, 1] = np.minimum(self._updates / (others * max(self._ticks, 1)), 1.0)
-        self.inbox[:, 2] = np.minimum(np.log1p(self._bytes) / _LOG_BYTES, 1.0)
-        since = np.where(self._last_contact < 0, _CONTACT_TICKS, state.tick - self._last_contact)
-        self.inbox[:, 3] = np.minimum(since / _CONTACT_TICKS, 1.0)
-
-    def _neighbour_features(self, poses: np.ndarray) -> None:
-        if self.n == 1:
-            return
-        links = self.state.links
-        link = links.link[self._learners[:, None], self._others]          # does j reach i
-        rssi = links.rssi[self._learners[:, None], self._others]
-        margin = rssi - self._sensitivity[self._learners][:, None]
-        m = self.config.margin_db
-        shown = np.ones_like(link) if self.config.observe_all else link
-        out = self.neighbours
-        out[:, :, 0] = link
-        out[:, :, 1] = np.where(shown, (poses[self._others, 0] - poses[self._learners, 0][:, None]) * self._scale, 0.0)
-        out[:, :, 2] = np.where(shown, (poses[self._others, 1] - poses[self._learners, 1][:, None]) * self._scale, 0.0)
-        out[:, :, 3] = np.where(shown, np.clip(np.nan_to_num(margin, nan=-m, neginf=-m, posinf=m), -m, m) / m, 0.0)
+        states = [navs[robot].state for robot in self.learners]
+        moving = np.array([st == "moving" or st == "planning" for st in states])
+        failed = np.array([st == "unreachable" or st == "blocked" for st in states])
+        self.pose = np.empty((lcount, len(POSE_FIELDS)), dtype=np.float32)
+        self.inbox = np.empty((lcount, len(INBOX_FIELDS)), dtype=np.float32)
+        _env_vectors(poses, learners, sim.truth.width_m, sim.truth.height_m, self._began, moving, failed, self._known,
+                     self._map_cells, min(state.tick / sim.spec.stop.max_ticks, 1.0), self._msgs, self._updates,
+                     self._bytes, self._last_contact, state.tick, 1.0 / (max(self.n - 1, 1) * max(self._ticks, 1)),
+                     _LOG_BYTES, _CONTACT_TICKS, self.pose, self.inbox)
+        self.neighbours = np.zeros((lcount, max(self.n - 1, 1), len(NEIGHBOUR_FIELDS)), dtype=np.float32)
+        if self.n > 1:
+            links = state.links
+            _env_neighbours(poses, links.link, links.rssi, self._sensitivity, learners, self._scale,
+                            cfg.margin_db, cfg.observe_all, self.neighbours)
+        if cfg.action == "goal":
+            masks = self.masks = np.ones((lcount, cfg.n_actions), dtype=np.int8)
+            masks[:, 1:1 + SECTORS] = self.choices[:, :, 0] > 0
 
     # ------------------------------------------------------------------------------ outputs ----
     def observation(self, l: int) -> dict[str, np.ndarray]:
-        """Learner slot ``l``'s observation (copies: the arrays are reused next step)."""
-        obs = {"map": self.crop[l].copy(), "pose": self.pose[l].copy(), "neighbours": self.neighbours[l].copy(),
-               "inbox": self.inbox[l].copy()}
+        """Learner slot ``l``'s observation (views of this step's arrays, which no later step writes)."""
+        obs = {"map": self.crop[l], "pose": self.pose[l], "neighbours": self.neighbours[l], "inbox": self.inbox[l]}
         if self.config.action == "goal":
-            obs["choices"] = self.choices[l].copy()
+            obs["choices"] = self.choices[l]
         return obs
 
     def action_mask(self, l: int) -> np.ndarray:
-        """Goal mode: which actions do something now (keep, sectors with a frontier, delegate)."""
-        mask = np.ones(self.config.n_actions, dtype=np.int8)
-        mask[1:1 + SECTORS] = self.choices[l, :, 0] > 0
-        return mask
+        """Goal mode: which actions do something now (keep, sectors with a frontier, delegate if on)."""
+        return self.masks[l]
 
     @property
     def truncated(self) -> bool:

@@ -80,15 +80,14 @@ class SwarmParallelEnv(ParallelEnv):
         return {a: self.core.observation(l) for l, a in enumerate(self.possible_agents)}
 
     def _infos(self) -> dict[str, dict[str, Any]]:
-        shared = self.core.info()
-        goal = self.core.config.action == "goal"
-        out = {}
-        for l, a in enumerate(self.possible_agents):
-            info = dict(shared)
-            if goal:
-                info["action_mask"] = self.core.action_mask(l)
-            out[a] = info
-        return out
+        """The run's tick, explored fraction and stop reason, and (goal mode) each agent's action mask."""
+        core = self.core
+        tick, explored, reason = core.info().values()
+        if core.config.action != "goal":
+            return {a: {"tick": tick, "explored": explored, "stop_reason": reason} for a in self.possible_agents}
+        masks = core.masks
+        return {a: {"tick": tick, "explored": explored, "stop_reason": reason, "action_mask": masks[l]}
+                for l, a in enumerate(self.possible_agents)}
 
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array" or self.core.sim is None:
