@@ -25,6 +25,7 @@ import pandas as pd
 from maps.errors import InvalidInput, shorten
 
 from ..schema import RUNS
+from .executors import DaskExecutor
 from .limits import MAX_RUNS
 from .spec import CampaignSpec, load_campaign, parse_campaign
 
@@ -90,14 +91,16 @@ def quick_spec_path() -> Path:
     return Path(str(files("swarm.campaign") / "examples" / "quick.toml"))
 
 
-def run(spec: Any, out: str | os.PathLike[str], *, workers: int | None = None, dask: str | None = None,
+def run(spec: Any, out: str | os.PathLike[str], *, workers: int | None = None, dask: Any = None,
         inline: bool = False, shard: str | None = None, retry_failed: bool = False, max_runs: int = MAX_RUNS,
         flush_runs: int = 20, progress: bool = False) -> CampaignResults:
     """Run every run of ``spec`` that ``out`` does not hold yet, as ``swarm campaign run SPEC -o OUT``.
 
     ``spec``: a campaign TOML path, TOML text, a mapping of its tables, a :class:`CampaignSpec`, or
     ``"quick"`` for the built-in quick campaign. ``workers``: processes (default one per core); ``dask``:
-    ``"local"`` or a scheduler address (``tcp://host:8786``); ``inline``: in this process; ``shard``:
+    ``"local"``, a scheduler address (``tls://host:8786``, secured by Dask's ``distributed.comm.tls``
+    settings) or a live ``distributed.Client`` or cluster object (e.g. dask-jobqueue's ``SLURMCluster``,
+    whose own security then applies); ``inline``: in this process; ``shard``:
     ``"i/N"``; ``retry_failed``: run failed runs again; ``flush_runs``: runs per Parquet part. Re-running
     resumes, and every executor gives the same rows (but ``swarm.schema.NONDETERMINISTIC_COLUMNS``).
     """
@@ -106,20 +109,51 @@ def run(spec: Any, out: str | os.PathLike[str], *, workers: int | None = None, d
 
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= 1024):
         raise InvalidInput("--workers", workers, "an integer from 1 to 1024")
-    if inline and (dask or workers):
+    if inline and (dask is not None or workers):
         raise InvalidInput("--inline", True, "not together with --workers or --dask")
     if isinstance(flush_runs, bool) or not isinstance(flush_runs, int) or not 1 <= flush_runs <= 100_000:
         raise InvalidInput("--part-size", flush_runs, "an integer from 1 to 100000")
     if out is None:
         raise InvalidInput("-o", None, "a results folder for this campaign")
     shard_t = parse_shard(shard)
-    if dask is not None:
+    if isinstance(dask, str):
         check_dask_address(dask)
-    campaign = campaign_spec(quick_spec_path() if spec == "quick" else spec, max_runs=max_runs)
-    outcome = run_campaign(campaign, out, executor=lambda: make_executor(workers=workers, dask=dask, inline=inline),
-                           shard=shard_t, retry_failed=retry_failed, progress=progress, flush_runs=flush_runs)
+        make = lambda: make_executor(workers=workers, dask=dask, inline=inline)  # noqa: E731
+    elif dask is not None:
+        make = lambda: ClientExecutor(dask, workers)  # noqa: E731
+    else:
+        make = lambda: make_executor(workers=workers, inline=inline)  # noqa: E731
+    campaign = campaign_spec(quick_spec_path() if isinstance(spec, str) and spec == "quick" else spec,
+                             max_runs=max_runs)
+    outcome = run_campaign(campaign, out, executor=make, shard=shard_t, retry_failed=retry_failed, progress=progress,
+                           flush_runs=flush_runs)
     return CampaignResults(folder=Path(out), total=outcome.total, skipped=outcome.skipped, ran=outcome.ran,
                            failed=outcome.failed, wall_s=outcome.wall_s)
+
+
+class ClientExecutor(DaskExecutor):
+    """A :class:`DaskExecutor` on a Dask client or cluster the caller holds (``dask=client`` or
+    ``dask=SLURMCluster(...)``): runs are submitted through it, and only a client made here is closed."""
+
+    def __init__(self, target: Any, workers: int | None = None) -> None:  # noqa: D107 (not DaskExecutor's)
+        try:
+            from distributed import Client
+        except ImportError:
+            raise InvalidInput("dask", type(target).__name__, "an installed Dask (pip install distributed)") from None
+        self.cluster = None
+        self._own = not isinstance(target, Client)
+        if self._own:
+            if not hasattr(target, "scheduler_address"):
+                raise InvalidInput("dask", type(target).__name__, "'local', a scheduler address, a distributed.Client "
+                                                                 "or a Dask cluster object")
+            target = Client(target, set_as_default=False)
+        self.client = target
+        self.name = f"dask:{self.client.scheduler.address}"
+        self.window = max(2 * (workers or 0), 2 * len(self.client.scheduler_info().get("workers", {})) or 2)
+
+    def close(self) -> None:
+        if self._own:
+            self.client.close()
 
 
 def _store(folder: str | os.PathLike[str]) -> Any:
@@ -161,4 +195,4 @@ def load_timeseries(folder: str | os.PathLike[str], keys: Any = None, labels: bo
     return frame.sort_values(["key", "tick"], kind="stable").reset_index(drop=True)
 
 
-__all__ = ["CampaignResults", "LABELS", "campaign_spec", "load", "load_timeseries", "run"]
+__all__ = ["CampaignResults", "ClientExecutor", "LABELS", "campaign_spec", "load", "load_timeseries", "run"]
