@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import functools
 from typing import Any
 
 import numpy as np
@@ -44,11 +43,10 @@ class SwarmParallelEnv(ParallelEnv):
         self._action_space = action_space(self.core)
         self._rng: np.random.Generator | None = None
 
-    @functools.lru_cache(maxsize=None)
     def observation_space(self, agent: str) -> Any:
+        """The same ``Dict`` space for every agent (swarm.env.spaces.observation_space)."""
         return self._observation_space
 
-    @functools.lru_cache(maxsize=None)
     def action_space(self, agent: str) -> Any:
         return self._action_space
 
@@ -82,7 +80,8 @@ class SwarmParallelEnv(ParallelEnv):
     def _infos(self) -> dict[str, dict[str, Any]]:
         """The run's tick, explored fraction and stop reason, and (goal mode) each agent's action mask."""
         core = self.core
-        tick, explored, reason = core.info().values()
+        shared = core.info()
+        tick, explored, reason = shared["tick"], shared["explored"], shared["stop_reason"]
         if core.config.action != "goal":
             return {a: {"tick": tick, "explored": explored, "stop_reason": reason} for a in self.possible_agents}
         masks = core.masks
