@@ -73,23 +73,6 @@ def flag_overrides(flags: Mapping[str, Any]) -> dict[str, Any]:
     return over
 
 
-def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tuple[str, ...],
-                       algorithm_params: tuple[str, ...], map_params: tuple[str, ...]) -> dict[str, Any]:
-    """``swarm run``'s spec as a mapping: the ``--spec`` file, then flags that were given, then ``--set``."""
-    from .cli.options import parse_params
-
-    data: dict[str, Any] = load_spec_file(spec_file) if spec_file else {}
-    over = flag_overrides(flags)
-    if algorithm_params:
-        over.setdefault("algorithm", {})["params"] = parse_params(algorithm_params)
-    if map_params:
-        over.setdefault("map", {})["params"] = parse_params(map_params, "--map-param")
-    data = merge(data, over)
-    if sets:
-        data = merge(data, parse_params(sets, "--set"))
-    return data
-
-
 def looks_like_toml(text: str) -> bool:
     """A string argument is TOML text when it holds a newline or an ``=``; else it is a file path."""
     return "\n" in text or "=" in text
@@ -157,5 +140,4 @@ def _table(key: str, value: Any) -> dict[str, Any]:
     return dict(value)
 
 
-__all__ = ["FLAG_FIELDS", "KEYWORDS", "SECTIONS", "build_spec_mapping", "flag_overrides", "load_spec_file", "merge",
-           "resolve", "spec_source"]
+__all__ = ["FLAG_FIELDS", "KEYWORDS", "SECTIONS", "flag_overrides", "load_spec_file", "merge", "resolve", "spec_source"]

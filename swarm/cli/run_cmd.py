@@ -14,7 +14,23 @@ from maps.errors import InvalidInput
 from . import cli
 from .checks import FiniteSeconds, check_output_path, write_failed
 from .options import parse_params
-from ..spec_input import build_spec_mapping, load_spec_file  # noqa: F401  (load_spec_file: re-exported)
+from ..spec_input import flag_overrides, load_spec_file, merge
+
+
+def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tuple[str, ...],
+                       algorithm_params: tuple[str, ...], map_params: tuple[str, ...]) -> dict[str, Any]:
+    """The run spec as a mapping: the ``--spec`` file, then flags that were given, then ``--set``
+    (:mod:`swarm.spec_input` reads the file and the flags as :func:`swarm.run` reads its arguments)."""
+    data: dict[str, Any] = load_spec_file(spec_file) if spec_file else {}
+    over = flag_overrides(flags)
+    if algorithm_params:
+        over.setdefault("algorithm", {})["params"] = parse_params(algorithm_params)
+    if map_params:
+        over.setdefault("map", {})["params"] = parse_params(map_params, "--map-param")
+    data = merge(data, over)
+    if sets:
+        data = merge(data, parse_params(sets, "--set"))
+    return data
 
 
 @cli.command("run")
