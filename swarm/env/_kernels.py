@@ -94,30 +94,6 @@ def _env_observe(known: np.ndarray, poses: np.ndarray, learners: np.ndarray, hal
 
 
 @njit(cache=True)
-def _env_window_counts(known: np.ndarray, learners: np.ndarray, poses: np.ndarray, set_cells: bool, cells: np.ndarray,
-                       radius: int, out: np.ndarray) -> None:  # pragma: no cover - compiled
-    """``out[l]``: known (not UNSEEN) cells of robot ``learners[l]``'s map within ``radius`` cells (a square)
-    of ``cells[l]`` = (row, col); with ``set_cells`` the cells are first set to the robots' pose cells."""
-    h = known.shape[1]
-    w = known.shape[2]
-    for l in range(learners.shape[0]):
-        r = learners[l]
-        if set_cells:
-            cells[l, 0] = int(poses[r, 1] * 2.0)
-            cells[l, 1] = int(poses[r, 0] * 2.0)
-        r0 = max(cells[l, 0] - radius, 0)
-        r1 = min(cells[l, 0] + radius + 1, h)
-        c0 = max(cells[l, 1] - radius, 0)
-        c1 = min(cells[l, 1] + radius + 1, w)
-        n = 0
-        for rr in range(r0, r1):
-            for cc in range(c0, c1):
-                if known[r, rr, cc] != UNSEEN:
-                    n += 1
-        out[l] = n
-
-
-@njit(cache=True)
 def _env_neighbours(poses: np.ndarray, link: np.ndarray, rssi: np.ndarray, sensitivity: np.ndarray,
                     learners: np.ndarray, scale: float, margin_db: float, observe_all: bool,
                     out: np.ndarray) -> None:  # pragma: no cover - compiled
@@ -152,16 +128,52 @@ def _env_neighbours(poses: np.ndarray, link: np.ndarray, rssi: np.ndarray, sensi
 
 
 @njit(cache=True)
-def _env_tick(before: np.ndarray, after: np.ndarray, began: np.ndarray, learners: np.ndarray, own_new: np.ndarray,
-              known_count: np.ndarray, began_any: np.ndarray, rewards: np.ndarray, own_weight: float, shared: float,
-              collision_penalty: float) -> None:  # pragma: no cover - compiled
-    """One tick's bookkeeping per learner: cells its lidar revealed (``after - before``), contacts begun, and
-    the reward: ``own_weight`` per revealed cell + ``shared`` (team area and time) - the collision penalty."""
+def _window_count(known: np.ndarray, r: int, row: int, col: int, radius: int) -> int:  # pragma: no cover - compiled
+    """Known (not UNSEEN) cells of robot ``r``'s map within ``radius`` cells (a square) of (row, col)."""
+    h = known.shape[1]
+    w = known.shape[2]
+    n = 0
+    for rr in range(max(row - radius, 0), min(row + radius + 1, h)):
+        for cc in range(max(col - radius, 0), min(col + radius + 1, w)):
+            if known[r, rr, cc] != UNSEEN:
+                n += 1
+    return n
+
+
+@njit(cache=True)
+def _env_before(known: np.ndarray, learners: np.ndarray, poses: np.ndarray, cells: np.ndarray, valid: np.ndarray,
+                radius: int, before: np.ndarray, after: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Before a tick's scan: ``before[l]``, the known cells of learner ``l``'s map in the window around its
+    pose's cell, which becomes ``cells[l]``. When the robot is still in the cell of the last count and
+    nothing was merged into its map since (``valid[l]``), that count (``after[l]``) is reused."""
     for l in range(learners.shape[0]):
+        r = learners[l]
+        row = int(poses[r, 1] * 2.0)
+        col = int(poses[r, 0] * 2.0)
+        if valid[l] and row == cells[l, 0] and col == cells[l, 1]:
+            before[l] = after[l]
+            continue
+        cells[l, 0] = row
+        cells[l, 1] = col
+        before[l] = _window_count(known, r, row, col, radius)
+
+
+@njit(cache=True)
+def _env_after(known: np.ndarray, learners: np.ndarray, cells: np.ndarray, valid: np.ndarray, radius: int,
+               before: np.ndarray, after: np.ndarray, began: np.ndarray, own_new: np.ndarray, known_count: np.ndarray,
+               began_any: np.ndarray, rewards: np.ndarray, own_weight: float, shared: float,
+               collision_penalty: float) -> None:  # pragma: no cover - compiled
+    """After the scan: per learner the cells its lidar revealed (``after - before`` over the same window),
+    contacts begun, and the tick's reward: ``own_weight`` per revealed cell + ``shared`` (team area and
+    time) - the collision penalty. The window count is then valid until a merge."""
+    for l in range(learners.shape[0]):
+        r = learners[l]
+        after[l] = _window_count(known, r, cells[l, 0], cells[l, 1], radius)
+        valid[l] = True
         new = after[l] - before[l]
         own_new[l] += new
         known_count[l] += new
-        hit = began[learners[l]]
+        hit = began[r]
         if hit:
             began_any[l] = True
         rewards[l] += own_weight * new + shared - (collision_penalty if hit else 0.0)

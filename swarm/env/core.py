@@ -28,7 +28,7 @@ from ..result import RunResult
 from ..simulation import Simulation
 from ..spec import RunSpec
 from ..transport.inprocess import InProcessHost, check_action, observations
-from ._kernels import _env_neighbours, _env_observe, _env_tick, _env_vectors, _env_window_counts
+from ._kernels import _env_after, _env_before, _env_neighbours, _env_observe, _env_vectors
 from .config import SECTORS, EnvConfig
 
 CELL_AREA_M2 = 0.25
@@ -80,6 +80,7 @@ class ExplorationCore:
         self._before = np.zeros(lcount, dtype=np.int64)
         self._after = np.zeros(lcount, dtype=np.int64)
         self._cells = np.zeros((lcount, 2), dtype=np.int64)
+        self._valid = np.zeros(lcount, dtype=np.bool_)
         self.sim: Simulation | None = None
         self.done = True
 
@@ -101,6 +102,7 @@ class ExplorationCore:
         self._sensitivity = sim.links.config.sensitivity_array(self.n)
         self._known = np.zeros(len(self.learners), dtype=np.int64)
         self._last_contact = np.full(len(self.learners), -1, dtype=np.int64)
+        self._valid[:] = False
         self._start_accumulators()
         self.done = self._sense()
         self._known[:] = np.count_nonzero(sim.known[self._learners].reshape(len(self.learners), -1), axis=1)
@@ -196,17 +198,18 @@ class ExplorationCore:
         revealed to it (before maps merged from others arrive) and what it received; True when the run stops."""
         sim, state, learners = self.sim, self.state, self._learners
         reward = self.config.reward
-        _env_window_counts(sim.known, learners, sim.world.poses, True, self._cells, self._window, self._before)
-        seen0 = sim.tracker.seen_free_cells  # (row, col) before the move: the window covers the moved scan
+        # the window around each robot's cell before the move covers what the moved robot's scan writes
+        _env_before(sim.known, learners, sim.world.poses, self._cells, self._valid, self._window, self._before,
+                    self._after)
+        seen0 = sim.tracker.seen_free_cells
         sim.move_and_scan(state)
-        _env_window_counts(sim.known, learners, sim.world.poses, False, self._cells, self._window, self._after)
         team = sim.tracker.seen_free_cells - seen0
         self._team_new += team
+        _env_after(sim.known, learners, self._cells, self._valid, self._window, self._before, self._after, state.began,
+                   self._own_new, self._known, self._began, self.rewards, reward.own * CELL_AREA_M2,
+                   reward.team * CELL_AREA_M2 * team - reward.time_penalty, reward.collision_penalty)
         stop = sim.communicate(state)
         self._ticks += 1
-        _env_tick(self._before, self._after, state.began, learners, self._own_new, self._known, self._began,
-                  self.rewards, reward.own * CELL_AREA_M2, reward.team * CELL_AREA_M2 * team - reward.time_penalty,
-                  reward.collision_penalty)
         inboxes = state.inboxes
         if any(inboxes):
             self._received(inboxes)
@@ -222,6 +225,7 @@ class ExplorationCore:
                 self._updates[l] += sum(isinstance(env.message, MapUpdate) for env in inbox)
                 self._last_contact[l] = self.state.tick
                 self._known[l] = np.count_nonzero(self.sim.known[robot])
+                self._valid[l] = False  # a merge may have filled its window
 
     def _features(self) -> None:
         """The observation arrays of every learner for the current tick, fresh arrays each step (handed out

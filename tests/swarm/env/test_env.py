@@ -239,6 +239,10 @@ def test_inbox_counts_map_updates_received():
         seen.append(obs["robot_0"]["inbox"].copy())
     assert any(v[1] > 0 and v[0] >= v[1] and v[2] > 0 for v in seen), "map updates arrive under global radio"
     assert min(v[3] for v in seen[2:]) < 0.05, "contact is recent"
+    known = env.core.sim.known
+    cells = known.shape[1] * known.shape[2]
+    for l in range(2):  # the known share follows lidar and merges exactly
+        assert obs[f"robot_{l}"]["pose"][7] == np.float32(np.count_nonzero(known[l]) / cells)
 
 
 # ----------------------------------------------------------------------------------------- rewards ----
