@@ -10,6 +10,8 @@ from numba import njit
 
 UNSEEN, FREE, OUTSIDE = 0, 1, 3
 """Crop values: the knowledge map's UNSEEN / FREE / SOLID (0, 1, 2), and 3 for cells outside the map."""
+NAV_IDLE, NAV_MOVING, NAV_FAILED = 0, 1, 2
+"""A navigator's state as the pose vector needs it: idle or reached, driving to a goal, goal unreachable."""
 
 
 TAN_22_5 = 0.41421356237309503
@@ -181,7 +183,7 @@ def _env_after(known: np.ndarray, learners: np.ndarray, cells: np.ndarray, valid
 
 @njit(cache=True)
 def _env_vectors(poses: np.ndarray, learners: np.ndarray, width: float, height: float, began: np.ndarray,
-                 moving: np.ndarray, failed: np.ndarray, known_count: np.ndarray, map_cells: float, time: float,
+                 nav: np.ndarray, known_count: np.ndarray, map_cells: float, time: float,
                  msgs: np.ndarray, updates: np.ndarray, nbytes: np.ndarray, last_contact: np.ndarray, tick: int,
                  per: float, log_bytes: float, contact_ticks: float, pose: np.ndarray,
                  inbox: np.ndarray) -> None:  # pragma: no cover - compiled
@@ -193,8 +195,8 @@ def _env_vectors(poses: np.ndarray, learners: np.ndarray, width: float, height: 
         pose[l, 2] = math.cos(poses[r, 2])
         pose[l, 3] = math.sin(poses[r, 2])
         pose[l, 4] = 1.0 if began[l] else 0.0
-        pose[l, 5] = 1.0 if moving[l] else 0.0
-        pose[l, 6] = 1.0 if failed[l] else 0.0
+        pose[l, 5] = 1.0 if nav[l] == NAV_MOVING else 0.0
+        pose[l, 6] = 1.0 if nav[l] == NAV_FAILED else 0.0
         pose[l, 7] = known_count[l] / map_cells
         pose[l, 8] = time
         inbox[l, 0] = min(msgs[l] * per, 1.0)
@@ -202,3 +204,28 @@ def _env_vectors(poses: np.ndarray, learners: np.ndarray, width: float, height: 
         inbox[l, 2] = min(math.log1p(nbytes[l]) / log_bytes, 1.0)
         since = contact_ticks if last_contact[l] < 0 else tick - last_contact[l]
         inbox[l, 3] = min(since / contact_ticks, 1.0)
+
+
+@njit(cache=True)
+def _env_features(known: np.ndarray, poses: np.ndarray, learners: np.ndarray, half: int, min_goal2: float,
+                  width: float, height: float, began: np.ndarray, nav: np.ndarray, known_count: np.ndarray,
+                  map_cells: float, time: float, msgs: np.ndarray, updates: np.ndarray, nbytes: np.ndarray,
+                  last_contact: np.ndarray, tick: int, per: float, log_bytes: float, contact_ticks: float,
+                  has_links: bool, link: np.ndarray, rssi: np.ndarray, sensitivity: np.ndarray, scale: float,
+                  margin_db: float, observe_all: bool, crop: np.ndarray, choices: np.ndarray, goals: np.ndarray,
+                  pose: np.ndarray, inbox: np.ndarray, neighbours: np.ndarray,
+                  masks: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Every learner's observation in one call: :func:`_env_observe`, :func:`_env_vectors`,
+    :func:`_env_neighbours` (if ``has_links``) and, if ``masks`` has rows, the goal-mode action masks (keep and
+    delegate always, a sector when it has a frontier)."""
+    _env_observe(known, poses, learners, half, min_goal2, crop, choices, goals)
+    _env_vectors(poses, learners, width, height, began, nav, known_count, map_cells, time, msgs, updates, nbytes,
+                 last_contact, tick, per, log_bytes, contact_ticks, pose, inbox)
+    if has_links:
+        _env_neighbours(poses, link, rssi, sensitivity, learners, scale, margin_db, observe_all, neighbours)
+    else:
+        neighbours[:] = 0.0
+    for l in range(masks.shape[0]):
+        masks[l, :] = 1
+        for s in range(8):
+            masks[l, 1 + s] = 1 if choices[l, s, 0] > 0 else 0

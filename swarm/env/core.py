@@ -28,7 +28,7 @@ from ..result import RunResult
 from ..simulation import Simulation
 from ..spec import RunSpec
 from ..transport.inprocess import InProcessHost, check_action, observations
-from ._kernels import _env_after, _env_before, _env_neighbours, _env_observe, _env_vectors
+from ._kernels import NAV_FAILED, NAV_MOVING, _env_after, _env_before, _env_features
 from .config import SECTORS, EnvConfig
 
 CELL_AREA_M2 = 0.25
@@ -46,8 +46,18 @@ INBOX_FIELDS = ("messages", "map_updates", "bytes", "since_contact")
 bytes received (1 = 64 KiB), ticks since anything was last received (1 = a minute or never); each in [0, 1]."""
 KEEP = Action()
 """Keep driving to the current goal (if any)."""
+DELEGATE_INDEX = 1 + SECTORS
+"""Goal mode with ``delegate``: the action that lets the robot's explorer decide."""
 _LOG_BYTES = math.log1p(65536.0)
+_NAV_CODE = {"moving": NAV_MOVING, "planning": NAV_MOVING, "unreachable": NAV_FAILED, "blocked": NAV_FAILED}
 _CONTACT_TICKS = 600.0
+
+
+class _NoLinks:
+    """The radio picture of a one-robot run, for the features kernel (never read)."""
+
+    link = np.zeros((1, 1), dtype=np.bool_)
+    rssi = np.zeros((1, 1))
 
 
 class ExplorationCore:
@@ -63,6 +73,10 @@ class ExplorationCore:
         self._slot = {robot: l for l, robot in enumerate(self.learners)}
         self.scripted = tuple(i for i in range(n) if i not in self._slot)
         self.half = config.crop_cells // 2
+        self._n_actions = config.n_actions
+        self._goal_mode = config.action == "goal"
+        self._others = max(n - 1, 1)
+        self._no_links = _NoLinks()
         lcount = len(self.learners)
         side = config.crop_cells
         self.crop = np.zeros((lcount, side, side), dtype=np.uint8)
@@ -100,6 +114,9 @@ class ExplorationCore:
         self._map_cells = float(sim.truth.shape[0] * sim.truth.shape[1])
         self._scale = 1.0 / max(sim.truth.width_m, sim.truth.height_m)
         self._sensitivity = sim.links.config.sensitivity_array(self.n)
+        self._navs = sim.navigators
+        self._width, self._height = float(sim.truth.width_m), float(sim.truth.height_m)
+        self._per_tick = 1.0 / spec.stop.max_ticks
         self._known = np.zeros(len(self.learners), dtype=np.int64)
         self._last_contact = np.full(len(self.learners), -1, dtype=np.int64)
         self._valid[:] = False
@@ -122,67 +139,69 @@ class ExplorationCore:
         observation arrays hold the step's outcome."""
         if self.sim is None or self.done:
             raise RuntimeError("step() after the episode ended: call reset()")
-        own = self._learner_actions(actions)
+        first, later, asked = self._learner_actions(actions)
         self._start_accumulators()
         for k in range(self.config.ticks_per_step):
-            self.sim.apply(self.state, self._tick_actions(own, first=k == 0))
+            self.sim.apply(self.state, self._tick_actions(first if k == 0 else later, asked))
             if self._sense():
                 self.done = True
                 break
         self._features()
 
-    def _learner_actions(self, actions: Mapping[int, Any]) -> list[Any]:
-        """Each learner's action checked: a goal-mode index, ``"delegate"`` or an Action for velocities."""
-        out: list[Any] = []
-        cfg = self.config
-        for robot in self.learners:
+    def _learner_actions(self, actions: Mapping[int, Any]) -> tuple[list[Action | None], list[Action | None], list[int]]:
+        """The step's actions checked and turned into the runtime's: per robot, the action of the step's first
+        tick and of the later ones (a goal is set once, then kept; a velocity is held), and the robots whose
+        explorer decides (scripted teammates and delegating learners, in id order)."""
+        first: list[Action | None] = [None] * self.n
+        later: list[Action | None] = [None] * self.n
+        asked = list(self.scripted)
+        goal_mode = self.config.action == "goal"
+        n_actions = self._n_actions
+        for l, robot in enumerate(self.learners):
             if robot not in actions:
                 raise InvalidInput("actions", sorted(actions), f"an action for every learning robot ({list(self.learners)})")
             a = actions[robot]
-            if cfg.action == "goal":
-                if type(a) is int and 0 <= a < cfg.n_actions:  # the common case, checked cheaply
-                    out.append("delegate" if a == 1 + SECTORS else a)
+            if goal_mode:
+                if not (type(a) is int and 0 <= a < n_actions):  # the common case is checked cheaply
+                    a = self._index(robot, a)
+                if a == DELEGATE_INDEX:
+                    asked.append(robot)
                     continue
-                try:
-                    index = int(a)
-                except (TypeError, ValueError):
-                    raise InvalidInput(f"actions[{robot}]", a, f"an integer 0..{cfg.n_actions - 1}") from None
-                if index != a or not 0 <= index < cfg.n_actions:
-                    raise InvalidInput(f"actions[{robot}]", a, f"an integer 0..{cfg.n_actions - 1}")
-                out.append("delegate" if index == 1 + SECTORS else index)
+                later[robot] = KEEP
+                row = self.goals[l, a - 1, 0] if a else -1
+                first[robot] = Action(goal=cell_centre(int(row), int(self.goals[l, a - 1, 1]))) if row >= 0 else KEEP
             else:
                 v = np.asarray(a, dtype=np.float64).reshape(-1)
                 if v.shape != (2,) or not np.isfinite(v).all():
                     raise InvalidInput(f"actions[{robot}]", a, "two finite numbers in [-1, 1]: speed, turn rate")
                 v = np.clip(v, -1.0, 1.0)
                 m = self.sim.motion
-                out.append(Action(velocity=(float(v[0]) * m.max_speed, float(v[1]) * m.max_turn_rate)))
-        return out
+                first[robot] = later[robot] = Action(velocity=(float(v[0]) * m.max_speed, float(v[1]) * m.max_turn_rate))
+        asked.sort()
+        return first, later, asked
 
-    def _tick_actions(self, own: list[Any], first: bool) -> list[Action | None]:
-        """The tick's action per robot: scripted robots' (and delegating learners') from their explorers on
-        this tick's observations, the learners' from ``own`` (a goal only at a step's first tick)."""
-        sim = self.sim
-        batch = sim.observe(self.state)
-        acts: list[Action | None] = [None] * self.n
-        asked = list(self.scripted)
-        for l, robot in enumerate(self.learners):
-            a = own[l]
-            if a == "delegate":
-                asked.append(robot)
-            elif isinstance(a, Action):
-                acts[robot] = a
-            elif not first or a == 0:
-                acts[robot] = KEEP
-            else:
-                row, col = self.goals[l, a - 1]
-                acts[robot] = Action(goal=cell_centre(int(row), int(col))) if row >= 0 else KEEP
-        if asked:
-            obs = observations(batch)
-            agents = self.host.agents
-            for robot in sorted(asked):
-                if obs[robot] is not None:
-                    acts[robot] = check_action(agents[robot].act(obs[robot]), robot)
+    def _index(self, robot: int, a: Any) -> int:
+        """A goal-mode action given as another integer type (numpy's), or a one-line error."""
+        try:
+            index = int(a)
+        except (TypeError, ValueError):
+            index = -1
+        if index != a or not 0 <= index < self._n_actions:
+            raise InvalidInput(f"actions[{robot}]", a, f"an integer 0..{self._n_actions - 1}")
+        return index
+
+    def _tick_actions(self, template: list[Action | None], asked: list[int]) -> list[Action | None]:
+        """The tick's action per robot: ``template`` (the learners'), with the explorers' of the robots in
+        ``asked`` decided on this tick's observations, as the in-process transport runs them."""
+        batch = self.sim.observe(self.state)
+        if not asked:
+            return template
+        acts = list(template)
+        obs = observations(batch)
+        agents = self.host.agents
+        for robot in asked:
+            if obs[robot] is not None:
+                acts[robot] = check_action(agents[robot].act(obs[robot]), robot)
         return acts
 
     # ------------------------------------------------------------------------------ sensing ----
@@ -229,32 +248,24 @@ class ExplorationCore:
 
     def _features(self) -> None:
         """The observation arrays of every learner for the current tick, fresh arrays each step (handed out
-        as views: an observation is never overwritten later)."""
+        as views: an observation is never overwritten later), in one compiled call."""
         sim, state, learners = self.sim, self.state, self._learners
-        cfg = self.config
-        lcount, side = len(self.learners), cfg.crop_cells
-        poses = sim.world.poses
+        lcount, side = len(self.learners), self.config.crop_cells
         self.crop = np.empty((lcount, side, side), dtype=np.uint8)
         self.choices = np.empty((lcount, SECTORS, 3), dtype=np.float32)
-        _env_observe(sim.known, poses, learners, self.half, 4.0, self.crop, self.choices, self.goals)
-        navs = sim.navigators
-        states = [navs[robot].state for robot in self.learners]
-        moving = np.array([st == "moving" or st == "planning" for st in states])
-        failed = np.array([st == "unreachable" or st == "blocked" for st in states])
         self.pose = np.empty((lcount, len(POSE_FIELDS)), dtype=np.float32)
         self.inbox = np.empty((lcount, len(INBOX_FIELDS)), dtype=np.float32)
-        _env_vectors(poses, learners, sim.truth.width_m, sim.truth.height_m, self._began, moving, failed, self._known,
-                     self._map_cells, min(state.tick / sim.spec.stop.max_ticks, 1.0), self._msgs, self._updates,
-                     self._bytes, self._last_contact, state.tick, 1.0 / (max(self.n - 1, 1) * max(self._ticks, 1)),
-                     _LOG_BYTES, _CONTACT_TICKS, self.pose, self.inbox)
-        self.neighbours = np.zeros((lcount, max(self.n - 1, 1), len(NEIGHBOUR_FIELDS)), dtype=np.float32)
-        if self.n > 1:
-            links = state.links
-            _env_neighbours(poses, links.link, links.rssi, self._sensitivity, learners, self._scale,
-                            cfg.margin_db, cfg.observe_all, self.neighbours)
-        if cfg.action == "goal":
-            masks = self.masks = np.ones((lcount, cfg.n_actions), dtype=np.int8)
-            masks[:, 1:1 + SECTORS] = self.choices[:, :, 0] > 0
+        self.neighbours = np.empty((lcount, max(self.n - 1, 1), len(NEIGHBOUR_FIELDS)), dtype=np.float32)
+        self.masks = np.empty((lcount if self._goal_mode else 0, self._n_actions), dtype=np.int8)
+        navs = self._navs
+        nav = np.array([_NAV_CODE.get(navs[robot].state, 0) for robot in self.learners], dtype=np.int8)
+        links = state.links.state() if self.n > 1 else self._no_links
+        _env_features(sim.known, sim.world.poses, learners, self.half, 4.0, self._width, self._height, self._began, nav,
+                      self._known, self._map_cells, min(state.tick * self._per_tick, 1.0), self._msgs, self._updates,
+                      self._bytes, self._last_contact, state.tick, 1.0 / (self._others * max(self._ticks, 1)),
+                      _LOG_BYTES, _CONTACT_TICKS, self.n > 1, links.link, links.rssi, self._sensitivity, self._scale,
+                      self.config.margin_db, self.config.observe_all, self.crop, self.choices, self.goals, self.pose,
+                      self.inbox, self.neighbours, self.masks)
 
     # ------------------------------------------------------------------------------ outputs ----
     def observation(self, l: int) -> dict[str, np.ndarray]:
