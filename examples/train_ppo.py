@@ -4,11 +4,11 @@
     python examples/train_ppo.py --timesteps 60000 --out ppo-results
 
 One robot explores a 24 x 24 m building (a new map every episode: the map follows the episode's seed)
-choosing, once a second (``ticks_per_step = 10``), among the goal actions of ``swarm/Explore-v0``: keep its
-goal, or drive to the nearest frontier cell of one of 8 sectors. The reward is the area its lidar
-reveals (m^2, x 0.1). After training, the learned policy, a uniformly random one and the runtime's own
-frontier explorer (the env's ``delegate`` action) each run the same evaluation maps, seeds the training
-never saw. Prints explored fraction after 60 s and ticks to 90 % explored (mean +- standard deviation
+choosing, once a second (``ticks_per_step = 10``), one of 8 sectors of ``swarm/Explore-v0``'s goal
+actions: it drives to the nearest frontier cell there (see ``sector_actions``). It sees the goal choices
+and its pose. The reward is the area its lidar reveals (m^2, x 0.1). After training, the learned policy
+(its most likely action, and sampled), a uniformly random one and the runtime's own frontier explorer (the
+env's ``delegate`` action) each run the same evaluation maps, seeds the training never saw. Prints explored fraction after 60 s and ticks to 90 % explored (mean +- standard deviation
 over the evaluation seeds) and the training wall and CPU time, writes them to OUT/results.json and draws
 OUT/explored.png (mean explored fraction over time, with the spread).
 """
@@ -34,11 +34,45 @@ KEYS = ("choices", "pose")
 into a small network, slows learning more than it informs a one-robot policy)."""
 
 
+def sector_actions(env):
+    """The example's action set: one of the 8 sectors, each step. A sector without a frontier cell becomes
+    the nearest sector (by angle) that has one, so no action is a no-op while any frontier is in view (a
+    deterministic policy that picked a no-op would repeat it for ever); with none in view the robot keeps
+    its goal. Both the learned and the random policy act through it."""
+    import gymnasium as gym
+
+    class SectorActions(gym.ActionWrapper):
+        def __init__(self, inner):
+            super().__init__(inner)
+            self.action_space = gym.spaces.Discrete(8)
+            self._mask = np.ones(9, dtype=np.int8)
+
+        def reset(self, **kwargs):
+            obs, info = self.env.reset(**kwargs)
+            self._mask = info["action_mask"]
+            return obs, info
+
+        def step(self, action):
+            obs, reward, terminated, truncated, info = self.env.step(self.action(action))
+            self._mask = info["action_mask"]
+            return obs, reward, terminated, truncated, info
+
+        def action(self, sector):
+            valid = np.flatnonzero(self._mask[1:9])
+            if valid.size == 0:
+                return 0
+            gap = np.minimum((valid - int(sector)) % 8, (int(sector) - valid) % 8)
+            return 1 + int(valid[np.argmin(gap)])
+
+    return SectorActions(env)
+
+
 def make_env(**extra):
     import gymnasium as gym
     from gymnasium.wrappers import FilterObservation
 
-    return FilterObservation(gym.make("swarm/Explore-v0", **{**ENV, **extra}), list(KEYS))
+    env = FilterObservation(gym.make("swarm/Explore-v0", **{**ENV, **extra}), list(KEYS))
+    return env if extra.get("delegate") else sector_actions(env)
 
 
 def evaluate(policy, seeds: list[int], delegate: bool = False) -> list[dict]:
@@ -118,11 +152,11 @@ def main() -> None:
     model.save(args.out / "ppo_explore")
 
     seeds = [1_000_000 + k for k in range(args.eval_seeds)]  # maps the training never saw
-    n_actions = env.action_space.n
     curves = {
-        "PPO": evaluate(lambda obs, info, rng: int(model.predict(obs, deterministic=True)[0]), seeds),
-        "random": evaluate(lambda obs, info, rng: int(rng.integers(n_actions)), seeds),
-        "frontier explorer": evaluate(lambda obs, info, rng: n_actions, seeds, delegate=True),
+        "PPO (argmax)": evaluate(lambda obs, info, rng: int(model.predict(obs, deterministic=True)[0]), seeds),
+        "PPO (sampled)": evaluate(lambda obs, info, rng: int(model.predict(obs, deterministic=False)[0]), seeds),
+        "random": evaluate(lambda obs, info, rng: int(rng.integers(8)), seeds),
+        "frontier explorer": evaluate(lambda obs, info, rng: 9, seeds, delegate=True),  # the delegate action
     }
     results = {"timesteps": args.timesteps, "train_wall_s": train_s, "train_cpu_s": train_cpu_s, "env": ENV,
                "policies": {name: summary(eps) for name, eps in curves.items()}}

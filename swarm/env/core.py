@@ -108,7 +108,6 @@ class ExplorationCore:
         host = InProcessHost()
         host.start(sim.resets())
         self.sim, self.host, self.state = sim, host, sim.start_state()
-        self._wall = 0.0
         reach = sim._reach + int(math.ceil(sim.motion.max_speed * TICK_S / 0.5)) + 1
         self._window = reach  # the lidar writes within sim._reach of the moved robot
         self._map_cells = float(sim.truth.shape[0] * sim.truth.shape[1])
