@@ -1,7 +1,7 @@
 """A few minutes of PPO in swarm's Gymnasium environment, against a random policy, on small buildings.
 
     pip install 'swarm-sim[rl]' stable-baselines3 torch      # a CPU build of torch is enough
-    python examples/train_ppo.py --timesteps 60000 --out ppo-results
+    python examples/train_ppo.py --timesteps 80000 --out ppo-results
 
 One robot explores a 24 x 24 m building (a new map every episode: the map follows the episode's seed)
 choosing, once a second (``ticks_per_step = 10``), one of 8 sectors of ``swarm/Explore-v0``'s goal
@@ -105,7 +105,15 @@ def summary(episodes: list[dict]) -> dict:
         missed += not hit
     return {"explored_at_60s_mean": float(np.mean(at)), "explored_at_60s_sd": float(np.std(at, ddof=1)),
             "ticks_to_90_mean": float(np.mean(to90)), "ticks_to_90_sd": float(np.std(to90, ddof=1)),
-            "missed_90": missed, "episodes": len(episodes)}
+            "missed_90": missed, "episodes": len(episodes), "explored_at_60s": at}
+
+
+def paired(a: dict, b: dict) -> dict:
+    """Policy a against b on the same maps: mean and standard deviation of the per-map difference of the
+    explored fraction at 60 s, and on how many maps a explored more, less, the same."""
+    d = np.array(a["explored_at_60s"]) - np.array(b["explored_at_60s"])
+    return {"diff_mean": float(d.mean()), "diff_sd": float(d.std(ddof=1)), "more": int((d > 0).sum()),
+            "less": int((d < 0).sum()), "same": int((d == 0).sum())}
 
 
 def plot(curves: dict[str, list[dict]], path: Path) -> None:
@@ -131,10 +139,13 @@ def plot(curves: dict[str, list[dict]], path: Path) -> None:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--timesteps", type=int, default=60_000, help="PPO environment steps (1 s of simulated time each)")
+    ap.add_argument("--timesteps", type=int, default=80_000, help="PPO environment steps (1 s of simulated time each)")
     ap.add_argument("--eval-seeds", type=int, default=20)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, default=Path("ppo-results"))
+    ap.add_argument("--evaluate", type=Path, default=None, metavar="MODEL.zip",
+                    help="evaluate a saved model instead of training one (episodes are deterministic: the same model "
+                         "and seeds give the same figures)")
     args = ap.parse_args()
 
     import torch
@@ -142,31 +153,42 @@ def main() -> None:
 
     torch.set_num_threads(1)  # small networks: one thread is faster and leaves the other core alone
     args.out.mkdir(parents=True, exist_ok=True)
-    env = make_env()
-    env.reset(seed=args.seed)  # training episodes then draw their seeds (maps) from this one
-    model = PPO("MultiInputPolicy", env, n_steps=512, batch_size=64, n_epochs=10, learning_rate=3e-4, gamma=0.95,
-                ent_coef=0.01, seed=args.seed, verbose=0, device="cpu", policy_kwargs={"net_arch": [64, 64]})
-    t0, c0 = time.perf_counter(), time.process_time()
-    model.learn(total_timesteps=args.timesteps)
-    train_s, train_cpu_s = time.perf_counter() - t0, time.process_time() - c0
-    model.save(args.out / "ppo_explore")
+    if args.evaluate is None:
+        env = make_env()
+        env.reset(seed=args.seed)  # training episodes then draw their seeds (maps) from this one
+        model = PPO("MultiInputPolicy", env, n_steps=512, batch_size=64, n_epochs=10, learning_rate=3e-4, gamma=0.95,
+                    ent_coef=0.01, seed=args.seed, verbose=0, device="cpu", policy_kwargs={"net_arch": [64, 64]})
+        t0, c0 = time.perf_counter(), time.process_time()
+        model.learn(total_timesteps=args.timesteps)
+        train_s, train_cpu_s = time.perf_counter() - t0, time.process_time() - c0
+        model.save(args.out / "ppo_explore")
+    else:
+        model, train_s, train_cpu_s = PPO.load(args.evaluate, device="cpu"), None, None
 
     seeds = [1_000_000 + k for k in range(args.eval_seeds)]  # maps the training never saw
-    curves = {
-        "PPO (argmax)": evaluate(lambda obs, info, rng: int(model.predict(obs, deterministic=True)[0]), seeds),
+    curves = {"PPO (argmax)": evaluate(lambda obs, info, rng: int(model.predict(obs, deterministic=True)[0]), seeds)}
+    torch.manual_seed(args.seed)  # the sampled policy draws from torch's generator
+    curves |= {
         "PPO (sampled)": evaluate(lambda obs, info, rng: int(model.predict(obs, deterministic=False)[0]), seeds),
         "random": evaluate(lambda obs, info, rng: int(rng.integers(8)), seeds),
         "frontier explorer": evaluate(lambda obs, info, rng: 9, seeds, delegate=True),  # the delegate action
     }
-    results = {"timesteps": args.timesteps, "train_wall_s": train_s, "train_cpu_s": train_cpu_s, "env": ENV,
-               "policies": {name: summary(eps) for name, eps in curves.items()}}
+    policies = {name: summary(eps) for name, eps in curves.items()}
+    results = {"timesteps": args.timesteps if args.evaluate is None else None, "train_wall_s": train_s,
+               "train_cpu_s": train_cpu_s, "env": ENV, "policies": policies,
+               "paired_vs_random": {name: paired(policies[name], policies["random"])
+                                    for name in policies if name != "random"}}
     (args.out / "results.json").write_text(json.dumps(results, indent=1))
     plot(curves, args.out / "explored.png")
-    print(f"PPO: {args.timesteps} steps in {train_s:.0f} s of training ({train_cpu_s:.0f} s of CPU)")
-    for name, s in results["policies"].items():
+    if train_s is not None:
+        print(f"PPO: {args.timesteps} steps in {train_s:.0f} s of training ({train_cpu_s:.0f} s of CPU)")
+    for name, s in policies.items():
         print(f"{name:18s} explored at 60 s {s['explored_at_60s_mean']:.3f} +- {s['explored_at_60s_sd']:.3f}, "
               f"ticks to 90 % {s['ticks_to_90_mean']:.0f} +- {s['ticks_to_90_sd']:.0f} "
               f"({s['missed_90']} of {s['episodes']} never reached 90 %)")
+    for name, d in results["paired_vs_random"].items():
+        print(f"{name} - random, same maps: {d['diff_mean']:+.3f} +- {d['diff_sd']:.3f} explored at 60 s; "
+              f"more on {d['more']}, less on {d['less']} of {d['more'] + d['less'] + d['same']} maps")
 
 
 if __name__ == "__main__":
