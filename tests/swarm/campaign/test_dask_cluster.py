@@ -76,12 +76,16 @@ class Cluster:
         self.logs = folder
         self.procs: list[subprocess.Popen] = []
         port = self.address.rsplit(":", 1)[1]
-        self._start("scheduler", ["scheduler", "--host", "127.0.0.1", "--port", port, "--protocol", "tls",
-                                  "--no-dashboard", *self.tls])
-        for i in range(2):
-            self._start(f"worker{i}", ["worker", self.address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
-                                       "--name", f"w{i}", "--local-directory", str(folder / f"w{i}"), *self.tls])
-        self.worker_pids = self._wait_for_workers(2, timeout_s=90)
+        try:
+            self._start("scheduler", ["scheduler", "--host", "127.0.0.1", "--port", port, "--protocol", "tls",
+                                      "--no-dashboard", *self.tls])
+            for i in range(2):
+                self._start(f"worker{i}", ["worker", self.address, "--nthreads", "1", "--no-nanny", "--no-dashboard",
+                                           "--name", f"w{i}", "--local-directory", str(folder / f"w{i}"), *self.tls])
+            self.worker_pids = self._wait_for_workers(2, timeout_s=90)
+        except BaseException:
+            self.stop()  # a cluster that did not come up leaves no process behind
+            raise
 
     def _start(self, name: str, args: list[str]) -> None:
         log = open(self.logs / f"{name}.log", "wb")
