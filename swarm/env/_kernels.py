@@ -162,15 +162,16 @@ def _env_before(known: np.ndarray, learners: np.ndarray, poses: np.ndarray, cell
 
 @njit(cache=True)
 def _env_after(known: np.ndarray, learners: np.ndarray, cells: np.ndarray, valid: np.ndarray, radius: int,
-               before: np.ndarray, after: np.ndarray, began: np.ndarray, own_new: np.ndarray, known_count: np.ndarray,
-               began_any: np.ndarray, rewards: np.ndarray, own_weight: float, shared: float,
+               cast: np.ndarray, before: np.ndarray, after: np.ndarray, began: np.ndarray, own_new: np.ndarray,
+               known_count: np.ndarray, began_any: np.ndarray, rewards: np.ndarray, own_weight: float, shared: float,
                collision_penalty: float) -> None:  # pragma: no cover - compiled
-    """After the scan: per learner the cells its lidar revealed (``after - before`` over the same window),
+    """After the scan: per learner the cells its lidar revealed (``after - before`` over the same window; 0
+    without counting for a robot whose rays were not cast, ``cast[r]`` False: its scan wrote nothing),
     contacts begun, and the tick's reward: ``own_weight`` per revealed cell + ``shared`` (team area and
     time) - the collision penalty. The window count is then valid until a merge."""
     for l in range(learners.shape[0]):
         r = learners[l]
-        after[l] = _window_count(known, r, cells[l, 0], cells[l, 1], radius)
+        after[l] = _window_count(known, r, cells[l, 0], cells[l, 1], radius) if cast[r] else before[l]
         valid[l] = True
         new = after[l] - before[l]
         own_new[l] += new

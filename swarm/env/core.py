@@ -86,11 +86,9 @@ class ExplorationCore:
         self.neighbours = np.zeros((lcount, max(n - 1, 1), len(NEIGHBOUR_FIELDS)), dtype=np.float32)
         self.inbox = np.zeros((lcount, len(INBOX_FIELDS)), dtype=np.float32)
         self.rewards = np.zeros(lcount, dtype=np.float64)
-        self._own_new = np.zeros(lcount, dtype=np.int64)
+        self._counters = np.zeros((4, lcount), dtype=np.int64)  # zeroed at once at every step
+        self._own_new, self._msgs, self._updates, self._bytes = self._counters
         self._began = np.zeros(lcount, dtype=np.bool_)
-        self._msgs = np.zeros(lcount, dtype=np.int64)
-        self._updates = np.zeros(lcount, dtype=np.int64)
-        self._bytes = np.zeros(lcount, dtype=np.int64)
         self._before = np.zeros(lcount, dtype=np.int64)
         self._after = np.zeros(lcount, dtype=np.int64)
         self._cells = np.zeros((lcount, 2), dtype=np.int64)
@@ -206,8 +204,9 @@ class ExplorationCore:
     # ------------------------------------------------------------------------------ sensing ----
     def _start_accumulators(self) -> None:
         """Zero what a step sums over its ticks."""
-        for array in (self.rewards, self._own_new, self._began, self._msgs, self._updates, self._bytes):
-            array.fill(0)
+        self.rewards.fill(0.0)
+        self._counters.fill(0)
+        self._began.fill(False)
         self._team_new = 0
         self._ticks = 0
 
@@ -223,9 +222,10 @@ class ExplorationCore:
         sim.move_and_scan(state)
         team = sim.tracker.seen_free_cells - seen0
         self._team_new += team
-        _env_after(sim.known, learners, self._cells, self._valid, self._window, self._before, self._after, state.began,
-                   self._own_new, self._known, self._began, self.rewards, reward.own * CELL_AREA_M2,
-                   reward.team * CELL_AREA_M2 * team - reward.time_penalty, reward.collision_penalty)
+        _env_after(sim.known, learners, self._cells, self._valid, self._window, sim.lidar.cast, self._before,
+                   self._after, state.began, self._own_new, self._known, self._began, self.rewards,
+                   reward.own * CELL_AREA_M2, reward.team * CELL_AREA_M2 * team - reward.time_penalty,
+                   reward.collision_penalty)
         stop = sim.communicate(state)
         self._ticks += 1
         inboxes = state.inboxes

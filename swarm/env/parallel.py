@@ -38,7 +38,8 @@ class SwarmParallelEnv(ParallelEnv):
         self.render_mode = render_mode
         self.possible_agents = [f"robot_{i}" for i in self.core.learners]
         self.agents: list[str] = []
-        self._robot = dict(zip(self.possible_agents, self.core.learners))
+        self._pairs = list(zip(self.possible_agents, self.core.learners))
+        self._agent_set = frozenset(self.possible_agents)
         self._observation_space = observation_space(self.core)
         self._action_space = action_space(self.core)
         self._rng: np.random.Generator | None = None
@@ -59,23 +60,29 @@ class SwarmParallelEnv(ParallelEnv):
     def step(self, actions: dict[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
         if not self.agents:
             raise RuntimeError("step() after every agent is done: call reset()")
-        missing = [a for a in self.agents if a not in actions]
-        if missing:
+        if not actions.keys() >= self._agent_set:
+            missing = [a for a in self.agents if a not in actions]
             raise InvalidInput("actions", sorted(actions), f"an action for every live agent (missing {missing[:4]})")
         core = self.core
-        core.step({self._robot[a]: actions[a] for a in self.agents})
+        core.step({robot: actions[a] for a, robot in self._pairs})
         obs, infos = self._observations(), self._infos()
-        rewards = {a: float(r) for a, r in zip(self.agents, core.rewards.tolist())}
+        rewards = dict(zip(self.agents, core.rewards.tolist()))
         truncated = core.truncated
         terminated = core.done and not truncated
-        terminations = {a: terminated for a in self.agents}
-        truncations = {a: truncated for a in self.agents}
+        terminations = dict.fromkeys(self.agents, terminated)
+        truncations = dict.fromkeys(self.agents, truncated)
         if core.done:
             self.agents = []
         return obs, rewards, terminations, truncations, infos
 
     def _observations(self) -> dict[str, dict[str, np.ndarray]]:
-        return {a: self.core.observation(l) for l, a in enumerate(self.possible_agents)}
+        """Every agent's observation: views of this step's arrays (:meth:`ExplorationCore.observation`)."""
+        core = self.core
+        rows = zip(self.possible_agents, core.crop, core.pose, core.neighbours, core.inbox)
+        if core.config.action != "goal":
+            return {a: {"map": m, "pose": p, "neighbours": n, "inbox": i} for a, m, p, n, i in rows}
+        return {a: {"map": m, "pose": p, "neighbours": n, "inbox": i, "choices": c}
+                for (a, m, p, n, i), c in zip(rows, core.choices)}
 
     def _infos(self) -> dict[str, dict[str, Any]]:
         """The run's tick, explored fraction and stop reason, and (goal mode) each agent's action mask."""
@@ -84,9 +91,8 @@ class SwarmParallelEnv(ParallelEnv):
         tick, explored, reason = shared["tick"], shared["explored"], shared["stop_reason"]
         if core.config.action != "goal":
             return {a: {"tick": tick, "explored": explored, "stop_reason": reason} for a in self.possible_agents}
-        masks = core.masks
-        return {a: {"tick": tick, "explored": explored, "stop_reason": reason, "action_mask": masks[l]}
-                for l, a in enumerate(self.possible_agents)}
+        return {a: {"tick": tick, "explored": explored, "stop_reason": reason, "action_mask": mask}
+                for a, mask in zip(self.possible_agents, core.masks)}
 
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array" or self.core.sim is None:
