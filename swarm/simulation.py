@@ -91,6 +91,27 @@ class TickView:
     sent: list[list[Envelope]] = field(default_factory=list)
 
 
+@dataclass(eq=False)
+class LoopState:
+    """Where a run stands inside its loop: the counters carried from tick to tick and, between
+    :meth:`Simulation.sense` and :meth:`Simulation.apply`, what the current tick sensed."""
+
+    commands: np.ndarray                    # float64[R, 2]: last tick's (v, omega), applied by the next move
+    was_colliding: np.ndarray               # bool[R]: in contact at the last tick
+    tick: int = 0
+    collisions: int = 0                     # contacts begun so far
+    stalled_for: int = 0
+    stop_reason: str = ""
+    poses: Any = None                       # float64[R, 3] of this tick (the world's array: moved in place)
+    collided: Any = None                    # bool[R]: in contact now
+    began: Any = None                       # bool[R]: contacts that began this tick
+    active: Any = None                      # bool[R]: robots not failed
+    links: Any = None                       # the tick's radio picture (evaluated on first use)
+    inboxes: list = field(default_factory=list)
+    merged: list = field(default_factory=list)
+    pose_tuples: list = field(default_factory=list)
+
+
 class Simulation:
     """One run. Construct from a :class:`RunSpec` or a mapping; :meth:`run` once."""
 
@@ -180,53 +201,85 @@ class Simulation:
 
     def _loop(self, host: AgentHost) -> RunResult:
         t0 = time.perf_counter()
+        state = self.start_state()
+        while not self.sense(state):
+            actions = host.act(self.observe(state))
+            self._note_failures(state.tick, host)
+            self.apply(state, actions)
+        return self._result(state.tick, state.stop_reason, state.collisions, time.perf_counter() - t0, host)
+
+    # The loop's body in three steps, so that a stepping driver (:mod:`swarm.env`) runs exactly the ticks
+    # :meth:`run` runs: ``sense`` (steps 1-4 and 8), ``observe`` (the batch for step 5), ``apply`` (6-7).
+    def start_state(self) -> LoopState:
+        """The state before tick 0 (no command yet)."""
+        n = self.spec.robots.count
+        return LoopState(commands=np.zeros((n, 2), dtype=np.float64), was_colliding=np.zeros(n, dtype=bool))
+
+    def sense(self, state: LoopState) -> bool:
+        """Steps 1-4 and 8 of tick ``state.tick``: move (after tick 0), scan, receive, metrics; True when the
+        run stops here (``state.stop_reason`` says why; the tick is recorded, nobody acts)."""
+        self.move_and_scan(state)
+        return self.communicate(state)
+
+    def move_and_scan(self, state: LoopState) -> None:
+        """Steps 1-2: the world moves under last tick's commands (not before tick 0), the lidars write the
+        knowledge maps; contacts begun this tick are counted (``state.began`` per robot)."""
+        if state.tick > 0:
+            self.world.step(state.commands)
+        poses = self.world.poses
+        collided = self.world.collided.copy()
+        began = collided > state.was_colliding  # contacts that began this tick
+        state.collisions += int(np.count_nonzero(began))
+        state.began = began
+        state.was_colliding = collided
+        active = ~self.failed
+        self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker, measure=False)
+        self.sharing.scanned(poses)
+        self.tracker.update_coverage(poses[:, :2], active=active)
+        state.poses, state.collided, state.active = poses, collided, active
+
+    def communicate(self, state: LoopState) -> bool:
+        """Steps 3-4 and 8: the tick's radio picture, inboxes and merges, thresholds, the stop test and the
+        time-series row; True when the run stops at this tick."""
         spec = self.spec
-        n = spec.robots.count
-        commands = np.zeros((n, 2), dtype=np.float64)
-        collisions = 0
-        was_colliding = np.zeros(n, dtype=bool)
-        stalled_for = 0
-        tick = 0
+        tick = state.tick
+        links = _TickLinks(self.links, state.poses[:, :2])
+        state.links = links
+        state.inboxes, state.merged = self._receive(tick, links)
+        explored = self.tracker.explored
+        self.metrics.check_thresholds(tick, explored)
         stop_reason = ""
-        while True:
-            if tick > 0:
-                self.world.step(commands)
-            poses = self.world.poses
-            collided = self.world.collided.copy()
-            collisions += int(np.count_nonzero(collided > was_colliding))  # contacts that began this tick
-            was_colliding = collided
-            active = ~self.failed
-            self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker, measure=False)
-            self.sharing.scanned(poses)
-            self.tracker.update_coverage(poses[:, :2], active=active)
-            links = _TickLinks(self.links, poses[:, :2])
-            inboxes, merged = self._receive(tick, links)
-            explored = self.tracker.explored
-            self.metrics.check_thresholds(tick, explored)
-            if explored >= spec.stop.explored:
-                stop_reason = "explored"
-            elif tick >= spec.stop.max_ticks:
-                stop_reason = "max_ticks"
-            elif stalled_for >= spec.stop.stall_ticks:
-                stop_reason = "stalled"
-            elif np.count_nonzero(active) == 0:  # (ndarray.any() costs ~1 us on 16 flags, this 0.3)
-                stop_reason = "all_failed"
-            if stop_reason or self.metrics.due(tick):
-                self._record(tick, explored, collisions, links)
-            if stop_reason:
-                break
-            pose_tuples = [_pose(Pose, row) for row in poses.tolist()]  # shared by observations and navigation
-            actions = host.act(self._batch(tick, poses, pose_tuples, collided, inboxes, merged))
-            self._note_failures(tick, host)
-            sent = self._send(tick, poses, actions, links)
-            commands = self._commands(actions, poses, pose_tuples)
-            moving = np.count_nonzero(commands) > 0 or any(nav.state in ("moving", "planning") for nav, action
-                                                           in zip(self.navigators, actions) if action is not None)
-            stalled_for = 0 if moving else stalled_for + 1
-            for observer in self.observers:
-                observer(TickView(tick, poses, self.known, self.tracker, actions, links, sent))
-            tick += 1
-        return self._result(tick, stop_reason, collisions, time.perf_counter() - t0, host)
+        if explored >= spec.stop.explored:
+            stop_reason = "explored"
+        elif tick >= spec.stop.max_ticks:
+            stop_reason = "max_ticks"
+        elif state.stalled_for >= spec.stop.stall_ticks:
+            stop_reason = "stalled"
+        elif np.count_nonzero(state.active) == 0:  # (ndarray.any() costs ~1 us on 16 flags, this 0.3)
+            stop_reason = "all_failed"
+        if stop_reason or self.metrics.due(tick):
+            self._record(tick, explored, state.collisions, links)
+        state.stop_reason = stop_reason
+        return bool(stop_reason)
+
+    def observe(self, state: LoopState) -> TickBatch:
+        """Step 5's input: the tick's observations for a host."""
+        state.pose_tuples = [_pose(Pose, row) for row in state.poses.tolist()]  # shared by observations and navigation
+        return self._batch(state.tick, state.poses, state.pose_tuples, state.collided, state.inboxes, state.merged)
+
+    def apply(self, state: LoopState, actions: list[Action | None]) -> None:
+        """Steps 6-7 of tick ``state.tick`` for the robots' ``actions`` (None: no action), then on to the
+        next tick: send, navigate, stall count, observers."""
+        poses = state.poses
+        sent = self._send(state.tick, poses, actions, state.links)
+        commands = self._commands(actions, poses, state.pose_tuples)
+        moving = np.count_nonzero(commands) > 0 or any(nav.state in ("moving", "planning") for nav, action
+                                                       in zip(self.navigators, actions) if action is not None)
+        state.stalled_for = 0 if moving else state.stalled_for + 1
+        for observer in self.observers:
+            observer(TickView(state.tick, poses, self.known, self.tracker, actions, state.links, sent))
+        state.commands = commands
+        state.tick += 1
 
     def _commands(self, actions: list[Action | None], poses: np.ndarray, pose_tuples: list[Pose]) -> np.ndarray:
         """The tick's (v, omega) per robot: an action's velocity, else its navigator's command toward the
@@ -437,7 +490,7 @@ def run(spec: RunSpec | Mapping[str, Any]) -> RunResult:
     return Simulation(spec).run()
 
 
-__all__ = ["Simulation", "TickView", "TransportOptions", "build_map", "run"]
+__all__ = ["LoopState", "Simulation", "TickView", "TransportOptions", "build_map", "run"]
 
 
 class _TickLinks:
