@@ -30,7 +30,7 @@ def execute(task: Task) -> dict[str, Any]:
     """Run one spec; never raises (a failure becomes a result with ``status = "failed"``).
 
     Besides the run's result: its wall and CPU time, the part of it spent in numba's compiler (compiling or
-    loading cached kernels: a worker's first runs), and its start and end on the machine's monotonic clock
+    loading cached kernels: a worker's first runs) and the functions it compiled, and its start and end on the machine's monotonic clock
     (``started``/``ended``: the gaps between a worker's runs are the pool's overhead, see :mod:`.estimate`)."""
     from ..jit import JitWatch
 
@@ -59,6 +59,7 @@ def execute(task: Task) -> dict[str, Any]:
     out["wall_time_s"] = time.perf_counter() - t0
     out["cpu_time_s"] = time.process_time() - c0
     out["jit_time_s"] = watch.seconds
+    out["jit_compiled"] = watch.compiled
     out["started"], out["ended"] = started, time.monotonic()
     out["worker_pid"] = os.getpid()
     out["worker_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0

@@ -43,6 +43,8 @@ class Outcome:
     """Time the warm-up runs spent in numba's compiler (compiling or loading kernels)."""
     startup_s: float = 0.0
     """Time to start the executor (a Dask cluster; a process pool starts its workers lazily)."""
+    executor_started: float | None = None
+    """When the executor was started (``time.monotonic()``; None if every run was a warm-up run)."""
 
     def timing(self) -> str:
         """Where the time went, e.g. ``kernels compiled in 64 s (3 warm-up runs), Dask started in 4 s``."""
@@ -243,7 +245,7 @@ def _execute(spec: CampaignSpec, store: ResultsStore, writer: str, todo: array, 
             _warm_up(spec, first, tasks, take, progress, log, outcome)
             warm.record(warm.stamp_path(), plan.needed)
         if rest:
-            t_start = time.monotonic()
+            t_start = outcome.executor_started = time.monotonic()
             own = executor is None or not hasattr(executor, "run")
             runner: Executor = make_executor() if executor is None else executor() if own else executor  # type: ignore[operator]
             outcome.startup_s = time.monotonic() - t_start

@@ -165,6 +165,59 @@ class _ReportBar:
             self.bar.close()
 
 
+@campaign_group.command("estimate")
+@click.argument("spec_path", metavar="SPEC.toml", type=click.Path(exists=True, dir_okay=False, path_type=Path))
+@click.option("--per-cell", type=click.IntRange(1, 1000), default=2, show_default=True,
+              help="Sample runs per stratum (the campaign's first replicates of its cells).")
+@click.option("--workers", type=click.IntRange(1, 100_000), default=None,
+              help="Workers to predict for (default: one per core); the sample runs on min(this, cores).")
+@click.option("--by", default=None, metavar="DIM,DIM,...",
+              help="Dimensions whose combinations form the strata [default: map,size,robots,algorithm,transport "
+                   "where the grid has them].")
+@click.option("-o", "--output", type=click.Path(file_okay=False, path_type=Path), default=None,
+              help="Write the sample runs into this results folder (the campaign's own -o: it then resumes from "
+                   "them). Default: a temporary folder, deleted.")
+@click.option("--shard", default=None, metavar="i/N|slurm", help="Predict for one shard of the campaign.")
+@click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Also write the estimate as JSON.")
+@click.option("--max-runs", type=click.IntRange(1), default=MAX_RUNS, show_default=True,
+              help="Refuse a campaign of more runs than this.")
+@click.option("--quiet", is_flag=True, help="No progress output.")
+def estimate_cmd(spec_path: Path, per_cell: int, workers: int | None, by: str | None, output: Path | None,
+                 shard: str | None, json_out: Path | None, max_runs: int, quiet: bool) -> None:
+    """Predict the wall time of SPEC.toml from a stratified sample of its runs.
+
+    Runs PER-CELL runs of every stratum (cells grouped by --by), the campaign's own first replicates, and
+    prints the predicted wall time on --workers workers with a 95 % bootstrap interval, the cost by
+    dimension and the slowest strata. See swarm/campaign/estimate.py for the model.
+    """
+    import json
+
+    from ..campaign import load_campaign
+    from ..campaign.estimate import estimate, report_lines
+    from ..campaign.runner import parse_shard
+    from .checks import check_output_path, write_failed
+
+    shard_t = parse_shard(shard)
+    dims = None if by is None else [d.strip() for d in by.split(",") if d.strip()]
+    if json_out is not None:
+        check_output_path("--json", json_out)
+    spec = load_campaign(spec_path, max_runs=max_runs)
+    say = (lambda text: None) if quiet else _note
+    est = estimate(spec, per_cell=per_cell, workers=workers, by=dims, output=output, shard=shard_t,
+                   progress=not quiet, log=say)
+    for line in report_lines(est):
+        click.echo(line)
+    if json_out is not None:
+        from maps.io import atomic_write_bytes
+
+        try:
+            atomic_write_bytes(json_out, json.dumps(est.to_dict(), indent=1).encode())
+        except OSError as exc:
+            raise write_failed("--json", json_out, exc) from None
+        click.echo(f"wrote {json_out}")
+
+
 @campaign_group.command("status")
 @click.argument("folder", metavar="DIR", type=click.Path(exists=True, file_okay=False, path_type=Path))
 def status_cmd(folder: Path) -> None:
