@@ -274,8 +274,11 @@ def _warm_up(spec: CampaignSpec, indices: list[int], tasks: Callable[[Iterable[i
     from .executors import execute
 
     n = len(indices)
-    text = (f"compiling numba kernels once, before the workers start: {n} warm-up run{'s' if n > 1 else ''} "
-            "of the campaign (after an install or an update: about a minute on one core; then cached)")
+    if log:
+        log(f"{n} warm-up run{'s' if n > 1 else ''} in this process first, so that numba compiles the kernels "
+            "this campaign needs once, before the workers start")
+    text = ("compiling numba kernels (after an install or an update: about a minute on one core; then cached "
+            "for every worker and later campaigns)")
     display = CompileProgress(note_text=text, plain=True, desc=f"warm-up run 1/{n}") if progress else None
     watch = display.watch if display is not None else JitWatch()
     t0 = time.monotonic()
