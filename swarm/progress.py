@@ -12,6 +12,7 @@ plain lines, so a slow first item (a compile, a pool starting) does not set the 
 
 from __future__ import annotations
 
+import os
 import sys
 import threading
 import time
@@ -28,6 +29,16 @@ def is_terminal(stream: Any) -> bool:
         return bool(isatty()) if callable(isatty) else False
     except (ValueError, OSError):
         return False
+
+
+def bar_width(stream: Any) -> dict[str, Any]:
+    """tqdm's size arguments for ``stream``: follow the terminal's size, or 100 x 40 when the terminal reports
+    none (a pseudo-terminal nobody sized, e.g. under ``script``: tqdm would draw nothing)."""
+    try:
+        columns, lines = os.get_terminal_size(stream.fileno())
+    except (AttributeError, OSError, ValueError):
+        columns = lines = 0
+    return {"dynamic_ncols": True} if columns > 0 and lines > 0 else {"ncols": columns or 100, "nrows": lines or 40}
 
 
 def clock(seconds: float) -> str:
@@ -94,7 +105,8 @@ class Bar:
                    "{desc}: {n} " + unit + "s [{elapsed}]" if total is None else
                    "{desc}: {percentage:3.0f}%|{bar}| {n_fmt}/{total_fmt} " + unit + "s [{elapsed}{postfix}]")
             self._bar = tqdm(total=total, desc=desc, unit=" " + unit + "s", file=self.stream, initial=initial,
-                             smoothing=SMOOTHING, dynamic_ncols=True, mininterval=0.2, leave=True, bar_format=fmt)
+                             smoothing=SMOOTHING, mininterval=0.2, leave=True, bar_format=fmt,
+                             **bar_width(self.stream))
             if total is not None:
                 self._bar.set_postfix_str(self._status())
             if live:  # redraw every half second although the foreground may not call update for a while

@@ -13,8 +13,12 @@ numba spent compiling (the campaign's own summary line), with the machine's load
 from __future__ import annotations
 
 import argparse
+import fcntl
 import os
 import pty
+import resource
+import struct
+import termios
 import select
 import shutil
 import subprocess
@@ -30,6 +34,12 @@ def load() -> str:
     return " ".join(Path("/proc/loadavg").read_text().split()[:3]) if Path("/proc/loadavg").exists() else "?"
 
 
+def cpu() -> float:
+    """CPU seconds (user + system) of this process's finished children and theirs (a campaign's workers)."""
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
 def timed(argv: list[str], cwd: Path, env: dict[str, str]) -> float:
     t0 = time.monotonic()
     subprocess.run(argv, cwd=cwd, env=env, check=True, stdout=subprocess.DEVNULL, stderr=subprocess.STDOUT)
@@ -40,6 +50,7 @@ def on_terminal(argv: list[str], cwd: Path, env: dict[str, str]) -> tuple[float,
     """Run ``argv`` with stdout and stderr on one pseudo-terminal, as a user would see it: (seconds to the
     first output, total seconds, [(time, line)] of the output; bar redraws kept as separate lines)."""
     master, slave = pty.openpty()
+    fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 40, 110, 0, 0))
     t0 = time.monotonic()
     p = subprocess.Popen(argv, cwd=cwd, env=env, stdout=slave, stderr=slave)
     os.close(slave)
@@ -90,13 +101,16 @@ def main() -> None:
     t = timed([args.python, "-m", "venv", str(work / "venv")], work, env)
     print(f"python -m venv: {t:.1f} s")
     pip = str(work / "venv" / "bin" / "pip")
+    c0 = cpu()
     t = timed([pip, "install", "--quiet", "."], work / "swarm", env)
-    print(f"pip install . (from PyPI, no cache): {t:.0f} s")
+    print(f"pip install . (from PyPI, no cache): {t:.0f} s ({cpu() - c0:.0f} s CPU)")
     run_dir = work / "quick"
     run_dir.mkdir()
     swarm = str(work / "venv" / "bin" / "swarm")
+    c0 = cpu()
     first, total, lines = on_terminal([swarm, "campaign", "run"], run_dir, env)
-    print(f"swarm campaign run (fresh caches): first output after {first:.1f} s, total {total:.0f} s")
+    print(f"swarm campaign run (fresh caches): first output after {first:.1f} s, total {total:.0f} s "
+          f"({cpu() - c0:.0f} s CPU in all its processes)")
     shown = [(t, text) for t, text in lines if not text.startswith(("runs:", "warm-up run", "report:"))]
     bars = [(t, text) for t, text in lines if text.startswith(("runs:", "warm-up run", "report:"))]
     for t, text in shown:
@@ -110,8 +124,10 @@ def main() -> None:
     if args.warm:
         again = work / "quick-again"
         again.mkdir()
+        c0 = cpu()
         first, total, _ = on_terminal([swarm, "campaign", "run"], again, env)
-        print(f"swarm campaign run again (warm caches): first output after {first:.1f} s, total {total:.0f} s")
+        print(f"swarm campaign run again (warm caches): first output after {first:.1f} s, total {total:.0f} s "
+              f"({cpu() - c0:.0f} s CPU)")
     print(f"load average after: {load()}")
     if args.keep is None:
         shutil.rmtree(work, ignore_errors=True)

@@ -281,7 +281,7 @@ def _warm_up(spec: CampaignSpec, indices: list[int], tasks: Callable[[Iterable[i
             "for every worker and later campaigns)")
     display = CompileProgress(note_text=text, plain=True, desc=f"warm-up run 1/{n}") if progress else None
     watch = display.watch if display is not None else JitWatch()
-    t0 = time.monotonic()
+    t0, c0 = time.monotonic(), time.process_time()
     with display if display is not None else watch:
         for k, task in enumerate(tasks(indices)):
             if display is not None:
@@ -290,7 +290,8 @@ def _warm_up(spec: CampaignSpec, indices: list[int], tasks: Callable[[Iterable[i
     outcome.warmup_runs, outcome.compile_s, outcome.warmup_s = n, watch.seconds, time.monotonic() - t0
     if log and watch.compiled:
         log(f"kernels ready: {watch.compiled} functions compiled in {watch.compile_seconds:.0f} s "
-            f"({n} warm-up run{'s' if n > 1 else ''}, {outcome.warmup_s:.0f} s, kept as campaign runs)")
+            f"({n} warm-up run{'s' if n > 1 else ''}: {outcome.warmup_s:.0f} s, {time.process_time() - c0:.0f} s "
+            "of CPU; kept as campaign runs)")
 
 
 def status(folder: str | Path) -> dict[str, Any]:

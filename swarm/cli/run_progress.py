@@ -14,7 +14,7 @@ import time
 from typing import Any, TextIO
 
 from ..jit import JitWatch
-from ..progress import COMPILE_NOTE, clock, is_terminal, note
+from ..progress import COMPILE_NOTE, bar_width, clock, is_terminal, note
 
 PERMILLE = 1000
 
@@ -81,7 +81,7 @@ class RunProgress:
         if self.enabled:
             from tqdm import tqdm
 
-            self._bar = tqdm(total=PERMILLE, file=self.stream, dynamic_ncols=True, leave=True,
+            self._bar = tqdm(total=PERMILLE, file=self.stream, leave=True, **bar_width(self.stream),
                              bar_format="run {percentage:3.0f}%|{bar}| [{elapsed}{postfix}]")
             self._bar.set_postfix_str(self.status(), refresh=False)
             self._thread = threading.Thread(target=self._loop, name="run-progress", daemon=True)
