@@ -1,11 +1,11 @@
 """Predict a campaign's wall time from a stratified sample of its own runs (``swarm campaign estimate``).
 
 **Strata.** The campaign's cells grouped by the dimensions that drive a run's cost (default: map, size,
-robots, algorithm and transport, those the grid has). From each stratum, ``per_cell`` runs: cells of the
-stratum drawn in a seeded random order (from the campaign seed, so radio and spawn are sampled without
-bias), each at replicate 0, then again at replicate 1 if the stratum has fewer cells than ``per_cell``.
-The sample is therefore made of runs of the campaign itself (same specs, same keys) from its first
-replicates: written into the campaign's results folder, they are kept when the campaign runs.
+robots, algorithm and transport, those the grid has). From each stratum, ``per_cell`` runs: run j is
+replicate j (a different map each, the campaign's first replicates 0..k-1) of the stratum's j-th cell in a
+seeded random order (from the campaign seed, so radio and spawn are sampled without bias). The sample is
+therefore made of runs of the campaign itself (same specs, same keys): written into the campaign's results
+folder, they are kept when the campaign runs.
 
 **Cost of a run.** Its wall time in a worker less the time numba spent compiling or loading kernels
 (``jit_time_s``: a worker's start-up, not the run's pace). The sample runs on as many local workers as the
@@ -18,9 +18,10 @@ consecutive runs of one worker: sending a spec, returning a result, committing p
 measured time for a worker to start and run its first run's kernel loading, and ``tail`` the wait for the
 last runs once fewer than ``W`` remain, ``(W - 1) / W`` times the mean cost of the campaign's last ``W``
 runs. The 95 % interval is a percentile bootstrap: runs resampled with replacement within each stratum
-(2,000 resamples), everything else held at its measured value. With 2 runs per stratum the within-stratum
-spread is known poorly; the interval is the sampling uncertainty of this design, not of the machine's
-future load.
+(2,000 resamples, rescaled so that 2 runs per stratum do not halve their variance), everything else held at
+its measured value. With 2 runs per stratum the within-stratum spread is known poorly; the interval is the
+sampling uncertainty of this design, not of the machine's future load (a shared machine whose other work
+changes between the sample and the campaign moves the real time by as much as that work changes).
 """
 
 from __future__ import annotations
@@ -159,10 +160,30 @@ def strata(spec: CampaignSpec, by: Sequence[str], per_cell: int,
     for s in groups.values():
         rng = np.random.default_rng(derive_seed(spec.seed, "estimate", *s.labels))
         order = [s.cells[i] for i in rng.permutation(len(s.cells))]
-        for j in range(min(per_cell, len(order) * reps)):
-            index = order[j % len(order)] * reps + j // len(order)
-            s.sample.append(index)
+        s.sample = [pos * reps + rep for pos, rep in _pairs(order, reps, per_cell)]
     return [s for s in groups.values() if s.runs > 0]
+
+
+def _pairs(order: list[int], reps: int, k: int) -> list[tuple[int, int]]:
+    """``k`` distinct (cell, replicate) pairs: sample j takes replicate j (another map each time, as long as
+    the campaign has replicates) of the cell ``order[j]`` (cells in turn, in their seeded order)."""
+    m = len(order)
+    want = min(k, m * reps)
+    out: list[tuple[int, int]] = []
+    seen: set[tuple[int, int]] = set()
+    for j in range(2 * m * reps):
+        pair = (order[(j + j // reps) % m], j % reps)
+        if pair not in seen:
+            seen.add(pair)
+            out.append(pair)
+            if len(out) == want:
+                return out
+    for rep in range(reps):  # what the interleaving missed, in order
+        for cell in order:
+            if (cell, rep) not in seen and len(out) < want:
+                seen.add((cell, rep))
+                out.append((cell, rep))
+    return out
 
 
 # ------------------------------------------------------------------------------------ estimating ----
@@ -268,17 +289,28 @@ def _tail(spec: CampaignSpec, groups: list[Stratum], runs: list[SampleRun], stra
 
 def _bootstrap(groups: list[Stratum], runs: list[SampleRun], stratum_of: list[int], gap: float, workers: int,
                fixed: float, seed: int) -> tuple[float, float]:
-    """Percentile interval of the prediction, runs resampled with replacement within each stratum."""
+    """Percentile interval of the prediction: runs resampled with replacement within each stratum, the
+    resampled means rescaled by sqrt(k / (k - 1)) (the plain bootstrap of k runs shrinks the variance of
+    their mean by (k - 1) / k: half of it for k = 2). A stratum of one sampled run borrows the median
+    coefficient of variation of the others (normal draws)."""
     rng = np.random.default_rng(seed)
     totals = np.zeros(BOOTSTRAP)
     cost = np.array([r.cost_s for r in runs])
     of = np.array(stratum_of)
+    cvs = [float(np.std(cost[of == k], ddof=1) / max(np.mean(cost[of == k]), 1e-9))
+           for k in range(len(groups)) if (of == k).sum() >= 2]
+    cv = float(np.median(cvs)) if cvs else 0.0
     for k, s in enumerate(groups):
         c = cost[of == k]
         if len(c) == 0:
             continue
-        draws = c[rng.integers(0, len(c), size=(BOOTSTRAP, len(c)))].mean(axis=1)
-        totals += s.runs * (draws + gap)
+        mean = float(c.mean())
+        if len(c) >= 2:
+            draws = c[rng.integers(0, len(c), size=(BOOTSTRAP, len(c)))].mean(axis=1)
+            draws = mean + np.sqrt(len(c) / (len(c) - 1)) * (draws - mean)
+        else:
+            draws = mean + cv * mean * rng.standard_normal(BOOTSTRAP)
+        totals += s.runs * (np.maximum(draws, 0.0) + gap)
     pred = fixed + totals / workers
     alpha = (1 - CONFIDENCE) / 2
     lo, hi = np.quantile(pred, [alpha, 1 - alpha])

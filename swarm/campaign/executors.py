@@ -90,8 +90,14 @@ class InlineExecutor:
         pass
 
 
+def _worker_start() -> None:
+    """A pool worker's start: import the runtime before the first run, so that no run's time includes it."""
+    from .. import simulation  # noqa: F401
+
+
 class PoolExecutor:
-    """A local process pool (``spawn`` start method: no inherited zenoh/numba threads)."""
+    """A local process pool (``spawn`` start method: no inherited zenoh/numba threads). Each worker imports
+    the runtime when it starts, not in its first run."""
 
     shares_cache = True
 
@@ -99,7 +105,7 @@ class PoolExecutor:
         self.name = f"pool:{workers}"
         self.workers = workers
         self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                                        max_tasks_per_child=max_runs_per_worker)
+                                        max_tasks_per_child=max_runs_per_worker, initializer=_worker_start)
 
     def run(self, tasks: Iterable[Task]) -> Iterator[dict[str, Any]]:
         pending: set = set()

@@ -290,9 +290,11 @@ def test_the_estimate_samples_the_campaigns_first_replicates_and_they_are_kept(t
     keys = dict(spec.iter_keys())
     for s in groups:
         runs = [spec.run_at(i) for i in s.sample]
-        assert [r.replicate for r in runs] == [0, 0], "two different cells of the stratum, replicate 0"
-        assert len({r.cell["radio"] for r in runs}) == 2
+        assert [r.replicate for r in runs] == [0, 1], "the campaign's first replicates: two maps"
+        assert len({r.cell["radio"] for r in runs}) == 2, "of two different cells of the stratum"
         assert all(r.key == keys[r.index] for r in runs), "the campaign's own runs"
+    radios = [spec.run_at(s.sample[0]).cell["radio"] for s in groups]
+    assert set(radios) == {"global", "los"}, "a seeded order of the cells, not always the first"
     est = estimate(spec, per_cell=2, workers=2, output=tmp_path / "out", progress=False,
                    by=("map", "size", "robots", "algorithm"))
     sample = sorted(i for s in groups for i in s.sample)
