@@ -126,7 +126,7 @@ class Estimate:
                 "sample_runs": len(self.runs), "new_runs": self.new_runs, "sample_wall_s": self.sample_wall_s,
                 "predicted_s": self.predicted_s, "ci95_s": [self.low_s, self.high_s],
                 "run_worker_hours": self.run_seconds / 3600, "gap_worker_hours": self.gap_seconds / 3600,
-                "cpu_core_hours": self.cpu_seconds / 3600,
+                "cpu_core_hours": self.cpu_seconds / 3600, "idle_machine_lower_bound_s": self.cpu_seconds / self.workers,
                 "gap_s": self.gap_s, "startup_s": self.startup_s, "tail_s": self.tail_s,
                 "by_dimension": {d: dict(v) for d, v in self.by_dimension().items()},
                 "slowest": [{"stratum": dict(zip(self.by, s.labels)), "mean_s": m, "share": sh}
@@ -340,6 +340,8 @@ def report_lines(e: Estimate) -> list[str]:
         f"({1000 * e.gap_s:.0f} ms between runs), + start-up {e.startup_s:.0f} s + last runs {e.tail_s:.0f} s",
         f"  runs' CPU time {hours(e.cpu_seconds)}; their wall time is {ratio:.2f}x that on {e.sample_workers} busy "
         f"workers{' (other load on the machine, or workers waiting for memory)' if ratio > 1.15 else ''}",
+        f"  with no other load on the machine, at least {hours(e.cpu_seconds / e.workers)} (CPU time over the "
+        "workers)",
         "cost by dimension (share of the campaign's run time):",
     ]
     for dim, shares in e.by_dimension().items():
