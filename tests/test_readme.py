@@ -196,7 +196,7 @@ def _argv(command: Command, port: int) -> list[str]:
 
 def _env(ws: Path) -> dict[str, str]:
     return {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
-            "XDG_CACHE_HOME": str(ws / "cache"), "DISPLAY": ""}
+            "SWARM_CACHE_DIR": str(ws / "cache"), "DISPLAY": ""}
 
 
 _background: list[subprocess.Popen] = []
@@ -208,7 +208,7 @@ def test_readme_command_runs_as_written(command, workspace, monkeypatch, capsys)
     if command.text in SKIP:
         pytest.skip(SKIP[command.text])
     monkeypatch.chdir(workspace)
-    monkeypatch.setenv("XDG_CACHE_HOME", str(workspace / "cache"))
+    monkeypatch.setenv("SWARM_CACHE_DIR", str(workspace / "cache"))
     monkeypatch.setenv("DISPLAY", "")
     argv = _argv(command, PORT)
     assert argv[0] == "swarm", f"a README command that is not swarm's needs a SKIP entry: {command.text}"

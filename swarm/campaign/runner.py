@@ -47,10 +47,10 @@ class Outcome:
     """When the executor was started (``time.monotonic()``; None if every run was a warm-up run)."""
 
     def timing(self) -> str:
-        """Where the time went, e.g. ``kernels compiled in 64 s (3 warm-up runs), Dask started in 4 s``."""
+        """Where the time went, e.g. ``kernels compiled in 64 s, in 3 warm-up runs, executor started in 4 s``."""
         parts = []
         if self.warmup_runs and self.compile_s >= 1:
-            parts.append(f"kernels compiled in {self.compile_s:.0f} s ({self.warmup_runs} warm-up runs)")
+            parts.append(f"kernels compiled in {self.compile_s:.0f} s, in {self.warmup_runs} warm-up runs")
         if self.startup_s >= 1:
             parts.append(f"executor started in {self.startup_s:.0f} s")
         return ", ".join(parts)
@@ -279,7 +279,7 @@ def _warm_up(spec: CampaignSpec, indices: list[int], tasks: Callable[[Iterable[i
             "this campaign needs once, before the workers start")
     text = ("compiling numba kernels (after an install or an update: about a minute on one core; then cached "
             "for every worker and later campaigns)")
-    display = CompileProgress(note_text=text, plain=True, desc=f"warm-up run 1/{n}") if progress else None
+    display = CompileProgress(note_text=text, desc=f"warm-up run 1/{n}") if progress else None
     watch = display.watch if display is not None else JitWatch()
     t0, c0 = time.monotonic(), time.process_time()
     with display if display is not None else watch:

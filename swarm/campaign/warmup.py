@@ -94,9 +94,13 @@ def plan(spec: CampaignSpec, todo: Iterable[int], stamp: Path | None = None) -> 
 
 
 # ------------------------------------------------------------------------------------------ stamp ----
+CACHE_ENV = "SWARM_CACHE_DIR"
+"""Folder for the stamp instead of ``$XDG_CACHE_HOME/swarm`` (``~/.cache/swarm``)."""
+
+
 def stamp_path() -> Path:
-    """Where the stamp of this installation lives: the user's cache folder, one file per installed swarm
-    (its package folder), Python and numba version."""
+    """Where the stamp of this installation lives: ``$SWARM_CACHE_DIR``, else the user's cache folder; one
+    file per installed swarm (its package folder), Python and numba version."""
     from importlib.metadata import PackageNotFoundError, version
 
     try:
@@ -105,6 +109,8 @@ def stamp_path() -> Path:
         numba_version = "?"
     here = str(Path(__file__).resolve().parents[2])
     key = hashlib.sha256(f"{here}\0{sys.version}\0{numba_version}".encode()).hexdigest()[:16]
+    if os.environ.get(CACHE_ENV):
+        return Path(os.environ[CACHE_ENV]) / f"kernels-{key}.json"
     base = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
     return base / "swarm" / f"kernels-{key}.json"
 
