@@ -28,7 +28,9 @@ THRESHOLD_COLUMNS: dict[str, str] = {threshold_key(t): f"t{round(t * 100)}" for 
 # -------------------------------------------------------------------------------------- messages ----
 DROP_CAUSES = ("dropped_link", "dropped_loss", "dropped_bandwidth")
 """Why a message did not reach a receiver: out of radio reach, lost (``comm.loss``), over the link's byte
-budget (``comm.bandwidth``). "Dropped" always means their sum."""
+budget (``comm.bandwidth``). "Dropped" always means their sum. Packet errors (``radio.per``) count as
+``dropped_loss`` when the receiver was within the sensitivity and ``dropped_link`` when it was below it
+(where a short message may still get through): the same split as without them (docs/radio.md)."""
 
 
 def dropped(counts: Mapping[str, int]) -> int:
@@ -36,7 +38,15 @@ def dropped(counts: Mapping[str, int]) -> int:
     return sum(int(counts[cause]) for cause in DROP_CAUSES)
 
 
-class MessageCounts(TypedDict):
+class RelayCounts(TypedDict, total=False):
+    """The part of ``summary["messages"]`` present only when ``comm.relay = "flood"`` (docs/radio.md)."""
+
+    relayed: int                    # relayed copies (counted in sent too)
+    bytes_relayed: int              # their bytes (in bytes_sent too)
+    duplicates: int                 # copies a robot received of a message it already had
+
+
+class MessageCounts(RelayCounts):
     """``summary["messages"]``: what the radio carried over the run (counts are per receiver for delivered
     and dropped messages, per broadcast for sent ones)."""
 
@@ -113,12 +123,15 @@ RUNS: dict[str, pa.DataType] = {
     "coverage": pa.float64(), **{col: pa.int64() for col in THRESHOLD_COLUMNS.values()}, "distance_m": pa.float64(),
     "collisions": pa.int64(), "msgs_sent": pa.int64(), "bytes_sent": pa.int64(), "msgs_delivered": pa.int64(),
     "bytes_delivered": pa.int64(), "msgs_dropped": pa.int64(), "failed_robots": pa.int64(), "spec_json": pa.string(),
-    "wall_time_s": pa.float64(), "worker_pid": pa.int64(), "worker_rss_mb": pa.float64(), "swarm_version": pa.string(),
+    "wall_time_s": pa.float64(), "cpu_time_s": pa.float64(), "jit_time_s": pa.float64(), "worker_pid": pa.int64(), "worker_rss_mb": pa.float64(), "swarm_version": pa.string(),
     "algorithm_dist": pa.string(), "algorithm_version": pa.string(),
 }
-"""One row per run (``*.runs.parquet``); the store adds ``part`` (the file a row came from) when reading."""
+"""One row per run (``*.runs.parquet``); the store adds ``part`` (the file a row came from) when reading.
+``wall_time_s`` and ``cpu_time_s`` time the whole run in its worker, ``jit_time_s`` the part of it in numba's
+compiler (compiling or loading cached kernels: non-zero in a worker's first runs)."""
 RUNS_SCHEMA = pa.schema(list(RUNS.items()))
-NONDETERMINISTIC_COLUMNS = ("wall_time_s", "worker_pid", "worker_rss_mb", "part", "swarm_version")
+NONDETERMINISTIC_COLUMNS = ("wall_time_s", "cpu_time_s", "jit_time_s", "worker_pid", "worker_rss_mb", "part",
+                            "swarm_version")
 """Columns that may differ between two executions of the same run."""
 
 
