@@ -525,15 +525,20 @@ class MapSharing:
         if not isinstance(msg, MapUpdate):
             return
         tracking = self.lidar_reach is not None
+        sender, seq = msg.sender, msg.seq
+        ours = "_since" in msg.__dict__  # built by this service, not sent by an algorithm
         if msg.full:
             carried = self._merge_full(msg, ids, stack, rows)
         else:
             idx, values = msg.cells()  # int64 and uint8, in range: checked when decoded
             merge_cells_many(stack, rows, idx, values)
+            if ours and tracking:  # the common case, its receivers' books in one tight loop
+                ids, at = self._book_delta(ids, idx, sender, seq, lists)
+                if not ids:
+                    return
+                lists = None if lists is None else [lists[k] for k in at]
             carried = [idx] * len(ids)
         delta_gap = not msg.full and self.spec.map_sharing == "delta"
-        sender, seq = msg.sender, msg.seq
-        ours = "_since" in msg.__dict__  # built by this service, not sent by an algorithm
         if lists is not None:
             for cells, into in zip(carried, lists):
                 into.append(cells)
@@ -550,6 +555,28 @@ class MapSharing:
             if not ours or msg.full or seq != last + 1:  # an update an algorithm sent counts as a gap
                 self._complete[r][sender] = ours and msg.full
             seen[sender] = seq if msg.full else max(last, seq)
+
+    def _book_delta(self, ids: list[int], idx: np.ndarray, sender: int, seq: int,
+                    lists: list[list[np.ndarray | None]] | None) -> tuple[list[int], list[int]]:
+        """The books of this service's delta ``seq`` from ``sender``, merged into robots ``ids`` (cells ``idx``),
+        for every receiver that had merged the sender's previous update: it is listed for the receiver's
+        next delta (and in ``lists``) and becomes its last merged update; nothing else changes. Returns the
+        other receivers and their positions in ``ids`` (a gap or an old update: :meth:`_take`'s general
+        rules). Each delta reaches up to n - 1 robots, so this loop runs n^2 times a sharing tick: it is
+        kept to what that case needs (docs/performance-history.md)."""
+        merged, seen_seq, gapped, rest = self._merged, self.seen_seq, [], []
+        before = seq - 1
+        for k, r in enumerate(ids):
+            seen = seen_seq[r]
+            if seen[sender] == before:
+                seen[sender] = seq
+                merged[r].append(idx)
+                if lists is not None:
+                    lists[k].append(idx)
+            else:
+                gapped.append(k)
+                rest.append(r)
+        return rest, gapped
 
     def _merge_full(self, msg: MapUpdate, ids: list[int], stack: np.ndarray, rows: np.ndarray) -> list[np.ndarray | None]:
         """Merge a full map into robots ``ids`` (maps ``stack[rows]``); per receiver, the cells the merge may

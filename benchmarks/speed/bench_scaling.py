@@ -82,8 +82,9 @@ def scaling(args: argparse.Namespace) -> None:
         print(f"pair {k + 1}: 32 robots {1e3 * a:.3f} ms/tick, 64 robots {1e3 * b:.3f} ms/tick (CPU): "
               f"ratio {b / a:.2f}", flush=True)
     ratios = sorted(b["total"] / a["total"] for a, b in zip(per_tick[32], per_tick[64]))
+    q = statistics.quantiles(ratios, n=4) if len(ratios) > 1 else [ratios[0]] * 3
     print(f"64/32 cost per tick over {len(ratios)} pairs: median {statistics.median(ratios):.2f} "
-          f"(range {ratios[0]:.2f}-{ratios[-1]:.2f}; 2.00 is linear)")
+          f"(quartiles {q[0]:.2f}-{q[2]:.2f}, range {ratios[0]:.2f}-{ratios[-1]:.2f}; 2.00 is linear)")
     if args.phases:
         print(f"{'ms per tick (median)':30s} {'32':>7s} {'64':>7s} {'ratio':>6s} {'above linear':>13s}")
         for label in [label for _, label in PHASES] + ["total"]:
