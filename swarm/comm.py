@@ -32,7 +32,7 @@ from numba import njit
 from maps.params import OMIT_DEFAULT, check_choice, check_float, check_int
 
 from .api import CELL_M
-from .knowledge import check_writable_map, merge_cells_many, sync_box_unchecked, sync_changes
+from .knowledge import check_writable_map, merge_cells_many, merge_cells_many_changed, sync_box_unchecked, sync_changes
 from .messages import MAX_MESSAGE_BYTES, MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
 from .schema import DROP_CAUSES
 
@@ -402,6 +402,7 @@ class MapSharing:
         self.seen_seq = [[0] * n for _ in range(n)]          # [receiver][sender] last seq merged
         self._complete = [[True] * n for _ in range(n)]      # [receiver][sender] merged each of its updates so far
         self.monotone = monotone
+        self._raised = np.zeros(0, dtype=np.int64)  # scratch: the cells a delta raised, receiver after receiver
         self.full_requested = [False] * n
         self.requests: list[list[int]] = [[] for _ in range(n)]  # targets each robot will ask next tick
         self.lidar_reach = lidar_reach if self.enabled and self.last_shared is not None else None
@@ -531,12 +532,13 @@ class MapSharing:
             carried = self._merge_full(msg, ids, stack, rows)
         else:
             idx, values = msg.cells()  # int64 and uint8, in range: checked when decoded
-            merge_cells_many(stack, rows, idx, values)
-            if ours and tracking:  # the common case, its receivers' books in one tight loop
-                ids, at = self._book_delta(ids, idx, sender, seq, lists)
+            if ours and tracking:  # the common case: merged and its receivers' books kept in one tight loop
+                ids, at = self._take_delta(ids, stack, rows, idx, values, sender, seq, lists)
                 if not ids:
                     return
                 lists = None if lists is None else [lists[k] for k in at]
+            else:
+                merge_cells_many(stack, rows, idx, values)
             carried = [idx] * len(ids)
         delta_gap = not msg.full and self.spec.map_sharing == "delta"
         if lists is not None:
@@ -556,26 +558,37 @@ class MapSharing:
                 self._complete[r][sender] = ours and msg.full
             seen[sender] = seq if msg.full else max(last, seq)
 
-    def _book_delta(self, ids: list[int], idx: np.ndarray, sender: int, seq: int,
-                    lists: list[list[np.ndarray | None]] | None) -> tuple[list[int], list[int]]:
-        """The books of this service's delta ``seq`` from ``sender``, merged into robots ``ids`` (cells ``idx``),
-        for every receiver that had merged the sender's previous update: it is listed for the receiver's
-        next delta (and in ``lists``) and becomes its last merged update; nothing else changes. Returns the
-        other receivers and their positions in ``ids`` (a gap or an old update: :meth:`_take`'s general
-        rules). Each delta reaches up to n - 1 robots, so this loop runs n^2 times a sharing tick: it is
-        kept to what that case needs (docs/performance-history.md)."""
+    def _take_delta(self, ids: list[int], stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray,
+                    sender: int, seq: int, lists: list[list[np.ndarray | None]] | None) -> tuple[list[int], list[int]]:
+        """Merge this service's delta ``seq`` from ``sender`` (cells ``idx``) into robots ``ids`` (maps
+        ``stack[rows]``) and keep the books of every receiver that had merged the sender's previous update:
+        the cells the merge raised in its map are listed for its next delta (and in ``lists``) and the
+        update becomes its last merged one; nothing else changes. Returns the other receivers and their
+        positions in ``ids`` (a gap or an old update: :meth:`_take`'s general rules). Each delta reaches up
+        to n - 1 robots, so this runs n^2 times a sharing tick: it keeps to what that case needs, and lists
+        only what changed (robots that share maps mostly know what they hear already), which the
+        receivers' next deltas then compare (docs/performance-history.md)."""
+        need = len(ids) * len(idx)
+        if self._raised.shape[0] < need:
+            self._raised = np.empty(2 * need, dtype=np.int64)
+        ends = np.empty(len(ids), dtype=np.int64)
+        merge_cells_many_changed(stack, rows, idx, values, self._raised, ends)
+        raised = self._raised
         merged, seen_seq, gapped, rest = self._merged, self.seen_seq, [], []
-        before = seq - 1
-        for k, r in enumerate(ids):
+        before, start = seq - 1, 0
+        for k, (r, end) in enumerate(zip(ids, ends.tolist())):
             seen = seen_seq[r]
             if seen[sender] == before:
                 seen[sender] = seq
-                merged[r].append(idx)
-                if lists is not None:
-                    lists[k].append(idx)
+                if end > start:
+                    cells = raised[start:end].copy()
+                    merged[r].append(cells)
+                    if lists is not None:
+                        lists[k].append(cells)
             else:
                 gapped.append(k)
                 rest.append(r)
+            start = end
         return rest, gapped
 
     def _merge_full(self, msg: MapUpdate, ids: list[int], stack: np.ndarray, rows: np.ndarray) -> list[np.ndarray | None]:

@@ -113,6 +113,30 @@ def merge_cells_many(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, value
     _merge_cells_many_kernel(stack, rows, idx, values)
 
 
+def merge_cells_many_changed(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray,
+                             out: np.ndarray, ends: np.ndarray) -> None:
+    """:func:`merge_cells_many` that also lists, per map, the cells the merge raised: map ``rows[k]``'s at
+    ``out[ends[k-1]:ends[k]]``, ascending when ``idx`` is (``out``: int64 with room for every row's every
+    cell; ``ends``: int64[len(rows)]). A receiver's next map update compares only these, not every cell it
+    was sent: robots that share maps mostly know what they hear already."""
+    _merge_cells_many_changed_kernel(stack, rows, idx, values, out, ends)
+
+
+@njit(cache=True)
+def _merge_cells_many_changed_kernel(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray,
+                                     out: np.ndarray, ends: np.ndarray) -> None:  # pragma: no cover - compiled
+    m = 0
+    for k in range(rows.shape[0]):
+        flat = stack[rows[k]].reshape(-1)
+        for j in range(idx.shape[0]):
+            i = idx[j]
+            if values[j] > flat[i]:
+                flat[i] = values[j]
+                out[m] = i
+                m += 1
+        ends[k] = m
+
+
 def merge_cells_unchecked(flat: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
     """:func:`merge_cells` on a flat writable map with int64 indices (in range) and uint8 values, for callers
     whose cells already are (decoded map updates); :func:`merge_cells_many` merges into several maps."""

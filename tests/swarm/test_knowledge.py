@@ -9,7 +9,8 @@ from maps import InvalidInput, Map
 from swarm.api import FREE, SOLID, UNSEEN
 from swarm.knowledge import (
     ExplorationTracker, LogOddsGrid, active_flags, classify_logodds, count_cells, count_known, empty_knowledge,
-    merge, merge_cells, sync_box, sync_boxes_flat, sync_changes, sync_regions, sync_regions_flat,
+    merge, merge_cells, merge_cells_many_changed, sync_box, sync_boxes_flat, sync_changes, sync_regions,
+    sync_regions_flat,
 )
 
 
@@ -326,3 +327,22 @@ def test_sync_boxes_flat_finds_every_change_inside_the_boxes_and_the_listed_cell
             assert np.array_equal(last, expected_last)
     with pytest.raises(InvalidInput, match="boxes"):
         sync_boxes_flat(current, last, np.zeros((3, 4), np.int64), [[]] * 4, None)
+
+
+def test_merge_cells_many_changed_lists_exactly_the_cells_each_merge_raised() -> None:
+    rng = np.random.default_rng(5)
+    stack = rng.integers(0, 3, size=(5, 12, 9), dtype=np.uint8)
+    before = stack.copy()
+    idx = np.sort(rng.choice(12 * 9, 40, replace=False)).astype(np.int64)
+    values = rng.integers(0, 3, 40).astype(np.uint8)
+    rows = np.array([3, 0, 4], dtype=np.int64)
+    out, ends = np.empty(3 * 40, np.int64), np.empty(3, np.int64)
+    merge_cells_many_changed(stack, rows, idx, values, out, ends)
+    start = 0
+    for k, row in enumerate(rows.tolist()):
+        expected = before[row].copy().reshape(-1)
+        expected[idx] = np.maximum(expected[idx], values)
+        assert np.array_equal(stack[row].reshape(-1), expected)
+        assert out[start:ends[k]].tolist() == np.flatnonzero(expected != before[row].reshape(-1)).tolist()
+        start = ends[k]
+    assert np.array_equal(stack[[1, 2]], before[[1, 2]])
