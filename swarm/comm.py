@@ -591,7 +591,8 @@ class MapSharing:
             start = end
         return rest, gapped
 
-    def _merge_full(self, msg: MapUpdate, ids: list[int], stack: np.ndarray, rows: np.ndarray) -> list[np.ndarray | None]:
+    def _merge_full(self, msg: MapUpdate, ids: list[int], stack: np.ndarray,
+                    rows: np.ndarray) -> list[np.ndarray | None]:
         """Merge a full map into robots ``ids`` (maps ``stack[rows]``); per receiver, the cells the merge may
         have changed (None: any). A full map this service built in delta mode on monotone maps notes the cells
         where it differs from its sender's previous update (``outgoing``). A receiver that merged every update

@@ -320,7 +320,8 @@ def _sync_boxes_kernel(current: np.ndarray, last: np.ndarray, boxes: np.ndarray,
     room = extra.shape[0]
     for k in range(current.shape[0]):
         if active[k]:
-            room += max(min(boxes[k, 1], rows) - max(boxes[k, 0], 0), 0) * max(min(boxes[k, 3], cols) - max(boxes[k, 2], 0), 0)
+            tall = max(min(boxes[k, 1], rows) - max(boxes[k, 0], 0), 0)
+            room += tall * max(min(boxes[k, 3], cols) - max(boxes[k, 2], 0), 0)
     out = np.empty(room, dtype=np.int64)
     m = 0
     e0 = 0

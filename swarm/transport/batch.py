@@ -255,10 +255,12 @@ class ObsBatchDecoder:
                 raise WireError("obs_batch: robot ids not ascending or outside the run")
             self._ids = (ids_b, ids)
         counts = _u32s(COUNTS * m).unpack(counts_b)
-        n_cells, n_inbox, n_near = sum(counts[CELLS::COUNTS]), sum(counts[INBOX::COUNTS]), sum(counts[NEIGHBOURS::COUNTS])
+        n_cells, n_inbox = sum(counts[CELLS::COUNTS]), sum(counts[INBOX::COUNTS])
+        n_near = sum(counts[NEIGHBOURS::COUNTS])
         if len(cells_b) != 5 * n_cells or len(refs_b) != 4 * n_inbox or len(near_b) != NEIGHBOUR.size * n_near:
             raise WireError("obs_batch: the cells, inbox or neighbours column does not match its counts")
-        if max(states_b[_NAV_AT::_STATE]) >= len(NAV_STATES) or max(states_b[_FLAGS_AT::_STATE]) & ~(COLLIDED | HAS_GOAL):
+        if (max(states_b[_NAV_AT::_STATE]) >= len(NAV_STATES)
+                or max(states_b[_FLAGS_AT::_STATE]) & ~(COLLIDED | HAS_GOAL)):
             raise WireError("obs_batch: unknown nav state or flags")
         counts_a = cells = None
         if n_cells:
@@ -467,8 +469,9 @@ class ActBatchDecoder:
                     decoded.append(decode(blob))
                 except MessageError:
                     continue
-            action = Action(goal=(gx, gy) if flags & ACT_GOAL else None, velocity=(v, w) if flags & ACT_VELOCITY else None,
-                            messages=tuple(decoded), debug=extra[1], clear_goal=bool(flags & ACT_CLEAR_GOAL))
+            action = Action(goal=(gx, gy) if flags & ACT_GOAL else None,
+                            velocity=(v, w) if flags & ACT_VELOCITY else None, messages=tuple(decoded),
+                            debug=extra[1], clear_goal=bool(flags & ACT_CLEAR_GOAL))
             last.pop(robot, None)
             out.append((action, len(extra[0]) - len(decoded)))
         if extra_at != len(extras):

@@ -225,7 +225,8 @@ def act_fields(ids=(0, 1), records=None, extras=None, tick=7) -> bytes:
 @pytest.mark.parametrize("packet", [
     act_fields(tick=8), act_fields(ids=(0, 2)), act_fields(ids=(0,), records=[(1.0, 2.0, 0.0, 0.0, 1)]),
     act_fields(records=[(1.0, 2.0, 0.0, 0.0, 9)], extras=[[[], None]]), act_fields(extras=[[[], None]]),
-    b"\x00garbage", msgpack.packb(["act_batch", 2, 7, u32(0, 1)]), msgpack.packb(["act", 2, 7, 0, None, None, False, [], None]),
+    b"\x00garbage", msgpack.packb(["act_batch", 2, 7, u32(0, 1)]),
+    msgpack.packb(["act", 2, 7, 0, None, None, False, [], None]),
 ])
 def test_a_malformed_act_batch_raises_wire_error(packet):
     with pytest.raises(WireError):
