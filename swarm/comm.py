@@ -29,6 +29,7 @@ from maps.params import OMIT_DEFAULT, check_choice, check_float, check_int
 
 from .api import CELL_M
 from .knowledge import check_writable_map, merge_cells_many, sync_box_unchecked, sync_changes
+from .metrics import InfoAges
 from .messages import MAX_MESSAGE_BYTES, MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
 from .schema import DROP_CAUSES
 
@@ -205,8 +206,10 @@ class Medium:
 class MapSharing:
     """The map-sharing service: builds each robot's MapUpdates and merges the ones it receives."""
 
-    def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None) -> None:
-        """``lidar_reach``: the owner's promise that apart from this service's merges only a lidar writes into
+    def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None,
+                 ages: InfoAges | None = None) -> None:
+        """``ages``: told of every update sent and of every merge that leaves a receiver holding the sender's
+        whole map (age of information, docs/comm-metrics.md). ``lidar_reach``: the owner's promise that apart from this service's merges only a lidar writes into
         the maps, within ``lidar_reach`` cells (rows and columns) of each robot's cell, and that it reports
         every scan with :meth:`scanned` from the start. A delta then compares only the places written since the robot's
         last update (:func:`swarm.knowledge.sync_box`), not both whole maps: the same cells. Without it
@@ -217,6 +220,8 @@ class MapSharing:
         self.last_shared = np.zeros((n, *shape), dtype=np.uint8) if spec.map_sharing == "delta" else None
         self.seq = [0] * n
         self.seen_seq = [[0] * n for _ in range(n)]          # [receiver][sender] last seq merged
+        self.whole = [[True] * n for _ in range(n)]          # [receiver][sender] holds all the sender's updates
+        self.ages = ages
         self.full_requested = [False] * n
         self.requests: list[list[int]] = [[] for _ in range(n)]  # targets each robot will ask next tick
         self.lidar_reach = lidar_reach if self.enabled and self.last_shared is not None else None
@@ -255,12 +260,16 @@ class MapSharing:
                     self._forget_writes(i)
                 self.seq[i] += 1
                 out[i].append(full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i])))
+                if self.ages is not None:
+                    self.ages.sent(i, self.seq[i], tick)
                 continue
             assert self.last_shared is not None
             changed = self._changed_since_update(i, known[i])  # ascending, as delta_update wants them
             if len(changed):
                 self.seq[i] += 1
                 out[i].append(delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed))
+                if self.ages is not None:
+                    self.ages.sent(i, self.seq[i], tick)
         return out
 
     def _changed_since_update(self, i: int, known: np.ndarray) -> np.ndarray:
@@ -297,13 +306,13 @@ class MapSharing:
         return touched
 
     def receive_tick(self, deliveries: Sequence[tuple[Any, Sequence[int]]], known: np.ndarray,
-                     live: np.ndarray, cells: bool = True) -> list[list[np.ndarray | None]]:
+                     live: np.ndarray, cells: bool = True, tick: int = 0) -> list[list[np.ndarray | None]]:
         """:meth:`receive` for every robot at once: ``deliveries`` are a tick's messages with the robots each
         reached, in the order the inboxes list them (sender, then sequence), and ``known`` the maps
         (``uint8[R, H, W]``); robots not ``live`` are left alone. The same effect and the same lists as
         calling :meth:`receive` per robot with its inbox, but each map update is merged into all its
         receivers in one compiled call (a long many-robot run merges a great many). ``cells=False``: the lists
-        stay empty (the in-process runtime does not read them)."""
+        stay empty (the in-process runtime does not read them). ``tick``: now (for :attr:`ages`)."""
         check_writable_map(known)
         touched: list[list[np.ndarray | None]] = [[] for _ in range(self.n)]
         flags = live.tolist()
@@ -316,15 +325,17 @@ class MapSharing:
             if isinstance(msg, MapUpdate) and msg.shape != known.shape[1:]:
                 raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape[1:]}")
             lists = [touched[r] for r in ids] if cells else None
-            self._take(msg, ids, known, np.array(ids, dtype=np.int64), lists)
+            self._take(msg, ids, known, np.array(ids, dtype=np.int64), lists, tick)
         return touched
 
     def _take(self, msg: Any, ids: list[int], stack: np.ndarray, rows: np.ndarray,
-              lists: list[list[np.ndarray | None]] | None) -> None:
+              lists: list[list[np.ndarray | None]] | None, tick: int = 0) -> None:
         """One service message reaching robots ``ids``, whose maps are ``stack[rows]`` (checked): merge a
         MapUpdate into each, note what it wrote for their next deltas, append the cells it carried (None for
         a full map) to ``lists[k]`` for robot ``ids[k]`` (unless None) and book its sequence number; or note
-        a MapRequest addressed to one of them."""
+        a MapRequest addressed to one of them. Tells :attr:`ages` which of them now hold the sender's whole
+        map: all after a full map; after a delta, those that merged every earlier update of the sender since
+        their last full map of it (a gap leaves a receiver partial until the full map it asks for)."""
         if isinstance(msg, MapRequest):
             if msg.target in ids:
                 self.full_requested[msg.target] = True
@@ -346,6 +357,7 @@ class MapSharing:
         if lists is not None:
             for carried in lists:
                 carried.append(idx)
+        whole: list[int] = []
         for r in ids:
             if tracking:
                 if idx is None:
@@ -356,7 +368,16 @@ class MapSharing:
             last = seen[sender]
             if delta_gap and seq != last + 1 and sender not in self.requests[r]:
                 self.requests[r].append(sender)
+            holds = self.whole[r]
+            if msg.full or seq == last + 1:
+                holds[sender] = holds[sender] or msg.full
+            elif seq > last + 1:
+                holds[sender] = False
+            if holds[sender] and (msg.full or seq == last + 1):
+                whole.append(r)
             seen[sender] = seq if msg.full else max(last, seq)
+        if self.ages is not None:
+            self.ages.merged(whole, sender, seq, tick)
 
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)

@@ -12,7 +12,8 @@ One logic tick (0.1 s, docs/design.md section 4):
 6. this tick's broadcasts are judged by this tick's links and queued for next tick;
 7. navigation turns goals into (v, omega) commands on each robot's own map (every moving robot's step in
    one compiled call, :class:`swarm.navigation.NavigationFleet`);
-8. metrics: explored thresholds every tick, a time-series row every ``record_every`` ticks.
+8. metrics: explored thresholds every tick, a time-series row every ``record_every`` ticks, and with it a
+   row of communication metrics (``RunResult.comm``, docs/comm-metrics.md).
 
 Everything random comes from :func:`swarm.spec.seed_streams`; nothing reads the clock except the
 ``*_time_s`` fields, so the same spec gives the same result bit for bit, whatever the transport.
@@ -37,7 +38,7 @@ from .knowledge import sync_changes, sync_regions_flat
 from . import registry
 from .maes_merge import MaesMerge
 from .maes_merge import resolve as resolve_maes_merge
-from .metrics import Metrics
+from .metrics import CommMetrics, InfoAges, Metrics
 from .navigation import NavigationFleet
 from .result import RunResult
 from .sensing import ExplorationTracker, Lidar
@@ -119,9 +120,11 @@ class Simulation:
         self.comm = self.spec.comm
         self.medium = Medium(n, self.comm, self.streams.radio, map_shape=self.truth.shape)
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
-        self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach)  # told of every scan
+        self.ages = InfoAges(n)  # who last merged whose map, when (age of information)
+        self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach,  # told of every scan
+                                  ages=self.ages)
         merge = resolve_maes_merge(self.comm.map_sharing, self.comm.share_every, registry.load(self.spec.algorithm.name))
-        self.maes_merge = MaesMerge(n, *merge) if merge is not None else None
+        self.maes_merge = MaesMerge(n, *merge, ages=self.ages) if merge is not None else None
         self._in_flight: list[list[Envelope]] | None = None  # link_at = "receive": last tick's outboxes
         self.inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         self._deliveries: list[tuple[Any, list[int]]] = []  # last tick's messages and who got each, in inbox order
@@ -129,6 +132,7 @@ class Simulation:
         self.transport = transport or TransportOptions()
         self.observers = tuple(observers)
         self.metrics = Metrics(self.spec.record_every)
+        self.comm_metrics = CommMetrics(n, exact_union=self.lidar_params.mode == "ternary")
         self.events: list[dict[str, Any]] = []
         self.failed = np.zeros(n, dtype=bool)
         self._drop_events = 0
@@ -261,9 +265,10 @@ class Simulation:
         deliveries, self._deliveries = self._deliveries, []
         if not deliveries:  # most ticks
             return inboxes, [[] for _ in inboxes]
-        merged = self.sharing.receive_tick(deliveries, self.known, ~self.failed, cells=self._mirror is not None)
+        merged = self.sharing.receive_tick(deliveries, self.known, ~self.failed, cells=self._mirror is not None,
+                                           tick=tick)
         if self.maes_merge is not None:
-            for robot in sorted(self.maes_merge.receive(deliveries, self.known, ~self.failed)):
+            for robot in sorted(self.maes_merge.receive(deliveries, self.known, ~self.failed, tick)):
                 merged[robot].append(None)
         return inboxes, merged
 
@@ -373,6 +378,7 @@ class Simulation:
                             comm_groups=len(groups), biggest_group=max(len(g) for g in groups) / n,
                             all_connected=len(groups) == 1,
                             mean_pair_distance_m=float(links.distance.mean()) if n > 1 else 0.0)
+        self.comm_metrics.record(tick, stats, self.known, self.tracker.seen_free_cells, groups, self.ages)
 
     def _message_counts(self, host: AgentHost) -> dict[str, Any]:
         """The medium's counts, with the messages a remote agent sent that did not decode counted as malformed
@@ -403,7 +409,8 @@ class Simulation:
             "setup_time_s": self.setup_time_s,
         }
         return RunResult(spec=self.spec.canonical(), key=self.spec.key, summary=summary,
-                         timeseries=self.metrics.series, events=self.events, provenance=provenance(self.spec))
+                         timeseries=self.metrics.series, events=self.events, provenance=provenance(self.spec),
+                         comm=self.comm_metrics.result())
 
 
 def provenance(spec: RunSpec) -> dict[str, Any]:

@@ -36,7 +36,7 @@ def execute(task: Task) -> dict[str, Any]:
         result = Simulation(spec).run()
         algorithm = result.provenance["algorithm"]
         out: dict[str, Any] = {"key": key, "status": "ok", "error": "", "summary": result.summary,
-                               "timeseries": result.timeseries, "events": result.events,
+                               "timeseries": result.timeseries, "events": result.events, "comm": result.comm,
                                "algorithm_dist": (algorithm["distribution"], algorithm["version"])}
         if result.key != key:
             out.update(status="failed", error=f"spec key changed in the worker ({result.key} != {key})")
@@ -45,7 +45,7 @@ def execute(task: Task) -> dict[str, Any]:
             raise
         last = traceback.format_exception(exc)[-1].strip()
         out = {"key": key, "status": "failed", "error": last[:2000], "summary": None, "timeseries": None,
-               "events": []}
+               "events": [], "comm": None}
     out["wall_time_s"] = time.perf_counter() - t0
     out["worker_pid"] = os.getpid()
     out["worker_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
