@@ -38,7 +38,7 @@ from .knowledge import sync_changes, sync_regions_flat
 from . import registry
 from .maes_merge import MaesMerge
 from .maes_merge import resolve as resolve_maes_merge
-from .metrics import CommMetrics, InfoAges, Metrics
+from .metrics import CommMetrics, FreeCounts, InfoAges, Metrics
 from .navigation import NavigationFleet
 from .result import RunResult
 from .sensing import ExplorationTracker, Lidar
@@ -121,8 +121,9 @@ class Simulation:
         self.medium = Medium(n, self.comm, self.streams.radio, map_shape=self.truth.shape)
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         self.ages = InfoAges(n)  # who last merged whose map, when (age of information)
+        self.free = FreeCounts(n, exact=self.lidar_params.mode == "ternary")  # each map's FREE cells
         self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach,  # told of every scan
-                                  ages=self.ages)
+                                  ages=self.ages, free=self.free)
         merge = resolve_maes_merge(self.comm.map_sharing, self.comm.share_every, registry.load(self.spec.algorithm.name))
         self.maes_merge = MaesMerge(n, *merge, ages=self.ages) if merge is not None else None
         self._in_flight: list[list[Envelope]] | None = None  # link_at = "receive": last tick's outboxes
@@ -132,7 +133,7 @@ class Simulation:
         self.transport = transport or TransportOptions()
         self.observers = tuple(observers)
         self.metrics = Metrics(self.spec.record_every)
-        self.comm_metrics = CommMetrics(n, exact_union=self.lidar_params.mode == "ternary")
+        self.comm_metrics = CommMetrics(n, self.free)
         self.events: list[dict[str, Any]] = []
         self.failed = np.zeros(n, dtype=bool)
         self._drop_events = 0
@@ -198,7 +199,8 @@ class Simulation:
             collisions += int(np.count_nonzero(collided > was_colliding))  # contacts that began this tick
             was_colliding = collided
             active = ~self.failed
-            self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker, measure=False)
+            self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker, measure=False,
+                            freed=self.free.freed)
             self.sharing.scanned(poses)
             self.tracker.update_coverage(poses[:, :2], active=active)
             links = _TickLinks(self.links, poses[:, :2])
@@ -270,6 +272,7 @@ class Simulation:
         if self.maes_merge is not None:
             for robot in sorted(self.maes_merge.receive(deliveries, self.known, ~self.failed, tick)):
                 merged[robot].append(None)
+                self.free.dirty[robot] = True
         return inboxes, merged
 
     def _send(self, tick: int, poses: np.ndarray, actions: list[Action | None], links: Any) -> list[list[Envelope]]:
