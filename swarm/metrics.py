@@ -66,48 +66,37 @@ class InfoAges:
     """
 
     KEEP_TICKS = 64
-    """Snapshots older than this are forgotten (deliveries take a tick, relayed ones a few)."""
+    """Snapshots kept, one per tick (deliveries take a tick, relayed ones a few; older ones are forgotten)."""
 
     def __init__(self, n: int) -> None:
         self.n = n
         self.merged_at = np.zeros((n, n), dtype=np.int64)
         self.merges = 0
-        self._snapshots: dict[int, np.ndarray] = {}  # tick -> merged_at when that tick's updates were sent
+        # merged_at when each of the last KEEP_TICKS ticks' updates were sent, by tick % KEEP_TICKS
+        self._ring = np.zeros((self.KEEP_TICKS, n, n), dtype=np.int64)
+        self._ring_tick = np.full(self.KEEP_TICKS, -1, dtype=np.int64)
 
     def sent(self, tick: int) -> None:
         """Robots broadcast their maps at ``tick``: note what each map holds of the others, for whoever
         merges them (once per tick, whoever sends)."""
-        if tick not in self._snapshots:
-            self._snapshots[tick] = self.merged_at.copy()
-            if len(self._snapshots) > 2 * self.KEEP_TICKS:
-                self._snapshots = {t: v for t, v in self._snapshots.items() if t >= tick - self.KEEP_TICKS}
+        slot = tick % self.KEEP_TICKS
+        if self._ring_tick[slot] != tick:
+            self._ring[slot] = self.merged_at
+            self._ring_tick[slot] = tick
 
     def merged(self, merges: list[tuple[np.ndarray, int, int]], tick: int) -> None:
         """A tick's merges, each ``(receivers, sender, sent)`` (``receivers``: int64 robot ids): they merged
         the update ``sender`` broadcast at tick ``sent`` and now hold its whole map as of then. Each merge
-        reads the snapshot of when its update was sent, so their order does not matter: all at once."""
+        reads the snapshot of when its update was sent (none older than ``KEEP_TICKS``: then only the
+        sender's own entry counts), so their order does not matter."""
         if not merges:
             return
-        n, k = self.n, len(merges)
-        got = np.zeros((n, k), dtype=np.bool_)  # got[r, j]: robot r merged update j
-        senders = np.empty(k, dtype=np.int64)
-        for j, (receivers, sender, _) in enumerate(merges):
-            got[receivers, j] = True
-            senders[j] = sender
-            self.merges += len(receivers)
-        sent = {m[2] for m in merges}
-        if len(sent) == 1:  # as usual: every update of the tick was sent at the same tick
-            snapshot = self._snapshots.get(sent.pop())
-            snaps = snapshot[senders] if snapshot is not None else np.zeros((k, n), dtype=np.int64)
-        else:
-            snaps = np.zeros((k, n), dtype=np.int64)  # what update j's sender held of the others then
-            for j, (_, sender, when) in enumerate(merges):
-                snapshot = self._snapshots.get(when)
-                if snapshot is not None:
-                    snaps[j] = snapshot[sender]
-        np.maximum(self.merged_at, np.where(got[:, :, None], snaps[None, :, :], 0).max(axis=1), out=self.merged_at)
-        direct = (got[:, :, None] & (senders[:, None] == np.arange(n))[None, :, :]).any(axis=1)
-        self.merged_at[direct] = tick
+        receivers = np.concatenate([m[0] for m in merges])
+        ends = np.cumsum([len(m[0]) for m in merges])
+        _merge_ages(self.merged_at, self._ring, self._ring_tick, receivers, ends,
+                    np.array([m[1] for m in merges], dtype=np.int64), np.array([m[2] for m in merges], dtype=np.int64),
+                    tick)
+        self.merges += len(receivers)
 
     def group(self, members: list[int], tick: int) -> None:
         """``members`` all got the union of their maps at ``tick`` (a MAES synchronisation)."""
@@ -124,6 +113,29 @@ class InfoAges:
             return np.zeros(n)
         off = self.merged_at.sum(axis=1) - self.merged_at.diagonal()
         return tick - off / (n - 1)
+
+
+@njit(cache=True)
+def _merge_ages(merged_at: np.ndarray, ring: np.ndarray, ring_tick: np.ndarray, receivers: np.ndarray,
+                ends: np.ndarray, senders: np.ndarray, sent: np.ndarray, tick: int) -> None:  # pragma: no cover
+    """:meth:`InfoAges.merged`: update j reached ``receivers[ends[j-1]:ends[j]]``; each receiver's row rises
+    to the sender's row of the snapshot of tick ``sent[j]`` (if still in the ring) and its entry for the
+    sender becomes ``tick``. Snapshots are of earlier ticks, so the order of the updates does not matter."""
+    n = merged_at.shape[0]
+    start = 0
+    for j in range(ends.shape[0]):
+        s = senders[j]
+        slot = sent[j] % ring.shape[0]
+        known = ring_tick[slot] == sent[j]
+        for k in range(start, ends[j]):
+            r = receivers[k]
+            if known:
+                for x in range(n):
+                    v = ring[slot, s, x]
+                    if v > merged_at[r, x]:
+                        merged_at[r, x] = v
+            merged_at[r, s] = tick
+        start = ends[j]
 
 
 # --------------------------------------------------------------------------------- free cells ----
