@@ -242,36 +242,44 @@ def sentence(r: pd.Series) -> str:
     m_a, m_b = r["missing_pct:a"], r["missing_pct:b"]
     g_a, g_b = r["aoi_age_s:a"], r["aoi_age_s:b"]
     big = r["biggest_pct:b"]
-    delivered = f"{_pct(d_b)} of deliveries arrived under {b}, {_pct(d_a)} under {a}"
-    missing = f"robots missed {_pct(m_b)} of the team's known free cells under {b}, {_pct(m_a)} under {a}"
-    age = f"their information about the others was {_secs(g_b)} old on average, {_secs(g_a)} under {a}"
-    same_links = _close(d_a, d_b, SAME_DELIVERED_PP)
-    same_knowledge = _close(m_a, m_b, SAME_MISSING_PP)
+    delivered = f"{_pct(d_b)} of deliveries under {b} against {_pct(d_a)} under {a}"
+    missing = f"robots missed {_pct(m_b)} of the team's known free cells under {b} against {_pct(m_a)}"
+    age = f"their information about the others was {_secs(g_b)} old on average against {_secs(g_a)}"
     ratio = 1 / r["ratio"]  # b / a
     how = {"identical": f"took exactly as long as under {a} in every pair ({int(r['pairs'])})",
            "slower": f"was slower than under {a} (ticks b/a {ratio:.2f}, p (Holm) {p_value(r['p_holm'])})",
            "faster": f"was faster than under {a} (ticks b/a {ratio:.2f}, p (Holm) {p_value(r['p_holm'])})",
-           "no established difference": f"time was not shown to differ from {a} (ticks b/a {ratio:.2f}, "
+           "no established difference": f"time was not shown to differ from {a}'s (ticks b/a {ratio:.2f}, "
                                         f"p (Holm) {p_value(r['p_holm'])})",
-           "not tested": f"time was not tested against {a} (runs differ on {int(r['tested'])} of {maps} maps, "
-                         f"{effects.MIN_UNITS} needed; ticks b/a {ratio:.2f})"}[r["verdict"]]
+           "not tested": f"time against {a}'s: ticks b/a {ratio:.2f}, not tested (runs differ on "
+                         f"{int(r['tested'])} of {maps} maps, {effects.MIN_UNITS} needed)"}[r["verdict"]]
     head = f"**{alg}, {r['dimension']} = {b}**: exploration {how}"
     if r["verdict"] in ("slower", "faster"):
         return f"{head}; {delivered}, {missing}, and {age}."
-    if same_links:
-        return (f"{head}. The comm setting made no difference to what was carried: {delivered}, and {missing}.")
-    if same_knowledge:
+    carried = _direction(d_a, d_b, SAME_DELIVERED_PP)  # more or fewer deliveries under b
+    knew = _direction(m_b, m_a, SAME_MISSING_PP)       # more or less knowledge under b (less missing)
+    if carried == 0:
+        return f"{head}. The comm setting made no difference to what was carried: {delivered}, and {missing}."
+    if knew == 0 and carried < 0:
         why = (f"because the robots stayed in groups (the biggest group held {_pct(big)} of them on average)"
                if big >= GROUPED_PCT else
                "as the map updates that did arrive kept each robot up to date" if _close_rel(g_a, g_b, SAME_AGE)
-               else f"although it was older ({_secs(g_b)} against {_secs(g_a)})")
-        return (f"{head}. Messages were lost ({delivered}) but no knowledge was: {missing}, {why}.")
-    return (f"{head}. Messages were lost ({delivered}) and the robots knew less ({missing}; {age}), yet "
-            f"exploration time did not show it.")
+               else f"although their information about the others was older ({_secs(g_b)} against {_secs(g_a)})")
+        return f"{head}. Messages were lost ({delivered}) but no knowledge was: {missing}, {why}."
+    if knew == 0:
+        return f"{head}. More messages arrived ({delivered}) but the robots knew no more: {missing}."
+    ending = {"identical": "yet exploration time did not change",
+              "no established difference": "yet no difference in exploration time was established",
+              "not tested": "too few maps to tell whether exploration time followed"}[r["verdict"]]
+    return (f"{head}. {'Fewer' if carried < 0 else 'More'} messages arrived ({delivered}) and the robots knew "
+            f"{'less' if knew < 0 else 'more'} ({missing}; {age}); {ending}.")
 
 
-def _close(x: float, y: float, tol: float) -> bool:
-    return bool(pd.notna(x) and pd.notna(y) and abs(x - y) < tol)
+def _direction(before: float, after: float, tol: float) -> int:
+    """+1 when ``after`` exceeds ``before`` by ``tol`` or more, -1 when it falls short by as much, else 0."""
+    if pd.isna(before) or pd.isna(after) or abs(after - before) < tol:
+        return 0
+    return 1 if after > before else -1
 
 
 def _close_rel(x: float, y: float, tol: float) -> bool:
