@@ -133,7 +133,7 @@ from swarm.api.grid import DEFAULT_MARGIN_M, configuration_space, default_view_r
 from swarm.api.messages import MessageError, message
 
 from .recovery import Backoff, Exclusions, Watchdog, check_recovery_params, unseen_near
-from .tnf_utility import VARIANTS, FrontierScore, maes_sensed_position, score_frontiers
+from .tnf_utility import VARIANTS, FrontierScore, best_frontier, maes_sensed_position
 
 
 @message("tnf.destination")
@@ -327,18 +327,15 @@ class TNF:
         if self.maes:
             # MAES's sensed robots, placed with their relative bearing as a global angle (its line 152).
             sensed = [maes_sensed_position(obs.pose.x, obs.pose.y, n.distance, n.bearing) for n in obs.neighbours]
-            scores = score_frontiers(obs.known, start, np.zeros((0, 2), dtype=np.int64), alpha=p.alpha, beta=p.beta,
-                                     robot_radius_m=self.robot.radius, penalty_radius_m=0.0, reach=self.reach,
-                                     exclude=exclude, min_size=p.min_frontier_cells, variant="maes",
-                                     position_m=(obs.pose.x, obs.pose.y),
-                                     sensed_m=np.array(sensed, dtype=np.float64).reshape(-1, 2))
-            return scores[0] if scores else None
+            return best_frontier(obs.known, start, np.zeros((0, 2), dtype=np.int64), alpha=p.alpha, beta=p.beta,
+                                 robot_radius_m=self.robot.radius, penalty_radius_m=0.0, reach=self.reach,
+                                 exclude=exclude, min_size=p.min_frontier_cells, variant="maes",
+                                 position_m=(obs.pose.x, obs.pose.y),
+                                 sensed_m=np.array(sensed, dtype=np.float64).reshape(-1, 2))
         dest = [cell for cell, _ in self.destinations.values()]
-        scores = score_frontiers(obs.known, start,
-                                 np.array(dest, dtype=np.int64).reshape(-1, 2), alpha=p.alpha, beta=p.beta,
-                                 robot_radius_m=self.robot.radius, penalty_radius_m=self.penalty_radius,
-                                 reach=self.reach, exclude=exclude, min_size=p.min_frontier_cells)
-        return scores[0] if scores else None
+        return best_frontier(obs.known, start, np.array(dest, dtype=np.int64).reshape(-1, 2), alpha=p.alpha,
+                             beta=p.beta, robot_radius_m=self.robot.radius, penalty_radius_m=self.penalty_radius,
+                             reach=self.reach, exclude=exclude, min_size=p.min_frontier_cells)
 
     # ------------------------------------------------------------------------------------ collisions ----
     def _sidestep(self, obs: Observation) -> tuple[tuple[float, float], int] | None:

@@ -41,16 +41,14 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import ndimage
 
-from swarm.api import CELL_M, FREE, SOLID, UNSEEN, cell_centre, grid
+from swarm.api import CELL_M, SOLID, UNSEEN, cell_centre, grid
+
+from . import tnf_kernels
 
 GAUSS_A, GAUSS_B, GAUSS_C = 5.0, 0.5, 0.1
 UNSEEN_VALUE = 0.5
 """A cell's value for the Gaussian: 0.5 for UNSEEN (the occupancy probability nobody knows), 0 otherwise."""
-
-_N8 = ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1))
-
 
 def gaussian(x: float | np.ndarray) -> float | np.ndarray:
     """MAES's information Gaussian: G(0.5) = 5, G(0) = G(1) = 5 e^-12.5 = 1.86e-5."""
@@ -68,13 +66,8 @@ MAES_CELL_WEIGHT = CELL_M / MAES_TILE_M
 
 def cell_information(known: np.ndarray, cells: np.ndarray) -> np.ndarray:
     """``G(v_c) + sum_{n in N8(c)} G(v_n)`` for each (row, col) in ``cells``; cells off the map count as known."""
-    h, w = known.shape
-    unseen = np.zeros((h + 2, w + 2), dtype=np.int64)
-    unseen[1:-1, 1:-1] = known == UNSEEN
-    r, c = cells[:, 0] + 1, cells[:, 1] + 1
-    n_unseen = sum(unseen[r + dr, c + dc] for dr, dc in _N8)
-    own = np.where(unseen[r, c] == 1, G_UNSEEN, G_KNOWN)
-    return own + n_unseen * G_UNSEEN + (8 - n_unseen) * G_KNOWN
+    at = np.asarray(cells, dtype=np.int64).reshape(-1, 2)
+    return tnf_kernels.information(_as_map(known), at, np.zeros(len(at), np.int64), 1, G_UNSEEN, G_KNOWN)[0]
 
 
 def distance_term(w: np.ndarray, alpha: float, beta: float) -> np.ndarray:
@@ -174,30 +167,65 @@ def score_frontiers(known: np.ndarray, start: tuple[int, int], destinations: np.
     puts them, :func:`maes_sensed_position`); ``destinations``, ``penalty_radius_m`` are then unused. F and
     ``Dmax`` count every frontier, reachable or not, as MAES scores them all before it looks for a path.
     """
+    terms = _terms(known, start, destinations, alpha=alpha, beta=beta, robot_radius_m=robot_radius_m,
+                   penalty_radius_m=penalty_radius_m, reach=reach, exclude=exclude, min_size=min_size,
+                   margin_m=margin_m, variant=variant, position_m=position_m, sensed_m=sensed_m)
+    return [] if terms is None else _ranked(*terms)
+
+
+def best_frontier(known: np.ndarray, start: tuple[int, int], destinations: np.ndarray, *, alpha: float,
+                  beta: float, robot_radius_m: float, penalty_radius_m: float, reach: int,
+                  exclude: np.ndarray | None = None, min_size: int = 1,
+                  margin_m: float = grid.DEFAULT_MARGIN_M, variant: str = "swarm",
+                  position_m: tuple[float, float] | None = None, sensed_m: np.ndarray | None = None
+                  ) -> FrontierScore | None:
+    """``score_frontiers(...)[0]`` (None when it is empty), without building and sorting the others."""
+    terms = _terms(known, start, destinations, alpha=alpha, beta=beta, robot_radius_m=robot_radius_m,
+                   penalty_radius_m=penalty_radius_m, reach=reach, exclude=exclude, min_size=min_size,
+                   margin_m=margin_m, variant=variant, position_m=position_m, sensed_m=sensed_m)
+    if terms is None:
+        return None
+    cells, fr, keep, raw, gain, dist, dterm, penalty = terms
+    utility = gain + dterm - penalty
+    if np.isnan(utility).any():   # Python's sort orders NaN keys its own way: take its answer
+        return _ranked(*terms)[0]
+    # the sort key (-utility, row, col): the largest utility, then the lowest row, then column
+    j = int(np.lexsort((cells[:, 1], cells[:, 0], -utility))[0])
+    return _score(cells, fr, keep, raw, gain, dist, dterm, penalty, utility, j)
+
+
+_Terms = tuple[np.ndarray, "Frontiers", np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+
+def _terms(known: np.ndarray, start: tuple[int, int], destinations: np.ndarray, *, alpha: float, beta: float,
+           robot_radius_m: float, penalty_radius_m: float, reach: int, exclude: np.ndarray | None, min_size: int,
+           margin_m: float, variant: str, position_m: tuple[float, float] | None, sensed_m: np.ndarray | None
+           ) -> _Terms | None:
+    """The candidates of :func:`score_frontiers` and their terms: (target cells, frontiers, index of each
+    candidate's frontier, raw gain, I, path length, D, C), or None when there is no candidate."""
     space = grid.configuration_space(known, robot_radius_m, margin_m)
     here = grid.nearest_in(space, start, reach + 1)
     if here is None:
-        return []
-    fr = frontiers(known, exclude, min_size)
+        return None
+    k = _as_map(known)
+    fr = frontiers(k, exclude, min_size)
     if not fr.count:
-        return []
-    field = grid.distance_field(space, here)
-    if exclude is not None:
-        field[exclude] = np.inf     # excluded cells are no targets (the robot may still drive through them)
-    targets = _targets(known, fr, field, reach)
+        return None
+    targets, dist_all = frontier_targets(k, fr, space, here, reach, exclude)
     keep = np.flatnonzero(targets[:, 0] >= 0)
     if not len(keep):
-        return []
-    raw = np.bincount(fr.owner, weights=cell_information(known, fr.cells), minlength=fr.count)[keep]
+        return None
+    _, raw_all = tnf_kernels.information(k, fr.cells, fr.owner, fr.count, G_UNSEEN, G_KNOWN)
+    raw = raw_all[keep]
     cells = targets[keep]
-    dist = field[cells[:, 0], cells[:, 1]].astype(np.float64)
+    dist = dist_all[keep].astype(np.float64)
     if variant == "maes":
         gain = maes_information(raw, fr.count)
         here_m = cell_centre(*start) if position_m is None else position_m
         dterm = maes_distance_term(maes_wavefront(fr, here_m)[keep], alpha, beta)
         sensed = np.zeros((0, 2)) if sensed_m is None else sensed_m
         penalty = maes_coordination(fr, sensed)[keep]
-        return _ranked(cells, fr, keep, raw, gain, dist, dterm, penalty)
+        return cells, fr, keep, raw, gain, dist, dterm, penalty
     d_max = float(dist.max())
     w = dist / d_max if d_max > 0.0 else np.zeros_like(dist)
     gain = raw / raw.max()
@@ -206,22 +234,25 @@ def score_frontiers(known: np.ndarray, start: tuple[int, int], destinations: np.
     if len(destinations) and penalty_radius_m > 0.0:
         d_dest = _destination_distance(known, destinations, cells, penalty_radius_m)
         penalty = coordination_penalty(d_dest, penalty_radius_m)
-    return _ranked(cells, fr, keep, raw, gain, dist, dterm, penalty)
+    return cells, fr, keep, raw, gain, dist, dterm, penalty
+
+
+def _score(cells: np.ndarray, fr: Frontiers, keep: np.ndarray, raw: np.ndarray, gain: np.ndarray, dist: np.ndarray,
+           dterm: np.ndarray, penalty: np.ndarray, utility: np.ndarray, j: int) -> FrontierScore:
+    return FrontierScore(target=(int(cells[j, 0]), int(cells[j, 1])), size=int(fr.sizes[keep[j]]),
+                         raw_gain=float(raw[j]), gain=float(gain[j]), distance_m=float(dist[j]),
+                         distance=float(dterm[j]), penalty=float(penalty[j]), utility=float(utility[j]))
 
 
 def _ranked(cells: np.ndarray, fr: Frontiers, keep: np.ndarray, raw: np.ndarray, gain: np.ndarray,
             dist: np.ndarray, dterm: np.ndarray, penalty: np.ndarray) -> list[FrontierScore]:
     utility = gain + dterm - penalty
-    scores = [FrontierScore(target=(int(cells[j, 0]), int(cells[j, 1])), size=int(fr.sizes[i]),
-                            raw_gain=float(raw[j]), gain=float(gain[j]), distance_m=float(dist[j]),
-                            distance=float(dterm[j]), penalty=float(penalty[j]), utility=float(utility[j]))
-              for j, i in enumerate(keep.tolist())]
+    scores = [_score(cells, fr, keep, raw, gain, dist, dterm, penalty, utility, j) for j in range(len(keep))]
     scores.sort(key=lambda s: (-s.utility, s.target))
     return scores
 
 
 # ---------------------------------------------------------------------------------------- pieces ----
-_EIGHT = np.ones((3, 3), dtype=bool)
 
 
 @dataclass(frozen=True, eq=False)
@@ -252,92 +283,46 @@ def frontiers(known: np.ndarray, exclude: np.ndarray | None = None, min_size: in
     frontier; its representative is then the remaining cell nearest the centroid. (Splitting it into
     separate clusters instead was measured 7-13 % slower on 50 x 50 caves and buildings with 1-2 robots.)
 
-    Labelling runs on the bounding box of the frontier cells plus a one-cell margin, which holds every
-    frontier cell's 4-neighbours, so the clusters are exactly the whole map's: early in a run, when the
-    explored part is small, that is a fraction of the cost.
+    Compiled (:func:`algorithms.tnf_kernels.frontier_clusters`): one pass finds the frontier cells, the
+    rest touches only them.
     """
-    mask = grid.frontier_mask(known)
-    rows_any, cols_any = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
-    empty = np.zeros((0, 2), dtype=np.int64)
-    none = Frontiers(empty, np.zeros(0, np.int64), np.zeros(0, np.int64), empty)
-    if not len(rows_any):
-        return none
-    r0, c0 = max(int(rows_any[0]) - 1, 0), max(int(cols_any[0]) - 1, 0)
-    labels, n = ndimage.label(mask[r0:int(rows_any[-1]) + 2, c0:int(cols_any[-1]) + 2], structure=_EIGHT)
-    rows, cols = np.nonzero(labels)
-    lab = labels[rows, cols].astype(np.int64) - 1
-    order = np.argsort(lab, kind="stable")               # grouped by cluster, row-major within
-    rows, cols, lab = rows[order] + r0, cols[order] + c0, lab[order]
-    sizes = np.bincount(lab, minlength=n)
-    cy = np.bincount(lab, weights=rows + 0.5, minlength=n) / sizes     # centroids in cell units
-    cx = np.bincount(lab, weights=cols + 0.5, minlength=n) / sizes
+    cells, owner, sizes, rep = tnf_kernels.frontier_clusters(_as_map(known), exclude, min_size)
+    return Frontiers(cells=cells, owner=owner, sizes=sizes, representative=rep)
+
+
+def frontier_targets(known: np.ndarray, fr: Frontiers, space: np.ndarray, here: tuple[int, int], reach: int,
+                     exclude: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Each frontier's target, int64[F, 2] ((-1, -1) for none), and the path length to it (float32[F]
+    metres, inf for none): the reachable view cell nearest its representative (see the module
+    docstring); ties go to the shorter path, then the lower row, then column.
+
+    View cells grow from the frontiers' cells, ``reach`` 4-connected steps through FREE cells (only the
+    cells near frontiers are touched, not the whole map). A cell within reach of two frontiers keeps the
+    label that arrives first (the lowest frontier index at equal depth). A view cell is reachable when it
+    is in ``space``, not in ``exclude`` and the robot's path from ``here`` reaches it
+    (:func:`swarm.grid.field_at`: the distance field's values at these cells only, bit for bit).
+    """
+    k = _as_map(known)
+    h, w = k.shape
+    flat, lab = tnf_kernels.view_labels(k, fr.cells, fr.owner, reach)
+    cand = space.reshape(-1)[flat]
     if exclude is not None:
-        keep = ~exclude[rows, cols]
-        rows, cols, lab = rows[keep], cols[keep], lab[keep]
-        sizes = np.bincount(lab, minlength=n)
-    d2 = (rows + 0.5 - cy[lab]) ** 2 + (cols + 0.5 - cx[lab]) ** 2
-    big = sizes >= max(min_size, 1)
-    if not big.any():
-        return none
-    if not big.all():
-        keep = big[lab]
-        rows, cols, d2, lab = rows[keep], cols[keep], d2[keep], np.cumsum(big)[lab[keep]] - 1
-        sizes = sizes[big]
-    best = np.lexsort((np.arange(len(lab)), d2, lab))
-    first = best[np.searchsorted(lab[best], np.arange(len(sizes)))]
-    cells = np.column_stack((rows, cols)).astype(np.int64)
-    return Frontiers(cells=cells, owner=lab, sizes=sizes.astype(np.int64), representative=cells[first])
+        cand &= ~exclude.reshape(-1)[flat]
+    dist = np.full(len(flat), np.inf, dtype=np.float32)
+    at = np.flatnonzero(cand)
+    if len(at):
+        rows, cols = np.divmod(flat[at], w)
+        dist[at] = grid.field_at(space, here, np.column_stack((rows, cols)))
+    targets, which = tnf_kernels.choose_targets(flat, lab, dist, fr.representative, w)
+    return targets, np.where(which >= 0, dist[np.maximum(which, 0)], np.float32(np.inf))
 
 
-def _targets(known: np.ndarray, fr: Frontiers, field: np.ndarray, reach: int) -> np.ndarray:
-    """Each frontier's target, int64[F, 2] ((-1, -1) for none): the reachable view cell nearest its
-    representative (see the module docstring).
-
-    View cells come from a breadth-first growth of the frontiers' labels, ``reach`` 4-connected steps
-    through FREE cells, touching only the cells near frontiers (not the whole map). A cell within reach of
-    two frontiers keeps the label that arrives first (lowest frontier index at equal depth).
-    """
-    h, w = known.shape
-    free = (known == FREE).reshape(-1)
-    flat = fr.cells[:, 0] * w + fr.cells[:, 1]
-    seen_flat, seen_lab = [flat], [fr.owner]
-    visited = np.zeros(h * w, dtype=bool)
-    visited[flat] = True
-    front, front_lab = flat, fr.owner
-    for _ in range(reach):
-        r, c = np.divmod(front, w)
-        cand, cand_lab = [], []
-        for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
-            rr, cc = r + dr, c + dc
-            ok = (rr >= 0) & (rr < h) & (cc >= 0) & (cc < w)
-            cand.append((rr * w + cc)[ok])
-            cand_lab.append(front_lab[ok])
-        cf, cl = np.concatenate(cand), np.concatenate(cand_lab)
-        keep = free[cf] & ~visited[cf]
-        cf, cl = cf[keep], cl[keep]
-        order = np.lexsort((cl, cf))             # per cell, the lowest label first
-        cf, cl = cf[order], cl[order]
-        first = np.ones(len(cf), dtype=bool)
-        first[1:] = cf[1:] != cf[:-1]
-        front, front_lab = cf[first], cl[first]
-        visited[front] = True
-        seen_flat.append(front)
-        seen_lab.append(front_lab)
-    allf, alll = np.concatenate(seen_flat), np.concatenate(seen_lab)
-    dist = field.reshape(-1)[allf]
-    ok = np.isfinite(dist)
-    allf, alll, dist = allf[ok], alll[ok], dist[ok]
-    out = np.full((fr.count, 2), -1, dtype=np.int64)
-    if not len(allf):
-        return out
-    rr, cc = np.divmod(allf, w)
-    reps = fr.representative
-    e2 = (rr - reps[alll, 0]) ** 2 + (cc - reps[alll, 1]) ** 2
-    order = np.lexsort((cc, rr, dist, e2, alll))
-    labels, first = np.unique(alll[order], return_index=True)
-    j = order[first]
-    out[labels, 0], out[labels, 1] = rr[j], cc[j]
-    return out
+def _as_map(known: np.ndarray) -> np.ndarray:
+    """``known`` as the compiled passes take it: C-contiguous uint8 (the runtime's maps already are)."""
+    k = np.asarray(known)
+    if k.dtype != np.uint8 or not k.flags.c_contiguous:
+        k = np.ascontiguousarray(k, dtype=np.uint8)
+    return k
 
 
 def _destination_distance(known: np.ndarray, destinations: np.ndarray, cells: np.ndarray, radius_m: float
@@ -347,12 +332,13 @@ def _destination_distance(known: np.ndarray, destinations: np.ndarray, cells: np
     Destinations in a cell this robot knows as solid snap to the nearest non-solid cell within 2 m."""
     open_ = known != SOLID
     h, w = known.shape
+    dest = np.asarray(destinations, dtype=np.int64).reshape(-1, 2)
+    dest = np.column_stack((np.minimum(np.maximum(dest[:, 0], 0), h - 1), np.minimum(np.maximum(dest[:, 1], 0), w - 1)))
     sources = []
-    for r, c in np.asarray(destinations, dtype=np.int64).reshape(-1, 2).tolist():
-        snapped = grid.nearest_in(open_, (min(max(r, 0), h - 1), min(max(c, 0), w - 1)), 4)
+    for (r, c), fine in zip(dest.tolist(), open_[dest[:, 0], dest[:, 1]].tolist()):
+        snapped = (r, c) if fine else grid.nearest_in(open_, (r, c), 4)
         if snapped is not None:
             sources.append(snapped)
     if not sources:
         return np.full(len(cells), math.inf)
-    field = grid.distance_field(open_, np.array(sources, dtype=np.int64), max_dist_m=radius_m)
-    return field[cells[:, 0], cells[:, 1]].astype(np.float64)
+    return grid.field_at(open_, np.array(sources, dtype=np.int64), cells, max_dist_m=radius_m).astype(np.float64)

@@ -11,6 +11,8 @@ frequency_ghz = 2.4
 tx_power_dbm = 15.0
 sensitivity_dbm = -82.0
 wall_mode = "crossing"         # or "per_metre"
+shadowing_sigma_db = 4.0       # log-normal shadowing (0 = off, the default); correlated over shadowing_corr_m
+per = "bpsk"                   # packet errors rising smoothly near the sensitivity ("off", the default)
 tx_power_overrides = { "3" = 10.0 }        # robot id -> dBm
 [radio.materials]
 glass = [2.26, 2.48, 3.04]                 # dB per crossing at 1.3 / 2.4 / 5.2 GHz
@@ -29,15 +31,19 @@ from typing import Any
 import numpy as np
 
 from maps.errors import InvalidInput, field_name
-from maps.params import check_choice, check_float, from_mapping, to_mapping
+from maps.params import OMIT_DEFAULT, check_choice, check_float, check_int, from_mapping, to_mapping
 
 from .crossings import DEFAULT_GRAZE_TOLERANCE_M
 from .materials import Material, material_from_value
+from .per import PER_CURVES
 
 MODELS: tuple[str, ...] = ("multiwall", "global", "los", "maes")
 WALL_MODES: tuple[str, ...] = ("crossing", "per_metre")
 MAX_ROBOT_ID_DIGITS = 9
 """Per-robot override keys are robot ids of at most this many digits (a run has at most 1000 robots)."""
+PHYSICAL_MODELS: tuple[str, ...] = ("multiwall", "maes")
+"""Models with a received power to shadow and a margin to turn into packet errors."""
+MAX_SHADOWING_SIGMA_DB = 50.0
 MAX_FREQUENCY_GHZ = 100.0
 """Upper end of the 3GPP TR 38.901 model (0.5-100 GHz); lower frequencies are allowed and clamp the table."""
 
@@ -57,6 +63,17 @@ class RadioConfig:
     - ``materials``: extra or overriding materials, name -> entry (see :func:`radio.materials.material_from_value`).
     - ``tx_power_overrides`` / ``sensitivity_overrides``: robot id -> dBm (finite). A run spec refuses ids
       beyond its robot count (:class:`swarm.spec.RunSpec`); used directly, :meth:`tx_power_array` ignores them.
+    - ``shadowing_sigma_db``: log-normal shadowing's standard deviation (0 = none, the default; 3 dB is
+      3GPP TR 38.901's indoor-office line-of-sight figure), spatially correlated over
+      ``shadowing_corr_m`` metres (:mod:`radio.shadowing`). ``multiwall`` and ``maes`` only.
+    - ``per``: ``off`` (default: every message within the sensitivity arrives) or ``bpsk``: a packet error
+      rate that rises smoothly as the margin falls, ``per_ref`` of ``per_ref_bytes``-byte messages lost at
+      the sensitivity (:mod:`radio.per`). ``multiwall`` and ``maes`` only.
+
+    The channel settings (the last five) are left out of the canonical form while they hold their
+    defaults, so specs written before they existed keep their run keys; a setting of a feature that is
+    off (``shadowing_corr_m`` at sigma 0, ``per_ref`` with ``per = "off"``) is allowed and unused, so a sweep
+    may include the off value.
     """
 
     model: str = "multiwall"
@@ -72,6 +89,11 @@ class RadioConfig:
     materials: Mapping[str, Any] = field(default_factory=dict)
     tx_power_overrides: Mapping[Any, float] = field(default_factory=dict)
     sensitivity_overrides: Mapping[Any, float] = field(default_factory=dict)
+    shadowing_sigma_db: float = field(default=0.0, metadata={OMIT_DEFAULT: True})
+    shadowing_corr_m: float = field(default=10.0, metadata={OMIT_DEFAULT: True})
+    per: str = field(default="off", metadata={OMIT_DEFAULT: True})
+    per_ref: float = field(default=0.1, metadata={OMIT_DEFAULT: True})
+    per_ref_bytes: int = field(default=4096, metadata={OMIT_DEFAULT: True})
 
     def __post_init__(self) -> None:
         check_choice("model", self.model, MODELS)
@@ -90,9 +112,30 @@ class RadioConfig:
                 raise InvalidInput("max_range_m", self.max_range_m, "only with model = 'los' (unset it otherwise)")
         if self.wall_mode != "crossing" and self.model != "multiwall":
             raise InvalidInput("wall_mode", self.wall_mode, "'crossing' unless model = 'multiwall'")
+        self._check_channel()
         _set(self, "materials", types.MappingProxyType(_check_materials(self.materials)))
         _set(self, "tx_power_overrides", _check_overrides("tx_power_overrides", self.tx_power_overrides))
         _set(self, "sensitivity_overrides", _check_overrides("sensitivity_overrides", self.sensitivity_overrides))
+
+    def _check_channel(self) -> None:
+        """The stochastic channel's settings (shadowing, packet errors)."""
+        _set(self, "shadowing_sigma_db", check_float("shadowing_sigma_db", self.shadowing_sigma_db, 0.0,
+                                                     MAX_SHADOWING_SIGMA_DB))
+        _set(self, "shadowing_corr_m", check_float("shadowing_corr_m", self.shadowing_corr_m, 0.1, 100_000.0))
+        check_choice("per", self.per, PER_CURVES)
+        _set(self, "per_ref", check_float("per_ref", self.per_ref, 0.0, 1.0, lo_open=True, hi_open=True))
+        check_int("per_ref_bytes", self.per_ref_bytes, 1, 1_000_000)
+        physical = " or ".join(repr(m) for m in PHYSICAL_MODELS)
+        if self.shadowing_sigma_db > 0.0 and self.model not in PHYSICAL_MODELS:
+            raise InvalidInput("shadowing_sigma_db", self.shadowing_sigma_db,
+                               f"0 unless model = {physical} (model {self.model!r} has no received power to shadow)")
+        if self.per != "off" and self.model not in PHYSICAL_MODELS:
+            raise InvalidInput("per", self.per, f"'off' unless model = {physical} (model {self.model!r} has no link margin)")
+
+    @property
+    def stochastic(self) -> bool:
+        """Shadowing or packet errors are on (the channel is more than a fixed threshold)."""
+        return self.shadowing_sigma_db > 0.0 or self.per != "off"
 
     def __hash__(self) -> int:
         return hash(json.dumps(self.to_mapping(), sort_keys=True))

@@ -52,10 +52,11 @@ def _radio_evaluate(blocks, xy, params, cross_db, metre_db, per_metre, code, tx,
 
 @njit(cache=True)
 def _radio_link_columns(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, senders,
-                        link):  # pragma: no cover
+                        link, rssi_out, distance_out):  # pragma: no cover
     """``link[i, k]``: the message of robot ``senders[k]`` reaches robot i, exactly as
-    :func:`_radio_evaluate` judges it, walking only the pairs with a sender. Returns the first bad row
-    (nothing filled) or -1."""
+    :func:`_radio_evaluate` judges it, walking only the pairs with a sender; ``rssi_out`` and
+    ``distance_out`` get the pairs' RSSI and distance (what shadowing and packet errors read) unless they
+    have no rows (the plain link question). Returns the first bad row (nothing filled) or -1."""
     bad = _radio_first_outside(xy, params[WIDTH], params[HEIGHT])
     if bad >= 0:
         return bad
@@ -77,4 +78,8 @@ def _radio_link_columns(blocks, xy, params, cross_db, metre_db, per_metre, code,
                            charged, rssi, ok)
         for i in range(n):
             link[i, k] = ok[i, 0] and i != j
+        if rssi_out.shape[0]:
+            for i in range(n):
+                rssi_out[i, k] = rssi[i, 0] if i != j else np.nan
+                distance_out[i, k] = distance[i, k]
     return -1

@@ -15,6 +15,11 @@ and links are symmetric for equal radios and can be asymmetric with per-robot ov
 - :class:`LineOfSight`: linked iff no wall is crossed (and ``d <= max_range_m`` if set); ``rssi`` is the
   sender's power where linked and ``-inf`` where not (the model has no propagation physics).
 - :class:`Global`: always linked; ``rssi`` is the sender's power (MAES reports 15 dBm in open space).
+
+With ``shadowing_sigma_db > 0`` (``multiwall`` and ``maes``) every RSSI also loses the link's log-normal
+shadowing ``S(p, q)`` read from the map's seeded field (:mod:`radio.shadowing`) and links are judged on
+that; ``per`` gives the curve the runtime draws packet errors from (:mod:`radio.per`,
+:attr:`LinkModel.packet_errors`).
 """
 
 from __future__ import annotations
@@ -36,7 +41,11 @@ from .crossings import WallCrossing, WallRaster, _radio_clear_within, _radio_pri
 from .evaluate import CHARGED, DISTANCE, PATH_LOSS, RSSI, _radio_evaluate, _radio_first_outside, _radio_link_columns
 from .materials import resolve_table
 from .pathloss import GLOBAL, LOS, MAES, MULTIWALL, _radio_link_budget
+from .per import PacketErrorCurve
+from .shadowing import ShadowingField, _radio_shadow_links
 
+_NO_ROWS = np.empty((0, 0))
+"""Tells :func:`radio.evaluate._radio_link_columns` that only the links are wanted."""
 MAES_CELL_M = 0.25
 """MAES charges a material once per mesh triangle; a tile crossed at right angles is 4 triangles (1 m / 4)."""
 
@@ -50,7 +59,8 @@ class LinkState:
 
     ``walls[i, j]``: wall crossings (maximal solid runs) between i and j; ``material_walls[i, j, m]``: how
     many of them charged material ``materials[m]``. ``path_loss_db`` (eq. 1) and ``wall_db`` are what the
-    model charged (0 where it has no such term).
+    model charged (0 where it has no such term); ``shadowing_db`` the shadowing subtracted from ``rssi``
+    (None when the model has none).
     """
 
     distance: np.ndarray
@@ -61,6 +71,7 @@ class LinkState:
     wall_db: np.ndarray
     rssi: np.ndarray
     link: np.ndarray
+    shadowing_db: np.ndarray | None = None
 
     @property
     def n_robots(self) -> int:
@@ -119,6 +130,7 @@ class LinkBudget:
     rssi_dbm: float
     sensitivity_dbm: float
     link: bool
+    shadowing_db: float = 0.0
 
     @property
     def margin_db(self) -> float:
@@ -139,7 +151,9 @@ class LinkModel:
     prices_walls: ClassVar[bool] = True
     """False for models that only count walls (LOS, Global): :meth:`trace` then reports 0 dB per wall."""
 
-    def __init__(self, truth: Map, config: RadioConfig) -> None:
+    def __init__(self, truth: Map, config: RadioConfig, field_seed: int | None = None) -> None:
+        """``field_seed``: the seed of the map's shadowing field (default: the map's own seed, else 0); a run
+        passes its map seed, so every run on a map meets the same field."""
         if type(self) is LinkModel:
             raise TypeError("LinkModel is abstract; use build_link_model")
         self.config = config
@@ -159,6 +173,13 @@ class LinkModel:
         self._radios: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._last_key: bytes | None = None
         self._last_state: LinkState | None = None
+        self.shadowing: ShadowingField | None = None
+        if config.shadowing_sigma_db > 0.0:
+            seed = field_seed if field_seed is not None else (truth.seed if truth.seed is not None else 0)
+            self.shadowing = ShadowingField(truth.width_m, truth.height_m, config.shadowing_corr_m, seed)
+        self.packet_errors: PacketErrorCurve | None = (
+            PacketErrorCurve(config.per_ref, config.per_ref_bytes) if config.per != "off" else None)
+        """The packet error curve the runtime applies to every delivery, None when ``per = "off"``."""
 
     # ------------------------------------------------------------------ model-specific pieces
     def _metre_db(self, table_metre_db: np.ndarray) -> np.ndarray:
@@ -214,9 +235,17 @@ class LinkModel:
                               self.code, tx, sens, out, walls, counts, link)
         if bad >= 0:
             raise self._outside("positions", xy[bad])
+        shadow = None
+        if self.shadowing is not None:
+            values = self.shadowing.at(xy)
+            shadow = np.empty((r, r))
+            _radio_shadow_links(values, values, np.arange(r), out[DISTANCE], self.config.shadowing_sigma_db,
+                                self.shadowing.corr_m, sens, out[RSSI], link, shadow)
+            shadow.setflags(write=False)
         for array in (out, walls, counts, link):
             array.setflags(write=False)  # the planes of `out` below are views, read-only with it
-        state = LinkState(out[DISTANCE], walls, counts, self.materials, out[PATH_LOSS], out[CHARGED], out[RSSI], link)
+        state = LinkState(out[DISTANCE], walls, counts, self.materials, out[PATH_LOSS], out[CHARGED], out[RSSI], link,
+                          shadow)
         self._last_key, self._last_state = key, state
         return state
 
@@ -235,12 +264,45 @@ class LinkModel:
         tx, sens = self._radio_arrays(r)
         if self._last_state is not None and self._last_key == xy.tobytes() + tx.tobytes() + sens.tobytes():
             return self._last_state.link[:, which]
+        if self.shadowing is not None:
+            return self._columns(xy, which, tx, sens)[0]
         link = np.empty((r, which.size), dtype=np.bool_)
         bad = _radio_link_columns(self.raster.blocks, xy, self._params, self.cross_db, self.metre_db,
-                                  self.per_metre, self.code, tx, sens, which, link)
+                                  self.per_metre, self.code, tx, sens, which, link, _NO_ROWS, _NO_ROWS)
         if bad >= 0:
             raise self._outside("positions", xy[bad])
         return link
+
+    def margin_columns(self, positions: np.ndarray, senders: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
+        """``(link, margin)`` for the columns ``senders``: :meth:`link_columns` and each pair's margin, RSSI
+        minus the receiver's sensitivity in dB (float64[R, len(senders)]; NaN for a robot and itself), as
+        :meth:`evaluate` gives them: what packet errors are drawn from."""
+        xy = np.ascontiguousarray(positions, dtype=np.float64)
+        r = xy.shape[0]
+        which = np.asarray(senders, dtype=np.int64)
+        tx, sens = self._radio_arrays(r)
+        if self._last_state is not None and self._last_key == xy.tobytes() + tx.tobytes() + sens.tobytes():
+            state = self._last_state
+            return state.link[:, which], state.rssi[:, which] - sens[:, None]
+        link, rssi = self._columns(xy, which, tx, sens)
+        return link, rssi - sens[:, None]
+
+    def _columns(self, xy: np.ndarray, which: np.ndarray, tx: np.ndarray,
+                 sens: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(link, rssi)`` of the pairs with a sender in ``which`` (checked), shadowing applied."""
+        r = xy.shape[0]
+        link = np.empty((r, which.size), dtype=np.bool_)
+        rssi = np.empty((r, which.size))
+        distance = np.empty((r, which.size))
+        bad = _radio_link_columns(self.raster.blocks, xy, self._params, self.cross_db, self.metre_db,
+                                  self.per_metre, self.code, tx, sens, which, link, rssi, distance)
+        if bad >= 0:
+            raise self._outside("positions", xy[bad])
+        if self.shadowing is not None:
+            values = self.shadowing.at(xy)
+            _radio_shadow_links(values, values[which], which, distance, self.config.shadowing_sigma_db,
+                                self.shadowing.corr_m, sens, rssi, link, np.empty((r, which.size)))
+        return link, rssi
 
     def in_sight(self, positions: np.ndarray, max_distance: float) -> tuple[np.ndarray, np.ndarray]:
         """``(distance, clear)`` for robots at ``positions`` (float64[R, 2]): the pair distances (bit for bit
@@ -281,17 +343,17 @@ class LinkModel:
         """The itemised link budget from transmitter ``p`` to receiver ``q``."""
         tx = self.config.tx_power_dbm if tx_power_dbm is None else tx_power_dbm
         sens = self.config.sensitivity_dbm if sensitivity_dbm is None else sensitivity_dbm
-        rssi, link, path_loss, charged, distance = self._one_to_many(p, np.asarray([q], dtype=np.float64), "q",
-                                                                     tx, sens)
+        rssi, link, path_loss, charged, distance, shadow = self._one_to_many(
+            p, np.asarray([q], dtype=np.float64), "q", tx, sens)
         return LinkBudget(self.name, float(distance[0]), tuple(self.trace(p, q)), float(path_loss[0]),
-                          float(charged[0]), float(tx), float(rssi[0]), float(sens), bool(link[0]))
+                          float(charged[0]), float(tx), float(rssi[0]), float(sens), bool(link[0]), float(shadow[0]))
 
     def field(self, p: Point, targets: np.ndarray, *, tx_power_dbm: float | None = None,
               sensitivity_dbm: float | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(rssi, link) at every target (float64[N, 2]) for one transmitter at ``p`` (heatmaps)."""
         tx = self.config.tx_power_dbm if tx_power_dbm is None else tx_power_dbm
         sens = self.config.sensitivity_dbm if sensitivity_dbm is None else sensitivity_dbm
-        rssi, link, _, _, _ = self._one_to_many(p, targets, "targets", tx, sens)
+        rssi, link, _, _, _, _ = self._one_to_many(p, targets, "targets", tx, sens)
         return rssi, link
 
     def _one_to_many(self, p: Point, targets: np.ndarray, name: str, tx: float,
@@ -299,12 +361,19 @@ class LinkModel:
         tx = _finite("tx_power_dbm", tx)
         sens = _finite("sensitivity_dbm", sens)
         targets = self._check_positions(targets, name)
-        distance, walls, wall_db = self.raster.one_to_many(self._check_point(p, "p"), targets, self.tol,
-                                                           self.cross_db, self.metre_db, self.per_metre)
+        src = self._check_point(p, "p")
+        distance, walls, wall_db = self.raster.one_to_many(src, targets, self.tol, self.cross_db, self.metre_db,
+                                                           self.per_metre)
         n = targets.shape[0]
+        sens_rx = np.full(n, sens)
         path_loss, charged, rssi, link = self._budget(distance.reshape(n, 1), walls.reshape(n, 1),
-                                                      wall_db.reshape(n, 1), np.full(1, tx), np.full(n, sens))
-        return rssi[:, 0], link[:, 0], path_loss[:, 0], charged[:, 0], distance
+                                                      wall_db.reshape(n, 1), np.full(1, tx), sens_rx)
+        shadow = np.zeros((n, 1))
+        if self.shadowing is not None:
+            _radio_shadow_links(self.shadowing.at(targets), self.shadowing.at(np.array([src])), np.full(1, -1),
+                                np.ascontiguousarray(distance.reshape(n, 1)), self.config.shadowing_sigma_db,
+                                self.shadowing.corr_m, sens_rx, rssi, link, shadow)
+        return rssi[:, 0], link[:, 0], path_loss[:, 0], charged[:, 0], distance, shadow[:, 0]
 
     # ---------------------------------------------------------------------------- checks
     def _check_positions(self, positions: object, name: str) -> np.ndarray:
@@ -381,10 +450,11 @@ class Global(LinkModel):
 MODEL_CLASSES: dict[str, type[LinkModel]] = {c.name: c for c in (MultiWall, MaesCompatible, LineOfSight, Global)}
 
 
-def build_link_model(truth: Map, config: RadioConfig | None = None) -> LinkModel:
-    """The link model ``config.model`` for the map ``truth`` (resolves materials: unknown ones are errors)."""
+def build_link_model(truth: Map, config: RadioConfig | None = None, field_seed: int | None = None) -> LinkModel:
+    """The link model ``config.model`` for the map ``truth`` (resolves materials: unknown ones are errors);
+    ``field_seed`` seeds its shadowing field (see :class:`LinkModel`)."""
     config = config or RadioConfig()
-    return MODEL_CLASSES[config.model](truth, config)
+    return MODEL_CLASSES[config.model](truth, config, field_seed)
 
 
 @njit(cache=True)

@@ -3,12 +3,14 @@
 The few names a user needs, imported on first use (so ``import swarm`` and the command line stay fast)::
 
     import swarm
-    result = swarm.run({"map": {"kind": "cave", "size": 60}, "robots": {"count": 4}, "seed": 1})
+    result = swarm.run({"map": {"kind": "cave", "size": 60}, "seed": 1}, robots=4)   # or a TOML file
     result.summary["explored"], result.timeseries["explored"]
+    runs = swarm.campaign.run("grid.toml", "results/grid", workers=2).runs()   # a pandas DataFrame
     truth = swarm.load_map("house.npz")          # or swarm.generate("building", 100, seed=7)
 
 Plugins (exploration algorithms, planners) import from :mod:`swarm.api`; :func:`swarm.testing.check_explorer`
-checks one.
+checks one. ``swarm.env`` holds the Gymnasium and PettingZoo environments (``pip install 'swarm-sim[rl]'``),
+imported only when used. docs/python-api.md is the guide.
 """
 
 from __future__ import annotations
@@ -17,7 +19,8 @@ from importlib import import_module
 from typing import Any
 
 _EXPORTS = {
-    "run": ("swarm.simulation", "run"),
+    "run": ("swarm.python_api", "run"),
+    "resolve_spec": ("swarm.python_api", "resolve_spec"),
     "Simulation": ("swarm.simulation", "Simulation"),
     "RunSpec": ("swarm.spec", "RunSpec"),
     "RunResult": ("swarm.result", "RunResult"),
@@ -31,6 +34,9 @@ _EXPORTS = {
     "load_map": ("maps.io", "load_map"),
 }
 
+_SUBPACKAGES = ("campaign", "env")
+"""Reached as ``swarm.campaign`` / ``swarm.env`` without importing them first (``swarm.env`` needs the rl extra)."""
+
 __all__ = sorted(_EXPORTS)
 
 
@@ -40,8 +46,10 @@ def __getattr__(name: str) -> Any:
         value = getattr(import_module(module), attr)
         globals()[name] = value
         return value
+    if name in _SUBPACKAGES:
+        return import_module(f"swarm.{name}")  # the import binds it as an attribute of this package
     raise AttributeError(f"module 'swarm' has no attribute {name!r}")
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+    return sorted(set(globals()) | set(_EXPORTS) | set(_SUBPACKAGES))

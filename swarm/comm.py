@@ -4,7 +4,10 @@
 radio's link matrix computed from positions at send time, optionally thinned by seeded packet loss and a
 per-link byte budget, and appear in each receiver's inbox at tick t+1, ordered by (sender, sequence). A
 robot never receives its own broadcast. (MAES judges links at receive time; we use send time, as a real
-radio does, docs/design.md section 4.)
+radio does, docs/design.md section 4.) Two options make the channel more than a fixed threshold: packet
+errors drawn from each pair's margin (``radio.per``, :mod:`radio.per`) and multi-hop relaying
+(``comm.relay = "flood"``): each robot forwards every message it hears for the first time, one tick per
+hop, and a receiver gets the original message once (docs/radio.md, "Relaying").
 
 **Map sharing** is a runtime service configured per run (``comm.map_sharing``), so every algorithm shares
 maps the same way and comparisons are fair: every ``share_every`` ticks each robot broadcasts a
@@ -19,8 +22,9 @@ when the runtime reports its scans (``lidar_reach``), else over the whole map: t
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 from numba import njit
@@ -33,8 +37,12 @@ from .metrics import FreeCounts, InfoAges
 from .messages import MAX_MESSAGE_BYTES, MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
 from .schema import DROP_CAUSES
 
+if TYPE_CHECKING:
+    from radio.per import PacketErrorCurve
+
 SHARING_MODES = ("delta", "full", "off", "maes", "maes_heartbeat", "maes_sync")
 LINK_TIMES = ("send", "receive")
+RELAY_MODES = ("none", "flood")
 
 
 @dataclass(frozen=True)
@@ -49,7 +57,12 @@ class CommSpec:
     (0 = unlimited); what exceeds it is dropped in send order. ``neighbour_range_m``: robots within this
     range and in line of sight appear in ``Observation.neighbours`` (0 = the lidar range). ``link_at``:
     judge a message's link from the positions when it is sent (``send``, default, as a radio does) or when
-    it is read a tick later (``receive``, as MAES does, docs/maes.md section 6.1).
+    it is read a tick later (``receive``, as MAES does, docs/maes.md section 6.1). ``relay``: ``none``
+    (default, as MAES: messages reach direct neighbours only) or ``flood``: every robot forwards each message
+    it receives for the first time, one tick per hop, over at most ``relay_hops`` hops from the sender
+    (the sender's own broadcast is hop 1, so ``relay_hops = 1`` relays nothing). ``relay_hops`` is allowed
+    and unused with ``relay = "none"`` (a sweep may include both). Both are left out of the canonical form
+    while at their defaults (run keys unchanged).
     """
 
     map_sharing: str = "delta"
@@ -58,10 +71,14 @@ class CommSpec:
     bandwidth: int = 0
     neighbour_range_m: float = 0.0
     link_at: str = field(default="send", metadata={OMIT_DEFAULT: True})
+    relay: str = field(default="none", metadata={OMIT_DEFAULT: True})
+    relay_hops: int = field(default=4, metadata={OMIT_DEFAULT: True})
 
     def __post_init__(self) -> None:
         check_choice("comm.map_sharing", self.map_sharing, SHARING_MODES)
         check_choice("comm.link_at", self.link_at, LINK_TIMES)
+        check_choice("comm.relay", self.relay, RELAY_MODES)
+        check_int("comm.relay_hops", self.relay_hops, 1, 1000)
         check_int("comm.share_every", self.share_every, 1, 1_000_000)
         check_float("comm.loss", self.loss, 0.0, 1.0)
         check_int("comm.bandwidth", self.bandwidth, 0)
@@ -70,13 +87,23 @@ class CommSpec:
 
 @dataclass
 class Envelope:
-    """One encoded message in flight; after delivery, ``delivered_to`` lists the robots that got it."""
+    """One encoded message in flight; after delivery, ``delivered_to`` lists the robots that got it. A relayed
+    copy (``comm.relay = "flood"``) keeps the original's ``sender``, ``seq``, ``data`` and ``message``; ``hop``
+    counts transmissions from the sender (1: the sender's own) and ``via`` is the robot that transmits the
+    copy (-1: the sender itself); ``delivered_to`` lists only robots for which it was the first copy."""
 
     sender: int
     seq: int
     data: bytes
     message: Any
     delivered_to: list[int] = field(default_factory=list)
+    hop: int = 1
+    via: int = -1
+
+    @property
+    def transmitter(self) -> int:
+        """The robot whose radio sends this copy (whose links judge it)."""
+        return self.sender if self.via < 0 else self.via
 
 
 @dataclass
@@ -96,13 +123,22 @@ class CommStats:
     map_bytes_sent: int = 0
     last_contact: list[int] = field(default_factory=list)
     malformed_by_robot: list[int] = field(default_factory=list)
+    relaying: bool = False
+    relayed: int = 0
+    bytes_relayed: int = 0
+    duplicates: int = 0
 
     def as_dict(self) -> dict[str, Any]:
-        return {"sent": self.sent, "bytes_sent": self.bytes_sent, "delivered": self.delivered,
-                "bytes_delivered": self.bytes_delivered, "dropped_link": self.dropped_link,
-                "dropped_loss": self.dropped_loss, "dropped_bandwidth": self.dropped_bandwidth,
-                "malformed": self.malformed, "malformed_by_robot": list(self.malformed_by_robot),
-                "map_bytes_sent": self.map_bytes_sent, "last_contact": list(self.last_contact)}
+        """The counts as ``summary["messages"]``; ``relayed``, ``bytes_relayed`` and ``duplicates`` only when
+        relaying (so runs without it keep their results bit for bit)."""
+        out = {"sent": self.sent, "bytes_sent": self.bytes_sent, "delivered": self.delivered,
+               "bytes_delivered": self.bytes_delivered, "dropped_link": self.dropped_link,
+               "dropped_loss": self.dropped_loss, "dropped_bandwidth": self.dropped_bandwidth,
+               "malformed": self.malformed, "malformed_by_robot": list(self.malformed_by_robot),
+               "map_bytes_sent": self.map_bytes_sent, "last_contact": list(self.last_contact)}
+        if self.relaying:
+            out.update(relayed=self.relayed, bytes_relayed=self.bytes_relayed, duplicates=self.duplicates)
+        return out
 
     @property
     def dropped(self) -> int:
@@ -115,18 +151,40 @@ class CommStats:
 
 
 class Medium:
-    """Carries envelopes from outboxes at tick t to inboxes at tick t+1 through the link matrix."""
+    """Carries envelopes from outboxes at tick t to inboxes at tick t+1 through the link matrix.
+
+    Counting, per transmission (a broadcast or a relayed copy, each in ``sent`` and ``bytes_sent``), every
+    other robot is exactly one of: ``delivered`` (its first copy of the message: into its inbox),
+    ``duplicates`` (relaying: it had the message already, or got it from another copy this tick),
+    ``dropped_link`` (out of reach: below the sensitivity, or lost to packet errors there),
+    ``dropped_loss`` (within reach but lost: ``comm.loss``, or packet errors at or above the sensitivity),
+    ``dropped_bandwidth``. So ``(n - 1) * sent = delivered + duplicates + dropped``.
+    """
 
     def __init__(self, n: int, spec: CommSpec, rng: np.random.Generator,
-                 map_shape: tuple[int, int] | None = None) -> None:
-        """``map_shape``: the knowledge maps' shape, which every MapUpdate an algorithm sends must have."""
+                 map_shape: tuple[int, int] | None = None, packet_errors: PacketErrorCurve | None = None,
+                 error_rng: np.random.Generator | None = None) -> None:
+        """``map_shape``: the knowledge maps' shape, which every MapUpdate an algorithm sends must have.
+        ``packet_errors``: the radio's PER curve (None: off), drawn from ``error_rng`` (the run's channel
+        stream); ``rng`` draws ``comm.loss``."""
         self.n = n
         self.spec = spec
         self.rng = rng
         self.map_shape = tuple(map_shape) if map_shape is not None else None
-        self.stats = CommStats(last_contact=[-1] * n, malformed_by_robot=[0] * n)
+        self.relaying = spec.relay == "flood"
+        self.stats = CommStats(last_contact=[-1] * n, malformed_by_robot=[0] * n, relaying=self.relaying)
         self.dropped: list[tuple[int, str]] = []  # (sender, reason) of messages dropped since last read
         self._seq = [0] * n
+        self.packet_errors = packet_errors
+        if packet_errors is not None and error_rng is None:
+            raise ValueError("packet errors need their generator (error_rng)")
+        self.error_rng = error_rng
+        self._others = [np.array([i for i in range(n) if i != j], dtype=np.int64) for j in range(n)]
+        # Relaying: the robots holding each message still spreading ((sender, seq) -> ids), the copies each
+        # robot forwards next tick, and the messages those copies carry.
+        self._holders: dict[tuple[int, int], set[int]] = {}
+        self._pending: list[list[Envelope]] = [[] for _ in range(n)]
+        self._pending_keys: set[tuple[int, int]] = set()
 
     def envelope(self, sender: int, msg: Any) -> Envelope | None:
         """Encode a message an algorithm (or its remote agent) sends from ``sender``; None when it is
@@ -156,8 +214,13 @@ class Medium:
         self._seq[sender] += 1
         return Envelope(sender, self._seq[sender], data, msg)
 
-    def deliver(self, tick: int, outboxes: Sequence[Sequence[Envelope]], link: np.ndarray) -> list[list[Envelope]]:
-        """Inboxes for tick+1. ``link[i, j]``: a message from j reaches i (judged at send time)."""
+    def deliver(self, tick: int, outboxes: Sequence[Sequence[Envelope]], link: np.ndarray,
+                margin: np.ndarray | None = None) -> list[list[Envelope]]:
+        """Inboxes for tick+1. ``link[i, j]``: a message transmitted by j reaches i (judged at send time);
+        ``margin[i, j]``: that pair's margin in dB (-inf: cannot receive), needed with packet errors. Only the
+        columns of robots with something in their outbox are read."""
+        if self.packet_errors is not None or self.relaying:
+            return self._deliver_channel(tick, outboxes, link, margin)
         n = self.n
         stats = self.stats
         inboxes: list[list[Envelope]] = [[] for _ in range(n)]
@@ -190,6 +253,123 @@ class Medium:
                 stats.bytes_delivered += size * len(targets)
         return inboxes
 
+    def _deliver_channel(self, tick: int, outboxes: Sequence[Sequence[Envelope]], link: np.ndarray,
+                         margin: np.ndarray | None) -> list[list[Envelope]]:
+        """:meth:`deliver` with packet errors or relaying (the plain loop above is the fast path without):
+        per transmission, the link or the packet-error draws, then ``comm.loss``, the byte budget, and the
+        first-copy filter that feeds the next hop; inboxes sorted by (sender, sequence)."""
+        n = self.n
+        stats = self.stats
+        inboxes: list[list[Envelope]] = [[] for _ in range(n)]
+        budget = np.full((n, n), self.spec.bandwidth, dtype=np.int64) if self.spec.bandwidth else None
+        log_keep = None
+        if self.packet_errors is not None:
+            if margin is None:
+                raise ValueError("packet errors need the pairs' margins")
+            log_keep = self.packet_errors.log_keep(margin)
+        touched: set[tuple[int, int]] = set()
+        for j in range(n):
+            if not outboxes[j]:
+                continue
+            others = self._others[j]
+            linked = link[others, j]
+            keep_j = log_keep[others, j] if log_keep is not None else None
+            for env in outboxes[j]:
+                size = len(env.data)
+                stats.sent += 1
+                stats.bytes_sent += size
+                if isinstance(env.message, MapUpdate):
+                    stats.map_bytes_sent += size
+                if env.hop > 1:
+                    stats.relayed += 1
+                    stats.bytes_relayed += size
+                if keep_j is None:
+                    reach = others[linked]
+                    stats.dropped_link += (n - 1) - len(reach)
+                else:
+                    reach = self._survive_errors(others, linked, keep_j, size)
+                if self.spec.loss > 0.0 and len(reach):
+                    keep = self.rng.random(len(reach)) >= self.spec.loss
+                    stats.dropped_loss += int((~keep).sum())
+                    reach = reach[keep]
+                targets = reach.tolist()
+                if budget is not None:
+                    targets = self._within_budget(budget, targets, j, size)
+                if self.relaying:
+                    targets = self._first_copies(env, targets)
+                    touched.add((env.sender, env.seq))
+                for i in targets:
+                    inboxes[i].append(env)
+                    stats.last_contact[i] = tick + 1
+                env.delivered_to.extend(targets)
+                stats.delivered += len(targets)
+                stats.bytes_delivered += size * len(targets)
+        if self.relaying:
+            for key in touched - self._pending_keys:  # the flood of these messages is over
+                del self._holders[key]
+            for box in inboxes:
+                box.sort(key=_inbox_order)
+        return inboxes
+
+    def _survive_errors(self, others: np.ndarray, linked: np.ndarray, log_keep: np.ndarray, size: int) -> np.ndarray:
+        """The robots of ``others`` that receive a ``size``-byte transmission despite packet errors: one
+        uniform draw per robot, kept when it is at least the robot's PER (``-expm1(8 size log_keep)``, as
+        :meth:`radio.per.PacketErrorCurve.per`: 1 without signal, 0 far above the sensitivity). The lost are
+        counted as ``dropped_link`` below the sensitivity (not ``linked``), else as ``dropped_loss``."""
+        assert self.error_rng is not None
+        kept = np.empty(len(others), dtype=np.bool_)
+        below, above = _kept_despite_errors(self.error_rng.random(len(others)), log_keep, 8.0 * size, linked, kept)
+        self.stats.dropped_link += below
+        self.stats.dropped_loss += above
+        return others[kept]
+
+    def _first_copies(self, env: Envelope, targets: list[int]) -> list[int]:
+        """Relaying: the robots of ``targets`` that get ``env``'s message for the first time (the others are
+        counted as duplicates); each queues a copy to forward next tick unless the hop limit is reached."""
+        key = (env.sender, env.seq)
+        holders = self._holders.get(key)
+        if holders is None:
+            holders = self._holders[key] = {env.sender}
+        new = [i for i in targets if i not in holders]
+        self.stats.duplicates += len(targets) - len(new)
+        holders.update(new)
+        if new and env.hop < self.spec.relay_hops:
+            for i in new:
+                self._pending[i].append(Envelope(env.sender, env.seq, env.data, env.message, hop=env.hop + 1, via=i))
+            self._pending_keys.add(key)
+        return new
+
+    def add_relays(self, outboxes: list[list[Envelope]], failed: np.ndarray) -> None:
+        """Relaying: append to each robot's outbox, after its own messages, the copies it forwards this tick
+        (of the messages it received first this tick); a robot that failed forwards nothing."""
+        if not self._pending_keys:
+            return
+        flags = failed.tolist()
+        kept: set[tuple[int, int]] = set()
+        for i, copies in enumerate(self._pending):
+            if not copies:
+                continue
+            if not flags[i]:
+                outboxes[i].extend(copies)
+                kept.update((c.sender, c.seq) for c in copies)
+            self._pending[i] = []
+        for key in self._pending_keys - kept:
+            self._holders.pop(key, None)
+        self._pending_keys = set()
+
+    def deliveries(self, outboxes: Sequence[Sequence[Envelope]]) -> list[tuple[Any, list[int]]]:
+        """A tick's delivered messages with the robots each reached, in inbox order (sender, then sequence):
+        what :meth:`MapSharing.receive_tick` takes. Relayed copies of one message are one entry."""
+        out = [(env.message, env.delivered_to) for box in outboxes for env in box if env.delivered_to]
+        if not self.relaying:
+            return out
+        merged: dict[tuple[int, int], tuple[Any, list[int]]] = {}
+        for box in outboxes:
+            for env in box:
+                if env.delivered_to:
+                    merged.setdefault((env.sender, env.seq), (env.message, []))[1].extend(env.delivered_to)
+        return [(msg, sorted(ids)) for _, (msg, ids) in sorted(merged.items(), key=lambda item: item[0])]
+
     def _within_budget(self, budget: np.ndarray, targets: list[int], sender: int, size: int) -> list[int]:
         """The receivers whose link from ``sender`` still carries ``size`` bytes this tick (charged); the
         others count as dropped for bandwidth."""
@@ -210,7 +390,9 @@ class MapSharing:
                  ages: InfoAges | None = None, free: FreeCounts | None = None) -> None:
         """``ages``: told of every update sent and of every merge that leaves a receiver holding the sender's
         whole map; ``free``: told how the merges change each map's count of FREE cells (age of information,
-        docs/comm-metrics.md). ``lidar_reach``: the owner's promise that apart from this service's merges only a lidar writes into
+        docs/comm-metrics.md).
+
+        ``lidar_reach``: the owner's promise that apart from this service's merges only a lidar writes into
         the maps, within ``lidar_reach`` cells (rows and columns) of each robot's cell, and that it reports
         every scan with :meth:`scanned` from the start. A delta then compares only the places written since the robot's
         last update (:func:`swarm.knowledge.sync_box`), not both whole maps: the same cells. Without it
@@ -397,6 +579,27 @@ class MapSharing:
         if whole:
             self._merges.append((robots if len(whole) == len(ids) else np.array(whole, dtype=np.int64), sender,
                                  msg.tick))
+
+
+@njit(cache=True)
+def _kept_despite_errors(u, log_keep, bits, linked, kept):  # pragma: no cover - compiled
+    """``kept[k]``: the draw ``u[k]`` is at least the PER ``-expm1(bits * log_keep[k])``; returns how many were
+    lost (below the sensitivity: not ``linked``, at or above it)."""
+    below = 0
+    above = 0
+    for k in range(u.shape[0]):
+        ok = u[k] >= -math.expm1(bits * log_keep[k])
+        kept[k] = ok
+        if not ok:
+            if linked[k]:
+                above += 1
+            else:
+                below += 1
+    return below, above
+
+
+def _inbox_order(env: Envelope) -> tuple[int, int]:
+    return env.sender, env.seq
 
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)

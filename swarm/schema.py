@@ -28,7 +28,9 @@ THRESHOLD_COLUMNS: dict[str, str] = {threshold_key(t): f"t{round(t * 100)}" for 
 # -------------------------------------------------------------------------------------- messages ----
 DROP_CAUSES = ("dropped_link", "dropped_loss", "dropped_bandwidth")
 """Why a message did not reach a receiver: out of radio reach, lost (``comm.loss``), over the link's byte
-budget (``comm.bandwidth``). "Dropped" always means their sum."""
+budget (``comm.bandwidth``). "Dropped" always means their sum. Packet errors (``radio.per``) count as
+``dropped_loss`` when the receiver was within the sensitivity and ``dropped_link`` when it was below it
+(where a short message may still get through): the same split as without them (docs/radio.md)."""
 
 
 def dropped(counts: Mapping[str, int]) -> int:
@@ -36,7 +38,15 @@ def dropped(counts: Mapping[str, int]) -> int:
     return sum(int(counts[cause]) for cause in DROP_CAUSES)
 
 
-class MessageCounts(TypedDict):
+class RelayCounts(TypedDict, total=False):
+    """The part of ``summary["messages"]`` present only when ``comm.relay = "flood"`` (docs/radio.md)."""
+
+    relayed: int                    # relayed copies (counted in sent too)
+    bytes_relayed: int              # their bytes (in bytes_sent too)
+    duplicates: int                 # copies a robot received of a message it already had
+
+
+class MessageCounts(RelayCounts):
     """``summary["messages"]``: what the radio carried over the run (counts are per receiver for delivered
     and dropped messages, per broadcast for sent ones)."""
 

@@ -9,7 +9,8 @@ One logic tick (0.1 s, docs/design.md section 4):
    sensing range and line of sight) walk only the pairs within range (``LinkModel.in_sight``);
 4. inboxes: messages sent last tick arrive; map updates are merged into the receiver's map;
 5. the transport hands each live robot its observation and gets its action (goal or velocity, messages);
-6. this tick's broadcasts are judged by this tick's links and queued for next tick;
+6. this tick's broadcasts (and, with ``comm.relay = "flood"``, the copies robots forward) are judged by
+   this tick's links and queued for next tick;
 7. navigation turns goals into (v, omega) commands on each robot's own map (every moving robot's step in
    one compiled call, :class:`swarm.navigation.NavigationFleet`);
 8. metrics: explored thresholds every tick, a time-series row every ``record_every`` ticks, and with it a
@@ -91,6 +92,27 @@ class TickView:
     sent: list[list[Envelope]] = field(default_factory=list)
 
 
+@dataclass(eq=False)
+class LoopState:
+    """Where a run stands inside its loop: the counters carried from tick to tick and, between
+    :meth:`Simulation.sense` and :meth:`Simulation.apply`, what the current tick sensed."""
+
+    commands: np.ndarray                    # float64[R, 2]: last tick's (v, omega), applied by the next move
+    was_colliding: np.ndarray               # bool[R]: in contact at the last tick
+    tick: int = 0
+    collisions: int = 0                     # contacts begun so far
+    stalled_for: int = 0
+    stop_reason: str = ""
+    poses: Any = None                       # float64[R, 3] of this tick (the world's array: moved in place)
+    collided: Any = None                    # bool[R]: in contact now
+    began: Any = None                       # bool[R]: contacts that began this tick
+    active: Any = None                      # bool[R]: robots not failed
+    links: Any = None                       # the tick's radio picture (evaluated on first use)
+    inboxes: list = field(default_factory=list)
+    merged: list = field(default_factory=list)
+    pose_tuples: list = field(default_factory=list)
+
+
 class Simulation:
     """One run. Construct from a :class:`RunSpec` or a mapping; :meth:`run` once."""
 
@@ -116,9 +138,10 @@ class Simulation:
         self.fleet = NavigationFleet(self.spec.navigation, self.motion,
                                      [planner_rng(self.spec.seed, i) for i in range(n)])
         self.navigators = self.fleet.navigators
-        self.links = build_link_model(self.truth, self.spec.radio)
+        self.links = build_link_model(self.truth, self.spec.radio, field_seed=self.streams.map_seed)
         self.comm = self.spec.comm
-        self.medium = Medium(n, self.comm, self.streams.radio, map_shape=self.truth.shape)
+        self.medium = Medium(n, self.comm, self.streams.radio, map_shape=self.truth.shape,
+                             packet_errors=self.links.packet_errors, error_rng=self.streams.channel)
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         self.ages = InfoAges(n)  # who last merged whose map, when (age of information)
         self.free = FreeCounts(n, exact=self.lidar_params.mode == "ternary")  # each map's FREE cells
@@ -183,54 +206,86 @@ class Simulation:
 
     def _loop(self, host: AgentHost) -> RunResult:
         t0 = time.perf_counter()
+        state = self.start_state()
+        while not self.sense(state):
+            actions = host.act(self.observe(state))
+            self._note_failures(state.tick, host)
+            self.apply(state, actions)
+        return self._result(state.tick, state.stop_reason, state.collisions, time.perf_counter() - t0, host)
+
+    # The loop's body in three steps, so that a stepping driver (:mod:`swarm.env`) runs exactly the ticks
+    # :meth:`run` runs: ``sense`` (steps 1-4 and 8), ``observe`` (the batch for step 5), ``apply`` (6-7).
+    def start_state(self) -> LoopState:
+        """The state before tick 0 (no command yet)."""
+        n = self.spec.robots.count
+        return LoopState(commands=np.zeros((n, 2), dtype=np.float64), was_colliding=np.zeros(n, dtype=bool))
+
+    def sense(self, state: LoopState) -> bool:
+        """Steps 1-4 and 8 of tick ``state.tick``: move (after tick 0), scan, receive, metrics; True when the
+        run stops here (``state.stop_reason`` says why; the tick is recorded, nobody acts)."""
+        self.move_and_scan(state)
+        return self.communicate(state)
+
+    def move_and_scan(self, state: LoopState) -> None:
+        """Steps 1-2: the world moves under last tick's commands (not before tick 0), the lidars write the
+        knowledge maps; contacts begun this tick are counted (``state.began`` per robot)."""
+        if state.tick > 0:
+            self.world.step(state.commands)
+        poses = self.world.poses
+        collided = self.world.collided.copy()
+        began = collided > state.was_colliding  # contacts that began this tick
+        state.collisions += int(np.count_nonzero(began))
+        state.began = began
+        state.was_colliding = collided
+        active = ~self.failed
+        self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker, measure=False,
+                        freed=self.free.freed)
+        self.sharing.scanned(poses)
+        self.tracker.update_coverage(poses[:, :2], active=active)
+        state.poses, state.collided, state.active = poses, collided, active
+
+    def communicate(self, state: LoopState) -> bool:
+        """Steps 3-4 and 8: the tick's radio picture, inboxes and merges, thresholds, the stop test and the
+        time-series row; True when the run stops at this tick."""
         spec = self.spec
-        n = spec.robots.count
-        commands = np.zeros((n, 2), dtype=np.float64)
-        collisions = 0
-        was_colliding = np.zeros(n, dtype=bool)
-        stalled_for = 0
-        tick = 0
+        tick = state.tick
+        links = _TickLinks(self.links, state.poses[:, :2])
+        state.links = links
+        state.inboxes, state.merged = self._receive(tick, links)
+        explored = self.tracker.explored
+        self.metrics.check_thresholds(tick, explored)
         stop_reason = ""
-        while True:
-            if tick > 0:
-                self.world.step(commands)
-            poses = self.world.poses
-            collided = self.world.collided.copy()
-            collisions += int(np.count_nonzero(collided > was_colliding))  # contacts that began this tick
-            was_colliding = collided
-            active = ~self.failed
-            self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker, measure=False,
-                            freed=self.free.freed)
-            self.sharing.scanned(poses)
-            self.tracker.update_coverage(poses[:, :2], active=active)
-            links = _TickLinks(self.links, poses[:, :2])
-            inboxes, merged = self._receive(tick, links)
-            explored = self.tracker.explored
-            self.metrics.check_thresholds(tick, explored)
-            if explored >= spec.stop.explored:
-                stop_reason = "explored"
-            elif tick >= spec.stop.max_ticks:
-                stop_reason = "max_ticks"
-            elif stalled_for >= spec.stop.stall_ticks:
-                stop_reason = "stalled"
-            elif np.count_nonzero(active) == 0:  # (ndarray.any() costs ~1 us on 16 flags, this 0.3)
-                stop_reason = "all_failed"
-            if stop_reason or self.metrics.due(tick):
-                self._record(tick, explored, collisions, links)
-            if stop_reason:
-                break
-            pose_tuples = [_pose(Pose, row) for row in poses.tolist()]  # shared by observations and navigation
-            actions = host.act(self._batch(tick, poses, pose_tuples, collided, inboxes, merged))
-            self._note_failures(tick, host)
-            sent = self._send(tick, poses, actions, links)
-            commands = self._commands(actions, poses, pose_tuples)
-            moving = np.count_nonzero(commands) > 0 or any(nav.state in ("moving", "planning") for nav, action
-                                                           in zip(self.navigators, actions) if action is not None)
-            stalled_for = 0 if moving else stalled_for + 1
-            for observer in self.observers:
-                observer(TickView(tick, poses, self.known, self.tracker, actions, links, sent))
-            tick += 1
-        return self._result(tick, stop_reason, collisions, time.perf_counter() - t0, host)
+        if explored >= spec.stop.explored:
+            stop_reason = "explored"
+        elif tick >= spec.stop.max_ticks:
+            stop_reason = "max_ticks"
+        elif state.stalled_for >= spec.stop.stall_ticks:
+            stop_reason = "stalled"
+        elif np.count_nonzero(state.active) == 0:  # (ndarray.any() costs ~1 us on 16 flags, this 0.3)
+            stop_reason = "all_failed"
+        if stop_reason or self.metrics.due(tick):
+            self._record(tick, explored, state.collisions, links)
+        state.stop_reason = stop_reason
+        return bool(stop_reason)
+
+    def observe(self, state: LoopState) -> TickBatch:
+        """Step 5's input: the tick's observations for a host."""
+        state.pose_tuples = [_pose(Pose, row) for row in state.poses.tolist()]  # shared by observations and navigation
+        return self._batch(state.tick, state.poses, state.pose_tuples, state.collided, state.inboxes, state.merged)
+
+    def apply(self, state: LoopState, actions: list[Action | None]) -> None:
+        """Steps 6-7 of tick ``state.tick`` for the robots' ``actions`` (None: no action), then on to the
+        next tick: send, navigate, stall count, observers."""
+        poses = state.poses
+        sent = self._send(state.tick, poses, actions, state.links)
+        commands = self._commands(actions, poses, state.pose_tuples)
+        moving = np.count_nonzero(commands) > 0 or any(nav.state in ("moving", "planning") for nav, action
+                                                       in zip(self.navigators, actions) if action is not None)
+        state.stalled_for = 0 if moving else state.stalled_for + 1
+        for observer in self.observers:
+            observer(TickView(state.tick, poses, self.known, self.tracker, actions, state.links, sent))
+        state.commands = commands
+        state.tick += 1
 
     def _commands(self, actions: list[Action | None], poses: np.ndarray, pose_tuples: list[Pose]) -> np.ndarray:
         """The tick's (v, omega) per robot: an action's velocity, else its navigator's command toward the
@@ -297,6 +352,8 @@ class Simulation:
             outboxes.append(box)
         if self.medium.dropped:
             self._note_drops(tick)
+        if self.medium.relaying:
+            self.medium.add_relays(outboxes, self.failed)
         if any(outboxes):
             if self.comm.link_at == "send":
                 self._deliver(tick, outboxes, links)
@@ -306,12 +363,19 @@ class Simulation:
 
     def _deliver(self, tick: int, outboxes: list[list[Envelope]], links: Any) -> None:
         """Judge the broadcasts of ``tick`` by ``links`` (the positions of send or of receipt) into next tick's
-        inboxes; failed robots receive nothing."""
-        link = links.senders_link([i for i, out in enumerate(outboxes) if out])
+        inboxes; failed robots receive nothing. With packet errors the medium also reads the pairs' margins."""
+        senders = [i for i, out in enumerate(outboxes) if out]
+        margin = None
+        if self.medium.packet_errors is None:
+            link = links.senders_link(senders)
+        else:
+            link, margin = links.senders_margin(senders)
         if np.count_nonzero(self.failed):
             link = link & ~self.failed[:, None]
-        self.inboxes = self.medium.deliver(tick, outboxes, link)
-        self._deliveries = [(env.message, env.delivered_to) for out in outboxes for env in out if env.delivered_to]
+            if margin is not None:
+                margin = np.where(self.failed[:, None], -np.inf, margin)
+        self.inboxes = self.medium.deliver(tick, outboxes, link, margin)
+        self._deliveries = self.medium.deliveries(outboxes)
 
     # ------------------------------------------------------------------------------- observations ----
     def _sight(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -436,7 +500,7 @@ def run(spec: RunSpec | Mapping[str, Any]) -> RunResult:
     return Simulation(spec).run()
 
 
-__all__ = ["Simulation", "TickView", "TransportOptions", "build_map", "run"]
+__all__ = ["LoopState", "Simulation", "TickView", "TransportOptions", "build_map", "run"]
 
 
 class _TickLinks:
@@ -467,6 +531,15 @@ class _TickLinks:
         link = np.zeros((len(self._xy), len(self._xy)), dtype=np.bool_)
         link[:, senders] = self._model.link_columns(self._xy, senders)
         return link
+
+    def senders_margin(self, senders: list[int]) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`senders_link` and the same columns of the margins (RSSI minus the receiver's sensitivity,
+        dB; NaN elsewhere), for packet errors."""
+        r = len(self._xy)
+        link = np.zeros((r, r), dtype=np.bool_)
+        margin = np.full((r, r), np.nan)
+        link[:, senders], margin[:, senders] = self._model.margin_columns(self._xy, senders)
+        return link, margin
 
     def __getattr__(self, name: str) -> Any:  # only for names not in __slots__: the LinkState's fields
         return getattr(self.state(), name)

@@ -336,6 +336,7 @@ class SeedStreams:
     sensor: np.random.Generator
     radio: np.random.Generator
     robots: tuple[np.random.Generator, ...]
+    channel: np.random.Generator
 
 
 def derive_seed(*parts: int | str) -> int:
@@ -349,20 +350,32 @@ ROBOT_STREAM = 3
 """Robot i's algorithm stream is ``SeedSequence(seed, spawn_key=(ROBOT_STREAM, i))``."""
 PLANNER_STREAM = 4
 """Robot i's path-planner stream (stochastic planners such as IBOA) is ``spawn_key=(PLANNER_STREAM, i)``."""
+CHANNEL_STREAM = 5
+"""Packet errors (``radio.per``) draw from ``SeedSequence(seed, spawn_key=(CHANNEL_STREAM,))``: a stream of
+its own, so turning them on changes no other draw (``comm.loss`` keeps the radio stream)."""
 
 
 def planner_rng(seed: int, robot: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(PLANNER_STREAM, robot)))
 
 
+def run_map_seed(seed: int, map_seed: int | None) -> int:
+    """The map seed a run uses: ``map.seed`` if set, else one derived from the master ``seed`` (it also seeds
+    the radio's shadowing field, so a recording's reader recomputes the run's radio picture from it)."""
+    return map_seed if map_seed is not None else derive_seed(seed, "map")
+
+
 def seed_streams(spec: RunSpec) -> SeedStreams:
-    """Map seed and generators for spawning, sensor noise, radio loss and each robot's algorithm."""
+    """Map seed and generators for spawning, sensor noise, radio loss, each robot's algorithm and packet
+    errors. The first four are the root's first children (``spawn_key`` 0-3), packet errors
+    :data:`CHANNEL_STREAM`; the shadowing field is drawn from the map seed (:mod:`radio.shadowing`)."""
     root = np.random.SeedSequence(spec.seed)
     spawn_ss, sensor_ss, radio_ss, robots_ss = root.spawn(ROBOT_STREAM + 1)
-    map_seed = spec.map.seed if spec.map.seed is not None else derive_seed(spec.seed, "map")
+    map_seed = run_map_seed(spec.seed, spec.map.seed)
     spawn_seed = spec.robots.spawn_seed if spec.robots.spawn_seed is not None else None
     spawn_rng = (np.random.default_rng(np.random.SeedSequence(spawn_seed)) if spawn_seed is not None
                  else np.random.default_rng(spawn_ss))
     robots = tuple(np.random.default_rng(s) for s in robots_ss.spawn(spec.robots.count))
+    channel = np.random.default_rng(np.random.SeedSequence(spec.seed, spawn_key=(CHANNEL_STREAM,)))
     return SeedStreams(map_seed=map_seed, spawn=spawn_rng, sensor=np.random.default_rng(sensor_ss),
-                       radio=np.random.default_rng(radio_ss), robots=robots)
+                       radio=np.random.default_rng(radio_ss), robots=robots, channel=channel)

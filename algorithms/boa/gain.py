@@ -160,3 +160,33 @@ def chain_gain(goal: int, parent: np.ndarray, H: int, W: int, unknown: np.ndarra
                     g, False)
         s = parent[s]
     return g
+
+
+@njit(cache=True)
+def observed_cells(occupied: np.ndarray, H: int, W: int, poses: np.ndarray, t_dr: np.ndarray, t_dc: np.ndarray,
+                   t_skip: np.ndarray, t_start: np.ndarray, out: np.ndarray) -> None:
+    """Set ``out`` (bool, flat H * W) at every cell the fans at ``poses`` (int64[N, 3]: row, col, heading
+    0..7) see on ``occupied`` (flat): the robot's own cell, then each cell of the heading's trie up to and
+    including the first occupied one on each beam, none past the grid's edge. A pose outside the grid sees
+    nothing. The union of :func:`algorithms.boa.beams.visible_cells` over the poses, in one walk per pose."""
+    for p in range(poses.shape[0]):
+        r = poses[p, 0]
+        c = poses[p, 1]
+        h = poses[p, 2]
+        if r < 0 or r >= H or c < 0 or c >= W:
+            continue
+        out[r * W + c] = True
+        i = t_start[h]
+        end = t_start[h + 1]
+        while i < end:
+            rr = r + t_dr[i]
+            cc = c + t_dc[i]
+            if rr < 0 or rr >= H or cc < 0 or cc >= W:
+                i = t_skip[i]
+                continue
+            k = rr * W + cc
+            out[k] = True
+            if occupied[k]:
+                i = t_skip[i]
+            else:
+                i += 1

@@ -43,6 +43,7 @@ class Doorway:
     resolved: bool = False      # local: nothing unseen is left behind it (not shared, re-checked)
     failed_until: int = -1      # local: the navigator could not get through; skip until this tick
     _cut: tuple[int, int, int, int] | None = field(default=None, repr=False, compare=False)
+    _wire: tuple[tuple[int, bool], Wire] | None = field(default=None, init=False, repr=False, compare=False)
 
     # ---------------------------------------------------------------------------------- geometry ----
     @property
@@ -101,8 +102,13 @@ class Doorway:
 
     # --------------------------------------------------------------------------------------- wire ----
     def wire(self) -> Wire:
-        return (round(self.x, 3), round(self.y, 3), self.axis, round(self.width, 3), round(self.depth, 3),
-                self.sides, int(self.passed))
+        """The record as others receive it. Kept while its explored facts stay (the geometry never changes
+        after a record is made): every heartbeat sends the whole list."""
+        key = (self.sides, self.passed)
+        if self._wire is None or self._wire[0] != key:
+            self._wire = (key, (round(self.x, 3), round(self.y, 3), self.axis, round(self.width, 3),
+                                round(self.depth, 3), self.sides, int(self.passed)))
+        return self._wire[1]
 
     @classmethod
     def from_wire(cls, w: Wire, tick: int = 0) -> Doorway:
@@ -116,8 +122,11 @@ def valid_wire(w: object) -> bool:
     if not isinstance(w, tuple) or len(w) != 7:
         return False
     x, y, axis, width, depth, sides, passed = w
-    nums = (x, y, width, depth)
-    return (all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in nums)
+    finite, num = math.isfinite, (int, float)     # spelled out: every heartbeat entry that changed comes here
+    return (isinstance(x, num) and not isinstance(x, bool) and finite(x)
+            and isinstance(y, num) and not isinstance(y, bool) and finite(y)
+            and isinstance(width, num) and not isinstance(width, bool) and finite(width)
+            and isinstance(depth, num) and not isinstance(depth, bool) and finite(depth)
             and axis in (0, 1) and 0 < width <= 50 and 0 < depth <= 50 and isinstance(sides, int)
             and isinstance(passed, int) and 0 <= x <= 1e5 and 0 <= y <= 1e5)
 
@@ -135,6 +144,8 @@ class DoorwayBook:
         self.version = 0
         self._xy = np.zeros((0, 2))
         self._wire: tuple[int, tuple[Wire, ...]] = (-1, ())
+        self._found: dict[tuple[int, float, float], tuple[int, Doorway | None]] = {}
+        self._boxes = np.zeros((0, 4), dtype=np.int64)
 
     def __iter__(self):
         return iter(self.doors)
@@ -147,13 +158,29 @@ class DoorwayBook:
         return door.axis, math.floor(door.x / MATCH_M), math.floor(door.y / MATCH_M)
 
     def find(self, door: Doorway) -> Doorway | None:
-        axis, bx, by = self._key(door)
+        return self._find_at(door.axis, door.x, door.y)
+
+    def _find_at(self, axis: int, x: float, y: float) -> Doorway | None:
+        """The first record (bucket by bucket) matching a doorway with this axis and centre. Heartbeats and
+        scans bring the same doorways over and over: an answer is remembered while no record is added
+        (only a new record can change it: records never move)."""
+        hit = self._found.get((axis, x, y))
+        if hit is not None and hit[0] == len(self.doors):
+            return hit[1]
+        bx, by = math.floor(x / MATCH_M), math.floor(y / MATCH_M)
+        found = None
         for dx in (-1, 0, 1):
             for dy in (-1, 0, 1):
                 for d in self._buckets.get((axis, bx + dx, by + dy), ()):
-                    if d.matches(door):
-                        return d
-        return None
+                    if d.axis == axis and math.hypot(d.x - x, d.y - y) < MATCH_M:   # Doorway.matches
+                        found = d
+                        break
+                if found is not None:
+                    break
+            if found is not None:
+                break
+        self._found[(axis, x, y)] = (len(self.doors), found)
+        return found
 
     def add(self, door: Doorway) -> tuple[Doorway, bool]:
         """Add or merge; returns (the stored record, whether it is new)."""
@@ -164,11 +191,23 @@ class DoorwayBook:
             self._xy = np.vstack([self._xy, [[door.x, door.y]]])
             self.version += 1
             return door, True
-        sides, passed = known.sides | door.sides, known.passed or door.passed
+        self._merge(known, door.sides, door.passed)
+        return known, False
+
+    def add_wire(self, w: Wire, tick: int = 0) -> tuple[Doorway, bool]:
+        """``add(Doorway.from_wire(w, tick))`` for a valid wire tuple, without making the record unless it
+        is new."""
+        known = self._find_at(int(w[2]), float(w[0]), float(w[1]))
+        if known is None:
+            return self.add(Doorway.from_wire(w, tick))
+        self._merge(known, int(w[5]) & 3, bool(w[6]))
+        return known, False
+
+    def _merge(self, known: Doorway, sides: int, passed: bool) -> None:
+        sides, passed = known.sides | sides, known.passed or passed
         if (sides, passed) != (known.sides, known.passed):
             known.sides, known.passed = sides, passed
             self.version += 1
-        return known, False
 
     def touch(self) -> None:
         """A record's explored facts changed in place."""
@@ -184,9 +223,16 @@ class DoorwayBook:
         d2 = (self._xy[:, 0] - x) ** 2 + (self._xy[:, 1] - y) ** 2
         return np.flatnonzero(d2 <= radius * radius).tolist()
 
+    def cut_boxes(self) -> np.ndarray:
+        """Every record's :meth:`Doorway.cut` as int64[N, 4] rows (r0, c0, r1, c1), in record order (kept:
+        records are only added, and their geometry never changes)."""
+        if len(self._boxes) != len(self.doors):
+            self._boxes = np.array([d.cut() for d in self.doors], dtype=np.int64).reshape(-1, 4)
+        return self._boxes
+
     def wire(self) -> tuple[Wire, ...]:
         version, wire = self._wire
         if version != self.version:
-            wire = tuple(d.wire() for d in self.doors)
+            wire = tuple(map(Doorway.wire, self.doors))
             self._wire = (self.version, wire)
         return wire

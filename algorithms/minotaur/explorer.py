@@ -115,7 +115,7 @@ from .auction import Auctions
 from .cells import clip, line_of_sight, local, mask
 from .detection import Pending, cells, scan
 from .doorways import Doorway, DoorwayBook
-from .messages import AuctionResult, Bid, DoorwayFound, DoorwayList, Heading
+from .messages import AuctionResult, Bid, DoorwayFound, DoorwayList, Heading, valid_heading
 from .params import MinotaurParams
 from .peers import Peers
 
@@ -192,6 +192,7 @@ class Minotaur:
         self._tick_cache: dict[str, Any] = {}
         self._obs: Observation | None = None
         self._debug_doors: tuple[int, list[tuple[float, float, int, float, bool]]] = (-1, [])
+        self._debug_open: list[int] = []                         # indices whose view says "not explored"
 
     def act(self, obs: Observation) -> Action:
         self._obs = obs
@@ -672,9 +673,26 @@ class Minotaur:
         return True
 
     def _doorways_view(self) -> list[tuple[float, float, int, float, bool]]:
+        """Every known doorway as (x, y, axis, width, explored), a new list whenever the book changed.
+        Records are only added and only become explored (sides and passed are only ever set), so only
+        new records and those not explored last time are looked at again."""
         version, view = self._debug_doors
         if version != self.book.version:
-            view = [(d.x, d.y, d.axis, d.width, d.explored) for d in self.book.doors]
+            doors = self.book.doors
+            view = list(view)
+            still = []
+            for k in self._debug_open:
+                d = doors[k]
+                if d.explored:
+                    view[k] = (d.x, d.y, d.axis, d.width, d.explored)
+                else:
+                    still.append(k)
+            for k in range(len(view), len(doors)):
+                d = doors[k]
+                view.append((d.x, d.y, d.axis, d.width, d.explored))
+                if not view[k][4]:
+                    still.append(k)
+            self._debug_open = still
             self._debug_doors = (self.book.version, view)
         return view
 
@@ -694,7 +712,7 @@ def _well_formed(m: Any) -> bool:
     in-process delivery hands over the sender's object, so check again). A doorway list is checked
     entry by entry when merged, only for the entries that changed: it is the bulk of the traffic."""
     if isinstance(m, DoorwayList):
-        return isinstance(m.doors, tuple) and Heading(m.sender, m.target, m.door).is_valid()
+        return isinstance(m.doors, tuple) and valid_heading(m.target, m.door)
     check = getattr(m, "validate", None)
     if check is None:
         return False

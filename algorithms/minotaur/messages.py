@@ -36,8 +36,11 @@ def _int(v: Any) -> bool:
 
 def _point(v: Any) -> bool:
     """A (x, y) pair of numbers (NaN allowed: "no target")."""
-    return isinstance(v, tuple) and len(v) == 2 and all(isinstance(c, (int, float)) and not isinstance(c, bool)
-                                                        for c in v)
+    if not isinstance(v, tuple) or len(v) != 2:
+        return False
+    x, y = v
+    return (isinstance(x, (int, float)) and not isinstance(x, bool)
+            and isinstance(y, (int, float)) and not isinstance(y, bool))
 
 
 def _check(ok: bool, what: str) -> None:
@@ -69,7 +72,12 @@ class Heading:
         _check(self.is_valid(), "minotaur.heading: bad fields")
 
     def is_valid(self) -> bool:
-        return _point(self.target) and (self.door == () or valid_wire(self.door))
+        return valid_heading(self.target, self.door)
+
+
+def valid_heading(target: Any, door: Any) -> bool:
+    """A heading's (and a doorway list's) target and doorway fields are safe to use."""
+    return _point(target) and (door == () or valid_wire(door))
 
 
 @message("minotaur.doorway_found")

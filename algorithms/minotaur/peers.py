@@ -12,7 +12,12 @@ another robot is going through to it, and to keep its greedy targets away from o
 from __future__ import annotations
 
 import math
+import threading
+from collections import OrderedDict
 from collections.abc import Iterator
+from functools import lru_cache
+from itertools import compress
+from operator import is_not
 
 import numpy as np
 
@@ -27,7 +32,7 @@ class Peers:
         self.poses: dict[int, tuple[float, float, int]] = {}        # robot -> (x, y, tick heard)
         self.targets: dict[int, tuple[float, float, int]] = {}
         self.doors: dict[int, tuple[Doorway, int]] = {}             # robot -> (doorway it goes through, tick)
-        self._lists: dict[int, tuple[tuple, frozenset]] = {}        # robot -> its last doorway list
+        self._lists: dict[int, _ListState] = {}                    # robot -> its last doorway list
 
     def saw(self, robot: int, x: float, y: float, tick: int) -> None:
         self.poses[robot] = (float(x), float(y), tick)
@@ -41,29 +46,49 @@ class Peers:
         """Merge a heartbeat or heading into ``book`` and remember the sender's target and doorway."""
         if isinstance(m, DoorwayList):
             for w in self._new_entries(m.sender, m.doors):
-                book.add(Doorway.from_wire(w, tick))
+                book.add_wire(w, tick)
         t = m.target
         if all(isinstance(v, (int, float)) and math.isfinite(v) for v in t):
             self.targets[m.sender] = (float(t[0]), float(t[1]), tick)
         else:
             self.targets.pop(m.sender, None)
         if valid_wire(m.door):
-            door, _ = book.add(Doorway.from_wire(m.door, tick))  # type: ignore[arg-type]
+            door, _ = book.add_wire(m.door, tick)  # type: ignore[arg-type]
             self.doors[m.sender] = (door, tick)
         else:
             self.doors.pop(m.sender, None)
 
     def _new_entries(self, sender: int, doors: tuple) -> list[Wire]:
         """The valid entries of a doorway list that its sender's previous list did not have: a robot
-        repeats its whole list every heartbeat, and merging only what changed keeps this cheap."""
-        last, seen = self._lists.get(sender, ((), frozenset()))
-        if doors == last:
+        repeats its whole list every heartbeat, and merging only what changed keeps this cheap.
+
+        What is new is ``frozenset(doors) - frozenset(previous)``, in that set's order (the order the
+        book adds them). Building both sets hashes every entry of every list a sender sends whenever
+        anything in it changed (most lists: one doorway added or marked explored). So the entries are
+        counted per sender (:class:`_ListState`) and only the positions that changed are hashed; when one
+        entry is new its order is trivial, and only two or more new ones build the sets for their order."""
+        state = self._lists.get(sender)
+        if state is None:
+            state = self._lists[sender] = _ListState()
+        if doors is state.doors or doors == state.doors:
             return []
+        if state.counts is not None and isinstance(doors, tuple):
+            try:
+                fresh = state.advance(doors)
+            except TypeError:            # an unhashable (malformed) entry: the sets below say what it means
+                pass
+            else:
+                if len(fresh) <= 1:
+                    return [w for w in fresh if valid_wire(w)]
+                return [w for w in state.set_of_doors() - state.previous_set if valid_wire(w)]
+        seen = state.set_of_doors()
         try:
-            entries = frozenset(doors)
+            entries = _SHARED.set_of(doors)
         except TypeError:                        # an unhashable (malformed) entry
             entries = frozenset(w for w in doors if valid_wire(w))
-        self._lists[sender] = (doors, entries)
+            state.reset(doors, entries, counted=False)
+        else:
+            state.reset(doors, entries, counted=True)
         return [w for w in entries - seen if valid_wire(w)]
 
     def claimed(self, tick: int, max_age: int) -> list[Doorway]:
@@ -78,8 +103,7 @@ class Peers:
         h, w = shape
         mask = np.zeros((h, w), dtype=bool)
         k = math.ceil(radius_m / CELL_M)
-        yy, xx = np.mgrid[-k:k + 1, -k:k + 1]
-        disc = yy * yy + xx * xx <= k * k
+        disc = _disc(k)
         for x, y in fresh:
             r, c = cell_of(x, y)
             r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
@@ -87,3 +111,113 @@ class Peers:
                 continue
             mask[r0:r1, c0:c1] |= disc[r0 - (r - k):r1 - (r - k), c0 - (c - k):c1 - (c - k)]
         return mask
+
+
+@lru_cache(maxsize=8)
+def _disc(k: int) -> np.ndarray:
+    """The cells within ``k`` of the centre of a (2k + 1)-square (read-only: shared by every call)."""
+    yy, xx = np.mgrid[-k:k + 1, -k:k + 1]
+    disc = yy * yy + xx * xx <= k * k
+    disc.flags.writeable = False
+    return disc
+
+
+class _ListState:
+    """A sender's last doorway list: the tuple, the number of times each entry occurs in it (None after a
+    list with an unhashable entry), and its entries as a set when one was built (``set_of_doors``)."""
+
+    def __init__(self) -> None:
+        self.doors: tuple = ()
+        self.counts: dict | None = {}
+        self._set: frozenset | None = frozenset()
+        self.previous_set: frozenset = frozenset()
+
+    def set_of_doors(self) -> frozenset:
+        """The entries of the last list as ``Peers._new_entries`` has always taken them: ``frozenset`` of
+        the list, or of its valid entries when one was unhashable."""
+        if self._set is None:
+            self._set = _SHARED.set_of(self.doors)
+        return self._set
+
+    def reset(self, doors: tuple, entries: frozenset, counted: bool) -> None:
+        self.doors, self._set = doors, entries
+        self.counts = _counts(doors) if counted else None
+
+    def advance(self, doors: tuple) -> list:
+        """Move to ``doors`` and return the entries it has that the last list had not (each once, in no
+        particular order); ``previous_set`` is then the last list's set. Raises TypeError on an
+        unhashable entry, leaving the state as it was."""
+        last, counts = self.doors, self.counts
+        assert counts is not None
+        changed = _SHARED.changed(last, doors)
+        n = min(len(doors), len(last))
+        gone = [last[i] for i in changed] + list(last[n:])
+        came = [doors[i] for i in changed] + list(doors[n:])
+        for w in gone + came:
+            hash(w)                                # raise before changing anything
+        fresh = []
+        for w in came:
+            if w not in counts and w not in fresh:
+                fresh.append(w)
+        if len(fresh) > 1:
+            self.previous_set = self.set_of_doors()
+        for w in gone:
+            k = counts[w] - 1
+            if k:
+                counts[w] = k
+            else:
+                del counts[w]
+        for w in came:
+            counts[w] = counts.get(w, 0) + 1
+        self.doors, self._set = doors, None
+        return fresh
+
+
+class _Shared(threading.local):
+    """What every receiver of one heartbeat computes alike, computed once: in-process, all receivers of a
+    sender's list get the same tuple object, and all that heard its previous one hold that same object.
+    Entries hold the tuples they describe, so an id is never reused while its entry lives."""
+
+    SIZE = 64
+
+    def __init__(self) -> None:
+        self.diffs: OrderedDict[tuple[int, int], tuple[tuple, tuple, list[int]]] = OrderedDict()
+        self.sets: OrderedDict[int, tuple[tuple, frozenset]] = OrderedDict()
+
+    def changed(self, last: tuple, doors: tuple) -> list[int]:
+        """Positions below both lengths whose entries differ (a sender's unchanged entries are the same
+        objects, Doorway.wire is kept, so identity is tested first, in C)."""
+        key = (id(last), id(doors))
+        hit = self.diffs.get(key)
+        if hit is not None and hit[0] is last and hit[1] is doors:
+            return hit[2]
+        n = min(len(doors), len(last))
+        out = [i for i in compress(range(n), map(is_not, doors, last)) if doors[i] != last[i]]
+        _put(self.diffs, key, (last, doors, out), self.SIZE)
+        return out
+
+    def set_of(self, doors: tuple) -> frozenset:
+        """``frozenset(doors)`` (raises TypeError on an unhashable entry)."""
+        hit = self.sets.get(id(doors))
+        if hit is not None and hit[0] is doors:
+            return hit[1]
+        out = frozenset(doors)
+        _put(self.sets, id(doors), (doors, out), self.SIZE)
+        return out
+
+
+def _put(cache: OrderedDict, key: object, value: object, size: int) -> None:
+    cache[key] = value
+    cache.move_to_end(key)
+    while len(cache) > size:
+        cache.popitem(last=False)
+
+
+_SHARED = _Shared()
+
+
+def _counts(doors: tuple) -> dict:
+    out: dict = {}
+    for w in doors:
+        out[w] = out.get(w, 0) + 1
+    return out

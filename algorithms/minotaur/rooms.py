@@ -16,10 +16,11 @@ import math
 from collections.abc import Iterable
 
 import numpy as np
+from numba import njit
 
 from swarm.api import cell_of, grid
 
-from .doorways import Doorway
+from .doorways import Doorway, DoorwayBook
 
 SNAP_CELLS = 4
 """A point in inflated space (a robot against a wall, a door's centre) snaps this far into the space."""
@@ -27,16 +28,27 @@ SNAP_CELLS = 4
 
 def cut_doors(space: np.ndarray, doors: Iterable[Doorway], origin: tuple[int, int] = (0, 0)) -> np.ndarray:
     """A copy of ``space`` (a map or a window whose cell (0, 0) is map cell ``origin``) with every
-    doorway's opening closed."""
+    doorway's opening closed. A :class:`DoorwayBook` gives its boxes at once (kept per book)."""
+    boxes = doors.cut_boxes() if isinstance(doors, DoorwayBook) else np.array(
+        [d.cut() for d in doors], dtype=np.int64).reshape(-1, 4)
     out = space.copy()
+    _close(out, boxes, origin[0], origin[1])
+    return out
+
+
+@njit(cache=True)
+def _close(out, boxes, r_origin, c_origin):  # pragma: no cover - compiled
+    """``out[r0:r1 + 1, c0:c1 + 1] = False`` for each box (r0, c0, r1, c1) shifted by the origin, clipped
+    to ``out``; boxes wholly outside are skipped."""
     h, w = out.shape
-    for d in doors:
-        r0, c0, r1, c1 = d.cut()
-        r0, r1, c0, c1 = r0 - origin[0], r1 - origin[0], c0 - origin[1], c1 - origin[1]
+    for i in range(boxes.shape[0]):
+        r0, c0 = boxes[i, 0] - r_origin, boxes[i, 1] - c_origin
+        r1, c1 = boxes[i, 2] - r_origin, boxes[i, 3] - c_origin
         if r1 < 0 or c1 < 0 or r0 >= h or c0 >= w:
             continue
-        out[max(r0, 0):r1 + 1, max(c0, 0):c1 + 1] = False
-    return out
+        for r in range(max(r0, 0), min(r1 + 1, h)):
+            for c in range(max(c0, 0), min(c1 + 1, w)):
+                out[r, c] = False
 
 
 def view_cells(known: np.ndarray, space: np.ndarray, reach: int) -> np.ndarray:
@@ -78,26 +90,26 @@ def choose_door(space: np.ndarray, cut: np.ndarray, start: tuple[int, int], door
     ``resolved`` (everything behind it is known) and skipped from then on."""
     if not doors:
         return None
-    in_room = grid.distance_field(cut, [start])
-    anywhere = grid.distance_field(space, [start])
-    options: list[tuple[int, float, int, Doorway, int]] = []
-    for k, d in enumerate(doors):
-        best: tuple[int, float, int] | None = None
-        for side in (-1, 1):
-            cell = snap(space, d.point(side, 1.0))
-            if cell is None:
-                continue
-            room_d = float(in_room[cell]) if cut[cell] else math.inf
-            if math.isfinite(room_d):
-                cand = (0, room_d, side)
-            elif math.isfinite(float(anywhere[cell])):
-                cand = (1, float(anywhere[cell]), side)
-            else:
-                continue
-            if best is None or cand[:2] < best[:2]:
-                best = cand
-        if best is not None:
-            options.append((best[0], best[1], k, d, best[2]))
+    cells = [(k, side, snap(space, d.point(side, 1.0))) for k, d in enumerate(doors) for side in (-1, 1)]
+    cells = [(k, side, cell) for k, side, cell in cells if cell is not None]
+    # the door-cut and the plain distance from start, read only at the approach cells (grid.field_at: the
+    # distance fields' values there), the plain one only where the door-cut one is inf
+    room = _field_at(cut, start, [cell for _, _, cell in cells if cut[cell]])
+    room_d = [room.get(cell, math.inf) if cut[cell] else math.inf for _, _, cell in cells]
+    plain = _field_at(space, start, [cell for (_, _, cell), d in zip(cells, room_d) if not math.isfinite(d)])
+    best_of: dict[int, tuple[int, float, int]] = {}
+    for (k, side, cell), in_d in zip(cells, room_d):
+        if math.isfinite(in_d):
+            cand = (0, in_d, side)
+        elif math.isfinite(plain.get(cell, math.inf)):
+            cand = (1, plain[cell], side)
+        else:
+            continue
+        best = best_of.get(k)
+        if best is None or cand[:2] < best[:2]:
+            best_of[k] = cand
+    options: list[tuple[int, float, int, Doorway, int]] = [
+        (best[0], best[1], k, doors[k], best[2]) for k, best in sorted(best_of.items())]
     options.sort(key=lambda o: o[:3])
     for rank, dist, _, d, side in options:
         far = snap(cut, d.point(-side, 1.0))
@@ -114,16 +126,24 @@ def nearest_door(space: np.ndarray, start: tuple[int, int], doors: list[Doorway]
     to enter from (the nearer approach point) and the path length (m)."""
     if not doors:
         return None
-    field = grid.distance_field(space, [start])
+    cells = [(k, side, snap(space, d.point(side, 1.0))) for k, d in enumerate(doors) for side in (-1, 1)]
+    field = _field_at(space, start, [cell for _, _, cell in cells if cell is not None])
     best: tuple[float, int, int] | None = None
-    for k, d in enumerate(doors):
-        for side in (-1, 1):
-            cell = snap(space, d.point(side, 1.0))
-            if cell is None or not math.isfinite(float(field[cell])):
-                continue
-            cand = (float(field[cell]), k, side)
-            if best is None or cand < best:
-                best = cand
+    for k, side, cell in cells:
+        if cell is None or not math.isfinite(field[cell]):
+            continue
+        cand = (field[cell], k, side)
+        if best is None or cand < best:
+            best = cand
     if best is None:
         return None
     return doors[best[1]], best[2], best[0]
+
+
+def _field_at(space: np.ndarray, start: tuple[int, int], cells: list[tuple[int, int]]
+              ) -> dict[tuple[int, int], float]:
+    """``float(grid.distance_field(space, [start])[cell])`` for each of ``cells``, as a dict."""
+    if not cells:
+        return {}
+    values = grid.field_at(space, [start], np.array(cells, dtype=np.int64).reshape(-1, 2))
+    return dict(zip(cells, values.tolist()))

@@ -37,8 +37,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
-from swarm.api import FREE, SOLID, UNSEEN
+from swarm.api import FREE, SOLID
 
 _DIRS = ((1, 0), (-1, 0), (0, 1), (0, -1))   # (drow, dcol)
 MAX_TRIES = 16
@@ -54,43 +55,81 @@ class FollowTarget:
     anchor: tuple[int, int]
 
 
-def _shift(a: np.ndarray, dr: int, dc: int, fill: bool = False) -> np.ndarray:
-    """``out[r, c] = a[r + dr, c + dc]`` (``fill`` outside)."""
-    out = np.full(a.shape, fill, dtype=a.dtype)
-    h, w = a.shape
-    rs, re = max(0, -dr), min(h, h - dr)
-    cs, ce = max(0, -dc), min(w, w - dc)
-    out[rs:re, cs:ce] = a[rs + dr:re + dr, cs + dc:ce + dc]
-    return out
-
-
 def candidates(known: np.ndarray) -> tuple[np.ndarray, ...]:
     """Wall ends and edge cells of a window: rows, cols, normal (drow, dcol) pointing into free space,
-    anchor (row, col) of the UNSEEN cell, and kind (0 wall end, 1 edge)."""
-    free = known == FREE
-    solid = known == SOLID
-    unseen = known == UNSEEN
-    parts = []
-    for dr, dc in _DIRS:
-        in_front = _shift(free, dr, dc)
-        face = solid & in_front
-        for tr, tc in ((dc, dr), (-dc, -dr)):            # the two directions along the wall
-            end = face & _shift(unseen, tr, tc) & ~_shift(solid, tr + dr, tc + dc, True)
-            rr, cc = np.nonzero(end)
-            if rr.size:
-                parts.append((rr, cc, np.full(rr.size, dr), np.full(rr.size, dc), rr + tr, cc + tc,
-                              np.zeros(rr.size, dtype=np.int64)))
-            face &= ~end
-        edge = free & _shift(unseen, -dr, -dc)            # unseen behind, so the normal (dr, dc) is away
-        rr, cc = np.nonzero(edge)
-        if rr.size:
-            parts.append((rr, cc, np.full(rr.size, dr), np.full(rr.size, dc), rr - dr, cc - dc,
-                          np.ones(rr.size, dtype=np.int64)))
-        free = free & ~edge                               # one normal per edge cell
-    if not parts:
-        empty = np.zeros(0, dtype=np.int64)
-        return empty, empty, empty, empty, empty, empty, empty
-    return tuple(np.concatenate(p) for p in zip(*parts))  # type: ignore[return-value]
+    anchor (row, col) of the UNSEEN cell, and kind (0 wall end, 1 edge), all int64.
+
+    For each normal in the order of ``_DIRS``: the wall ends along the wall one way, then the other (a
+    face cell found one way is not looked at the other way), then the edge cells whose UNSEEN neighbour
+    lies behind the normal (an edge cell found for one normal is FREE no longer for the next ones, so it
+    has one normal and is no wall's free front for later normals); each group in row-major order. One
+    compiled pass per group (``tests/algorithms/test_minotaur_fast.py`` checks it against the numpy
+    form it replaced)."""
+    k = np.ascontiguousarray(known, dtype=np.uint8)
+    return _candidates(k)
+
+
+@njit(cache=True)
+def _candidates(known):  # pragma: no cover - compiled
+    """:func:`candidates`. Every candidate is a known cell with an UNSEEN 4-neighbour (the wall end's cell
+    along the wall, the edge cell's behind it), so the groups are read off the row-major list of such
+    cells; ``cleared``
+    marks the edge cells taken (FREE no longer for later normals)."""
+    h, w = known.shape
+    near = np.empty(h * w, np.int64)
+    m = 0
+    for r in range(h):
+        for c in range(w):
+            if known[r, c] != 0 and ((r > 0 and known[r - 1, c] == 0) or (r + 1 < h and known[r + 1, c] == 0)
+                                     or (c > 0 and known[r, c - 1] == 0) or (c + 1 < w and known[r, c + 1] == 0)):
+                near[m] = r * w + c
+                m += 1
+    cleared = np.zeros((h, w), np.bool_)
+    ended = np.zeros(m, np.bool_)
+    out = np.empty((7, 64), np.int64)
+    n = 0
+    for d in range(4):
+        dr, dc = _DIRS[d]
+        ended[:] = False
+        for t in range(2):
+            tr, tc = (dc, dr) if t == 0 else (-dc, -dr)
+            for i in range(m):
+                r, c = near[i] // w, near[i] % w
+                fr, fc = r + dr, c + dc
+                if ended[i] or known[r, c] != 2 or not (0 <= fr < h and 0 <= fc < w):
+                    continue
+                if known[fr, fc] != 1 or cleared[fr, fc]:
+                    continue          # not a wall face towards (dr, dc)
+                ar, ac = r + tr, c + tc
+                if not (0 <= ar < h and 0 <= ac < w) or known[ar, ac] != 0:
+                    continue
+                br, bc = ar + dr, ac + dc
+                if not (0 <= br < h and 0 <= bc < w) or known[br, bc] == 2:
+                    continue          # a wall in front of the unseen cell (or the map's edge)
+                out = _push(out, n, r, c, dr, dc, ar, ac, 0)
+                n += 1
+                ended[i] = True
+        for i in range(m):
+            r, c = near[i] // w, near[i] % w
+            ar, ac = r - dr, c - dc
+            if known[r, c] == 1 and not cleared[r, c] and 0 <= ar < h and 0 <= ac < w and known[ar, ac] == 0:
+                out = _push(out, n, r, c, dr, dc, ar, ac, 1)
+                n += 1
+                cleared[r, c] = True
+    return (out[0, :n].copy(), out[1, :n].copy(), out[2, :n].copy(), out[3, :n].copy(), out[4, :n].copy(),
+            out[5, :n].copy(), out[6, :n].copy())
+
+
+@njit(cache=True, inline="always")
+def _push(out, n, r, c, dr, dc, ar, ac, kind):  # pragma: no cover - compiled
+    """Column ``n`` of ``out`` (7 rows, grown when full) set to one candidate; returns ``out``."""
+    if n == out.shape[1]:
+        bigger = np.empty((7, 2 * n), np.int64)
+        bigger[:, :n] = out[:, :n]
+        out = bigger
+    out[0, n], out[1, n], out[2, n], out[3, n] = r, c, dr, dc
+    out[4, n], out[5, n], out[6, n] = ar, ac, kind
+    return out
 
 
 def spin_keys(rows: np.ndarray, cols: np.ndarray, at: tuple[float, float], travel: tuple[float, float],

@@ -49,9 +49,9 @@ def workload(args: argparse.Namespace, seed: int) -> dict:
             "stop": {"max_ticks": args.max_ticks}, "transport": args.transport}
     if args.set:
         from swarm.cli.options import parse_params
-        from swarm.cli.run_cmd import _merge
+        from swarm.spec_input import merge
 
-        spec = _merge(spec, parse_params(tuple(args.set), "--set"))
+        spec = merge(spec, parse_params(tuple(args.set), "--set"))
     return spec
 
 

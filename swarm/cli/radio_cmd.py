@@ -138,6 +138,9 @@ def format_budget(link_model: Any, src: tuple[float, float], dst: tuple[float, f
         lines.append(f"path loss: {b.path_loss_db:.2f} dB")
     if b.model in ("multiwall", "maes"):
         lines.append(f"wall loss: {b.wall_db:.2f} dB")
+    if link_model.shadowing is not None:
+        lines.append(f"shadowing: {b.shadowing_db:+.2f} dB (sigma {c.shadowing_sigma_db:g} dB, correlated over "
+                     f"{c.shadowing_corr_m:g} m, field of map seed {link_model.truth.seed or 0})")
     lines.append(f"tx power: {b.tx_power_dbm:.2f} dBm")
     lines.append(f"RSSI: {b.rssi_dbm:.2f} dBm")
     lines.append(f"sensitivity: {b.sensitivity_dbm:.2f} dBm")
@@ -149,6 +152,10 @@ def format_budget(link_model: Any, src: tuple[float, float], dst: tuple[float, f
     else:
         verdict = f"no link (short by {-b.margin_db:.2f} dB)"
     lines.append(f"verdict: {verdict}")
+    curve = link_model.packet_errors
+    if curve is not None:
+        pers = ", ".join(f"{size} B {100 * float(curve.per(b.margin_db, size)):.3g} %" for size in (100, 1000, 4096))
+        lines.append(f"packet error rate ({c.per}): {pers}")
     return lines
 
 

@@ -14,58 +14,22 @@ from maps.errors import InvalidInput
 from . import cli
 from .checks import FiniteSeconds, check_output_path, write_failed
 from .options import parse_params
-
-
-def load_spec_file(path: Path) -> dict[str, Any]:
-    """A run spec TOML file, read with a size cap; any unreadable or invalid file is an InvalidInput."""
-    from maps.io import parse_toml, read_file_bytes
-
-    data = read_file_bytes(path, "--spec")
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError:
-        raise InvalidInput("--spec", str(path), "a UTF-8 TOML file") from None
-    return parse_toml(text, "--spec", str(path))
-
-
-def _merge(base: dict[str, Any], overrides: dict[str, Any]) -> dict[str, Any]:
-    out = dict(base)
-    for k, v in overrides.items():
-        if isinstance(v, dict) and isinstance(out.get(k), dict):
-            out[k] = _merge(out[k], v)
-        else:
-            out[k] = v
-    return out
+from ..spec_input import flag_overrides, load_spec_file, merge
 
 
 def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tuple[str, ...],
                        algorithm_params: tuple[str, ...], map_params: tuple[str, ...]) -> dict[str, Any]:
-    """The run spec as a mapping: the ``--spec`` file, then flags that were given, then ``--set``."""
+    """The run spec as a mapping: the ``--spec`` file, then flags that were given, then ``--set``
+    (:mod:`swarm.spec_input` reads the file and the flags as :func:`swarm.run` reads its arguments)."""
     data: dict[str, Any] = load_spec_file(spec_file) if spec_file else {}
-    over: dict[str, Any] = {}
-    if flags["map"] is not None:
-        value = flags["map"]
-        if value in ("building", "cave"):
-            over["map"] = {"kind": value}
-        else:
-            over["map"] = {"kind": "file", "path": value, "size": 50}
-    for flag, (section, key) in {"size": ("map", "size"), "map_seed": ("map", "seed"),
-                                 "robots": ("robots", "count"), "spawn": ("robots", "spawn"),
-                                 "algorithm": ("algorithm", "name"), "max_ticks": ("stop", "max_ticks"),
-                                 "explored": ("stop", "explored")}.items():
-        if flags[flag] is not None:
-            over.setdefault(section, {})[key] = flags[flag]
-    if flags["seed"] is not None:
-        over["seed"] = flags["seed"]
-    if flags["transport"] is not None:
-        over["transport"] = flags["transport"]
+    over = flag_overrides(flags)
     if algorithm_params:
         over.setdefault("algorithm", {})["params"] = parse_params(algorithm_params)
     if map_params:
         over.setdefault("map", {})["params"] = parse_params(map_params, "--map-param")
-    data = _merge(data, over)
+    data = merge(data, over)
     if sets:
-        data = _merge(data, parse_params(sets, "--set"))
+        data = merge(data, parse_params(sets, "--set"))
     return data
 
 

@@ -13,7 +13,7 @@ Typical use (the runtime's navigator)::
     waypoints = simplify(space, path)               # float[M, 2] metres, collision-free segments
 
 Module map: :mod:`.cspace` (passable, configuration_space, nearest_in), :mod:`.search` (plan,
-distance_field, nearest_reachable), :mod:`.path` (simplify, path_length_m, segment_clear),
+distance_field, field_at, nearest_reachable), :mod:`.path` (simplify, path_length_m, segment_clear),
 :mod:`.frontiers` (frontier_mask, frontier_clusters), :mod:`.reference` (optimal grid and any-angle lengths), :mod:`.targets` (nearest_reachable_unseen, view_cells),
 :mod:`.local` (the navigator's exact local-first plan, the target search's compiled window stage),
 :mod:`.memo` (a far target search's path, reused by the plan that follows it), :mod:`.kept` (the whole-map
@@ -25,12 +25,12 @@ from .cspace import DEFAULT_MARGIN_M, configuration_space, inflation_offsets, ne
 from .frontiers import FrontierCluster, frontier_clusters, frontier_mask
 from .path import cells_to_metres, path_length_m, segment_clear, simplify
 from .reference import any_angle_length_m, grid_length_m, steps_length
-from .search import distance_field, nearest_reachable, plan
+from .search import distance_field, field_at, nearest_reachable, plan
 from .targets import nearest_reachable_unseen, view_cells
 
 __all__ = [
     "DEFAULT_MARGIN_M", "FrontierCluster", "any_angle_length_m", "cells_to_metres", "configuration_space",
-    "distance_field", "frontier_clusters", "frontier_mask", "grid_length_m", "inflation_offsets", "nearest_in",
-    "nearest_reachable", "nearest_reachable_unseen", "passable", "path_length_m", "plan", "segment_clear", "simplify",
-    "steps_length", "view_cells",
+    "distance_field", "field_at", "frontier_clusters", "frontier_mask", "grid_length_m", "inflation_offsets",
+    "nearest_in", "nearest_reachable", "nearest_reachable_unseen", "passable", "path_length_m", "plan",
+    "segment_clear", "simplify", "steps_length", "view_cells",
 ]

@@ -159,6 +159,100 @@ def grid_bucket_search(free: np.ndarray, wp: int, seeds: np.ndarray, goal: int, 
 
 
 @njit(cache=True)
+def grid_bucket_settle(free: np.ndarray, wp: int, seeds: np.ndarray, marks: np.ndarray, remaining: int,
+                       max_d: float, dist: np.ndarray, ring: np.ndarray,
+                       touched: np.ndarray) -> int:  # pragma: no cover - compiled
+    """:func:`grid_bucket_search` without a goal that stops once every marked cell is settled.
+
+    marks: uint8[n], nonzero at the ``remaining`` distinct cells whose distances the caller wants (cells
+    outside the space may be marked: they are never settled, so the search then runs to its end). The
+    other arguments are :func:`grid_bucket_search`'s (``touched`` required, ``dist`` all inf on entry).
+    Seeds, buckets and neighbours are processed in exactly its order, so every settled cell holds the
+    distance the whole search gives it, bit for bit; stopping after the last marked cell only leaves the
+    farther part of the map unsearched. Returns the number of ``touched`` entries written.
+    """
+    n = free.shape[0]
+    nt = 0
+    count = np.zeros(3, dtype=np.int64)
+    for i in range(seeds.shape[0]):
+        s = seeds[i]
+        if dist[s] != 0.0:
+            dist[s] = 0.0
+            ring[count[0]] = s
+            count[0] += 1
+            touched[nt] = s
+            nt += 1
+    k = 0
+    slot = 0
+    one = np.uint64(1)
+    up = np.uint64(wp)
+    while remaining > 0 and count[0] + count[1] + count[2] > 0:
+        if k > max_d:
+            break
+        s1 = slot + 1 if slot < 2 else 0
+        s2 = s1 + 1 if s1 < 2 else 0
+        base = slot * n
+        m = count[slot]
+        fk = float(k)
+        for i in range(m):
+            p = np.uint64(ring[np.uint64(base + i)])
+            dp = dist[p]
+            if dp < fk:  # stale: settled earlier from a lower bucket
+                continue
+            touched[np.uint64(nt)] = p
+            nt += 1
+            if marks[p] != 0:
+                remaining -= 1
+                if remaining == 0:
+                    break
+            e = free[p + one] != 0
+            w = free[p - one] != 0
+            nn = free[p + up] != 0
+            ss = free[p - up] != 0
+            if e:
+                _grid_relax(p + one, dp + 1.0, fk, dist, ring, count, n, s1, s2)
+            if w:
+                _grid_relax(p - one, dp + 1.0, fk, dist, ring, count, n, s1, s2)
+            if nn:
+                _grid_relax(p + up, dp + 1.0, fk, dist, ring, count, n, s1, s2)
+            if ss:
+                _grid_relax(p - up, dp + 1.0, fk, dist, ring, count, n, s1, s2)
+            dd = dp + SQRT2
+            if nn:
+                if e and free[p + up + one] != 0:
+                    _grid_relax(p + up + one, dd, fk, dist, ring, count, n, s1, s2)
+                if w and free[p + up - one] != 0:
+                    _grid_relax(p + up - one, dd, fk, dist, ring, count, n, s1, s2)
+            if ss:
+                if e and free[p - up + one] != 0:
+                    _grid_relax(p - up + one, dd, fk, dist, ring, count, n, s1, s2)
+                if w and free[p - up - one] != 0:
+                    _grid_relax(p - up - one, dd, fk, dist, ring, count, n, s1, s2)
+        if remaining == 0:
+            break
+        count[slot] = 0
+        k += 1
+        slot = s1
+    for sl in range(3):  # cells still queued (tentative, or settled when the search stopped in their bucket)
+        for i in range(count[sl]):
+            touched[nt] = ring[sl * n + i]
+            nt += 1
+    return nt
+
+
+@njit(cache=True)
+def grid_read_metres(dist: np.ndarray, cells: np.ndarray, max_d: float, touched: np.ndarray, nt: int,
+                     out: np.ndarray) -> None:  # pragma: no cover - compiled
+    """``out[i]`` = :func:`grid_field_metres`'s value at the padded flat index ``cells[i]`` (float32 metres,
+    inf beyond ``max_d`` cells), then every ``touched[:nt]`` cell of ``dist`` back to inf."""
+    for i in range(cells.shape[0]):
+        d = dist[cells[i]]
+        out[i] = d * CELL_M if d <= max_d + EPS else np.inf
+    for i in range(nt):
+        dist[touched[i]] = np.inf
+
+
+@njit(cache=True)
 def grid_field_metres(dist: np.ndarray, wp: int, max_d: float, out: np.ndarray) -> None:  # pragma: no cover
     """Write the padded cell distances into ``out`` (float32[H, W]) in metres; inf beyond ``max_d`` cells."""
     h, w = out.shape

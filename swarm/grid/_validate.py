@@ -89,7 +89,7 @@ def check_cells(cells: Any, shape: tuple[int, ...], field: str) -> np.ndarray:
         raise InvalidInput(field, f"array {arr.dtype}{list(arr.shape)}",
                            "a (row, col) pair or a non-empty int[K, 2] array of cells")
     arr = arr.astype(np.int64, copy=False)
-    if (arr < 0).any() or (arr[:, 0] >= shape[0]).any() or (arr[:, 1] >= shape[1]).any():
+    if arr.min() < 0 or arr[:, 0].max() >= shape[0] or arr[:, 1].max() >= shape[1]:  # (no boolean temporaries)
         raise InvalidInput(field, arr.tolist(), f"cells with 0 <= row < {shape[0]} and 0 <= col < {shape[1]}")
     return arr
 

@@ -16,7 +16,8 @@ from typing import Any
 import numpy as np
 
 from ..api import CELL_M
-from ._kernels import NO_TOUCHED, grid_bucket_search, grid_descend_path, grid_field_metres
+from ._kernels import (NO_TOUCHED, grid_bucket_search, grid_bucket_settle, grid_descend_path, grid_field_metres,
+                       grid_read_metres)
 from ._validate import check_cell, check_cells, check_length, check_same_shape, check_space
 
 _NO_TARGETS = np.zeros(0, dtype=np.uint8)
@@ -36,12 +37,24 @@ class _Workspace(threading.local):
         self.dist = np.empty(0, dtype=np.float64)
         self.ring = np.empty(0, dtype=np.int32)
         self.pads: dict[tuple[int, int, int], np.ndarray] = {}
+        self.inf = np.zeros(0, dtype=np.float64)    # all inf between calls (field_at resets what it touched)
+        self.touched = np.zeros(0, dtype=np.int32)
+        self.marks = np.zeros(0, dtype=np.uint8)     # all 0 between calls
 
     def get(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         if self.dist.shape[0] < n:
             self.dist = np.empty(n, dtype=np.float64)
             self.ring = np.empty(3 * n, dtype=np.int32)
         return self.dist[:n], self.ring
+
+    def clean(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """An all-inf distance array of ``n`` cells, room for the cells a search touches, and an all-0 mark
+        array (for :func:`field_at`, which leaves all three as it found them)."""
+        if self.inf.shape[0] != n:
+            self.inf = np.full(n, np.inf)
+            self.touched = np.empty(4 * n, dtype=np.int32)
+            self.marks = np.zeros(n, dtype=np.uint8)
+        return self.inf, self.touched, self.marks
 
     def padded(self, grid: np.ndarray, which: int = 0) -> tuple[np.ndarray, int]:
         """``grid`` (bool[H, W]) as a flat uint8 array with a one-cell blocked border, and the padded row
@@ -116,6 +129,43 @@ def distance_field(space: np.ndarray, sources: Any, max_dist_m: float | None = N
     max_cells = np.inf if limit is None else limit / CELL_M
     grid_bucket_search(free, wp, _flat(cells, wp), -1, _NO_TARGETS, max_cells, dist, ring, NO_TOUCHED)
     grid_field_metres(dist, wp, max_cells, out)
+    return out
+
+
+def field_at(space: np.ndarray, sources: Any, cells: np.ndarray, max_dist_m: float | None = None) -> np.ndarray:
+    """``distance_field(space, sources, max_dist_m)`` read at ``cells`` (int[N, 2], N may be 0): float32[N],
+    bit for bit the same values.
+
+    Cheaper when only some cells matter (a frontier's candidate targets, say): the search stops as soon as
+    every one of ``cells`` has its final distance (a cell outside the space never gets one, so the search
+    then runs to its end, as :func:`distance_field` does), and neither the whole distance array is reset
+    nor the whole field converted to metres. The search is the same compiled one, run in the same order
+    (:func:`swarm.grid._kernels.grid_bucket_settle`), which is what makes the values identical.
+    """
+    sp = check_space(space)
+    src = check_cells(sources, sp.shape, "sources")
+    at = np.asarray(cells)
+    if at.shape[0] == 0:
+        return np.zeros(0, dtype=np.float32)
+    at = check_cells(at, sp.shape, "cells")
+    limit = check_length(max_dist_m, "max_dist_m", allow_none=True)
+    src = src[sp[src[:, 0], src[:, 1]]]
+    out = np.empty(at.shape[0], dtype=np.float32)
+    if src.shape[0] == 0:
+        out.fill(np.inf)
+        return out
+    free, wp = _WORK.padded(sp)
+    _, ring = _WORK.get(free.shape[0])
+    dist, touched, marks = _WORK.clean(free.shape[0])
+    flat = _flat(at, wp)
+    marks[flat] = 1
+    remaining = int(np.count_nonzero(marks))
+    max_cells = np.inf if limit is None else limit / CELL_M
+    try:
+        nt = grid_bucket_settle(free, wp, _flat(src, wp), marks, remaining, max_cells, dist, ring, touched)
+        grid_read_metres(dist, flat, max_cells, touched, nt, out)
+    finally:
+        marks[flat] = 0
     return out
 
 

@@ -327,7 +327,10 @@ class Recording:
         poses with the run's own map and radio spec: RSSI to the last bit, unlike the quantised stream."""
         from radio import build_link_model, config_from_mapping
 
-        model = build_link_model(self.truth, config_from_mapping(self.spec.get("radio", {})))
+        from ..spec import run_map_seed
+
+        field_seed = run_map_seed(self.spec["seed"], self.spec["map"].get("seed"))  # the shadowing field's, as the run's
+        model = build_link_model(self.truth, config_from_mapping(self.spec.get("radio", {})), field_seed=field_seed)
         return model.evaluate(self.poses[self._check_tick(tick), :, :2])
 
 

@@ -271,7 +271,7 @@ class Recorder:
                     if q is None:
                         q = quantise_rssi(links.rssi, self.quantum)
                     b.msg_recv.extend(receivers)
-                    b.msg_rssi.extend(q[receivers, env.sender].tolist())
+                    b.msg_rssi.extend(q[receivers, env.transmitter].tolist())  # a relayed copy: its relay's signal
                 count += 1
         b.counts["msg"].append(count)
 

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.ndimage import gaussian_filter
 
 from algorithms.boa import minimize
@@ -230,3 +232,24 @@ def test_unlimited_battery() -> None:
     assert np.array_equal(a, b)
     two = ExplorationProblem(belief, (1, 1), NORTH, None, n_goals=2)
     assert float(two(np.array([[8.0, 3.0, 20.0, 20.0]]))[0]) < 0
+
+
+@settings(max_examples=150, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), fov=st.sampled_from([90.0, 180.0, 360.0]),
+       range_m=st.sampled_from([2.0, 4.0, 7.0]))
+def test_predicted_observed_is_the_union_of_the_reference_scans(seed: int, fov: float, range_m: float):
+    """The compiled trie walk (issue 35) marks exactly the cells the per-beam reference sees from each pose,
+    poses off the grid and headings outside 0..7 included."""
+    from algorithms.boa.fitness import predicted_observed
+
+    rng = np.random.default_rng(seed)
+    h, w = (int(v) for v in rng.integers(1, 50, size=2))
+    belief = Belief(rng.random((h, w)) < 0.5, rng.random((h, w)) < rng.uniform(0, 0.4), float(rng.choice([0.5, 1.0])))
+    lidar = Lidar(fov_deg=fov, range_m=range_m)
+    poses = [(int(rng.integers(-3, h + 3)), int(rng.integers(-3, w + 3)), int(rng.integers(-1, 8)))
+             for _ in range(int(rng.integers(0, 20)))]
+    tables = lidar.tables(belief.cell_m)
+    want = np.zeros(h * w, bool)
+    for r, c, hd in poses:
+        want[visible_cells(belief.occupied, r, c, hd, tables)] = True
+    assert np.array_equal(predicted_observed(belief, poses, lidar), want.reshape(h, w))

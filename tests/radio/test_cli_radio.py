@@ -86,3 +86,25 @@ def test_heatmap_writes_a_picture(capsys, wall_npz, tmp_path):
     code, out, _ = run(capsys, "radio", "heatmap", wall_npz, "--tx", "10,20.25", "-o", str(png), "--scale", "2")
     assert code == 0 and "hears the transmitter" in out and png.exists()
     assert Image.open(png).width == 80 * 2  # 40 m = 80 cells at 2 px
+
+
+def test_link_itemises_shadowing_and_packet_errors(capsys, wall_npz):
+    """The shadowing term is the link model's own (the map file's seed) and moves the RSSI by itself; the
+    PER line shows the curve at the link's margin."""
+    from maps.io import load_map
+    from radio import RadioConfig, build_link_model
+
+    args = ("radio", "link", wall_npz, "--from", "10,20.25", "--to", "30,20.25")
+    code, out, _ = run(capsys, *args, "--param", "shadowing_sigma_db=6", "--param", "per=bpsk", "--sensitivity", "-65")
+    assert code == 0
+    truth = load_map(wall_npz)
+    shadow = build_link_model(truth, RadioConfig(shadowing_sigma_db=6.0)).budget((10, 20.25), (30, 20.25))
+    plain = build_link_model(truth, RadioConfig()).budget((10, 20.25), (30, 20.25))
+    assert f"shadowing: {shadow.shadowing_db:+.2f} dB (sigma 6 dB" in out and shadow.shadowing_db != 0.0
+    assert shadow.rssi_dbm == pytest.approx(plain.rssi_dbm - shadow.shadowing_db, abs=1e-9)
+    assert f"RSSI: {shadow.rssi_dbm:.2f} dBm" in out
+    assert "packet error rate (bpsk): 100 B" in out and "4096 B" in out
+    code, out, _ = run(capsys, *args)
+    assert "shadowing" not in out and "packet error" not in out
+    code, _, err = run(capsys, *args, "--model", "los", "--param", "shadowing_sigma_db=6")
+    assert code == 2 and "shadowing_sigma_db" in err and len(err.strip().splitlines()) == 1

@@ -105,25 +105,29 @@ def test_a_gap_in_deltas_stops_counting_merges_until_the_full_map():
                                           "asked for is sent at tick 4, and the delta after it counts again")
 
 
-def test_drops_by_cause_add_up_to_sent_minus_delivered_per_receiver():
+@pytest.mark.parametrize("relay", ["none", "flood"])
+def test_drops_by_cause_add_up_to_sent_minus_delivered_per_receiver(relay):
     """Robot 3 is behind the wall (link), a third of the rest is lost (loss), and every link carries a ping a
-    tick but no map update (bandwidth)."""
+    tick but no map update (bandwidth). Relaying adds copies a robot already had (duplicates)."""
     from swarm.messages import encode
     from tests.swarm.agents import Ping
 
     poses = [(3.0, 5.0, 0.0), (6.0, 5.0, 0.0), (9.0, 3.0, 0.0), (20.0, 5.0, 0.0)]
     budget = 2 * len(encode(Ping(3, 40)))
-    r = run(poses, WALL_60DB, comm={"map_sharing": "full", "share_every": 1, "loss": 0.3, "bandwidth": budget},
-            algorithm=TALKER, ticks=40)
+    comm = {"map_sharing": "full", "share_every": 1, "loss": 0.3, "bandwidth": budget, "relay": relay}
+    r = run(poses, WALL_60DB, comm=comm, algorithm=TALKER, ticks=40)
     m = r.summary["messages"]
+    duplicates = m.get("duplicates", 0)
     assert all(m[cause] > 0 for cause in DROP_CAUSES) and m["delivered"] > 0, \
         "every cause occurs and some messages arrive, so the sum is a real check"
-    assert sum(m[cause] for cause in DROP_CAUSES) == m["sent"] * 3 - m["delivered"]
+    assert (duplicates > 0) == (relay == "flood")
+    assert sum(m[cause] for cause in DROP_CAUSES) == m["sent"] * 3 - m["delivered"] - duplicates
     s = r.comm["series"]
     for k in range(len(s["tick"])):
         dropped = sum(s[f"msgs_{cause}"][k] for cause in DROP_CAUSES)
-        assert dropped == r.timeseries["msgs_sent"][k] * 3 - r.timeseries["msgs_delivered"][k]
         assert dropped == r.timeseries["msgs_dropped"][k]
+        if relay == "none":
+            assert dropped == r.timeseries["msgs_sent"][k] * 3 - r.timeseries["msgs_delivered"][k]
     assert r.comm["summary"]["bytes_dropped"] == m["bytes_sent"] * 3 - m["bytes_delivered"] > 0
 
 

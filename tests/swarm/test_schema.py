@@ -22,7 +22,9 @@ SPEC = {"map": {"kind": "building", "size": 20}, "robots": {"count": 2}, "seed":
 def test_a_runs_summary_and_time_series_have_the_schemas_fields():
     r = Simulation(SPEC).run()
     assert set(r.summary) == set(typing.get_type_hints(Summary))
-    assert set(r.summary["messages"]) == set(typing.get_type_hints(MessageCounts))
+    assert set(r.summary["messages"]) == MessageCounts.__required_keys__
+    relaying = Simulation({**SPEC, "comm": {"relay": "flood"}}).run()  # the relaying counts come with relaying
+    assert set(relaying.summary["messages"]) == set(typing.get_type_hints(MessageCounts))
     assert list(r.timeseries) == list(TIMESERIES)
     assert r.timeseries["msgs_dropped"][-1] == dropped(r.summary["messages"]) > 0, "one definition of dropped"
 

@@ -88,7 +88,8 @@ def load(results_dir: str | Path) -> CampaignData:
     spec, spec_error = _read_spec(source)
     table = store.runs_table()
     frame = table.to_pandas() if table is not None else None
-    axes = spec.axes if spec is not None else tuple(c for c in (frame.columns if frame is not None else ()) if is_axis(c))
+    columns = frame.columns if frame is not None else ()
+    axes = spec.axes if spec is not None else tuple(c for c in columns if is_axis(c))
     runs = _runs_frame(frame, axes)
     orders = _orders(spec, runs, axes)
     for dim in (*DIMS, *axes):

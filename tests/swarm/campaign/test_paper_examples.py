@@ -100,6 +100,12 @@ def test_comm_sweep_example_sweeps_sensitivity_and_loss_from_the_best_radio() ->
     spec = load_campaign(ROOT / "examples" / "comm-sweep.toml")
     labels = {dim: [o.label for o in opts] for dim, opts in spec.grid.items()}
     assert labels["algorithm"] == ["greed", "tnf", "minotaur"] and labels["map"] == ["building", "cave"]
-    assert spec.axes == ("radio.sensitivity_dbm", "comm.loss")
+    assert spec.axes == ("radio.sensitivity_dbm", "comm.loss", "comm.relay")
     assert labels["radio.sensitivity_dbm"] == ["-88", "-82", "-76", "-70"], "the reference (first) is the best radio"
-    assert {r.spec.radio.model for r in spec.runs()} == {"multiwall"} and spec.replicates >= 6
+    runs = spec.runs()
+    assert {r.spec.radio.model for r in runs} == {"multiwall"} and spec.replicates >= 6
+    flood = {(r.cell["map"], r.cell["size"], r.cell["algorithm"], r.cell["radio.sensitivity_dbm"], r.replicate)
+             for r in runs if r.spec.comm.relay == "flood"}
+    plain = {(r.cell["map"], r.cell["size"], r.cell["algorithm"], r.cell["radio.sensitivity_dbm"], r.replicate)
+             for r in runs if r.spec.comm.relay == "none" and r.spec.comm.loss == 0}
+    assert flood and flood < plain, "every relaying run has its pair without relaying"
