@@ -163,7 +163,8 @@ class CommSummary(TypedDict):
 
 
 COMM_RUN_COLUMNS: dict[str, pa.DataType] = {
-    **{f"msgs_{cause}": pa.int64() for cause in DROP_CAUSES}, "bytes_dropped": pa.int64(),
+    **{f"msgs_{cause}": pa.int64() for cause in DROP_CAUSES}, "msgs_relayed": pa.int64(),
+    "msgs_duplicates": pa.int64(), "bytes_dropped": pa.int64(),
     "map_merges": pa.int64(), "comm_groups_mean": pa.float64(), "biggest_group_mean": pa.float64(),
     "all_connected_share": pa.float64(), "since_contact_mean": pa.float64(), "since_contact_max": pa.int64(),
     "missing_free_mean": pa.float64(), "missing_free_max": pa.float64(), "aoi_age_mean": pa.float64(),
@@ -177,8 +178,10 @@ def comm_columns(summary: Summary | Mapping[str, Any] | None, comm: Mapping[str,
     """The runs-table columns of :data:`COMM_RUN_COLUMNS` for a run's summary and ``RunResult.comm``."""
     out: dict[str, Any] = {col: None for col in COMM_RUN_COLUMNS}
     if summary is not None:
+        msgs = summary["messages"]
         for cause in DROP_CAUSES:
-            out[f"msgs_{cause}"] = int(summary["messages"][cause])
+            out[f"msgs_{cause}"] = int(msgs[cause])
+        out["msgs_relayed"], out["msgs_duplicates"] = int(msgs.get("relayed", 0)), int(msgs.get("duplicates", 0))
     if comm:
         for col in COMM_RUN_COLUMNS:
             if col in comm["summary"]:

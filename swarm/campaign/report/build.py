@@ -487,7 +487,8 @@ def _communication(rep: Report, out: ReportWriter, ok: pd.DataFrame, store: Resu
         _over_time_figures(rep, out, ok, store, talk[0] if talk else "algorithm")
 
 
-COMM_READING = ("Delivered and lost %: of the deliveries possible (a broadcast could reach every other robot); "
+COMM_READING = ("Delivered %: the share of the other robots each message reached; lost %: failed deliveries of "
+                "every transmission (relayed copies included), per cause; "
                 "biggest group and all connected: over the recorded rows; contact gap: seconds since a robot "
                 "last received anything; missing: share of the team's known free cells a robot does not know; "
                 "AoI age: how old a robot's information about the others is (seconds since it last merged "

@@ -6,8 +6,10 @@ time and which metric shows why.
 
 Quantities per run (from the runs table):
 
-- *delivered %* and *lost %* (per cause): deliveries over the deliveries possible, ``msgs_sent x (robots -
-  1)`` (a broadcast could reach every other robot);
+- *delivered %*: the share of the other robots each message reached: deliveries over ``(msgs_sent -
+  msgs_relayed) x (robots - 1)`` (with relaying a robot gets each message once, whichever copy brings it);
+- *lost %* (per cause): failed deliveries over ``msgs_sent x (robots - 1)``, every transmission counted
+  (relayed copies included; without relaying the two shares add up to 100 %);
 - *biggest group %*, *all connected %*: mean over the recorded rows;
 - *contact gap (s)*: ticks since a robot last received anything, mean over robots and rows, in seconds;
 - *missing %*: share of the team's known free cells a robot does not know, mean over robots and rows;
@@ -66,10 +68,14 @@ def derive(runs_t: pd.DataFrame) -> pd.DataFrame:
     """``runs_t`` plus the per-run quantities of the module docstring (percentages and seconds)."""
     out = runs_t.copy()
     n = robots_of(out)
-    possible = out["msgs_sent"].to_numpy(float) * np.maximum(n - 1, 0)
+    others = np.maximum(n - 1, 0)
+    sent = out["msgs_sent"].to_numpy(float)
+    messages = (sent - out["msgs_relayed"].fillna(0).to_numpy(float)) * others  # (message, robot) pairs
+    transmissions = sent * others
     with np.errstate(invalid="ignore", divide="ignore"):
-        share = lambda col: np.where(possible > 0, 100 * out[col].to_numpy(float) / possible, np.nan)  # noqa: E731
-        out["delivered_pct"] = share("msgs_delivered")
+        out["delivered_pct"] = np.where(messages > 0, 100 * out["msgs_delivered"].to_numpy(float) / messages, np.nan)
+        share = lambda col: np.where(transmissions > 0, 100 * out[col].to_numpy(float) / transmissions,  # noqa: E731
+                                     np.nan)
         out["lost_pct"] = share("msgs_dropped")
         for cause in DROP_CAUSES:
             out[f"lost_{cause}_pct"] = share(f"msgs_{cause}")
@@ -242,7 +248,7 @@ def sentence(r: pd.Series) -> str:
     m_a, m_b = r["missing_pct:a"], r["missing_pct:b"]
     g_a, g_b = r["aoi_age_s:a"], r["aoi_age_s:b"]
     big = r["biggest_pct:b"]
-    delivered = f"{_pct(d_b)} of deliveries under {b} against {_pct(d_a)} under {a}"
+    delivered = f"a message reached {_pct(d_b)} of the other robots under {b} against {_pct(d_a)} under {a}"
     missing = f"robots missed {_pct(m_b)} of the team's known free cells under {b} against {_pct(m_a)}"
     age = f"their information about the others was {_secs(g_b)} old on average against {_secs(g_a)}"
     ratio = 1 / r["ratio"]  # b / a
@@ -267,11 +273,11 @@ def sentence(r: pd.Series) -> str:
                else f"although their information about the others was older ({_secs(g_b)} against {_secs(g_a)})")
         return f"{head}. Messages were lost ({delivered}) but no knowledge was: {missing}, {why}."
     if knew == 0:
-        return f"{head}. More messages arrived ({delivered}) but the robots knew no more: {missing}."
+        return f"{head}. Messages reached more robots ({delivered}) but the robots knew no more: {missing}."
     ending = {"identical": "yet exploration time did not change",
               "no established difference": "yet no difference in exploration time was established",
               "not tested": "too few maps to tell whether exploration time followed"}[r["verdict"]]
-    return (f"{head}. {'Fewer' if carried < 0 else 'More'} messages arrived ({delivered}) and the robots knew "
+    return (f"{head}. Messages reached {'fewer' if carried < 0 else 'more'} robots ({delivered}) and the robots knew "
             f"{'less' if knew < 0 else 'more'} ({missing}; {age}); {ending}.")
 
 

@@ -10,7 +10,8 @@ Hook
 
 - ``data``: :class:`.load.CampaignData` (``load.load(results_dir)``).
 - ``comparisons``: ``[(name, filter_a, filter_b), ...]``. A filter maps grid dimensions (``map``, ``size``,
-  ``robots``, ``spawn``, ``algorithm``, ``radio``, ``comm``, ``transport``) to a label or a list of labels
+  ``robots``, ``spawn``, ``algorithm``, ``radio``, ``comm``, ``transport``, and radio/comm parameter axes
+  such as ``radio.sensitivity_dbm``) to a label or a list of labels
   (numbers are accepted for numeric labels: ``{"robots": 16}``); a dimension a filter leaves out takes any
   value. The dimensions where the two filters differ are the *contrast*; runs of A and B pair when they
   agree on every other dimension and on the replicate (the same map and start poses), e.g.

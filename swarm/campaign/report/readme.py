@@ -186,7 +186,8 @@ def _paired(rep: Report) -> str:
                   ""]
         lines += _inline(sec.table, sec.rows, sec.name)
     for sec in rep.paired:
-        lines += [f"### {PAIRED_TITLE.get(sec.dim, f'Values of {sec.dim}')}, per cell", "", sec.family + " " + _tally(sec), ""]
+        title = PAIRED_TITLE.get(sec.dim, f"Values of {sec.dim}")
+        lines += [f"### {title}, per cell", "", sec.family + " " + _tally(sec), ""]
         lines += _inline(sec.table, sec.rows, sec.name)
         if sec.dim == "algorithm" and rep.paired_figures:
             lines += ["Per-replicate scatter plots (a point above the diagonal: b took longer than a on that map):",
@@ -310,9 +311,10 @@ def _method(rep: Report) -> str:
         f"({effects.RESAMPLES} resamples of the maps from a generator seeded with {effects.SEED} and the row's "
         f"labels: the same numbers every time; none below {effects.MIN_UNITS} maps); *r* is the matched-pairs "
         "rank-biserial correlation (W+ − W−) / (W+ + W−) of the same signed ranks.",
-        "- **Communication**: delivered and lost shares count deliveries (one per receiver) against the "
-        "deliveries possible, `msgs_sent x (robots - 1)`. In *What made a difference* each value of a radio or "
-        "comm dimension is paired with the dimension's first value per algorithm (every other dimension pooled, "
+        "- **Communication**: the delivered share is the share of the other robots each message reached, "
+        "deliveries over `(msgs_sent - msgs_relayed) x (robots - 1)`; lost shares count failed deliveries of "
+        "every transmission, relayed copies included, over `msgs_sent x (robots - 1)`. In *What made a "
+        "difference* each value of a radio or comm dimension is paired with the dimension's first value per algorithm (every other dimension pooled, "
         "the map as the unit, 1-robot runs left out) and its exploration time judged as in the paired tables "
         "(Holm over that table's rows): *identical* when every pair ties. The sentence then names the metric "
         f"that explains it: the same deliveries (within {comm.SAME_DELIVERED_PP:g} percentage point), lost "

@@ -66,7 +66,8 @@ def test_radio_axes_alone_sweep_the_default_model():
 
 
 def test_an_axis_overrides_run_and_rules_name_axes():
-    text = NESTED + '[run]\ncomm = {loss = 0.5, bandwidth = 900}\n\n[[exclude]]\n"radio.sensitivity_dbm" = -70\nradio = "global"\n'
+    text = NESTED + '[run]\ncomm = {loss = 0.5, bandwidth = 900}\n'
+    text += '\n[[exclude]]\n"radio.sensitivity_dbm" = -70\nradio = "global"\n'
     text += '\n[[exclude]]\ncomm.loss = 0.25\nradio.model = "global"\n'
     runs = parse_campaign(text).runs()
     cells = {(r.cell["radio"], r.cell["radio.sensitivity_dbm"], r.cell["comm.loss"]) for r in runs}
@@ -76,7 +77,8 @@ def test_an_axis_overrides_run_and_rules_name_axes():
 
 
 def test_an_include_adds_a_value_outside_the_axis():
-    spec = parse_campaign(NESTED + '\n[[include]]\nradio = "multiwall"\n"radio.sensitivity_dbm" = -94\n"comm.loss" = 0\n')
+    rule = '\n[[include]]\nradio = "multiwall"\n"radio.sensitivity_dbm" = -94\n"comm.loss" = 0\n'
+    spec = parse_campaign(NESTED + rule)
     extra = [r for r in spec.runs() if r.cell["radio.sensitivity_dbm"] == "-94"]
     assert len(extra) == 1 and extra[0].spec.radio.sensitivity_dbm == -94.0
 

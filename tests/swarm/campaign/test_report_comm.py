@@ -61,7 +61,8 @@ def test_the_section_has_its_tables_figures_and_a_finding_per_comparison(sweep):
         ("greed", "-90", "-35"), ("frontier", "-90", "-35")]
     for _, row in effects.iterrows():
         line = next(ln for ln in section.splitlines() if ln.startswith(f"- **{row['algorithm']}, "))
-        assert f"{row['delivered_pct:b']:.1f} % of deliveries under -35 against {row['delivered_pct:a']:.1f} %" in line
+        assert (f"a message reached {row['delivered_pct:b']:.1f} % of the other robots under -35 against "
+                f"{row['delivered_pct:a']:.1f} %") in line
         assert f"{row['missing_pct:b']:.1f} %" in line
     assert effects["delivered_pct:b"].max() < effects["delivered_pct:a"].min(), \
         "a -35 dBm receiver hears less than a -90 dBm one: the sweep shows in the numbers"
@@ -78,14 +79,15 @@ def test_the_section_has_its_tables_figures_and_a_finding_per_comparison(sweep):
     ({"delivered_pct": (100.0, 60.0), "missing_pct": (2.0, 2.5), "biggest_pct": (100.0, 40.0),
       "aoi_age_s": (1.0, 9.0)}, "not tested", ["was older (9.0 s against 1.0 s)"], ["groups"]),
     ({"delivered_pct": (100.0, 60.0), "missing_pct": (2.0, 30.0)}, "no established difference",
-     ["Fewer messages arrived", "robots knew less", "30.0 %", "no difference in exploration time was established"],
+     ["Messages reached fewer robots", "robots knew less", "30.0 %",
+      "no difference in exploration time was established"],
      ["no knowledge"]),
     ({"delivered_pct": (100.0, 60.0), "missing_pct": (2.0, 30.0)}, "not tested",
      ["robots knew less", "too few maps to tell"], ["established"]),
     ({"delivered_pct": (60.0, 100.0), "missing_pct": (10.0, 2.0)}, "identical",
-     ["More messages arrived", "robots knew more", "did not change"], ["lost"]),
+     ["Messages reached more robots", "robots knew more", "did not change"], ["lost"]),
     ({"delivered_pct": (60.0, 100.0), "missing_pct": (2.0, 2.2)}, "no established difference",
-     ["More messages arrived", "knew no more"], ["lost"]),
+     ["Messages reached more robots", "knew no more"], ["lost"]),
     ({"delivered_pct": (100.0, 60.0), "missing_pct": (2.0, 30.0)}, "slower",
      ["was slower than under ref (ticks b/a 1.25", "30.0 %"], ["did not show"]),
 ])
