@@ -517,6 +517,11 @@ def _against_figure(rep: Report, out: ReportWriter, multi: pd.DataFrame, dim: st
         return
     values = _numeric(labels)
     x = values if values is not None else np.arange(len(labels), dtype=float)
+    # only the cells that have every value (an [[include]] may add a value to some cells only)
+    keys = [d for d in data.dims if d != dim] + ["replicate"]
+    complete = multi.groupby(keys, observed=True)[dim].transform("nunique") == len(labels)
+    partial = not complete.all()
+    multi = multi[complete]
     panel_dims = ["map", "size"]
     if len(multi.groupby(panel_dims, observed=True)) > MAX_AGAINST_PANELS:
         panel_dims = ["map"]
@@ -544,8 +549,9 @@ def _against_figure(rep: Report, out: ReportWriter, multi: pd.DataFrame, dim: st
         panels.append(comm_figures.Panel(title, lines))
     name = f"comm/against_{slug(dim)}"
     what = tables.header(dim) if dim not in ("radio", "comm") else {"radio": "radio model", "comm": "comm setting"}[dim]
-    title = f"Exploration time and communication against {what}" + (
-        f" (pooled over {', '.join(pooled)}; 1-robot runs left out)" if pooled else " (1-robot runs left out)")
+    left_out = "1-robot runs" + (" and cells without every value" if partial else "") + " left out"
+    title = f"Exploration time and communication against {what} (" + (
+        f"pooled over {', '.join(pooled)}; " if pooled else "") + f"{left_out})"
     xlabel = tables.header(dim) if dim not in ("radio", "comm") else what
     out.write(f"{name}.{rep.fmt}", comm_figures.against_figure(panels, AGAINST_METRICS, xlabel, (x, labels), title,
                                                                rep.fmt))

@@ -46,7 +46,7 @@ def against_figure(panels: Sequence[Panel], metrics: Sequence[tuple[str, str]], 
     cols, rows = len(panels), len(metrics)
     titles = [textwrap.fill(p.title, PANEL_TITLE_CHARS - 20) for p in panels]
     width = 3.9 * cols + 1.1
-    heading = textwrap.fill(title, int(width * 13))
+    heading = textwrap.fill(title, int(width * 10))
     lines = max((t.count("\n") + 1 for t in titles), default=1) + heading.count("\n")
     height = 2.3 * rows + 0.9 + 0.2 * lines
     with matplotlib.rc_context(_RC):
