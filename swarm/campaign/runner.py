@@ -256,6 +256,11 @@ def _execute(spec: CampaignSpec, store: ResultsStore, writer: str, todo: array, 
                 bar = Progress(len(todo), initial=len(first)) if progress else None
                 for result in runner.run(tasks(rest)):
                     take(result)
+            except BaseException:  # Ctrl-C, SIGTERM (swarm.cli turns it into SystemExit), a failed write
+                if own and hasattr(runner, "abort"):
+                    runner.abort()  # do not wait minutes for the runs in flight: a resume runs them again
+                    own = False
+                raise
             finally:
                 if bar:
                     bar.close()
