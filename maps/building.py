@@ -42,19 +42,25 @@ from .params import check_float, check_int, check_weights, to_mapping
 from .raster import FOUR, tiles_to_cells
 
 DOOR_LABEL = -2
+DEFAULT_DOOR_PADDING = 2
+"""MAES's door padding, used whenever the door fits with it (see :class:`BuildingParams`)."""
 SOLID_LABEL = -1
 
 
 @dataclass(frozen=True)
 class BuildingParams:
-    """MAES defaults (docs/maes.md section 3.3); lengths in tiles (1 m)."""
+    """MAES defaults (docs/maes.md section 3.3); lengths in tiles (1 m).
+
+    ``door_padding`` left out (None) is chosen to fit the door: MAES's 2 where ``2 * 2 + door_width <=
+    min_room_side``, else the most that fits (``(min_room_side - door_width) // 2``), so ``door_width = 3``
+    works without also lowering the padding. After construction it always holds the number used."""
 
     hall_width: int = 4
     max_hall_percent: float = 20.0
     min_room_side: int = 6
     wall_thickness: int = 1
     door_width: int = 2
-    door_padding: int = 2
+    door_padding: int | None = None
     room_split_percent: float = 85.0
     extra_door_percent: float = 0.0
     border: int = 1
@@ -68,6 +74,10 @@ class BuildingParams:
         check_float("max_hall_percent", self.max_hall_percent, 0.0, 90.0)
         check_int("min_room_side", self.min_room_side, 2, 100)
         check_int("door_width", self.door_width, 1, 20)
+        auto = self.door_padding is None
+        if auto:
+            object.__setattr__(self, "door_padding",
+                               min(DEFAULT_DOOR_PADDING, max(0, (self.min_room_side - self.door_width) // 2)))
         check_int("door_padding", self.door_padding, 0, 20)
         check_float("room_split_percent", self.room_split_percent, 0.0, 100.0)
         check_float("extra_door_percent", self.extra_door_percent, 0.0, 100.0)
@@ -77,7 +87,9 @@ class BuildingParams:
                            dict(check_weights("interior_materials", self.interior_materials)))
         if 2 * self.door_padding + self.door_width > self.min_room_side:
             raise InvalidInput("door_width", self.door_width,
-                               f"2*door_padding + door_width <= min_room_side ({self.min_room_side})")
+                               f"door_width <= min_room_side ({self.min_room_side})" if auto else
+                               f"2*door_padding + door_width <= min_room_side ({self.min_room_side}) with "
+                               f"door_padding {self.door_padding}")
 
 
 class _RoomsWithoutDoor(Exception):

@@ -32,6 +32,8 @@ MAX_SUBSTEP_MOVE_M: float = 0.05
 """The most a robot may travel in one physics sub-step: a tenth of the thinnest wall (one 0.5 m cell).
 Contacts are discrete, so a robot can overlap a wall by up to one sub-step's travel before the contact
 pushes it back; keeping that far below the wall thickness is what makes tunnelling impossible."""
+DEFAULT_SUBSTEPS: int = 5
+"""Physics sub-steps per tick at the default speed (more only where ``max_speed`` needs them)."""
 
 
 @dataclass(frozen=True)
@@ -55,6 +57,9 @@ class MotionParams:
     - ``substeps = 5``: physics at 50 Hz moves a robot at most 2 cm per sub-step (see
       :data:`MAX_SUBSTEP_MOVE_M`). Free motion is integrated exactly whatever the sub-step (see
       :mod:`swarm.world`), so sub-steps only refine contacts; each costs ~6 us per tick for 16 robots.
+      Left out (None), it is the larger of 5 and the fewest that keep a sub-step's travel within
+      :data:`MAX_SUBSTEP_MOVE_M` at ``max_speed`` (6 at 3 m/s), so ``max_speed = 3`` needs no
+      ``substeps``; after construction it always holds the number used.
 
     MAES robots are much faster (about 3 tiles/s and 4 rad/s, reached within ~0.1 s); use
     :meth:`maes` for parity campaigns.
@@ -65,7 +70,7 @@ class MotionParams:
     max_accel: float = 1.0
     max_turn_accel: float = 4.0
     radius: float = 0.3
-    substeps: int = 5
+    substeps: int | None = None
 
     def __post_init__(self) -> None:
         check_float("max_speed", self.max_speed, 0.0, 10.0, lo_open=True)
@@ -73,8 +78,10 @@ class MotionParams:
         check_float("max_accel", self.max_accel, 0.0, 1000.0, lo_open=True)
         check_float("max_turn_accel", self.max_turn_accel, 0.0, 1000.0, lo_open=True)
         check_float("radius", self.radius, 0.05, 1.0)
-        check_int("substeps", self.substeps, 1, 1000)
         needed = math.ceil(self.max_speed * TICK_S / MAX_SUBSTEP_MOVE_M - 1e-9)
+        if self.substeps is None:
+            object.__setattr__(self, "substeps", max(DEFAULT_SUBSTEPS, needed))
+        check_int("substeps", self.substeps, 1, 1000)
         if self.substeps < needed:
             raise InvalidInput("substeps", self.substeps,
                                f"an integer >= {needed} (at max_speed {self.max_speed:g} m/s a physics "

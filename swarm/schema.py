@@ -200,12 +200,16 @@ RUNS: dict[str, pa.DataType] = {
     "coverage": pa.float64(), **{col: pa.int64() for col in THRESHOLD_COLUMNS.values()}, "distance_m": pa.float64(),
     "collisions": pa.int64(), "msgs_sent": pa.int64(), "bytes_sent": pa.int64(), "msgs_delivered": pa.int64(),
     "bytes_delivered": pa.int64(), "msgs_dropped": pa.int64(), "failed_robots": pa.int64(), "spec_json": pa.string(),
-    "wall_time_s": pa.float64(), "worker_pid": pa.int64(), "worker_rss_mb": pa.float64(), "swarm_version": pa.string(),
-    "algorithm_dist": pa.string(), "algorithm_version": pa.string(), **COMM_RUN_COLUMNS,
+    "wall_time_s": pa.float64(), "cpu_time_s": pa.float64(), "jit_time_s": pa.float64(), "worker_pid": pa.int64(),
+    "worker_rss_mb": pa.float64(), "swarm_version": pa.string(), "algorithm_dist": pa.string(),
+    "algorithm_version": pa.string(), **COMM_RUN_COLUMNS,
 }
-"""One row per run (``*.runs.parquet``); the store adds ``part`` (the file a row came from) when reading."""
+"""One row per run (``*.runs.parquet``); the store adds ``part`` (the file a row came from) when reading.
+``wall_time_s`` and ``cpu_time_s`` time the whole run in its worker, ``jit_time_s`` the part of it in numba's
+compiler (compiling or loading cached kernels: non-zero in a worker's first runs)."""
 RUNS_SCHEMA = pa.schema(list(RUNS.items()))
-NONDETERMINISTIC_COLUMNS = ("wall_time_s", "worker_pid", "worker_rss_mb", "part", "swarm_version")
+NONDETERMINISTIC_COLUMNS = ("wall_time_s", "cpu_time_s", "jit_time_s", "worker_pid", "worker_rss_mb", "part",
+                            "swarm_version")
 """Columns that may differ between two executions of the same run."""
 
 

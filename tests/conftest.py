@@ -15,6 +15,16 @@ def box_map(width_cells: int = 20, height_cells: int = 20, material: str = "conc
     return Map(solid=solid, material=solid.astype(np.uint8), materials=("air", material))
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _warmup_stamps_stay_in_the_test_session(tmp_path_factory):
+    """Campaigns record their numba warm-up (swarm.campaign.warmup) in a folder of this session, not in the
+    user's cache folder."""
+    mp = pytest.MonkeyPatch()
+    mp.setenv("SWARM_CACHE_DIR", str(tmp_path_factory.mktemp("swarm-cache")))
+    yield
+    mp.undo()
+
+
 @pytest.fixture
 def empty_room() -> Map:
     return box_map()

@@ -27,13 +27,23 @@ Task = tuple[str, dict[str, Any]]
 
 
 def execute(task: Task) -> dict[str, Any]:
-    """Run one spec; never raises (a failure becomes a result with ``status = "failed"``)."""
+    """Run one spec; never raises (a failure becomes a result with ``status = "failed"``).
+
+    Besides the run's result: its wall and CPU time, the part of it spent in numba's compiler (compiling or
+    loading cached kernels: a worker's first runs) and the functions it compiled, and its start and end on the machine's monotonic clock
+    (``started``/``ended``: the gaps between a worker's runs are the pool's overhead, see :mod:`.estimate`)."""
+    from ..jit import JitWatch
+
     key, spec = task
+    started = time.monotonic()
     t0 = time.perf_counter()
+    c0 = time.process_time()
+    watch = JitWatch()
     try:
         from ..simulation import Simulation
 
-        result = Simulation(spec).run()
+        with watch:
+            result = Simulation(spec).run()
         algorithm = result.provenance["algorithm"]
         out: dict[str, Any] = {"key": key, "status": "ok", "error": "", "summary": result.summary,
                                "timeseries": result.timeseries, "events": result.events, "comm": result.comm,
@@ -47,6 +57,10 @@ def execute(task: Task) -> dict[str, Any]:
         out = {"key": key, "status": "failed", "error": last[:2000], "summary": None, "timeseries": None,
                "events": [], "comm": None}
     out["wall_time_s"] = time.perf_counter() - t0
+    out["cpu_time_s"] = time.process_time() - c0
+    out["jit_time_s"] = watch.seconds
+    out["jit_compiled"] = watch.compiled
+    out["started"], out["ended"] = started, time.monotonic()
     out["worker_pid"] = os.getpid()
     out["worker_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     return out
@@ -54,6 +68,8 @@ def execute(task: Task) -> dict[str, Any]:
 
 class Executor(Protocol):
     name: str
+    shares_cache: bool
+    """Its workers use this machine's numba cache (so kernels compiled here first serve them)."""
 
     def run(self, tasks: Iterable[Task]) -> Iterator[dict[str, Any]]: ...
 
@@ -64,6 +80,7 @@ class InlineExecutor:
     """In this process, one run after another (debugging, tests, profiling)."""
 
     name = "inline"
+    shares_cache = True
 
     def run(self, tasks: Iterable[Task]) -> Iterator[dict[str, Any]]:
         for task in tasks:
@@ -73,14 +90,41 @@ class InlineExecutor:
         pass
 
 
+ORPHAN_CHECK_S = 1.0
+"""How often a pool worker checks that the campaign process that started it is still alive."""
+
+
+def _exit_when_orphaned(parent: int) -> None:
+    """Exit this worker as soon as its parent is gone (killed, say, with no chance to stop its pool): an
+    orphaned worker would otherwise finish its run, then wait on a queue nobody writes to, for ever."""
+    while True:
+        time.sleep(ORPHAN_CHECK_S)
+        if os.getppid() != parent:
+            os._exit(1)
+
+
+def _worker_start(parent: int | None = None) -> None:
+    """A pool worker's start: import the runtime before the first run, so that no run's time includes it;
+    watch the campaign process (``parent``), and go when it goes."""
+    if parent is not None:
+        threading.Thread(target=_exit_when_orphaned, args=(parent,), name="swarm-orphan-watch", daemon=True).start()
+    from .. import simulation  # noqa: F401
+
+
 class PoolExecutor:
-    """A local process pool (``spawn`` start method: no inherited zenoh/numba threads)."""
+    """A local process pool (``spawn`` start method: no inherited zenoh/numba threads). Each worker imports
+    the runtime when it starts, not in its first run, and exits when the campaign process is gone. Closing
+    waits for the runs in flight; :meth:`abort` (Ctrl-C, SIGTERM) stops the workers at once instead (their
+    runs are not written; a resumed campaign runs them again)."""
+
+    shares_cache = True
 
     def __init__(self, workers: int, max_runs_per_worker: int | None = None) -> None:
         self.name = f"pool:{workers}"
         self.workers = workers
         self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                                        max_tasks_per_child=max_runs_per_worker)
+                                        max_tasks_per_child=max_runs_per_worker, initializer=_worker_start,
+                                        initargs=(os.getpid(),))
 
     def run(self, tasks: Iterable[Task]) -> Iterator[dict[str, Any]]:
         pending: set = set()
@@ -99,6 +143,16 @@ class PoolExecutor:
 
     def close(self) -> None:
         self.pool.shutdown(wait=True, cancel_futures=True)
+
+    def abort(self) -> None:
+        """Stop now: cancel queued runs and terminate the workers (runs in flight are lost, not written)."""
+        processes = list(getattr(self.pool, "_processes", {}).values())  # the stdlib has no public handle before 3.14
+        self.pool.shutdown(wait=False, cancel_futures=True)
+        for proc in processes:
+            if proc.is_alive():
+                proc.terminate()
+        for proc in processes:
+            proc.join(timeout=5)
 
 
 DASK_SCHEMES = ("tcp", "tls", "ucx", "ws", "wss")
@@ -167,6 +221,7 @@ class DaskExecutor:
             raise InvalidInput("--dask", address, "an installed Dask (pip install distributed)") from None
 
         self.cluster = None
+        self.shares_cache = where is None
         if where is None:
             self.cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, host="127.0.0.1",
                                         dashboard_address=None, silence_logs=40, security=True)
@@ -175,7 +230,14 @@ class DaskExecutor:
             _reachable(address, where[1], where[2], timeout_s)
             self.client = _connect(Client, address, timeout_s)
         self.name = f"dask:{address}"
+        self.address = address
         self.window = max(2 * workers, 2 * len(self.client.scheduler_info().get("workers", {})) or 2)
+
+    def describe(self) -> str:
+        """How many workers, where (for the start-up message)."""
+        workers = len(self.client.scheduler_info().get("workers", {}))
+        where = "a local cluster" if self.cluster is not None else self.address
+        return f"{workers} worker{'s' if workers != 1 else ''} on {where}"
 
     def run(self, tasks: Iterable[Task]) -> Iterator[dict[str, Any]]:
         from distributed import as_completed

@@ -1,48 +1,27 @@
-"""One line on a terminal when numba starts compiling swarm's kernels.
+"""On a terminal, say when numba starts compiling swarm's kernels and show it compiling.
 
-numba compiles each kernel on its first call and caches it on disk, so the first ``swarm run`` after an
-install (or after a kernel is edited) spends about a minute compiling before the simulation starts, and
-says nothing while it does. On a terminal this prints one line when the first compilation starts; output
-that is not a terminal (pipes, logs, tests) gets nothing, so it stays exactly the run's results.
+numba compiles each kernel on its first call and caches it on disk, so the first command after an install
+(or after a kernel is edited) spends about a minute compiling before it starts its real work. On a
+terminal this prints one line when the first compilation starts and then a live counter of functions
+compiled with its clock (:class:`swarm.progress.CompileProgress`); output that is not a terminal (pipes,
+logs, tests) gets nothing, so it stays exactly the command's results.
 """
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Iterator
 from contextlib import contextmanager
-from typing import Any, TextIO
+from typing import TextIO
 
-NOTE = ("swarm: compiling numba kernels on first use (about a minute after an install; "
-        "cached for later runs)")
+from ..progress import COMPILE_NOTE, CompileProgress
 
-
-def _is_terminal(stream: TextIO) -> bool:
-    isatty = getattr(stream, "isatty", None)
-    return bool(isatty()) if callable(isatty) else False
+NOTE = COMPILE_NOTE
 
 
 @contextmanager
-def compile_notice(stream: TextIO | None = None) -> Iterator[None]:
-    """Within the block, print :data:`NOTE` to ``stream`` (default stderr) when numba starts its first
-    compilation, once; nothing when ``stream`` is not a terminal or nothing is compiled (warm cache)."""
-    out = sys.stderr if stream is None else stream
-    if not _is_terminal(out):
-        yield
-        return
-    from numba.core import event
-
-    class _FirstCompile(event.Listener):  # numba's listener base: on_start / on_end per event
-        said = False
-
-        def on_start(self, ev: Any) -> None:
-            if not self.said:
-                self.said = True
-                out.write(NOTE + "\n")
-                out.flush()
-
-        def on_end(self, ev: Any) -> None:
-            pass
-
-    with event.install_listener("numba:compile", _FirstCompile()):
-        yield
+def compile_notice(stream: TextIO | None = None) -> Iterator[CompileProgress]:
+    """Within the block, show numba's first compilation on ``stream`` (default stderr) if it is a terminal;
+    nothing when it is not or nothing compiles (warm cache). Yields the progress (its ``watch`` holds the
+    compile count and time afterwards)."""
+    with CompileProgress(stream) as progress:
+        yield progress

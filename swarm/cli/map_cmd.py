@@ -69,7 +69,8 @@ def params_cmd(kind: str) -> None:
 
     p = params_for(kind)
     for f in dataclasses.fields(p):
-        click.echo(f"{f.name} = {getattr(p, f.name)!r}")
+        auto = "  # left out: chosen to fit the other values" if f.default is None else ""
+        click.echo(f"{f.name} = {getattr(p, f.name)!r}{auto}")
 
 
 @map_group.command("show")

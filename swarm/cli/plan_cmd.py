@@ -51,30 +51,36 @@ def plan_cmd(path: Path, src: tuple[float, float], dst: tuple[float, float], pla
     from maps.io import load_map
     from swarm import grid, planners
     from swarm.api import FREE, SOLID
+    from swarm.jit import JitWatch
+
+    from .compile_notice import compile_notice
 
     if planner not in planners.available():
         raise InvalidInput("--planner", planner, " | ".join(planners.available()))
     chosen = planners.get_planner(planner, parse_params(params), field="--param")
     truth = load_map(path)
-    known = np.where(truth.solid, SOLID, FREE).astype(np.uint8)
-    space = grid.configuration_space(known, radius, margin)
-    start, start_note = _cell(truth, space, "--from", src, radius + margin)
-    goal, goal_note = _cell(truth, space, "--to", dst, radius + margin)
-    reference = grid.plan(space, start, goal)
-    if reference is None:
-        raise InvalidInput("--to", _fmt(dst), "a point the robot can reach from --from (no path exists)")
-    t0 = time.perf_counter()
-    cells = chosen.plan(space, start, goal, np.random.default_rng(seed))
-    elapsed = time.perf_counter() - t0
-    if cells is None:
-        raise InvalidInput("--planner", planner, "a planner that finds the path A* finds (this one found none)")
-    describe = getattr(chosen, "describe_last", None)
-    result = {"cells": np.asarray(cells, dtype=np.int64), "reference": reference, "elapsed": elapsed,
-              "note": describe() if describe is not None else None,
-              "driven": grid.path_length_m(grid.simplify(space, np.asarray(cells, dtype=np.int64))),
-              "astar": grid.steps_length(reference) * 0.5,
-              "astar_driven": grid.path_length_m(grid.simplify(space, reference)),
-              "any_angle": grid.any_angle_length_m(space, start, goal)}
+    with compile_notice() as first_use:
+        known = np.where(truth.solid, SOLID, FREE).astype(np.uint8)
+        space = grid.configuration_space(known, radius, margin)
+        start, start_note = _cell(truth, space, "--from", src, radius + margin)
+        goal, goal_note = _cell(truth, space, "--to", dst, radius + margin)
+        reference = grid.plan(space, start, goal)
+        if reference is None:
+            raise InvalidInput("--to", _fmt(dst), "a point the robot can reach from --from (no path exists)")
+        with JitWatch() as in_plan:
+            t0 = time.perf_counter()
+            cells = chosen.plan(space, start, goal, np.random.default_rng(seed))
+            elapsed = time.perf_counter() - t0
+        if cells is None:
+            raise InvalidInput("--planner", planner, "a planner that finds the path A* finds (this one found none)")
+        describe = getattr(chosen, "describe_last", None)
+        result = {"cells": np.asarray(cells, dtype=np.int64), "reference": reference,
+                  "elapsed": elapsed - in_plan.seconds, "note": describe() if describe is not None else None,
+                  "driven": grid.path_length_m(grid.simplify(space, np.asarray(cells, dtype=np.int64))),
+                  "astar": grid.steps_length(reference) * 0.5,
+                  "astar_driven": grid.path_length_m(grid.simplify(space, reference)),
+                  "any_angle": grid.any_angle_length_m(space, start, goal)}
+    result["jit"] = first_use.watch
     for line in report_lines(truth, planner, start, goal, result, radius, margin, (start_note, goal_note)):
         click.echo(line)
     if output is not None:
@@ -120,13 +126,18 @@ def report_lines(truth: Any, planner: str, start: tuple[int, int], goal: tuple[i
     lines += [n for n in notes if n]
     lines.append(f"from ({sx:g}, {sy:g}) to ({gx:g}, {gy:g}): straight line {m * _dist(start, goal):.2f} m")
     lines.append(f"{planner}: {result['driven']:.2f} m as driven ({len(result['cells'])} cells planned, "
-                 f"shortcut by line of sight as the navigator does), {result['elapsed']:.2f} s")
+                 f"shortcut by line of sight as the navigator does), {result['elapsed']:.2f} s planning")
     if result["note"]:
         lines.append(f"  {result['note']}")
     lines.append(f"optimal 8-connected grid path (A*): {result['astar']:.2f} m, {result['astar_driven']:.2f} m "
                  f"as driven (ratio {result['driven'] / result['astar_driven']:.3f})")
     lines.append(f"any-angle shortest path (physical limit): {result['any_angle']:.2f} m "
                  f"(ratio {result['driven'] / result['any_angle']:.3f})")
+    jit = result.get("jit")
+    if jit is not None and jit.seconds >= 0.05:
+        what = (f"compiling {jit.compiled} functions (first use after an install; cached for later calls)"
+                if jit.compiled else "loading compiled kernels from its cache")
+        lines.append(f"numba: {jit.seconds:.2f} s {what}, not counted in the planning time above")
     return lines
 
 

@@ -79,12 +79,13 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
             gif: Path | None, mp4: Path | None, record_out: Path | None, print_spec: bool) -> None:
     """Run one exploration and print a one-line summary.
 
-    With no arguments: 4 robots with the frontier explorer on a 50 x 50 building, seed 0.
+    With no arguments: 4 robots with the frontier explorer on a 50 x 50 building, seed 0. On a terminal,
+    stderr shows the run's progress (tick, explored share, speed, and numba compiling on a first run).
     """
 
     from ..simulation import Simulation
     from ..spec import RunSpec
-    from .compile_notice import compile_notice
+    from .run_progress import RunProgress
 
     flags = {"map": map_, "size": size, "map_seed": map_seed, "robots": robots, "spawn": spawn,
              "algorithm": algorithm, "seed": seed, "max_ticks": max_ticks, "explored": explored,
@@ -104,7 +105,7 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
         if path is not None:
             check_output_path(flag, path)
     options = _transport_options(spec, listen, remote, agent_timeout, run_id, token_file)
-    with compile_notice():
+    with RunProgress(spec.stop.max_ticks, spec.stop.explored) as progress:
         sim = Simulation(spec, transport=options)
         recorder = None
         if gif is not None or mp4 is not None:
@@ -112,6 +113,8 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
 
             recorder = GifRecorder(sim.truth)
             sim.observers = (recorder,)
+        if progress.enabled:
+            sim.observers = (*sim.observers, progress)
         run_recorder = None
         if record_out is not None:
             from ..record import Recorder

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from scipy import ndimage
 
-from maps import generate
+from maps import InvalidInput, generate
 from maps.building import DOOR_LABEL
 from maps.io import map_to_bytes
 from maps.raster import FOUR, NEAR, robot_space
@@ -136,6 +136,24 @@ def test_building_door_width_is_configurable():
         assert max(r1 - r0, c1 - c0) == 6
     check_building_graph(m)
     check_traversable(m)
+
+
+def test_a_wider_door_gets_a_padding_that_fits_unless_one_is_given():
+    """door_width = 3 works as the README writes it: the padding left out shrinks to fit the room side."""
+    from maps.building import BuildingParams
+
+    assert BuildingParams().door_padding == 2, "MAES's padding where the door fits with it"
+    assert [BuildingParams(door_width=w).door_padding for w in (3, 4, 5, 6)] == [1, 1, 0, 0]
+    assert BuildingParams(door_width=3, min_room_side=8).door_padding == 2
+    m = generate("building", 100, 2, {"door_width": 3})
+    same = generate("building", 100, 2, {"door_width": 3, "door_padding": 1})
+    assert np.array_equal(m.solid, same.solid) and np.array_equal(m.material, same.material), "as padding 1"
+    with pytest.raises(InvalidInput) as err:
+        BuildingParams(door_width=3, door_padding=2)
+    assert err.value.field == "door_width" and "door_padding 2" in err.value.allowed
+    with pytest.raises(InvalidInput) as err:
+        BuildingParams(door_width=7)
+    assert err.value.allowed == "door_width <= min_room_side (6)"
 
 
 def test_building_extra_doors_make_loops():

@@ -72,6 +72,17 @@ def test_too_few_substeps_for_the_speed_are_refused() -> None:
     MotionParams(max_speed=3.0, substeps=6)
 
 
+def test_substeps_left_out_follow_the_speed() -> None:
+    """--set motion.max_speed=3 needs no --set motion.substeps: the fewest safe sub-steps, at least 5."""
+    assert [MotionParams(max_speed=v).substeps for v in (0.5, 1.0, 2.5, 3.0, 10.0)] == [5, 5, 5, 6, 20]
+    assert MotionParams.maes().substeps == 8, "an explicit count stays"
+    from swarm.spec import RunSpec
+
+    spec = RunSpec.from_mapping({"motion": {"max_speed": 3.0}})
+    assert spec.canonical()["motion"]["substeps"] == 6, "the spec records the count used"
+    assert RunSpec.from_mapping({"motion": {"max_speed": 3.0, "substeps": 6}}).key == spec.key
+
+
 def test_unknown_param_is_an_error() -> None:
     with pytest.raises(InvalidInput) as err:
         from_mapping(MotionParams, {"top_speed": 2.0})

@@ -27,6 +27,7 @@ nothing varies) and ``<cell>`` the labels of every other shown dimension in grid
 from __future__ import annotations
 
 import shlex
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -140,6 +141,16 @@ class Report:
     written: list[str] = field(default_factory=list)
 
 
+class ReportProgress:
+    """What :func:`build_report` tells a progress display: each stage as it starts, each file written."""
+
+    def stage(self, name: str) -> None:
+        pass
+
+    def wrote(self, relative: str) -> None:
+        pass
+
+
 def check_target(target: Any) -> float:
     if isinstance(target, bool) or not isinstance(target, (int, float)) or not 0 < float(target) <= 1:
         raise InvalidInput("--target", target, "an explored fraction in (0, 1], e.g. 0.98")
@@ -163,27 +174,32 @@ def command_line(results_dir: Path, report_dir: Path, target: float, maes_csv: b
 
 def build_report(results_dir: str | Path, report_dir: str | Path, *, target: float = DEFAULT_TARGET,
                  maes_csv: bool = False, fmt: str = "png", figures_file: str | Path | None = None,
-                 cell_figures: bool = True) -> Path:
+                 cell_figures: bool = True, progress: "ReportProgress | None" = None) -> Path:
     """Write the report of ``results_dir`` into ``report_dir``; returns the path of its README.md.
 
     ``figures_file``: a figure layout (:mod:`.layout`) whose multi-panel figures are drawn first.
     ``cell_figures=False``: no per-cell curves, cactus and paired figures (tables and layout figures only;
-    a 540-cell campaign has ~1,200 of them, ~70 MB: right for exploring, too much to publish)."""
+    a 540-cell campaign has ~1,200 of them, ~70 MB: right for exploring, too much to publish).
+    ``progress``: told each stage as it starts and each file as it is written."""
     from .readme import render
+
+    stage = progress.stage if progress is not None else (lambda name: None)
 
     target = check_target(target)
     if fmt not in figures.FORMATS:
         raise InvalidInput("--format", fmt, ", ".join(figures.FORMATS))
     results_dir, report_dir = Path(results_dir), Path(report_dir)
     layout_figs = load_layout(figures_file) if figures_file is not None else ()
+    stage("loading results")
     data = load(results_dir)
     if layout_figs:
         check_layout(layout_figs, {d: data.orders[d] for d in data.dims})
-    out = ReportWriter(report_dir)
+    out = ReportWriter(report_dir, on_write=progress.wrote if progress is not None else None)
     store = ResultsStore(data.folder)
     dims = list(data.dims)
     ok = data.ok.reset_index(drop=True)
     cell_id = ok.groupby(dims, observed=True, sort=True).ngroup().to_numpy() if len(ok) else np.zeros(0, np.int64)
+    stage("reading time series")
     sampled = sample(store, ok, cell_id, data.every, target)
     runs_t = stats.add_time_to_target(ok, target, sampled.first_at_target)
     column = stats.threshold_column(target)
@@ -196,9 +212,11 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
                  fmt=fmt, runs_t=runs_t, ttt_source=source,
                  layout_file=figures_path.name if figures_path is not None else None, cell_figures=cell_figures)
     if len(ok):
+        stage("figures")
         _layout_figures(rep, out, ok.assign(cell=cell_id), sampled, layout_figs)
         if cell_figures:
             _figures(rep, out, ok.assign(cell=cell_id), sampled)
+        stage("tables and paired statistics")
         _summary(rep, out)
         _paired(rep, out)
         _comm(rep, out)
@@ -208,6 +226,7 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
     if maes_csv:
         from ..maes_csv import write_runs
 
+        stage("MAES CSVs")
         rep.maes = write_runs(store, data, out, "maes-csv")
     rep.written = list(out.written)
     readme = out.write("README.md", render(rep))

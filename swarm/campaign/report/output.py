@@ -8,6 +8,7 @@ exists) are deleted using the previous ``files.txt``; files the report never wro
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 from maps.errors import InvalidInput
@@ -18,13 +19,16 @@ _HEADER = "# files written by `swarm campaign report` (the next report deletes t
 
 
 class ReportWriter:
-    def __init__(self, folder: Path) -> None:
+    """``on_write(relative)`` is called after each file is written (a progress display)."""
+
+    def __init__(self, folder: Path, on_write: Callable[[str], None] | None = None) -> None:
         if folder.exists() and not folder.is_dir():
             raise InvalidInput("-o", str(folder), "a folder for the report (this is a file)")
         folder.mkdir(parents=True, exist_ok=True)
         self.folder = folder
         self.written: list[str] = []
         self._dirs: set[Path] = set()
+        self.on_write = on_write
 
     def write(self, relative: str, data: bytes | str) -> Path:
         """Write ``folder/relative`` atomically (skipped when the bytes are already there)."""
@@ -36,6 +40,8 @@ class ReportWriter:
         if not (path.is_file() and path.stat().st_size == len(blob) and path.read_bytes() == blob):
             atomic_write_bytes(path, blob)
         self.written.append(relative)
+        if self.on_write is not None:
+            self.on_write(relative)
         return path
 
     def finish(self) -> None:

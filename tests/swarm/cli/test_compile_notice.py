@@ -1,4 +1,5 @@
-"""`swarm run` says so on a terminal when numba compiles its kernels, and prints nothing extra otherwise."""
+"""`swarm run` says so on a terminal when numba compiles its kernels (one line, then a live counter), and
+prints nothing extra otherwise."""
 
 from __future__ import annotations
 
@@ -23,12 +24,16 @@ def _fresh_kernel():
     return total
 
 
-def test_a_terminal_gets_one_line_however_many_kernels_compile():
+def test_a_terminal_gets_one_note_and_a_counter_of_what_compiled():
     out = _Terminal()
-    with compile_notice(out):
+    with compile_notice(out) as progress:
         assert _fresh_kernel()(np.ones(2)) == 3.0
         assert _fresh_kernel()(np.ones(3)) == 4.0
-    assert out.getvalue() == NOTE + "\n"
+    text = out.getvalue()
+    assert text.count(NOTE) == 1 and text.startswith(NOTE + "\n")
+    assert progress.watch.compiled >= 2 and progress.watch.seconds > 0
+    final = text.replace("\r", "\n").strip().splitlines()[-1]
+    assert final.startswith(f"compiling: {progress.watch.compiled} functions [")
 
 
 def test_nothing_when_nothing_compiles_or_the_stream_is_not_a_terminal():

@@ -101,3 +101,24 @@ def test_unreachable_goal_is_bad_input(tmp_path, capsys):
     save_npz(Map(solid=solid, material=solid.astype(np.uint8), materials=("air", "concrete")), path)
     code, _, err = run(capsys, "plan", str(path), "--from", "3,3", "--to", "15,15")
     assert code == 2 and "--to" in err and "reach" in err
+
+
+def test_numba_compiling_is_reported_apart_from_the_planning_time(map_file, capsys, monkeypatch):
+    """A first call's compile (35 s after an install) is not planning time: the planner's time excludes
+    what numba spent inside it, and a line says what numba cost."""
+    from swarm.jit import JitWatch
+
+    real = JitWatch.__exit__
+
+    def slow_compile(self, *exc):  # as if numba had spent 30 s compiling 12 functions in the block
+        self.seconds += 30.0
+        self.compiled += 12
+        return real(self, *exc)
+
+    monkeypatch.setattr(JitWatch, "__exit__", slow_compile)
+    code, out, err = run(capsys, "plan", str(map_file), "--from", "3,3", "--to", "16,16", "--planner", "astar")
+    assert code == 0, err
+    planning = float(re.search(r"astar: [0-9.]+ m as driven .*, (-?[0-9.]+) s planning", out).group(1))
+    assert planning < 0, "the 30 s the watch inside the planner's call reported are taken out of its time"
+    line = out.strip().splitlines()[-1]
+    assert line.startswith("numba: 30.") and "compiling 12 functions" in line and "not counted" in line
