@@ -32,7 +32,8 @@ from numba import njit
 from maps.params import OMIT_DEFAULT, check_choice, check_float, check_int
 
 from .api import CELL_M
-from .knowledge import check_writable_map, merge_cells_many, sync_box_unchecked, sync_changes
+from .knowledge import check_writable_map, merge_cells_many, merge_cells_many_counted, sync_box_unchecked, sync_changes
+from .metrics import FreeCounts, InfoAges
 from .messages import MAX_MESSAGE_BYTES, MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
 from .schema import DROP_CAUSES
 
@@ -385,8 +386,13 @@ class Medium:
 class MapSharing:
     """The map-sharing service: builds each robot's MapUpdates and merges the ones it receives."""
 
-    def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None) -> None:
-        """``lidar_reach``: the owner's promise that apart from this service's merges only a lidar writes into
+    def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None,
+                 ages: InfoAges | None = None, free: FreeCounts | None = None) -> None:
+        """``ages``: told of every update sent and of every merge that leaves a receiver holding the sender's
+        whole map; ``free``: told how the merges change each map's count of FREE cells (age of information,
+        docs/comm-metrics.md).
+
+        ``lidar_reach``: the owner's promise that apart from this service's merges only a lidar writes into
         the maps, within ``lidar_reach`` cells (rows and columns) of each robot's cell, and that it reports
         every scan with :meth:`scanned` from the start. A delta then compares only the places written since the robot's
         last update (:func:`swarm.knowledge.sync_box`), not both whole maps: the same cells. Without it
@@ -397,6 +403,10 @@ class MapSharing:
         self.last_shared = np.zeros((n, *shape), dtype=np.uint8) if spec.map_sharing == "delta" else None
         self.seq = [0] * n
         self.seen_seq = [[0] * n for _ in range(n)]          # [receiver][sender] last seq merged
+        self.whole = [[True] * n for _ in range(n)]          # [receiver][sender] holds all the sender's updates
+        self.ages = ages
+        self.free = free
+        self._merges: list[tuple[np.ndarray, int, int]] = []  # this tick's (receivers, sender, sent tick): ages
         self.full_requested = [False] * n
         self.requests: list[list[int]] = [[] for _ in range(n)]  # targets each robot will ask next tick
         self.lidar_reach = lidar_reach if self.enabled and self.last_shared is not None else None
@@ -441,6 +451,8 @@ class MapSharing:
             if len(changed):
                 self.seq[i] += 1
                 out[i].append(delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed))
+        if self.ages is not None:
+            self.ages.sent(tick)
         return out
 
     def _changed_since_update(self, i: int, known: np.ndarray) -> np.ndarray:
@@ -461,10 +473,11 @@ class MapSharing:
         self._merged[i] = []
         self._whole[i] = False
 
-    def receive(self, receiver: int, messages: Sequence[Any], known: np.ndarray) -> list[np.ndarray | None]:
+    def receive(self, receiver: int, messages: Sequence[Any], known: np.ndarray,
+                tick: int = 0) -> list[np.ndarray | None]:
         """Handle one receiver's service messages of a tick: merge every MapUpdate and note MapRequests
         addressed to it. Returns, per merged update, the flat indices it carried (None for a full map: any
-        cell may have changed). Other messages are left to the algorithm."""
+        cell may have changed). Other messages are left to the algorithm. ``tick``: now (for :attr:`ages`)."""
         for msg in messages:
             if isinstance(msg, MapUpdate) and msg.shape != known.shape:
                 raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape}")
@@ -472,18 +485,22 @@ class MapSharing:
             check_writable_map(known)
         touched: list[np.ndarray | None] = []
         stack, rows = known[np.newaxis], np.zeros(1, dtype=np.int64)
+        robot = np.array([receiver], dtype=np.int64)
         for msg in messages:
-            self._take(msg, [receiver], stack, rows, [touched])
+            self._take(msg, [receiver], stack, rows, [touched], robot)
+        if self.ages is not None:
+            self.ages.merged(self._merges, tick)
+        self._merges = []
         return touched
 
     def receive_tick(self, deliveries: Sequence[tuple[Any, Sequence[int]]], known: np.ndarray,
-                     live: np.ndarray, cells: bool = True) -> list[list[np.ndarray | None]]:
+                     live: np.ndarray, cells: bool = True, tick: int = 0) -> list[list[np.ndarray | None]]:
         """:meth:`receive` for every robot at once: ``deliveries`` are a tick's messages with the robots each
         reached, in the order the inboxes list them (sender, then sequence), and ``known`` the maps
         (``uint8[R, H, W]``); robots not ``live`` are left alone. The same effect and the same lists as
         calling :meth:`receive` per robot with its inbox, but each map update is merged into all its
         receivers in one compiled call (a long many-robot run merges a great many). ``cells=False``: the lists
-        stay empty (the in-process runtime does not read them)."""
+        stay empty (the in-process runtime does not read them). ``tick``: now (for :attr:`ages`)."""
         check_writable_map(known)
         touched: list[list[np.ndarray | None]] = [[] for _ in range(self.n)]
         flags = live.tolist()
@@ -496,15 +513,22 @@ class MapSharing:
             if isinstance(msg, MapUpdate) and msg.shape != known.shape[1:]:
                 raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape[1:]}")
             lists = [touched[r] for r in ids] if cells else None
-            self._take(msg, ids, known, np.array(ids, dtype=np.int64), lists)
+            rows = np.array(ids, dtype=np.int64)
+            self._take(msg, ids, known, rows, lists, rows)
+        if self.ages is not None:
+            self.ages.merged(self._merges, tick)
+        self._merges = []
         return touched
 
     def _take(self, msg: Any, ids: list[int], stack: np.ndarray, rows: np.ndarray,
-              lists: list[list[np.ndarray | None]] | None) -> None:
-        """One service message reaching robots ``ids``, whose maps are ``stack[rows]`` (checked): merge a
+              lists: list[list[np.ndarray | None]] | None, robots: np.ndarray) -> None:
+        """One service message reaching robots ``ids`` (``robots``: the same as an array), whose maps are
+        ``stack[rows]`` (checked): merge a
         MapUpdate into each, note what it wrote for their next deltas, append the cells it carried (None for
         a full map) to ``lists[k]`` for robot ``ids[k]`` (unless None) and book its sequence number; or note
-        a MapRequest addressed to one of them."""
+        a MapRequest addressed to one of them. Notes for :attr:`ages` which of them now hold the sender's
+        whole map: all after a full map; after a delta, those that merged every earlier update of the sender
+        since their last full map of it (a gap leaves a receiver partial until the full map it asks for)."""
         if isinstance(msg, MapRequest):
             if msg.target in ids:
                 self.full_requested[msg.target] = True
@@ -518,14 +542,20 @@ class MapSharing:
             for row in rows.tolist():
                 flat = stack[row].reshape(-1)
                 np.maximum(flat, dense, out=flat)
+            if self.free is not None:
+                self.free.dirty[robots] = True  # counted afresh when next read
         else:
             idx, values = msg.cells()  # int64 and uint8, in range: checked when decoded
-            merge_cells_many(stack, rows, idx, values)
+            if self.free is not None:
+                merge_cells_many_counted(stack, rows, idx, values, robots, self.free.freed)
+            else:
+                merge_cells_many(stack, rows, idx, values)
         delta_gap = not msg.full and self.spec.map_sharing == "delta"
         sender, seq = msg.sender, msg.seq
         if lists is not None:
             for carried in lists:
                 carried.append(idx)
+        whole: list[int] = []  # the receivers that now hold the sender's whole map (for ages)
         for r in ids:
             if tracking:
                 if idx is None:
@@ -536,7 +566,19 @@ class MapSharing:
             last = seen[sender]
             if delta_gap and seq != last + 1 and sender not in self.requests[r]:
                 self.requests[r].append(sender)
+            holds = self.whole[r]
+            if msg.full:
+                holds[sender] = True
+                whole.append(r)
+            elif seq == last + 1:
+                if holds[sender]:
+                    whole.append(r)
+            elif seq > last:
+                holds[sender] = False  # a gap: partial until the full map it asks for
             seen[sender] = seq if msg.full else max(last, seq)
+        if whole:
+            self._merges.append((robots if len(whole) == len(ids) else np.array(whole, dtype=np.int64), sender,
+                                 msg.tick))
 
 
 @njit(cache=True)

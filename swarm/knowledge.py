@@ -28,7 +28,7 @@ from .api import CELL_M, FREE, SOLID, UNSEEN
 __all__ = [
     "FREE", "SOLID", "UNSEEN", "ExplorationTracker", "LogOddsGrid", "active_flags", "check_writable_map",
     "classify_logodds", "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "merge_cells_many",
-    "sync_box", "sync_box_unchecked", "sync_changes", "sync_regions",
+    "merge_cells_many_counted", "sync_box", "sync_box_unchecked", "sync_changes", "sync_regions",
 ]
 
 
@@ -105,6 +105,31 @@ def _merge_cells_many_kernel(stack: np.ndarray, rows: np.ndarray, idx: np.ndarra
     """:func:`_merge_cells_kernel` into each map ``stack[rows[k]]``."""
     for k in range(rows.shape[0]):
         _merge_cells_kernel(stack[rows[k]].reshape(-1), idx, values)
+
+
+@njit(cache=True)
+def _merge_cells_many_counted_kernel(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray,
+                                     robots: np.ndarray, freed: np.ndarray) -> None:  # pragma: no cover - compiled
+    """:func:`_merge_cells_many_kernel`, adding to ``freed[robots[k]]`` how many FREE cells map
+    ``stack[rows[k]]`` gained (UNSEEN -> FREE) less those it lost (FREE -> SOLID)."""
+    for k in range(rows.shape[0]):
+        flat = stack[rows[k]].reshape(-1)
+        change = 0
+        for j in range(idx.shape[0]):
+            i = idx[j]
+            v = values[j]
+            old = flat[i]
+            if v > old:
+                change += (v == FREE) - (old == FREE)
+                flat[i] = v
+        freed[robots[k]] += change
+
+
+def merge_cells_many_counted(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray,
+                             robots: np.ndarray, freed: np.ndarray) -> None:
+    """:func:`merge_cells_many` that also keeps count: ``freed[robots[k]]`` (int64) changes by the FREE cells
+    map ``stack[rows[k]]`` gained or lost (age-of-information metrics, :class:`swarm.metrics.FreeCounts`)."""
+    _merge_cells_many_counted_kernel(stack, rows, idx, values, robots, freed)
 
 
 def merge_cells_many(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:

@@ -46,7 +46,7 @@ def execute(task: Task) -> dict[str, Any]:
             result = Simulation(spec).run()
         algorithm = result.provenance["algorithm"]
         out: dict[str, Any] = {"key": key, "status": "ok", "error": "", "summary": result.summary,
-                               "timeseries": result.timeseries, "events": result.events,
+                               "timeseries": result.timeseries, "events": result.events, "comm": result.comm,
                                "algorithm_dist": (algorithm["distribution"], algorithm["version"])}
         if result.key != key:
             out.update(status="failed", error=f"spec key changed in the worker ({result.key} != {key})")
@@ -55,7 +55,7 @@ def execute(task: Task) -> dict[str, Any]:
             raise
         last = traceback.format_exception(exc)[-1].strip()
         out = {"key": key, "status": "failed", "error": last[:2000], "summary": None, "timeseries": None,
-               "events": []}
+               "events": [], "comm": None}
     out["wall_time_s"] = time.perf_counter() - t0
     out["cpu_time_s"] = time.process_time() - c0
     out["jit_time_s"] = watch.seconds
