@@ -7,8 +7,8 @@ actions). :mod:`swarm.viewer` turns a recording into one self-contained HTML pag
 """
 
 from .container import FORMAT_VERSION, MAGIC
-from .reader import MessageRecord, Recording, TickState, load_recording
+from .reader import CommState, MessageRecord, Recording, TickState, load_recording
 from .recorder import Recorder, record_run
 
-__all__ = ["FORMAT_VERSION", "MAGIC", "MessageRecord", "Recorder", "Recording", "TickState", "load_recording",
+__all__ = ["CommState", "FORMAT_VERSION", "MAGIC", "MessageRecord", "Recorder", "Recording", "TickState", "load_recording",
            "record_run"]
