@@ -57,7 +57,7 @@ from maps.materials import colour_of
 
 from ..comm import LOSS_CAUSES
 from .container import BLOCK, FORMAT_NAME, FORMAT_VERSION, HEAD, MAGIC, TAIL, encode_chunk, pack_array
-from .kernels import RSSI_NAN, _record_links, changed_cells, quantise_rssi
+from .kernels import RSSI_NAN, _record_changes, _record_links, changed_cells, quantise_rssi
 
 if TYPE_CHECKING:
     from ..simulation import Simulation, TickView
@@ -201,7 +201,10 @@ class Recorder:
         self._rssi = np.full((n, n), RSSI_NAN, dtype=np.int16)
         self._acts: list[bytes | None] = [None] * n
         self._groups = [-1] * n                                  # each robot's group (its smallest member)
-        self._merged_at = np.zeros((n, n), dtype=np.int64)       # mirror of sim.ages.merged_at
+        self._merged_at = np.zeros(n * n, dtype=np.int64)        # mirror of sim.ages.merged_at
+        self._aoi_idx = np.empty(n * n, dtype=np.int64)          # scratch for its changes
+        self._aoi_val = np.empty(n * n, dtype=np.int64)
+        self._links_changed = True                               # since the groups were last labelled
         self._contact = list(sim.medium.stats.last_contact)      # the medium's last_contact at the last tick
         self._ages, self._stats = sim.ages, sim.medium.stats     # the run's own comm bookkeeping
         self._team_free = sim.comm_metrics.team_free
@@ -297,6 +300,7 @@ class Recorder:
         nt, nr = _record_links(link, rssi, self._link.reshape(-1), self._rssi.reshape(-1), self.quantum,
                                self.update_units, self._toggled, self._rssi_idx, self._rssi_val)
         b.counts["link"].append(nt)
+        self._links_changed |= nt > 0
         b.link_idx.append(self._toggled[:nt].copy())
         b.counts["rssi"].append(nr)
         b.rssi_idx.append(self._rssi_idx[:nr].copy())
@@ -328,24 +332,25 @@ class Recorder:
         """Groups, map merges, contacts and the team's free cells of this tick, as the run's metrics have
         them at this tick's row (merges and the tracker do not change between the row and the observers)."""
         n = self.n
-        groups = links.groups() if n > 1 else [frozenset({0})]
-        label = [0] * n
-        for members in groups:
-            first = min(members)
-            for robot in members:
-                label[robot] = first
-        changed = [i for i in range(n) if label[i] != self._groups[i]]
+        changed: list[int] = []
+        if self._links_changed:  # groups are a function of the link matrix alone
+            self._links_changed = False
+            label = [0] * n
+            for members in (links.groups() if n > 1 else [frozenset({0})]):
+                first = min(members)
+                for robot in members:
+                    label[robot] = first
+            changed = [i for i in range(n) if label[i] != self._groups[i]]
+            for i in changed:
+                b.group_robot.append(i)
+                b.group_id.append(label[i])
+            self._groups = label
         b.counts["group"].append(len(changed))
-        for i in changed:
-            b.group_robot.append(i)
-            b.group_id.append(label[i])
-        self._groups = label
-        merged, mirror = self._ages.merged_at.reshape(-1), self._merged_at.reshape(-1)
-        idx = np.flatnonzero(merged != mirror)
-        b.counts["aoi"].append(len(idx))
-        b.aoi_idx.append(idx)
-        b.aoi_val.append(merged[idx])
-        mirror[idx] = merged[idx]
+        m = _record_changes(self._ages.merged_at.reshape(-1), self._merged_at, self._aoi_idx, self._aoi_val)
+        b.counts["aoi"].append(m)
+        if m:
+            b.aoi_idx.append(self._aoi_idx[:m].copy())
+            b.aoi_val.append(self._aoi_val[:m].copy())
         # The medium sets last_contact[i] = t + 1 when it delivers a message of tick t: at send time (now,
         # after the run's row for this tick) or, with link_at = "receive", during tick t + 1. So robot i got a
         # message at this tick when its entry is this tick now or was at the last tick.
