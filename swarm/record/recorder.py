@@ -33,9 +33,10 @@ per-tick work does not depend on how much the robots did:
 Chunks of ``block_ticks`` ticks are compressed as they fill, so memory holds only compressed bytes.
 
 **What is exact.** Poses (float64), explored/coverage (float64), every robot's knowledge map, the union
-``seen`` raster, the boolean link matrix, every message's (sender, seq, type, size, receivers) and each
-robot's action (goal, velocity, clear_goal, debug, after :func:`plain` normalisation) are reproduced
-exactly at every tick. RSSI is stored in units of ``rssi_quantum_db`` (0.25 dB) and an entry is rewritten
+``seen`` raster, the boolean link matrix, every message's (sender, seq, type, size, receivers,
+transmitter, failed deliveries and their causes), each robot's action (goal, velocity, clear_goal, debug,
+after :func:`plain` normalisation), the groups, ``merged_at``, contacts and the team's free cells are
+reproduced exactly at every tick. RSSI is stored in units of ``rssi_quantum_db`` (0.25 dB) and an entry is rewritten
 when it drifts more than ``rssi_update_db`` (1 dB) from the stored value, or its link toggles, so the stored
 matrix is always within 1.125 dB of the truth; the exact RSSI is recomputable from the exact poses
 (:meth:`swarm.record.Recording.link_state`). Identical specs give byte-identical recordings.

@@ -512,7 +512,7 @@
       });
       document.getElementById('robot-close').addEventListener('click', () => this.select(null));
       document.addEventListener('keydown', (e) => {
-        if (e.target && (e.target.tagName === 'SELECT')) return;
+        if (e.target && (e.target.tagName === 'SELECT' || e.target.type === 'number')) return;
         if (e.key === ' ') { e.preventDefault(); this.playing ? this.pause() : this.play(); }
         if (e.target === this.slider) return;
         const step = e.shiftKey ? 10 : 1;
@@ -701,13 +701,14 @@
     drawGroups() {
       const groups = this.groups().filter((g) => g.length > 1);
       if (!groups.length) return;
-      const layer = this.groupLayer;
+      const layer = this.groupLayer, pad = this.robotPx + 6;
       if (layer.width !== this.canvas.width || layer.height !== this.canvas.height) {
         layer.width = this.canvas.width; layer.height = this.canvas.height;
       }
       const g = layer.getContext('2d');
       g.clearRect(0, 0, layer.width, layer.height);
-      g.lineJoin = 'round'; g.lineCap = 'round'; g.lineWidth = 2 * (this.robotPx + 6);
+      g.lineJoin = 'round'; g.lineCap = 'round'; g.lineWidth = 2 * pad;
+      let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
       for (const members of groups) {
         const hull = convexHull(members.map((i) => this.worldToCanvas(...this.pose(i))));
         const colour = this.colour(members[0]);
@@ -715,39 +716,54 @@
         g.beginPath();
         hull.forEach(([x, y], k) => (k ? g.lineTo(x, y) : g.moveTo(x, y)));
         g.closePath(); g.fill(); g.stroke();
+        for (const [x, y] of hull) { x0 = Math.min(x0, x); y0 = Math.min(y0, y); x1 = Math.max(x1, x); y1 = Math.max(y1, y); }
         this.drawn.groups.push({ members, colour, hull });
       }
-      // drawn opaque on their own layer, then blended once: overlapping strokes do not darken
-      this.ctx.save(); this.ctx.globalAlpha = 0.3; this.ctx.drawImage(layer, 0, 0); this.ctx.restore();
+      // drawn opaque on their own layer, then blended once (overlapping strokes do not darken), only the
+      // part the hulls cover: compositing the whole canvas costs milliseconds in software rendering
+      x0 = Math.max(0, Math.floor(x0 - pad - 1)); y0 = Math.max(0, Math.floor(y0 - pad - 1));
+      x1 = Math.min(layer.width, Math.ceil(x1 + pad + 1)); y1 = Math.min(layer.height, Math.ceil(y1 + pad + 1));
+      if (x1 <= x0 || y1 <= y0) return;
+      this.ctx.save(); this.ctx.globalAlpha = 0.3;
+      this.ctx.drawImage(layer, x0, y0, x1 - x0, y1 - y0, x0, y0, x1 - x0, y1 - y0);
+      this.ctx.restore();
     }
 
     /** Failed deliveries of the last LOST_TICKS ticks' transmissions, fading: a dashed line in the cause's
      *  colour from the transmitter three quarters of the way to the robot it did not reach, ending in a
-     *  cross. With a robot selected, only those from or to it. */
+     *  cross. With a robot selected, only those from or to it. One path per tick and cause (a stroke per
+     *  line cost milliseconds a frame when 16 robots share maps out of reach). */
     drawLosses() {
       const ctx = this.ctx, m = this.rec.msg, off = this.rec.off.msg, causes = this.rec.causes;
-      const first = Math.max(0, this.tick - LOST_TICKS + 1), sel = this.selectedRobot;
+      const sel = this.selectedRobot;
       ctx.save();
       ctx.lineWidth = 2;
-      for (let k = off[first]; k < off[this.tick + 1]; k++) {
-        if (m.lostOff[k] === m.lostOff[k + 1]) continue;
-        const age = this.tick - m.tick[k], alpha = 1 - age / LOST_TICKS;
-        const from = m.via[k];
-        const [sx, sy] = this.worldToCanvas(...this.pose(from));
-        for (let q = m.lostOff[k]; q < m.lostOff[k + 1]; q++) {
-          const cause = causes[m.lostCause[q]], to = m.lost[q];
-          if (this.hiddenCauses.has(cause) || (sel !== null && from !== sel && to !== sel)) continue;
-          const colour = causeColour(cause);
-          const [rx, ry] = this.worldToCanvas(...this.pose(to));
-          const ex = sx + 0.75 * (rx - sx), ey = sy + 0.75 * (ry - sy);
-          ctx.strokeStyle = rgb(colour, alpha);
-          ctx.setLineDash([5, 4]);
-          ctx.beginPath(); ctx.moveTo(sx, sy); ctx.lineTo(ex, ey); ctx.stroke();
-          ctx.setLineDash([]);
-          ctx.beginPath(); ctx.moveTo(ex - 3.5, ey - 3.5); ctx.lineTo(ex + 3.5, ey + 3.5);
-          ctx.moveTo(ex + 3.5, ey - 3.5); ctx.lineTo(ex - 3.5, ey + 3.5); ctx.stroke();
-          this.drawn.losses.push({ tick: m.tick[k], from, to, sender: m.sender[k], seq: m.seq[k], cause,
-                                   type: m.types[m.type[k]], x1: sx, y1: sy, x2: ex, y2: ey, colour });
+      for (let t = Math.max(0, this.tick - LOST_TICKS + 1); t <= this.tick; t++) {
+        const lines = new Map();
+        for (let k = off[t]; k < off[t + 1]; k++) {
+          if (m.lostOff[k] === m.lostOff[k + 1]) continue;
+          const from = m.via[k];
+          const [sx, sy] = this.worldToCanvas(...this.pose(from));
+          for (let q = m.lostOff[k]; q < m.lostOff[k + 1]; q++) {
+            const cause = causes[m.lostCause[q]], to = m.lost[q];
+            if (this.hiddenCauses.has(cause) || (sel !== null && from !== sel && to !== sel)) continue;
+            if (!lines.has(cause)) lines.set(cause, [new Path2D(), new Path2D()]);
+            const [dashed, crosses] = lines.get(cause);
+            const [rx, ry] = this.worldToCanvas(...this.pose(to));
+            const ex = sx + 0.75 * (rx - sx), ey = sy + 0.75 * (ry - sy);
+            dashed.moveTo(sx, sy); dashed.lineTo(ex, ey);
+            crosses.moveTo(ex - 3.5, ey - 3.5); crosses.lineTo(ex + 3.5, ey + 3.5);
+            crosses.moveTo(ex + 3.5, ey - 3.5); crosses.lineTo(ex - 3.5, ey + 3.5);
+            this.drawn.losses.push({ tick: t, from, to, sender: m.sender[k], seq: m.seq[k], cause,
+                                     type: m.types[m.type[k]], x1: sx, y1: sy, x2: ex, y2: ey,
+                                     colour: causeColour(cause) });
+          }
+        }
+        const alpha = 1 - (this.tick - t) / LOST_TICKS;
+        for (const [cause, [dashed, crosses]] of lines) {
+          ctx.strokeStyle = rgb(causeColour(cause), alpha);
+          ctx.setLineDash([5, 4]); ctx.stroke(dashed);
+          ctx.setLineDash([]); ctx.stroke(crosses);
         }
       }
       ctx.restore();
@@ -759,11 +775,11 @@
       let best = 6;
       for (const d of this.drawn.losses) {
         const dist = segmentDistance(cx, cy, d.x1, d.y1, d.x2, d.y2);
-        if (dist < best || (dist <= best && text)) {
+        if (dist <= best) {   // ties: the newest, drawn last, on top
           best = dist;
           const relay = d.from !== d.sender ? ` relayed by ${d.from}` : '';
           const margin = this.margin(d.to, d.from);
-          const m = isFinite(margin) ? ` (RSSI margin now ${fmt(margin, 1)} dB)` : '';
+          const m = isFinite(margin) ? `; RSSI margin now ${fmt(margin, 1)} dB` : '';
           text = `Lost at tick ${d.tick} (${(d.tick * this.head.tick_s).toFixed(1)} s): robot ${d.sender} → ` +
                  `robot ${d.to}, ${d.type} #${d.seq}${relay}. Cause: ${d.cause}: ${causeText(d.cause)}${m}.`;
         }
