@@ -716,7 +716,9 @@
         g.beginPath();
         hull.forEach(([x, y], k) => (k ? g.lineTo(x, y) : g.moveTo(x, y)));
         g.closePath(); g.fill(); g.stroke();
-        for (const [x, y] of hull) { x0 = Math.min(x0, x); y0 = Math.min(y0, y); x1 = Math.max(x1, x); y1 = Math.max(y1, y); }
+        for (const [x, y] of hull) {
+          x0 = Math.min(x0, x); y0 = Math.min(y0, y); x1 = Math.max(x1, x); y1 = Math.max(y1, y);
+        }
         this.drawn.groups.push({ members, colour, hull });
       }
       // drawn opaque on their own layer, then blended once (overlapping strokes do not darken), only the
@@ -1026,7 +1028,8 @@
         `tick ${t} / ${this.rec.T - 1} (${(t * this.head.tick_s).toFixed(1)} s) · explored ` +
         `${(100 * this.rec.explored[t]).toFixed(1)} % · coverage ${(100 * this.rec.coverage[t]).toFixed(1)} % · ` +
         `${this.linkCount()} links · ${off[t + 1] - off[t]} messages sent` +
-        (this.rec.hasComm ? ` · ${this.lostCount(t)} deliveries lost · ${plural(this.groups().length, 'group')}` : '');
+        (this.rec.hasComm
+          ? ` · ${this.lostCount(t)} deliveries lost · ${plural(this.groups().length, 'group')}` : '');
     }
 
     lostCount(t) {
@@ -1072,7 +1075,9 @@
       const R = this.rec.R, t = this.tick, tickS = this.head.tick_s, c = this.commState()[i];
       const mates = this.groups().find((g) => g.includes(i)).filter((j) => j !== i);
       const ages = [];
-      for (let s = 0; s < R; s++) if (s !== i) ages.push(`${s}: ${((t - this.state.mergedAt[i * R + s]) * tickS).toFixed(1)} s`);
+      for (let s = 0; s < R; s++) {
+        if (s !== i) ages.push(`${s}: ${((t - this.state.mergedAt[i * R + s]) * tickS).toFixed(1)} s`);
+      }
       return [['group', mates.length ? `with ${mates.join(', ')}` : 'alone'],
               ['last contact', `${(c.since * tickS).toFixed(1)} s ago`],
               ['missing', `${(100 * c.missing).toFixed(1)} % of the team's free cells`],
