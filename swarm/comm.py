@@ -43,6 +43,12 @@ if TYPE_CHECKING:
 SHARING_MODES = ("delta", "full", "off", "maes", "maes_heartbeat", "maes_sync")
 LINK_TIMES = ("send", "receive")
 RELAY_MODES = ("none", "flood")
+LOSS_CAUSES = ("link", "loss", "bandwidth", "packet_error")
+"""Why one delivery failed, as :attr:`Envelope.lost` codes (indices) give it when an observer asks for them
+(:attr:`Medium.note_losses`): no link (or a failed receiver), ``comm.loss``, the byte budget, a packet error
+on a link above the sensitivity. The drop counts fold ``packet_error`` into ``dropped_loss`` (and a packet
+error below the sensitivity is ``link``, as there), docs/comm-metrics.md."""
+_LINK, _LOSS, _BANDWIDTH, _PACKET_ERROR = range(len(LOSS_CAUSES))
 
 
 @dataclass(frozen=True)
@@ -90,7 +96,10 @@ class Envelope:
     """One encoded message in flight; after delivery, ``delivered_to`` lists the robots that got it. A relayed
     copy (``comm.relay = "flood"``) keeps the original's ``sender``, ``seq``, ``data`` and ``message``; ``hop``
     counts transmissions from the sender (1: the sender's own) and ``via`` is the robot that transmits the
-    copy (-1: the sender itself); ``delivered_to`` lists only robots for which it was the first copy."""
+    copy (-1: the sender itself); ``delivered_to`` lists only robots for which it was the first copy. ``lost``
+    is None unless the medium notes losses (:attr:`Medium.note_losses`, for the recorder): then it lists
+    ``(receiver, cause)`` for every other robot this transmission failed to reach, ``cause`` an index into
+    :data:`LOSS_CAUSES` (a relayed copy that reached a robot already holding the message is not lost)."""
 
     sender: int
     seq: int
@@ -99,6 +108,7 @@ class Envelope:
     delivered_to: list[int] = field(default_factory=list)
     hop: int = 1
     via: int = -1
+    lost: list[tuple[int, int]] | None = None
 
     @property
     def transmitter(self) -> int:
@@ -174,6 +184,9 @@ class Medium:
         self.relaying = spec.relay == "flood"
         self.stats = CommStats(last_contact=[-1] * n, malformed_by_robot=[0] * n, relaying=self.relaying)
         self.dropped: list[tuple[int, str]] = []  # (sender, reason) of messages dropped since last read
+        self.note_losses = False
+        """Set by an observer that wants each envelope's failed deliveries (:attr:`Envelope.lost`); off, the
+        medium does no work for them (the draws and counts are the same either way)."""
         self._seq = [0] * n
         self.packet_errors = packet_errors
         if packet_errors is not None and error_rng is None:
@@ -225,11 +238,14 @@ class Medium:
         stats = self.stats
         inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         budget = np.full((n, n), self.spec.bandwidth, dtype=np.int64) if self.spec.bandwidth else None
+        note = self.note_losses
+        lost = None
         for j in range(n):
             if not outboxes[j]:
                 continue
             in_reach = np.flatnonzero(link[:, j])
             others = [i for i in in_reach.tolist() if i != j]  # every receiver when nothing is lost
+            unreached = [(i, _LINK) for i in np.flatnonzero(~link[:, j]).tolist() if i != j] if note else []
             for env in outboxes[j]:
                 size = len(env.data)
                 stats.sent += 1
@@ -238,13 +254,17 @@ class Medium:
                     stats.map_bytes_sent += size
                 receivers = in_reach
                 stats.dropped_link += (n - 1) - len(receivers)
+                if note:
+                    lost = env.lost = list(unreached)
                 targets = others
                 if self.spec.loss > 0.0 and len(receivers):
                     keep = self.rng.random(len(receivers)) >= self.spec.loss
                     stats.dropped_loss += int((~keep).sum())
                     targets = [i for i in receivers[keep].tolist() if i != j]
+                    if lost is not None:
+                        lost.extend((i, _LOSS) for i in receivers[~keep].tolist())
                 if budget is not None:
-                    targets = self._within_budget(budget, targets, j, size)
+                    targets = self._within_budget(budget, targets, j, size, lost)
                 for i in targets:
                     inboxes[i].append(env)
                     stats.last_contact[i] = tick + 1
@@ -268,6 +288,8 @@ class Medium:
                 raise ValueError("packet errors need the pairs' margins")
             log_keep = self.packet_errors.log_keep(margin)
         touched: set[tuple[int, int]] = set()
+        note = self.note_losses
+        lost = None
         for j in range(n):
             if not outboxes[j]:
                 continue
@@ -275,6 +297,8 @@ class Medium:
             linked = link[others, j]
             keep_j = log_keep[others, j] if log_keep is not None else None
             for env in outboxes[j]:
+                if note:
+                    lost = env.lost = []
                 size = len(env.data)
                 stats.sent += 1
                 stats.bytes_sent += size
@@ -286,15 +310,19 @@ class Medium:
                 if keep_j is None:
                     reach = others[linked]
                     stats.dropped_link += (n - 1) - len(reach)
+                    if lost is not None:
+                        lost.extend((i, _LINK) for i in others[~linked].tolist())
                 else:
-                    reach = self._survive_errors(others, linked, keep_j, size)
+                    reach = self._survive_errors(others, linked, keep_j, size, lost)
                 if self.spec.loss > 0.0 and len(reach):
                     keep = self.rng.random(len(reach)) >= self.spec.loss
                     stats.dropped_loss += int((~keep).sum())
+                    if lost is not None:
+                        lost.extend((i, _LOSS) for i in reach[~keep].tolist())
                     reach = reach[keep]
                 targets = reach.tolist()
                 if budget is not None:
-                    targets = self._within_budget(budget, targets, j, size)
+                    targets = self._within_budget(budget, targets, j, size, lost)
                 if self.relaying:
                     targets = self._first_copies(env, targets)
                     touched.add((env.sender, env.seq))
@@ -311,16 +339,21 @@ class Medium:
                 box.sort(key=_inbox_order)
         return inboxes
 
-    def _survive_errors(self, others: np.ndarray, linked: np.ndarray, log_keep: np.ndarray, size: int) -> np.ndarray:
+    def _survive_errors(self, others: np.ndarray, linked: np.ndarray, log_keep: np.ndarray, size: int,
+                        lost: list[tuple[int, int]] | None = None) -> np.ndarray:
         """The robots of ``others`` that receive a ``size``-byte transmission despite packet errors: one
         uniform draw per robot, kept when it is at least the robot's PER (``-expm1(8 size log_keep)``, as
         :meth:`radio.per.PacketErrorCurve.per`: 1 without signal, 0 far above the sensitivity). The lost are
-        counted as ``dropped_link`` below the sensitivity (not ``linked``), else as ``dropped_loss``."""
+        counted as ``dropped_link`` below the sensitivity (not ``linked``), else as ``dropped_loss``, and
+        listed in ``lost`` (when given) as ``link`` or ``packet_error``."""
         assert self.error_rng is not None
         kept = np.empty(len(others), dtype=np.bool_)
         below, above = _kept_despite_errors(self.error_rng.random(len(others)), log_keep, 8.0 * size, linked, kept)
         self.stats.dropped_link += below
         self.stats.dropped_loss += above
+        if lost is not None and below + above:
+            failed = np.flatnonzero(~kept)
+            lost.extend(zip(others[failed].tolist(), np.where(linked[failed], _PACKET_ERROR, _LINK).tolist()))
         return others[kept]
 
     def _first_copies(self, env: Envelope, targets: list[int]) -> list[int]:
@@ -370,13 +403,16 @@ class Medium:
                     merged.setdefault((env.sender, env.seq), (env.message, []))[1].extend(env.delivered_to)
         return [(msg, sorted(ids)) for _, (msg, ids) in sorted(merged.items(), key=lambda item: item[0])]
 
-    def _within_budget(self, budget: np.ndarray, targets: list[int], sender: int, size: int) -> list[int]:
+    def _within_budget(self, budget: np.ndarray, targets: list[int], sender: int, size: int,
+                       lost: list[tuple[int, int]] | None = None) -> list[int]:
         """The receivers whose link from ``sender`` still carries ``size`` bytes this tick (charged); the
-        others count as dropped for bandwidth."""
+        others count as dropped for bandwidth (and are listed in ``lost``, when given)."""
         kept = []
         for i in targets:
             if budget[i, sender] < size:
                 self.stats.dropped_bandwidth += 1
+                if lost is not None:
+                    lost.append((i, _BANDWIDTH))
                 continue
             budget[i, sender] -= size
             kept.append(i)

@@ -225,18 +225,22 @@ class CommMetrics:
         self._biggest.append(max(len(g) for g in groups) / n)
         self._connected += len(groups) == 1
 
+    def team_free(self, known: np.ndarray, seen_free: int) -> int:
+        """The team's known free cells, the missing share's denominator: ``seen_free`` (the tracker's count)
+        when only the ternary lidar writes maps, else the cells FREE in some map of ``known``, counted."""
+        if self.free.exact:
+            return seen_free
+        cells = known.size // self.n
+        if self._union.shape[0] != cells:
+            self._union = np.zeros(cells, dtype=np.uint8)
+        return int(_free_union(known.reshape(self.n, cells), self._union))
+
     def _missing(self, known: np.ndarray, seen_free: int) -> list[float]:
         """Per robot: the share of the free cells some robot's map holds that its own map does not."""
         if self.n < 2:
             return [0.0] * self.n
         counts = self.free.read(known)
-        if self.free.exact:
-            team = seen_free
-        else:
-            cells = known.size // self.n
-            if self._union.shape[0] != cells:
-                self._union = np.zeros(cells, dtype=np.uint8)
-            team = _free_union(known.reshape(self.n, cells), self._union)
+        team = self.team_free(known, seen_free)
         if team <= 0:
             return [0.0] * self.n
         # clipped: an algorithm's own map update may hold free cells no lidar saw

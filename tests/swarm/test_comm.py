@@ -419,3 +419,44 @@ def test_medium_delivers_as_the_receiver_by_receiver_reference(loss, bandwidth):
         assert [[e.delivered_to for e in row] for row in boxes_fast] == [[e.delivered_to for e in row] for row in boxes_slow]
         assert fast.stats.as_dict() == slow.stats.as_dict()
     assert fast.stats.delivered > 0 and (fast.stats.dropped_bandwidth > 0) == (bandwidth > 0)
+
+
+@pytest.mark.parametrize("loss,bandwidth,relay", [(0.0, 0, "none"), (0.3, 30, "none"), (0.3, 30, "flood")])
+def test_a_medium_noting_losses_lists_every_failed_delivery_and_changes_nothing(loss, bandwidth, relay):
+    """With ``note_losses`` (the recorder's) every envelope lists each other robot it failed to reach, once, with
+    the cause the counts give it; inboxes, delivered_to and counts are those of a medium that does not note."""
+    from swarm.comm import LOSS_CAUSES, Envelope
+
+    rng = np.random.default_rng(7)
+    n = 6
+    spec = CommSpec(loss=loss, bandwidth=bandwidth, relay=relay)
+    noting, plain = Medium(n, spec, np.random.default_rng(1)), Medium(n, spec, np.random.default_rng(1))
+    noting.note_losses = True
+    causes = {c: 0 for c in LOSS_CAUSES}
+    for tick in range(30):
+        link = rng.random((n, n)) < 0.6
+        np.fill_diagonal(link, False)
+        sizes = [[int(s) for s in rng.integers(1, 25, rng.integers(0, 3))] for _ in range(n)]
+        boxes = [[[Envelope(j, 100 * tick + k, bytes(s), Ping(sender=j, tick=tick)) for k, s in enumerate(row)]
+                  for j, row in enumerate(sizes)] for _ in range(2)]
+        for medium, box in zip((noting, plain), boxes):
+            if medium.relaying:
+                medium.add_relays(box, np.zeros(n, dtype=bool))
+        got, want = noting.deliver(tick, boxes[0], link), plain.deliver(tick, boxes[1], link)
+        assert [[(e.sender, e.seq, e.hop) for e in inbox] for inbox in got] == \
+            [[(e.sender, e.seq, e.hop) for e in inbox] for inbox in want]
+        for env, other in zip((e for row in boxes[0] for e in row), (e for row in boxes[1] for e in row)):
+            assert other.lost is None and env.delivered_to == other.delivered_to
+            missed = [robot for robot, _ in env.lost]
+            assert len(set(missed)) == len(missed) and not set(missed) & set(env.delivered_to)
+            assert env.transmitter not in missed
+            if relay == "none":
+                assert sorted(missed + env.delivered_to) == [i for i in range(n) if i != env.transmitter]
+            for robot, cause in env.lost:
+                assert link[robot, env.transmitter] == (LOSS_CAUSES[cause] != "link")
+                causes[LOSS_CAUSES[cause]] += 1
+    stats = noting.stats
+    assert stats.as_dict() == plain.stats.as_dict()
+    assert (causes["link"], causes["loss"], causes["bandwidth"]) == \
+        (stats.dropped_link, stats.dropped_loss, stats.dropped_bandwidth)
+    assert causes["link"] > 0 and (causes["loss"] > 0) == (loss > 0) and (causes["bandwidth"] > 0) == (bandwidth > 0)
