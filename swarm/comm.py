@@ -32,7 +32,9 @@ from numba import njit
 from maps.params import OMIT_DEFAULT, check_choice, check_float, check_int
 
 from .api import CELL_M
-from .knowledge import check_writable_map, merge_cells_many, merge_cells_many_changed, sync_box_unchecked, sync_changes
+from .knowledge import (check_writable_map, merge_cells_many, merge_cells_many_changed, merge_cells_many_counted,
+                        sync_box_unchecked, sync_changes)
+from .metrics import FreeCounts, InfoAges
 from .messages import MAX_MESSAGE_BYTES, MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
 from .schema import DROP_CAUSES
 
@@ -42,6 +44,12 @@ if TYPE_CHECKING:
 SHARING_MODES = ("delta", "full", "off", "maes", "maes_heartbeat", "maes_sync")
 LINK_TIMES = ("send", "receive")
 RELAY_MODES = ("none", "flood")
+LOSS_CAUSES = ("link", "loss", "bandwidth", "packet_error")
+"""Why one delivery failed, as :attr:`Envelope.lost` codes (indices) give it when an observer asks for them
+(:attr:`Medium.note_losses`): no link (or a failed receiver), ``comm.loss``, the byte budget, a packet error
+on a link above the sensitivity. The drop counts fold ``packet_error`` into ``dropped_loss`` (and a packet
+error below the sensitivity is ``link``, as there), docs/comm-metrics.md."""
+_LINK, _LOSS, _BANDWIDTH, _PACKET_ERROR = range(len(LOSS_CAUSES))
 
 
 @dataclass(frozen=True)
@@ -89,7 +97,10 @@ class Envelope:
     """One encoded message in flight; after delivery, ``delivered_to`` lists the robots that got it. A relayed
     copy (``comm.relay = "flood"``) keeps the original's ``sender``, ``seq``, ``data`` and ``message``; ``hop``
     counts transmissions from the sender (1: the sender's own) and ``via`` is the robot that transmits the
-    copy (-1: the sender itself); ``delivered_to`` lists only robots for which it was the first copy."""
+    copy (-1: the sender itself); ``delivered_to`` lists only robots for which it was the first copy. ``lost``
+    is None unless the medium notes losses (:attr:`Medium.note_losses`, for the recorder): then it lists
+    ``(receiver, cause)`` for every other robot this transmission failed to reach, ``cause`` an index into
+    :data:`LOSS_CAUSES` (a relayed copy that reached a robot already holding the message is not lost)."""
 
     sender: int
     seq: int
@@ -98,6 +109,7 @@ class Envelope:
     delivered_to: list[int] = field(default_factory=list)
     hop: int = 1
     via: int = -1
+    lost: list[tuple[int, int]] | None = None
 
     @property
     def transmitter(self) -> int:
@@ -173,6 +185,9 @@ class Medium:
         self.relaying = spec.relay == "flood"
         self.stats = CommStats(last_contact=[-1] * n, malformed_by_robot=[0] * n, relaying=self.relaying)
         self.dropped: list[tuple[int, str]] = []  # (sender, reason) of messages dropped since last read
+        self.note_losses = False
+        """Set by an observer that wants each envelope's failed deliveries (:attr:`Envelope.lost`); off, the
+        medium does no work for them (the draws and counts are the same either way)."""
         self._seq = [0] * n
         self.packet_errors = packet_errors
         if packet_errors is not None and error_rng is None:
@@ -224,11 +239,14 @@ class Medium:
         stats = self.stats
         inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         budget = np.full((n, n), self.spec.bandwidth, dtype=np.int64) if self.spec.bandwidth else None
+        note = self.note_losses
+        lost = None
         for j in range(n):
             if not outboxes[j]:
                 continue
             in_reach = np.flatnonzero(link[:, j])
             others = [i for i in in_reach.tolist() if i != j]  # every receiver when nothing is lost
+            unreached = [(i, _LINK) for i in np.flatnonzero(~link[:, j]).tolist() if i != j] if note else []
             for env in outboxes[j]:
                 size = len(env.data)
                 stats.sent += 1
@@ -237,13 +255,17 @@ class Medium:
                     stats.map_bytes_sent += size
                 receivers = in_reach
                 stats.dropped_link += (n - 1) - len(receivers)
+                if note:
+                    lost = env.lost = list(unreached)
                 targets = others
                 if self.spec.loss > 0.0 and len(receivers):
                     keep = self.rng.random(len(receivers)) >= self.spec.loss
                     stats.dropped_loss += int((~keep).sum())
                     targets = [i for i in receivers[keep].tolist() if i != j]
+                    if lost is not None:
+                        lost.extend((i, _LOSS) for i in receivers[~keep].tolist())
                 if budget is not None:
-                    targets = self._within_budget(budget, targets, j, size)
+                    targets = self._within_budget(budget, targets, j, size, lost)
                 for i in targets:
                     inboxes[i].append(env)
                     stats.last_contact[i] = tick + 1
@@ -267,6 +289,8 @@ class Medium:
                 raise ValueError("packet errors need the pairs' margins")
             log_keep = self.packet_errors.log_keep(margin)
         touched: set[tuple[int, int]] = set()
+        note = self.note_losses
+        lost = None
         for j in range(n):
             if not outboxes[j]:
                 continue
@@ -274,6 +298,8 @@ class Medium:
             linked = link[others, j]
             keep_j = log_keep[others, j] if log_keep is not None else None
             for env in outboxes[j]:
+                if note:
+                    lost = env.lost = []
                 size = len(env.data)
                 stats.sent += 1
                 stats.bytes_sent += size
@@ -285,15 +311,19 @@ class Medium:
                 if keep_j is None:
                     reach = others[linked]
                     stats.dropped_link += (n - 1) - len(reach)
+                    if lost is not None:
+                        lost.extend((i, _LINK) for i in others[~linked].tolist())
                 else:
-                    reach = self._survive_errors(others, linked, keep_j, size)
+                    reach = self._survive_errors(others, linked, keep_j, size, lost)
                 if self.spec.loss > 0.0 and len(reach):
                     keep = self.rng.random(len(reach)) >= self.spec.loss
                     stats.dropped_loss += int((~keep).sum())
+                    if lost is not None:
+                        lost.extend((i, _LOSS) for i in reach[~keep].tolist())
                     reach = reach[keep]
                 targets = reach.tolist()
                 if budget is not None:
-                    targets = self._within_budget(budget, targets, j, size)
+                    targets = self._within_budget(budget, targets, j, size, lost)
                 if self.relaying:
                     targets = self._first_copies(env, targets)
                     touched.add((env.sender, env.seq))
@@ -310,16 +340,21 @@ class Medium:
                 box.sort(key=_inbox_order)
         return inboxes
 
-    def _survive_errors(self, others: np.ndarray, linked: np.ndarray, log_keep: np.ndarray, size: int) -> np.ndarray:
+    def _survive_errors(self, others: np.ndarray, linked: np.ndarray, log_keep: np.ndarray, size: int,
+                        lost: list[tuple[int, int]] | None = None) -> np.ndarray:
         """The robots of ``others`` that receive a ``size``-byte transmission despite packet errors: one
         uniform draw per robot, kept when it is at least the robot's PER (``-expm1(8 size log_keep)``, as
         :meth:`radio.per.PacketErrorCurve.per`: 1 without signal, 0 far above the sensitivity). The lost are
-        counted as ``dropped_link`` below the sensitivity (not ``linked``), else as ``dropped_loss``."""
+        counted as ``dropped_link`` below the sensitivity (not ``linked``), else as ``dropped_loss``, and
+        listed in ``lost`` (when given) as ``link`` or ``packet_error``."""
         assert self.error_rng is not None
         kept = np.empty(len(others), dtype=np.bool_)
         below, above = _kept_despite_errors(self.error_rng.random(len(others)), log_keep, 8.0 * size, linked, kept)
         self.stats.dropped_link += below
         self.stats.dropped_loss += above
+        if lost is not None and below + above:
+            failed = np.flatnonzero(~kept)
+            lost.extend(zip(others[failed].tolist(), np.where(linked[failed], _PACKET_ERROR, _LINK).tolist()))
         return others[kept]
 
     def _first_copies(self, env: Envelope, targets: list[int]) -> list[int]:
@@ -369,13 +404,16 @@ class Medium:
                     merged.setdefault((env.sender, env.seq), (env.message, []))[1].extend(env.delivered_to)
         return [(msg, sorted(ids)) for _, (msg, ids) in sorted(merged.items(), key=lambda item: item[0])]
 
-    def _within_budget(self, budget: np.ndarray, targets: list[int], sender: int, size: int) -> list[int]:
+    def _within_budget(self, budget: np.ndarray, targets: list[int], sender: int, size: int,
+                       lost: list[tuple[int, int]] | None = None) -> list[int]:
         """The receivers whose link from ``sender`` still carries ``size`` bytes this tick (charged); the
-        others count as dropped for bandwidth."""
+        others count as dropped for bandwidth (and are listed in ``lost``, when given)."""
         kept = []
         for i in targets:
             if budget[i, sender] < size:
                 self.stats.dropped_bandwidth += 1
+                if lost is not None:
+                    lost.append((i, _BANDWIDTH))
                 continue
             budget[i, sender] -= size
             kept.append(i)
@@ -386,8 +424,12 @@ class MapSharing:
     """The map-sharing service: builds each robot's MapUpdates and merges the ones it receives."""
 
     def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None,
-                 monotone: bool = False) -> None:
-        """``lidar_reach``: the owner's promise that apart from this service's merges only a lidar writes into
+                 monotone: bool = False, ages: InfoAges | None = None, free: FreeCounts | None = None) -> None:
+        """``ages``: told of every update sent and of every merge that leaves a receiver holding the sender's
+        whole map; ``free``: told how the merges change each map's count of FREE cells (age of information,
+        docs/comm-metrics.md).
+
+        ``lidar_reach``: the owner's promise that apart from this service's merges only a lidar writes into
         the maps, within ``lidar_reach`` cells (rows and columns) of each robot's cell, and that it reports
         every scan with :meth:`scanned` from the start. A delta then compares only the places written since the robot's
         last update (:func:`swarm.knowledge.sync_box`), not both whole maps: the same cells. Without it
@@ -401,7 +443,11 @@ class MapSharing:
         self.seq = [0] * n
         self.seen_seq = [[0] * n for _ in range(n)]          # [receiver][sender] last seq merged
         self._complete = [[True] * n for _ in range(n)]      # [receiver][sender] merged each of its updates so far
+        self.whole = [[True] * n for _ in range(n)]          # [receiver][sender] holds all the sender's updates
         self.monotone = monotone
+        self.ages = ages
+        self.free = free
+        self._merges: list[tuple[np.ndarray, int, int]] = []  # this tick's (receivers, sender, sent tick): ages
         self._raised = np.zeros(0, dtype=np.int64)  # scratch: the cells a delta raised, receiver after receiver
         self.full_requested = [False] * n
         self.requests: list[list[int]] = [[] for _ in range(n)]  # targets each robot will ask next tick
@@ -455,6 +501,8 @@ class MapSharing:
                 update = delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed)
                 update.__dict__["_since"] = None  # built here (see _take): never on the wire
                 out[i].append(update)
+        if self.ages is not None:
+            self.ages.sent(tick)
         return out
 
     def _changed_since_update(self, i: int, known: np.ndarray) -> np.ndarray:
@@ -475,10 +523,11 @@ class MapSharing:
         self._merged[i] = []
         self._whole[i] = False
 
-    def receive(self, receiver: int, messages: Sequence[Any], known: np.ndarray) -> list[np.ndarray | None]:
+    def receive(self, receiver: int, messages: Sequence[Any], known: np.ndarray,
+                tick: int = 0) -> list[np.ndarray | None]:
         """Handle one receiver's service messages of a tick: merge every MapUpdate and note MapRequests
         addressed to it. Returns, per merged update, the flat indices it carried (None for a full map: any
-        cell may have changed). Other messages are left to the algorithm."""
+        cell may have changed). Other messages are left to the algorithm. ``tick``: now (for :attr:`ages`)."""
         for msg in messages:
             if isinstance(msg, MapUpdate) and msg.shape != known.shape:
                 raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape}")
@@ -486,18 +535,22 @@ class MapSharing:
             check_writable_map(known)
         touched: list[np.ndarray | None] = []
         stack, rows = known[np.newaxis], np.zeros(1, dtype=np.int64)
+        robot = np.array([receiver], dtype=np.int64)
         for msg in messages:
-            self._take(msg, [receiver], stack, rows, [touched])
+            self._take(msg, [receiver], stack, rows, [touched], robot)
+        if self.ages is not None:
+            self.ages.merged(self._merges, tick)
+        self._merges = []
         return touched
 
     def receive_tick(self, deliveries: Sequence[tuple[Any, Sequence[int]]], known: np.ndarray,
-                     live: np.ndarray, cells: bool = True) -> list[list[np.ndarray | None]]:
+                     live: np.ndarray, cells: bool = True, tick: int = 0) -> list[list[np.ndarray | None]]:
         """:meth:`receive` for every robot at once: ``deliveries`` are a tick's messages with the robots each
         reached, in the order the inboxes list them (sender, then sequence), and ``known`` the maps
         (``uint8[R, H, W]``); robots not ``live`` are left alone. The same effect and the same lists as
         calling :meth:`receive` per robot with its inbox, but each map update is merged into all its
         receivers in one compiled call (a long many-robot run merges a great many). ``cells=False``: the lists
-        stay empty (the in-process runtime does not read them)."""
+        stay empty (the in-process runtime does not read them). ``tick``: now (for :attr:`ages`)."""
         check_writable_map(known)
         touched: list[list[np.ndarray | None]] = [[] for _ in range(self.n)]
         flags = live.tolist()
@@ -510,15 +563,22 @@ class MapSharing:
             if isinstance(msg, MapUpdate) and msg.shape != known.shape[1:]:
                 raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape[1:]}")
             lists = [touched[r] for r in ids] if cells else None
-            self._take(msg, ids, known, np.array(ids, dtype=np.int64), lists)
+            rows = np.array(ids, dtype=np.int64)
+            self._take(msg, ids, known, rows, lists, rows)
+        if self.ages is not None:
+            self.ages.merged(self._merges, tick)
+        self._merges = []
         return touched
 
     def _take(self, msg: Any, ids: list[int], stack: np.ndarray, rows: np.ndarray,
-              lists: list[list[np.ndarray | None]] | None) -> None:
-        """One service message reaching robots ``ids``, whose maps are ``stack[rows]`` (checked): merge a
+              lists: list[list[np.ndarray | None]] | None, robots: np.ndarray) -> None:
+        """One service message reaching robots ``ids`` (``robots``: the same as an array), whose maps are
+        ``stack[rows]`` (checked): merge a
         MapUpdate into each, note what it wrote for their next deltas, append the cells it carried (None for
         a full map) to ``lists[k]`` for robot ``ids[k]`` (unless None) and book its sequence number; or note
-        a MapRequest addressed to one of them."""
+        a MapRequest addressed to one of them. Notes for :attr:`ages` which of them now hold the sender's
+        whole map: all after a full map; after a delta, those that merged every earlier update of the sender
+        since their last full map of it (a gap leaves a receiver partial until the full map it asks for)."""
         if isinstance(msg, MapRequest):
             if msg.target in ids:
                 self.full_requested[msg.target] = True
@@ -528,15 +588,19 @@ class MapSharing:
         tracking = self.lidar_reach is not None
         sender, seq = msg.sender, msg.seq
         ours = "_since" in msg.__dict__  # built by this service, not sent by an algorithm
+        whole: list[int] = []  # the receivers that now hold the sender's whole map (for ages)
+        everyone = len(ids)
         if msg.full:
             carried = self._merge_full(msg, ids, stack, rows)
+            if self.free is not None:
+                self.free.dirty[robots] = True  # counted afresh when next read
         else:
             idx, values = msg.cells()  # int64 and uint8, in range: checked when decoded
             if ours and tracking:  # the common case: merged and its receivers' books kept in one tight loop
-                ids, at = self._take_delta(ids, stack, rows, idx, values, sender, seq, lists)
-                if not ids:
-                    return
+                ids, at, whole = self._take_delta(ids, stack, rows, robots, idx, values, sender, seq, lists)
                 lists = None if lists is None else [lists[k] for k in at]
+            elif self.free is not None:
+                merge_cells_many_counted(stack, rows, idx, values, robots, self.free.freed)
             else:
                 merge_cells_many(stack, rows, idx, values)
             carried = [idx] * len(ids)
@@ -556,30 +620,50 @@ class MapSharing:
                 self.requests[r].append(sender)
             if not ours or msg.full or seq != last + 1:  # an update an algorithm sent counts as a gap
                 self._complete[r][sender] = ours and msg.full
+            holds = self.whole[r]
+            if msg.full:
+                holds[sender] = True
+                whole.append(r)
+            elif seq == last + 1:
+                if holds[sender]:
+                    whole.append(r)
+            elif seq > last:
+                holds[sender] = False  # a gap: partial until the full map it asks for
             seen[sender] = seq if msg.full else max(last, seq)
+        if whole:  # (the order of the receivers does not matter: swarm.metrics.InfoAges.merged)
+            self._merges.append((robots if len(whole) == everyone else np.array(whole, dtype=np.int64), sender,
+                                 msg.tick))
 
-    def _take_delta(self, ids: list[int], stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray,
-                    sender: int, seq: int, lists: list[list[np.ndarray | None]] | None) -> tuple[list[int], list[int]]:
-        """Merge this service's delta ``seq`` from ``sender`` (cells ``idx``) into robots ``ids`` (maps
-        ``stack[rows]``) and keep the books of every receiver that had merged the sender's previous update:
-        the cells the merge raised in its map are listed for its next delta (and in ``lists``) and the
-        update becomes its last merged one; nothing else changes. Returns the other receivers and their
-        positions in ``ids`` (a gap or an old update: :meth:`_take`'s general rules). Each delta reaches up
-        to n - 1 robots, so this runs n^2 times a sharing tick: it keeps to what that case needs, and lists
-        only what changed (robots that share maps mostly know what they hear already), which the
-        receivers' next deltas then compare (docs/performance-history.md)."""
+    def _take_delta(self, ids: list[int], stack: np.ndarray, rows: np.ndarray, robots: np.ndarray,
+                    idx: np.ndarray, values: np.ndarray, sender: int, seq: int,
+                    lists: list[list[np.ndarray | None]] | None) -> tuple[list[int], list[int], list[int]]:
+        """Merge this service's delta ``seq`` from ``sender`` (cells ``idx``) into robots ``ids`` (``robots``
+        as an array; maps ``stack[rows]``), counting their FREE cells for :attr:`free`, and keep the books of
+        every receiver that had merged the sender's previous update: the cells the merge raised in its map
+        are listed for its next delta (and in ``lists``) and the update becomes its last merged one; nothing
+        else changes. Returns the other receivers and their positions in ``ids`` (a gap or an old update:
+        :meth:`_take`'s general rules), and the receivers booked here that now hold the sender's whole map
+        (for :attr:`ages`). Each delta reaches up to n - 1 robots, so this runs n^2 times a sharing tick: it
+        keeps to what that case needs, and lists only what changed (robots that share maps mostly know what
+        they hear already), which the receivers' next deltas then compare (docs/performance-history.md)."""
         need = len(ids) * len(idx)
         if self._raised.shape[0] < need:
             self._raised = np.empty(2 * need, dtype=np.int64)
         ends = np.empty(len(ids), dtype=np.int64)
-        merge_cells_many_changed(stack, rows, idx, values, self._raised, ends)
+        merge_cells_many_changed(stack, rows, idx, values, self._raised, ends,
+                                 robots, None if self.free is None else self.free.freed)
         raised = self._raised
-        merged, seen_seq, gapped, rest = self._merged, self.seen_seq, [], []
+        merged, seen_seq, holds = self._merged, self.seen_seq, self.whole
+        gapped: list[int] = []
+        rest: list[int] = []
+        whole: list[int] = []
         before, start = seq - 1, 0
         for k, (r, end) in enumerate(zip(ids, ends.tolist())):
             seen = seen_seq[r]
             if seen[sender] == before:
                 seen[sender] = seq
+                if holds[r][sender]:
+                    whole.append(r)
                 if end > start:
                     cells = raised[start:end].copy()
                     merged[r].append(cells)
@@ -589,7 +673,7 @@ class MapSharing:
                 gapped.append(k)
                 rest.append(r)
             start = end
-        return rest, gapped
+        return rest, gapped, whole
 
     def _merge_full(self, msg: MapUpdate, ids: list[int], stack: np.ndarray,
                     rows: np.ndarray) -> list[np.ndarray | None]:

@@ -28,7 +28,7 @@ from .api import CELL_M, FREE, SOLID, UNSEEN
 __all__ = [
     "FREE", "SOLID", "UNSEEN", "ExplorationTracker", "LogOddsGrid", "active_flags", "check_writable_map",
     "classify_logodds", "count_cells", "count_known", "empty_knowledge", "merge", "merge_cells", "merge_cells_many",
-    "sync_box", "sync_box_unchecked", "sync_changes", "sync_regions",
+    "merge_cells_many_counted", "sync_box", "sync_box_unchecked", "sync_changes", "sync_regions",
 ]
 
 
@@ -107,6 +107,31 @@ def _merge_cells_many_kernel(stack: np.ndarray, rows: np.ndarray, idx: np.ndarra
         _merge_cells_kernel(stack[rows[k]].reshape(-1), idx, values)
 
 
+@njit(cache=True)
+def _merge_cells_many_counted_kernel(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray,
+                                     robots: np.ndarray, freed: np.ndarray) -> None:  # pragma: no cover - compiled
+    """:func:`_merge_cells_many_kernel`, adding to ``freed[robots[k]]`` how many FREE cells map
+    ``stack[rows[k]]`` gained (UNSEEN -> FREE) less those it lost (FREE -> SOLID)."""
+    for k in range(rows.shape[0]):
+        flat = stack[rows[k]].reshape(-1)
+        change = 0
+        for j in range(idx.shape[0]):
+            i = idx[j]
+            v = values[j]
+            old = flat[i]
+            if v > old:
+                change += (v == FREE) - (old == FREE)
+                flat[i] = v
+        freed[robots[k]] += change
+
+
+def merge_cells_many_counted(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray,
+                             robots: np.ndarray, freed: np.ndarray) -> None:
+    """:func:`merge_cells_many` that also keeps count: ``freed[robots[k]]`` (int64) changes by the FREE cells
+    map ``stack[rows[k]]`` gained or lost (age-of-information metrics, :class:`swarm.metrics.FreeCounts`)."""
+    _merge_cells_many_counted_kernel(stack, rows, idx, values, robots, freed)
+
+
 def merge_cells_many(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
     """:func:`merge_cells_unchecked` into each map ``stack[rows[k]]`` of a writable C-contiguous stack
     (``uint8[R, H, W]``, rows int64 in range): one call for all the receivers of a map update."""
@@ -114,27 +139,39 @@ def merge_cells_many(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, value
 
 
 def merge_cells_many_changed(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray,
-                             out: np.ndarray, ends: np.ndarray) -> None:
+                             out: np.ndarray, ends: np.ndarray, robots: np.ndarray | None = None,
+                             freed: np.ndarray | None = None) -> None:
     """:func:`merge_cells_many` that also lists, per map, the cells the merge raised: map ``rows[k]``'s at
     ``out[ends[k-1]:ends[k]]``, ascending when ``idx`` is (``out``: int64 with room for every row's every
     cell; ``ends``: int64[len(rows)]). A receiver's next map update compares only these, not every cell it
-    was sent: robots that share maps mostly know what they hear already."""
-    _merge_cells_many_changed_kernel(stack, rows, idx, values, out, ends)
+    was sent: robots that share maps mostly know what they hear already. With ``freed`` it also keeps
+    count as :func:`merge_cells_many_counted` does (``robots``: the robot of each row)."""
+    if freed is None:
+        robots, freed = rows, np.zeros(0, dtype=np.int64)
+    _merge_cells_many_changed_kernel(stack, rows, idx, values, out, ends, robots, freed)
 
 
 @njit(cache=True)
 def _merge_cells_many_changed_kernel(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray,
-                                     out: np.ndarray, ends: np.ndarray) -> None:  # pragma: no cover - compiled
+                                     out: np.ndarray, ends: np.ndarray, robots: np.ndarray,
+                                     freed: np.ndarray) -> None:  # pragma: no cover - compiled
+    """``freed`` empty: no count kept."""
     m = 0
     for k in range(rows.shape[0]):
         flat = stack[rows[k]].reshape(-1)
+        change = 0
         for j in range(idx.shape[0]):
             i = idx[j]
-            if values[j] > flat[i]:
-                flat[i] = values[j]
+            v = values[j]
+            old = flat[i]
+            if v > old:
+                change += (v == FREE) - (old == FREE)
+                flat[i] = v
                 out[m] = i
                 m += 1
         ends[k] = m
+        if freed.shape[0]:
+            freed[robots[k]] += change
 
 
 def merge_cells_unchecked(flat: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:

@@ -25,6 +25,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from .messages import message
+from .metrics import InfoAges
 
 MODES = ("maes_heartbeat", "maes_sync")
 DEFAULT_MERGE = ("maes_heartbeat", 10)
@@ -64,10 +65,12 @@ class MapHeartbeat:
 class MaesMerge:
     """MAES's map merge of one run: which robots broadcast heartbeats, and what a tick's deliveries merge."""
 
-    def __init__(self, n: int, mode: str, share_every: int) -> None:
+    def __init__(self, n: int, mode: str, share_every: int, ages: InfoAges | None = None) -> None:
+        """``ages``: told of every synchronisation (its members all hold each other's maps)."""
         if mode not in MODES:
             raise ValueError(f"mode {mode!r}; allowed: {', '.join(MODES)}")
         self.n, self.mode, self.share_every = n, mode, share_every
+        self.ages = ages
         self.merges = 0  # synchronisations performed (a receiver's merge of two or more maps)
         self._broadcast: set[int] = set()  # sync: who broadcast in the last round (only they read next tick)
 
@@ -83,10 +86,10 @@ class MaesMerge:
             out[i].append(MapHeartbeat(sender=i, tick=tick))
         return out
 
-    def receive(self, deliveries: Sequence[tuple[Any, Sequence[int]]], known: np.ndarray, live: np.ndarray
-                ) -> set[int]:
+    def receive(self, deliveries: Sequence[tuple[Any, Sequence[int]]], known: np.ndarray, live: np.ndarray,
+                tick: int = 0) -> set[int]:
         """Merge what this tick's heartbeats call for into ``known`` (uint8[R, H, W], in place); returns the
-        robots whose maps were overwritten (any cell of them may have changed)."""
+        robots whose maps were overwritten (any cell of them may have changed). ``tick``: now (for ``ages``)."""
         heard: list[list[int]] = [[] for _ in range(self.n)]
         for msg, receivers in deliveries:
             if isinstance(msg, MapHeartbeat):
@@ -107,4 +110,6 @@ class MaesMerge:
                 known[g] = union
             changed.update(group)
             self.merges += 1
+            if self.ages is not None:
+                self.ages.group(group, tick)
         return changed

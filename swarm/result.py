@@ -24,10 +24,14 @@ class RunResult:
     provenance: dict[str, Any] = field(default_factory=dict)
     """What computed it: ``{"swarm": version, "algorithm": {"name", "distribution", "version"}}`` (the
     plugin's installed distribution; None for one loaded from a path outside any)."""
+    comm: dict[str, Any] = field(default_factory=dict)
+    """Communication metrics (docs/comm-metrics.md): ``{"summary": CommSummary, "series": {column: [...]},
+    "robots": {name: [[per robot] per row]}}``, rows at the time series' ticks. Kept apart from ``summary``
+    and ``timeseries`` so those stay what they were (benchmarks/result_digests.py hashes them)."""
 
     def to_dict(self) -> dict[str, Any]:
         return {"key": self.key, "spec": self.spec, "summary": self.summary, "timeseries": self.timeseries,
-                "events": self.events, "provenance": self.provenance}
+                "events": self.events, "provenance": self.provenance, "comm": self.comm}
 
     def to_json(self, indent: int | None = None) -> str:
         return json.dumps(self.to_dict(), indent=indent, sort_keys=True)

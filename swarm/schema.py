@@ -112,6 +112,83 @@ TIMESERIES: dict[str, tuple[pa.DataType, str]] = {
 """Time-series columns (``RunResult.timeseries``, ``*.timeseries.parquet`` with a ``key`` column first)."""
 TIMESERIES_COLUMNS: tuple[str, ...] = tuple(TIMESERIES)
 
+# ---------------------------------------------------------------------------- communication ----
+# ``RunResult.comm`` (docs/comm-metrics.md defines every quantity): its own summary and series, so the run's
+# ``summary``, ``timeseries`` and ``events`` (what benchmarks/result_digests.py hashes) stay as they were.
+COMM_SERIES: dict[str, tuple[pa.DataType, str]] = {
+    "tick": (pa.int64(), "the tick of the row (the time series' ticks)"),
+    **{f"msgs_{cause}": (pa.int64(), f"deliveries failed so far for cause '{cause}' (one per receiver)")
+       for cause in DROP_CAUSES},
+    "bytes_dropped": (pa.int64(), "bytes of the deliveries that failed so far, all causes"),
+    "map_merges": (pa.int64(), "map merges so far that left the receiver holding the sender's whole map"),
+    "since_contact_mean": (pa.float64(), "ticks since each robot last received a message, mean over robots"),
+    "since_contact_max": (pa.int64(), "the same, the longest"),
+    "missing_free_mean": (pa.float64(), "share of the team's known free cells a robot does not know, mean over "
+                                        "robots"),
+    "missing_free_max": (pa.float64(), "the same, the robot missing most"),
+    "aoi_age_mean": (pa.float64(), "age of a robot's information about the others (ticks), mean over robots"),
+    "aoi_age_max": (pa.float64(), "the same, the robot with the oldest"),
+}
+"""Per-row communication columns (``RunResult.comm["series"]``; in a campaign, extra columns of
+``*.timeseries.parquet``). The drop columns follow :data:`DROP_CAUSES`."""
+COMM_SERIES_COLUMNS: tuple[str, ...] = tuple(COMM_SERIES)
+
+COMM_ROBOT_SERIES: dict[str, tuple[pa.DataType, str]] = {
+    "missing_free": (pa.float64(), "share of the team's known free cells this robot does not know"),
+    "aoi_age": (pa.float64(), "mean over the other robots of the ticks since this robot last merged their map"),
+    "since_contact": (pa.int64(), "ticks since this robot last received a message (since the start if never)"),
+    "group": (pa.int64(), "its communication group at this tick (groups numbered by their lowest robot id)"),
+}
+"""Per robot and row (``RunResult.comm["robots"][name][row][robot]``; in a campaign the long table
+``*.robots.parquet``: key, tick, robot and these columns)."""
+
+
+class CommSummary(TypedDict):
+    """``RunResult.comm["summary"]``: means over the run's recorded rows (and robots, for per-robot
+    quantities); a lone robot has nothing to miss or wait for (0)."""
+
+    rows: int                       # recorded rows the means cover
+    bytes_dropped: int
+    map_merges: int
+    comm_groups_mean: float
+    biggest_group_mean: float
+    all_connected_share: float      # share of recorded rows with every robot in one group
+    since_contact_mean: float
+    since_contact_max: int
+    missing_free_mean: float
+    missing_free_max: float
+    aoi_age_mean: float
+    aoi_age_max: float
+    per_robot: dict[str, list[float]]  # missing_free_mean, aoi_age_mean, since_contact_mean: per robot
+
+
+COMM_RUN_COLUMNS: dict[str, pa.DataType] = {
+    **{f"msgs_{cause}": pa.int64() for cause in DROP_CAUSES}, "msgs_relayed": pa.int64(),
+    "msgs_duplicates": pa.int64(), "bytes_dropped": pa.int64(),
+    "map_merges": pa.int64(), "comm_groups_mean": pa.float64(), "biggest_group_mean": pa.float64(),
+    "all_connected_share": pa.float64(), "since_contact_mean": pa.float64(), "since_contact_max": pa.int64(),
+    "missing_free_mean": pa.float64(), "missing_free_max": pa.float64(), "aoi_age_mean": pa.float64(),
+    "aoi_age_max": pa.float64(),
+}
+"""Runs-table columns from a run's messages and :class:`CommSummary` (None for failed runs and for results
+of versions that did not record them)."""
+
+
+def comm_columns(summary: Summary | Mapping[str, Any] | None, comm: Mapping[str, Any] | None) -> dict[str, Any]:
+    """The runs-table columns of :data:`COMM_RUN_COLUMNS` for a run's summary and ``RunResult.comm``."""
+    out: dict[str, Any] = {col: None for col in COMM_RUN_COLUMNS}
+    if summary is not None:
+        msgs = summary["messages"]
+        for cause in DROP_CAUSES:
+            out[f"msgs_{cause}"] = int(msgs[cause])
+        out["msgs_relayed"], out["msgs_duplicates"] = int(msgs.get("relayed", 0)), int(msgs.get("duplicates", 0))
+    if comm:
+        for col in COMM_RUN_COLUMNS:
+            if col in comm["summary"]:
+                out[col] = comm["summary"][col]
+    return out
+
+
 # ------------------------------------------------------------------------------------- runs table ----
 RUNS: dict[str, pa.DataType] = {
     "key": pa.string(), "campaign": pa.string(), "index": pa.int64(), "replicate": pa.int64(),
@@ -123,8 +200,9 @@ RUNS: dict[str, pa.DataType] = {
     "coverage": pa.float64(), **{col: pa.int64() for col in THRESHOLD_COLUMNS.values()}, "distance_m": pa.float64(),
     "collisions": pa.int64(), "msgs_sent": pa.int64(), "bytes_sent": pa.int64(), "msgs_delivered": pa.int64(),
     "bytes_delivered": pa.int64(), "msgs_dropped": pa.int64(), "failed_robots": pa.int64(), "spec_json": pa.string(),
-    "wall_time_s": pa.float64(), "cpu_time_s": pa.float64(), "jit_time_s": pa.float64(), "worker_pid": pa.int64(), "worker_rss_mb": pa.float64(), "swarm_version": pa.string(),
-    "algorithm_dist": pa.string(), "algorithm_version": pa.string(),
+    "wall_time_s": pa.float64(), "cpu_time_s": pa.float64(), "jit_time_s": pa.float64(), "worker_pid": pa.int64(),
+    "worker_rss_mb": pa.float64(), "swarm_version": pa.string(), "algorithm_dist": pa.string(),
+    "algorithm_version": pa.string(), **COMM_RUN_COLUMNS,
 }
 """One row per run (``*.runs.parquet``); the store adds ``part`` (the file a row came from) when reading.
 ``wall_time_s`` and ``cpu_time_s`` time the whole run in its worker, ``jit_time_s`` the part of it in numba's
@@ -153,9 +231,18 @@ def summary_columns(summary: Summary | Mapping[str, Any] | None) -> dict[str, An
 
 
 def timeseries_table(rows: list[dict[str, Any]]) -> pa.Table:
-    """Time-series rows (``key`` first) as a table of the schema's types (extra columns inferred)."""
+    """Time-series rows (``key`` first, the communication columns after the others) as a table of the
+    schema's types (extra columns inferred)."""
     table = pa.Table.from_pylist(rows)
-    return _cast_known(table, {"key": pa.string(), **{c: t for c, (t, _) in TIMESERIES.items()}})
+    return _cast_known(table, {"key": pa.string(), **{c: t for c, (t, _) in TIMESERIES.items()},
+                               **{c: t for c, (t, _) in COMM_SERIES.items()}})
+
+
+def robots_table(rows: list[dict[str, Any]]) -> pa.Table:
+    """Per-robot rows (key, tick, robot, :data:`COMM_ROBOT_SERIES`) as a table of the schema's types."""
+    table = pa.Table.from_pylist(rows)
+    return _cast_known(table, {"key": pa.string(), "tick": pa.int64(), "robot": pa.int64(),
+                               **{c: t for c, (t, _) in COMM_ROBOT_SERIES.items()}})
 
 
 def runs_table(rows: list[dict[str, Any]]) -> pa.Table:

@@ -213,16 +213,17 @@ def _lidar_advance(t_x: float, t_y: float, d_x: float, d_y: float) -> tuple[bool
 @njit(cache=True, inline="always")
 def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_base: int, write_known: bool,
                         seen: np.ndarray, x: float, y: float, dx: float, dy: float, range_m: float,
-                        cell: float) -> tuple[float, int]:
+                        cell: float) -> tuple[float, int, int]:
     """Walk one ray by the exact rule (module docstring). ``solid``, ``seen`` and ``known`` are flat views
     of the rasters, ``cols`` wide (``known`` of all robots: this robot's map starts at ``known_base``).
     Marks ``seen`` (and the robot's map with a maximum when ``write_known``); returns (entry distance of
-    the first solid cell or inf, newly seen free cells). Needs a solid outer edge, which :class:`maps.Map`
+    the first solid cell or inf, newly seen free cells, cells of the robot's map it turned FREE). Needs a solid outer edge, which :class:`maps.Map`
     guarantees, to stay on the raster; indices are unsigned, so no negative-index code is compiled."""
     row, col, step_r, step_c, t_x, t_y, d_x, d_y = _lidar_ray_start(x, y, dx, dy, cell)
     r2 = range_m * range_m
     t_entry = 0.0
     new = 0
+    fresh = 0
     # A cell entered at t has its centre within t + cell / sqrt(2): no need to measure it that early.
     sure = range_m - 0.7072 * cell
     k = row * cols + col
@@ -233,7 +234,7 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
             if write_known:
                 known[np.uint64(known_base + k)] = SOLID
             seen[at] = True
-            return t_entry, new
+            return t_entry, new, fresh
         if t_entry <= sure:
             in_range = True
         else:
@@ -243,6 +244,7 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
         if in_range:
             if write_known and known[np.uint64(known_base + k)] < FREE:
                 known[np.uint64(known_base + k)] = FREE
+                fresh += 1
             if not seen[at]:
                 seen[at] = True
                 new += 1
@@ -252,19 +254,19 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
         row = select(in_x, row, row + step_r)
         k = select(in_x, k + step_c, k + step_k)
         if t_entry > range_m:
-            return np.inf, new
+            return np.inf, new, fresh
 
 
 @njit(cache=True)
 def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarray, cos_a: np.ndarray,
                           sin_a: np.ndarray, range_m: float, cell: float, known: np.ndarray,
                           seen: np.ndarray, ranges: np.ndarray, required: np.ndarray, half_widths: np.ndarray,
-                          cast: np.ndarray) -> int:
+                          cast: np.ndarray, fresh: np.ndarray) -> int:
     """One tick of the ternary lidar for every robot and ray. Returns the number of newly seen free
     cells, or ``-(r + 1)`` (nothing written) if robot r's pose is invalid. With a ``required`` raster
     (:func:`_required_raster`; empty: cast every robot) a robot whose scan would write nothing
     (:func:`_lidar_settled`) is not cast: its ranges are NaN and ``cast[r]`` is False (True for robots
-    cast)."""
+    cast). ``fresh[r]`` grows by the cells of robot r's map the scan turned from UNSEEN to FREE."""
     rows, cols = solid.shape
     bad = _lidar_first_bad_pose(poses, active, rows, cols, cell)
     if bad >= 0:
@@ -292,9 +294,10 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
         for i in range(cos_a.shape[0]):
             dx = ch * cos_a[i] - sh * sin_a[i]
             dy = sh * cos_a[i] + ch * sin_a[i]
-            t_hit, n_new = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, True, seen_flat,
-                                               x, y, dx, dy, range_m, cell)
+            t_hit, n_new, n_fresh = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, True,
+                                                        seen_flat, x, y, dx, dy, range_m, cell)
             new += n_new
+            fresh[r] += n_fresh
             ranges[r, i] = t_hit
     return new
 
@@ -406,8 +409,8 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
         for i in range(cos_a.shape[0]):
             dx = ch * cos_a[i] - sh * sin_a[i]
             dy = sh * cos_a[i] + ch * sin_a[i]
-            t_hit, n_new = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, False, seen_flat,
-                                               x, y, dx, dy, range_m, cell)
+            t_hit, n_new, _ = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, False, seen_flat,
+                                                  x, y, dx, dy, range_m, cell)
             new += n_new
             z = t_hit
             if noisy and t_hit <= range_m:
@@ -496,6 +499,7 @@ class Lidar:
         self._required = np.zeros((0, 0), dtype=np.uint8)   # built on the first scan that skips settled robots
         self._half_widths = _reach_half_widths(self.params.range_m, CELL_M)
         self._cast = np.zeros(0, dtype=np.bool_)
+        self._freed = np.zeros(0, dtype=np.int64)  # the counts nobody asked for (``scan(freed=None)``)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -503,7 +507,7 @@ class Lidar:
 
     def scan(self, poses: np.ndarray, known: np.ndarray, rng: np.random.Generator | None = None,
              active: np.ndarray | None = None, tracker: ExplorationTracker | None = None, *,
-             measure: bool = True) -> np.ndarray | None:
+             measure: bool = True, freed: np.ndarray | None = None) -> np.ndarray | None:
         """Cast every active robot's rays from ``poses`` (``float64[R, 3]``: x, y, theta) and write what
         they observe into ``known`` (``uint8[R, H, W]``, C-contiguous, modified in place) and into the
         tracker (``tracker`` if given, else :attr:`tracker`). Returns the measured ranges
@@ -515,7 +519,11 @@ class Lidar:
         cell of whose reach (the cells within range of any point of its cell) already holds what a ray
         would leave there, in its map and in the tracker; about a third of the robot-ticks of the
         16-robot benchmark, which travel through explored rooms. The maps and the tracker end exactly as
-        with every robot cast. :attr:`cast` tells which robots were."""
+        with every robot cast. :attr:`cast` tells which robots were.
+
+        ``freed`` (``int64[R]``, ternary mode): ``freed[r]`` grows by the cells of robot r's map this scan
+        turned from UNSEEN to FREE, so a caller can keep each map's count of free cells without reading the
+        maps (:class:`swarm.metrics.FreeCounts`)."""
         trk = self.tracker if tracker is None else self._check_tracker(tracker)
         pose = np.ascontiguousarray(poses, dtype=np.float64)
         if pose.ndim != 2 or pose.shape[1] != 3:
@@ -527,6 +535,9 @@ class Lidar:
         p = self.params
         if self._cast.shape[0] != n:
             self._cast = np.zeros(n, dtype=np.bool_)
+            self._freed = np.zeros(n, dtype=np.int64)
+        if freed is not None and (freed.dtype != np.int64 or freed.shape != (n,)):
+            raise InvalidInput("freed", (freed.dtype, freed.shape), f"an int64 array of shape ({n},)")
         if p.mode == "ternary":
             required = _CAST_EVERY_ROBOT
             if not measure:
@@ -534,7 +545,8 @@ class Lidar:
                     self._required = _required_raster(self.truth.solid)
                 required = self._required
             new = _lidar_ternary_kernel(self._solid, pose, act, self._cos, self._sin, p.range_m, CELL_M,
-                                        known, trk.seen_buffer, ranges, required, self._half_widths, self._cast)
+                                        known, trk.seen_buffer, ranges, required, self._half_widths, self._cast,
+                                        self._freed if freed is None else freed)
         else:
             if p.noisy:
                 if not isinstance(rng, np.random.Generator):

@@ -13,7 +13,8 @@ One logic tick (0.1 s, docs/design.md section 4):
    this tick's links and queued for next tick;
 7. navigation turns goals into (v, omega) commands on each robot's own map (every moving robot's step in
    one compiled call, :class:`swarm.navigation.NavigationFleet`);
-8. metrics: explored thresholds every tick, a time-series row every ``record_every`` ticks.
+8. metrics: explored thresholds every tick, a time-series row every ``record_every`` ticks, and with it a
+   row of communication metrics (``RunResult.comm``, docs/comm-metrics.md).
 
 Everything random comes from :func:`swarm.spec.seed_streams`; nothing reads the clock except the
 ``*_time_s`` fields, so the same spec gives the same result bit for bit, whatever the transport.
@@ -38,7 +39,7 @@ from .knowledge import sync_boxes_flat, sync_changes
 from . import registry
 from .maes_merge import MaesMerge
 from .maes_merge import resolve as resolve_maes_merge
-from .metrics import Metrics
+from .metrics import CommMetrics, FreeCounts, InfoAges, Metrics
 from .navigation import NavigationFleet
 from .result import RunResult
 from .sensing import ExplorationTracker, Lidar
@@ -143,10 +144,12 @@ class Simulation:
         self.medium = Medium(n, self.comm, self.streams.radio, map_shape=self.truth.shape,
                              packet_errors=self.links.packet_errors, error_rng=self.streams.channel)
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
+        self.ages = InfoAges(n)  # who last merged whose map, when (age of information)
+        self.free = FreeCounts(n, exact=self.lidar_params.mode == "ternary")  # each map's FREE cells
         self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach,  # told of every scan
-                                  monotone=self.lidar_params.mode == "ternary")
+                                  monotone=self.lidar_params.mode == "ternary", ages=self.ages, free=self.free)
         merge = resolve_maes_merge(self.comm.map_sharing, self.comm.share_every, registry.load(self.spec.algorithm.name))
-        self.maes_merge = MaesMerge(n, *merge) if merge is not None else None
+        self.maes_merge = MaesMerge(n, *merge, ages=self.ages) if merge is not None else None
         self._in_flight: list[list[Envelope]] | None = None  # link_at = "receive": last tick's outboxes
         self.inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         self._deliveries: list[tuple[Any, list[int]]] = []  # last tick's messages and who got each, in inbox order
@@ -154,6 +157,7 @@ class Simulation:
         self.transport = transport or TransportOptions()
         self.observers = tuple(observers)
         self.metrics = Metrics(self.spec.record_every)
+        self.comm_metrics = CommMetrics(n, self.free)
         self.events: list[dict[str, Any]] = []
         self.failed = np.zeros(n, dtype=bool)
         self._drop_events = 0
@@ -236,7 +240,8 @@ class Simulation:
         state.began = began
         state.was_colliding = collided
         active = ~self.failed
-        self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker, measure=False)
+        self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker, measure=False,
+                        freed=self.free.freed)
         self.sharing.scanned(poses)
         self.tracker.update_coverage(poses[:, :2], active=active)
         state.poses, state.collided, state.active = poses, collided, active
@@ -319,10 +324,12 @@ class Simulation:
         deliveries, self._deliveries = self._deliveries, []
         if not deliveries:  # most ticks
             return inboxes, [[] for _ in inboxes]
-        merged = self.sharing.receive_tick(deliveries, self.known, ~self.failed, cells=self._mirror is not None)
+        merged = self.sharing.receive_tick(deliveries, self.known, ~self.failed, cells=self._mirror is not None,
+                                           tick=tick)
         if self.maes_merge is not None:
-            for robot in sorted(self.maes_merge.receive(deliveries, self.known, ~self.failed)):
+            for robot in sorted(self.maes_merge.receive(deliveries, self.known, ~self.failed, tick)):
                 merged[robot].append(None)
+                self.free.dirty[robot] = True
         return inboxes, merged
 
     def _send(self, tick: int, poses: np.ndarray, actions: list[Action | None], links: Any) -> list[list[Envelope]]:
@@ -447,6 +454,7 @@ class Simulation:
                             comm_groups=len(groups), biggest_group=max(len(g) for g in groups) / n,
                             all_connected=len(groups) == 1,
                             mean_pair_distance_m=float(links.distance.mean()) if n > 1 else 0.0)
+        self.comm_metrics.record(tick, stats, self.known, self.tracker.seen_free_cells, groups, self.ages)
 
     def _message_counts(self, host: AgentHost) -> dict[str, Any]:
         """The medium's counts, with the messages a remote agent sent that did not decode counted as malformed
@@ -477,7 +485,8 @@ class Simulation:
             "setup_time_s": self.setup_time_s,
         }
         return RunResult(spec=self.spec.canonical(), key=self.spec.key, summary=summary,
-                         timeseries=self.metrics.series, events=self.events, provenance=provenance(self.spec))
+                         timeseries=self.metrics.series, events=self.events, provenance=provenance(self.spec),
+                         comm=self.comm_metrics.result())
 
 
 def provenance(spec: RunSpec) -> dict[str, Any]:

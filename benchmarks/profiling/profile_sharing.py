@@ -32,6 +32,7 @@ TIMED: list[tuple[Any, str, str]] = [
     (comm.MapUpdate, "cells", "a delta's cells (decoded on the first call)"),
     (comm.MapUpdate, "dense", "a full map's cells (decoded on the first call)"),
     (comm, "merge_cells_many", "merge a delta into all its receivers"),
+    (comm, "merge_cells_many_counted", "  the same, counting free cells (the runtime's)"),
 ]
 
 

@@ -46,7 +46,7 @@ def execute(task: Task) -> dict[str, Any]:
             result = Simulation(spec).run()
         algorithm = result.provenance["algorithm"]
         out: dict[str, Any] = {"key": key, "status": "ok", "error": "", "summary": result.summary,
-                               "timeseries": result.timeseries, "events": result.events,
+                               "timeseries": result.timeseries, "events": result.events, "comm": result.comm,
                                "algorithm_dist": (algorithm["distribution"], algorithm["version"])}
         if result.key != key:
             out.update(status="failed", error=f"spec key changed in the worker ({result.key} != {key})")
@@ -55,7 +55,7 @@ def execute(task: Task) -> dict[str, Any]:
             raise
         last = traceback.format_exception(exc)[-1].strip()
         out = {"key": key, "status": "failed", "error": last[:2000], "summary": None, "timeseries": None,
-               "events": []}
+               "events": [], "comm": None}
     out["wall_time_s"] = time.perf_counter() - t0
     out["cpu_time_s"] = time.process_time() - c0
     out["jit_time_s"] = watch.seconds
@@ -90,14 +90,32 @@ class InlineExecutor:
         pass
 
 
-def _worker_start() -> None:
-    """A pool worker's start: import the runtime before the first run, so that no run's time includes it."""
+ORPHAN_CHECK_S = 1.0
+"""How often a pool worker checks that the campaign process that started it is still alive."""
+
+
+def _exit_when_orphaned(parent: int) -> None:
+    """Exit this worker as soon as its parent is gone (killed, say, with no chance to stop its pool): an
+    orphaned worker would otherwise finish its run, then wait on a queue nobody writes to, for ever."""
+    while True:
+        time.sleep(ORPHAN_CHECK_S)
+        if os.getppid() != parent:
+            os._exit(1)
+
+
+def _worker_start(parent: int | None = None) -> None:
+    """A pool worker's start: import the runtime before the first run, so that no run's time includes it;
+    watch the campaign process (``parent``), and go when it goes."""
+    if parent is not None:
+        threading.Thread(target=_exit_when_orphaned, args=(parent,), name="swarm-orphan-watch", daemon=True).start()
     from .. import simulation  # noqa: F401
 
 
 class PoolExecutor:
     """A local process pool (``spawn`` start method: no inherited zenoh/numba threads). Each worker imports
-    the runtime when it starts, not in its first run."""
+    the runtime when it starts, not in its first run, and exits when the campaign process is gone. Closing
+    waits for the runs in flight; :meth:`abort` (Ctrl-C, SIGTERM) stops the workers at once instead (their
+    runs are not written; a resumed campaign runs them again)."""
 
     shares_cache = True
 
@@ -105,7 +123,8 @@ class PoolExecutor:
         self.name = f"pool:{workers}"
         self.workers = workers
         self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
-                                        max_tasks_per_child=max_runs_per_worker, initializer=_worker_start)
+                                        max_tasks_per_child=max_runs_per_worker, initializer=_worker_start,
+                                        initargs=(os.getpid(),))
 
     def run(self, tasks: Iterable[Task]) -> Iterator[dict[str, Any]]:
         pending: set = set()
@@ -124,6 +143,16 @@ class PoolExecutor:
 
     def close(self) -> None:
         self.pool.shutdown(wait=True, cancel_futures=True)
+
+    def abort(self) -> None:
+        """Stop now: cancel queued runs and terminate the workers (runs in flight are lost, not written)."""
+        processes = list(getattr(self.pool, "_processes", {}).values())  # the stdlib has no public handle before 3.14
+        self.pool.shutdown(wait=False, cancel_futures=True)
+        for proc in processes:
+            if proc.is_alive():
+                proc.terminate()
+        for proc in processes:
+            proc.join(timeout=5)
 
 
 DASK_SCHEMES = ("tcp", "tls", "ucx", "ws", "wss")

@@ -15,7 +15,8 @@ from maps.errors import InvalidInput
 
 from .executors import Executor, make_executor
 from .spec import CampaignSpec, Run, parse_campaign
-from ..schema import NONDETERMINISTIC_COLUMNS, TIMESERIES_COLUMNS, summary_columns
+from ..schema import (COMM_ROBOT_SERIES, COMM_SERIES_COLUMNS, NONDETERMINISTIC_COLUMNS, TIMESERIES_COLUMNS,
+                      comm_columns, summary_columns)
 from .store import ResultsStore
 from .writers import Writer, live_writers
 
@@ -111,8 +112,10 @@ def runs_row(campaign: CampaignSpec, run: Run, result: dict[str, Any]) -> dict[s
         "transport": spec.transport, "map_kind": spec.map.kind, "algorithm_name": spec.algorithm.name,
         "radio_model": spec.radio.model, **run.seeds, "status": result["status"], "error": result["error"],
         "explored_target": spec.stop.explored, "max_ticks": spec.stop.max_ticks,
+        **{axis: run.cell[axis] for axis in campaign.axes},
     }
     row.update(summary_columns(result["summary"]))
+    row.update(comm_columns(result["summary"], result.get("comm")))
     dist = result.get("algorithm_dist") or (None, None)
     row.update(spec_json=spec.to_json(), wall_time_s=result["wall_time_s"], cpu_time_s=result.get("cpu_time_s"),
                jit_time_s=result.get("jit_time_s"), worker_pid=result["worker_pid"],
@@ -121,11 +124,36 @@ def runs_row(campaign: CampaignSpec, run: Run, result: dict[str, Any]) -> dict[s
     return row
 
 
-def timeseries_rows(key: str, ts: dict[str, list[Any]] | None) -> list[dict[str, Any]]:
+def timeseries_rows(key: str, ts: dict[str, list[Any]] | None,
+                    comm: dict[str, Any] | None = None) -> list[dict[str, Any]]:
+    """The run's time-series rows, with its communication series (same ticks) as further columns."""
     if not ts:
         return []
     cols = [c for c in TIMESERIES_COLUMNS if c in ts]
-    return [{"key": key, **dict(zip(cols, values))} for values in zip(*(ts[c] for c in cols))]
+    rows = [{"key": key, **dict(zip(cols, values))} for values in zip(*(ts[c] for c in cols))]
+    series = (comm or {}).get("series")
+    if series and series["tick"] == ts["tick"]:
+        extra = [c for c in COMM_SERIES_COLUMNS if c != "tick" and c in series]
+        for row, values in zip(rows, zip(*(series[c] for c in extra))):
+            row.update(zip(extra, values))
+    return rows
+
+
+def robot_rows(key: str, comm: dict[str, Any] | None, every: int) -> list[dict[str, Any]]:
+    """The long per-robot table of a run (key, tick, robot, :data:`swarm.schema.COMM_ROBOT_SERIES`): rows at
+    ticks that are multiples of ``every`` and the run's last row; none when ``every`` is 0."""
+    if not comm or not every or "robots" not in comm:
+        return []
+    ticks, robots = comm["series"]["tick"], comm["robots"]
+    names = [c for c in COMM_ROBOT_SERIES if c in robots]
+    out = []
+    for k, tick in enumerate(ticks):
+        if tick % every and k != len(ticks) - 1:
+            continue
+        columns = [robots[c][k] for c in names]
+        for robot, values in enumerate(zip(*columns)):
+            out.append({"key": key, "tick": tick, "robot": robot, **dict(zip(names, values))})
+    return out
 
 
 class Progress:
@@ -211,6 +239,7 @@ def _execute(spec: CampaignSpec, store: ResultsStore, writer: str, todo: array, 
     rest = array("q", (i for i in todo if i not in chosen))
     rows: list[dict[str, Any]] = []
     ts_rows: list[dict[str, Any]] = []
+    per_robot: list[dict[str, Any]] = []
     last_flush = time.monotonic()
     in_flight: dict[str, Run] = {}
     bar: Progress | None = None
@@ -222,16 +251,17 @@ def _execute(spec: CampaignSpec, store: ResultsStore, writer: str, todo: array, 
             yield run.key, run.canonical()
 
     def flush() -> None:
-        nonlocal rows, ts_rows, last_flush
-        batch, ts_batch = rows, ts_rows
-        rows, ts_rows, last_flush = [], [], time.monotonic()  # cleared first: a failed commit is not retried
+        nonlocal rows, ts_rows, per_robot, last_flush
+        batch, ts_batch, robot_batch = rows, ts_rows, per_robot
+        rows, ts_rows, per_robot, last_flush = [], [], [], time.monotonic()  # cleared first: no retry
         if batch:
-            store.write_part(batch, ts_batch, writer=writer)
+            store.write_part(batch, ts_batch, writer=writer, robots=robot_batch)
 
     def take(result: dict[str, Any]) -> None:
         run = in_flight.pop(result["key"])
         rows.append(runs_row(spec, run, result))
-        ts_rows.extend(timeseries_rows(run.key, result["timeseries"]))
+        ts_rows.extend(timeseries_rows(run.key, result["timeseries"], result.get("comm")))
+        per_robot.extend(robot_rows(run.key, result.get("comm"), spec.robot_series_every))
         outcome.failed += result["status"] != "ok"
         if bar:
             bar.update(result["status"] == "ok")
@@ -256,6 +286,11 @@ def _execute(spec: CampaignSpec, store: ResultsStore, writer: str, todo: array, 
                 bar = Progress(len(todo), initial=len(first)) if progress else None
                 for result in runner.run(tasks(rest)):
                     take(result)
+            except BaseException:  # Ctrl-C, SIGTERM (swarm.cli turns it into SystemExit), a failed write
+                if own and hasattr(runner, "abort"):
+                    runner.abort()  # do not wait minutes for the runs in flight: a resume runs them again
+                    own = False
+                raise
             finally:
                 if bar:
                     bar.close()

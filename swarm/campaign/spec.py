@@ -15,6 +15,7 @@ algorithm = ["greed", {name = "tnf", params = {alpha = 1, beta = 10}}]
 radio = ["global", "los", "multiwall"]   # or {model = "multiwall", frequency_ghz = 5.2, label = "mw5"}
 comm = [{map_sharing = "delta"}]         # optional; needs a label when it has several entries
 transport = ["inprocess"]                # optional
+"radio.sensitivity_dbm" = [-70, -82]     # optional axes: any radio or comm parameter, one value per cell
 
 [run]                                    # applied to every run: lidar, motion, navigation, comm, ...
 lidar = {range_m = 7.0}
@@ -25,6 +26,7 @@ max_ticks = 36000
 
 [output]
 timeseries_every = 10
+robot_series_every = 100                 # per-robot comm rows (*.robots.parquet) every N ticks; 0: none
 
 [[exclude]]                              # drop cells matching every key (a list matches any of its values)
 robots = 8
@@ -45,6 +47,16 @@ seed derive from (campaign seed, map kind, size, replicate) only, through :func:
 Every algorithm, robot count and comm model therefore meets the same worlds and starting points (paired
 comparisons), and nothing depends on the order runs execute in. Each run is keyed by the hash of its
 canonical spec (:attr:`swarm.spec.RunSpec.key`).
+
+**Axes.** Any radio or comm parameter can be a grid dimension of its own, named ``radio.<parameter>`` or
+``comm.<parameter>`` (a field of :class:`radio.RadioConfig` other than ``model``, or of
+:class:`swarm.comm.CommSpec`), with plain values (numbers, strings, booleans) labelled by their text. In
+``[grid]`` either quote the name (``"radio.sensitivity_dbm" = [...]``, beside ``radio = [...]``) or write
+the ``radio`` / ``comm`` entry as a table of lists (``radio.sensitivity_dbm = [...]``, ``comm.loss =
+[...]``), in which ``radio.model`` lists the radio dimension (default ``["multiwall"]``). An axis value
+overrides ``[run]``; a radio or comm entry of the grid that sets the same parameter is an error. Rules name
+axes the same way (``"radio.sensitivity_dbm" = -88``). Axes come after the fixed dimensions, in the
+order given.
 
 Every ``[grid]`` entry is a list. The runs are never all built at once: the run count comes from the grid
 (:mod:`.cells`), a campaign of more than ``max_runs`` runs is refused before any run spec exists, one run
@@ -77,6 +89,10 @@ from .text import clip
 
 DIMENSIONS = ("map", "size", "robots", "spawn", "algorithm", "radio", "comm", "transport")
 REQUIRED = ("map", "size", "robots", "spawn", "algorithm", "radio")
+AXIS_SECTIONS = ("radio", "comm")
+"""Run-spec sections whose parameters may be grid axes (``radio.sensitivity_dbm``, ``comm.loss``)."""
+DEFAULT_ROBOT_SERIES_EVERY = 10
+"""``output.robot_series_every`` defaults to this many time-series rows."""
 SECTIONS = ("campaign", "grid", "run", "stop", "output", "exclude", "include")
 SPEC_FORMAT = 1
 MAX_OPTIONS = 10_000
@@ -184,6 +200,16 @@ class CampaignSpec:
     @property
     def timeseries_every(self) -> int:
         return int(self.output.get("timeseries_every", 10))
+
+    @property
+    def robot_series_every(self) -> int:
+        """Ticks between per-robot rows in ``*.robots.parquet`` (0: none)."""
+        return int(self.output.get("robot_series_every", DEFAULT_ROBOT_SERIES_EVERY * self.timeseries_every))
+
+    @property
+    def axes(self) -> tuple[str, ...]:
+        """The grid's radio and comm parameter axes (``radio.sensitivity_dbm``), in grid order."""
+        return tuple(dim for dim in self.grid if is_axis(dim))
 
     # ---------------------------------------------------------------------------------- cells ----
     def cells(self) -> list[dict[str, Option]]:
@@ -362,7 +388,7 @@ class CampaignSpec:
         for opt in self.grid.get(dim, ()):
             if value == opt.label or value == opt.value:
                 return opt
-        return _parse_option(dim, value, where)
+        return _parse_option(dim, value, where, self.grid.get("radio"))
 
     def run_for(self, cell: Mapping[str, Option], rep: int, index: int = 0) -> Run:
         """The run of a grid cell at replicate ``rep`` (``index``: its position in :meth:`runs`), its spec
@@ -376,9 +402,16 @@ class CampaignSpec:
         spec["robots"] = {"count": cell["robots"].value, "spawn": cell["spawn"].value,
                           "spawn_seed": seeds["spawn_seed"]}
         spec["algorithm"] = cell["algorithm"].value
-        spec["radio"] = cell["radio"].value
+        spec["radio"] = dict(cell["radio"].value)
         if "comm" in cell:
             spec["comm"] = {**spec.get("comm", {}), **cell["comm"].value}
+        for axis in (dim for dim in cell if is_axis(dim)):
+            section, name = axis.split(".", 1)
+            dim_opt = cell.get(section)
+            if dim_opt is not None and name in dim_opt.value:
+                raise InvalidInput(f"grid.{section}", dim_opt.label, f"an entry without '{name}' ({axis} is a grid "
+                                                                      "axis: set it in one place)")
+            spec[section] = {**spec.get(section, {}), name: cell[axis].value}
         if "transport" in cell:
             spec["transport"] = cell["transport"].value
         spec["stop"] = {**spec.get("stop", {}), **self.stop}
@@ -465,16 +498,17 @@ def campaign_from_mapping(raw: Mapping[str, Any]) -> CampaignSpec:
     reps = head.get("replicates", 1)
     if not isinstance(reps, int) or isinstance(reps, bool) or not 1 <= reps <= 100_000:
         raise InvalidInput("campaign.replicates", reps, "an integer in 1..100000")
-    grid_raw = _table(raw, "grid")
+    grid_raw = _flatten_axes(_table(raw, "grid"), "grid", default_model=True)
     for key in grid_raw:
-        if key not in DIMENSIONS:
-            raise InvalidInput(f"grid.{clip(key)}", grid_raw[key], f"one of {', '.join(DIMENSIONS)}")
+        if key not in DIMENSIONS and not is_axis(key):
+            raise InvalidInput(f"grid.{clip(key)}", grid_raw[key], f"one of {', '.join(DIMENSIONS)}, or a radio or "
+                                                                   "comm parameter (radio.sensitivity_dbm, comm.loss)")
     for key in REQUIRED:
         if key not in grid_raw:
             raise InvalidInput(f"grid.{key}", None, "a list of values (every campaign crosses map, size, robots, "
                                                     "spawn, algorithm and radio)")
     grid: dict[str, tuple[Option, ...]] = {}
-    for dim in DIMENSIONS:
+    for dim in [*DIMENSIONS, *(key for key in grid_raw if is_axis(key))]:
         if dim not in grid_raw:
             continue
         values = grid_raw[dim]
@@ -485,12 +519,12 @@ def campaign_from_mapping(raw: Mapping[str, Any]) -> CampaignSpec:
             raise InvalidInput(f"grid.{dim}", values, "a non-empty list")
         if len(values) > MAX_OPTIONS:
             raise InvalidInput(f"grid.{dim}", f"{len(values):,} values", f"at most {MAX_OPTIONS:,} values")
-        options = tuple(_parse_option(dim, v, f"grid.{dim}[{i}]") for i, v in enumerate(values))
+        options = tuple(_parse_option(dim, v, f"grid.{dim}[{i}]", grid.get("radio")) for i, v in enumerate(values))
         labels = [o.label for o in options]
         if len(set(labels)) != len(labels):
             dup = next(label for i, label in enumerate(labels) if label in labels[:i])
-            raise InvalidInput(f"grid.{dim}", dup, "distinct entries (this label repeats; give tables a distinct "
-                                                   "'label')")
+            raise InvalidInput(f"grid.{dim}", dup, "distinct values (this one repeats)" if is_axis(dim) else
+                               "distinct entries (this label repeats; give tables a distinct 'label')")
         grid[dim] = options
     run_base = _table(raw, "run")
     for key in ("seed", "map", "robots", "algorithm", "radio", "transport", "stop", "record_every"):
@@ -499,11 +533,16 @@ def campaign_from_mapping(raw: Mapping[str, Any]) -> CampaignSpec:
     stop = _table(raw, "stop")
     output = _table(raw, "output")
     for key in output:
-        if key not in ("timeseries_every",):
-            raise InvalidInput(f"output.{clip(key)}", output[key], "timeseries_every")
+        if key not in ("timeseries_every", "robot_series_every"):
+            raise InvalidInput(f"output.{clip(key)}", output[key], "timeseries_every, robot_series_every")
     every = output.get("timeseries_every", 10)
     if not isinstance(every, int) or isinstance(every, bool) or not 1 <= every <= 100_000:
         raise InvalidInput("output.timeseries_every", every, "an integer in 1..100000 (ticks)")
+    robot_every = output.get("robot_series_every", DEFAULT_ROBOT_SERIES_EVERY * every)
+    if (not isinstance(robot_every, int) or isinstance(robot_every, bool) or not 0 <= robot_every <= 10_000_000
+            or robot_every % every):
+        raise InvalidInput("output.robot_series_every", robot_every, f"0 (no per-robot rows) or a multiple of "
+                                                                     f"timeseries_every ({every}) in ticks")
     exclude = tuple(_rules(raw, "exclude", grid))
     include = tuple(_rules(raw, "include", grid))
     return CampaignSpec(name=name, seed=seed, replicates=reps, grid=grid, run=dict(run_base), stop=dict(stop),
@@ -522,6 +561,7 @@ def _rules(raw: Mapping[str, Any], name: str, grid: Mapping[str, Any]) -> list[d
     rules = raw.get(name, [])
     if not isinstance(rules, list) or not all(isinstance(r, Mapping) for r in rules):
         raise InvalidInput(name, rules, f"[[{name}]] tables")
+    rules = [_flatten_rule(rule, grid, f"{name}[{k}]") for k, rule in enumerate(rules)]
     for k, rule in enumerate(rules):
         for key in rule:
             if key not in grid:
@@ -529,12 +569,106 @@ def _rules(raw: Mapping[str, Any], name: str, grid: Mapping[str, Any]) -> list[d
     return [dict(r) for r in rules]
 
 
-def _parse_option(dim: str, value: Any, where: str) -> Option:
-    """Turn one grid entry into an Option, validating it in isolation so errors name its key."""
+def is_axis(dim: str) -> bool:
+    """A radio or comm parameter axis (``radio.sensitivity_dbm``), not a fixed dimension."""
+    return dim.partition(".")[0] in AXIS_SECTIONS and "." in dim
+
+
+def axis_fields(section: str) -> tuple[str, ...]:
+    """The parameters of a section that may be axes: every field of its dataclass (radio: but ``model``,
+    the radio dimension itself)."""
+    from ..comm import CommSpec
+    from radio import RadioConfig
+
+    cls = RadioConfig if section == "radio" else CommSpec
+    return tuple(f.name for f in dataclasses.fields(cls)  # tables (materials, overrides) are not plain values
+                 if f.name != "model" and f.default_factory is dataclasses.MISSING)
+
+
+def _flatten_axes(table: Mapping[str, Any], where: str, default_model: bool = False) -> dict[str, Any]:
+    """``[grid]`` with its ``radio`` / ``comm`` tables of lists (``radio.sensitivity_dbm = [...]`` in TOML)
+    turned into axes (``"radio.sensitivity_dbm"``); a table's ``radio.model`` is the radio dimension
+    (``default_model``: ``["multiwall"]`` when left out). Quoted axis names pass through; one given twice
+    is an error."""
+    out: dict[str, Any] = {}
+    for key, value in table.items():
+        if key not in AXIS_SECTIONS or not isinstance(value, Mapping):
+            if key in out:
+                raise InvalidInput(f"{where}.{clip(key)}", value, "each dimension once (this one is given twice)")
+            out[key] = value
+            continue
+        if key == "radio" and default_model:
+            out["radio"] = value.get("model", ["multiwall"])
+        for name, values in value.items():
+            if key == "radio" and name == "model":
+                continue
+            axis = f"{key}.{name}"
+            if axis in table or axis in out:
+                raise InvalidInput(f"{where}.{clip(axis)}", values, "each axis once (this one is given twice)")
+            out[axis] = values
+    return out
+
+
+def _flatten_rule(rule: Mapping[str, Any], grid: Mapping[str, Any], where: str) -> dict[str, Any]:
+    """A rule's ``radio`` / ``comm`` table whose keys all name axes of the grid (and ``model``, the radio
+    dimension) written as axes, as in ``[grid]``; any other table stays a value (a radio or comm entry)."""
+    flat = dict(rule)
+    for section in AXIS_SECTIONS:
+        value = rule.get(section)
+        if not isinstance(value, Mapping) or not value:
+            continue
+        names = [n for n in value if not (section == "radio" and n == "model")]
+        if names and all(f"{section}.{n}" in grid for n in names):
+            flat.pop(section)
+            flat.update(_flatten_axes({section: value}, where))
+            if section == "radio" and "model" in value:
+                flat["radio"] = value["model"]
+    return flat
+
+
+def _parse_axis(axis: str, value: Any, where: str, radio: tuple[Option, ...] | None) -> Option:
+    """One value of a radio or comm parameter axis, checked alone (comm) or with one of the grid's radio
+    entries (a radio parameter may depend on the model); combinations are checked per cell."""
+    from ..comm import CommSpec
+    from maps.params import from_mapping
+    from radio import config_from_mapping
+
+    section, name = axis.split(".", 1)
+    if name not in axis_fields(section):
+        hint = " (the radio models are the radio dimension: radio = [...])" if axis == "radio.model" else ""
+        raise InvalidInput(f"grid.{clip(axis)}", value, f"a {section} parameter with plain values: "
+                                                        f"{', '.join(axis_fields(section))}{hint}")
+    if isinstance(value, (list, dict)) or value is None:
+        raise InvalidInput(where, value, f"a plain value of {axis} (a number, string or boolean)")
+    tables = [{}] if section == "comm" else [opt.value for opt in radio or ()] or [{}]
+    for k, table in enumerate(tables):
+        try:
+            if section == "comm":
+                from_mapping(CommSpec, {name: value}, prefix="comm.")
+            else:
+                config_from_mapping({**table, name: value})
+            break
+        except InvalidInput as exc:
+            if k == len(tables) - 1:
+                raise InvalidInput(where, value, exc.allowed) from None
+    if isinstance(value, bool):
+        label = str(value).lower()
+    elif isinstance(value, float):
+        label = f"{value:g}"
+    else:
+        label = str(value)
+    return Option(label, value)
+
+
+def _parse_option(dim: str, value: Any, where: str, radio: tuple[Option, ...] | None = None) -> Option:
+    """Turn one grid entry into an Option, validating it in isolation so errors name its key (``radio``:
+    the grid's radio entries, against which a radio parameter axis is checked)."""
     from ..comm import CommSpec
     from ..spec import MapSpec, RobotsSpec
     from maps.params import from_mapping
 
+    if is_axis(dim):
+        return _parse_axis(dim, value, where, radio)
     try:
         if dim == "map":
             table = {"kind": value} if isinstance(value, str) else dict(value) if isinstance(value, Mapping) else None

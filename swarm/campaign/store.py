@@ -4,12 +4,13 @@ Layout::
 
     DIR/campaign.toml          the spec as given (written once; a different spec in the same folder is an error)
     DIR/parts/<id>.timeseries.parquet   rows (key, tick, explored, coverage, ..., comm metrics)
+    DIR/parts/<id>.robots.parquet       per robot and row (key, tick, robot, comm metrics); optional
     DIR/parts/<id>.runs.parquet         one row per run: spec columns, seeds, summary metrics, status
     DIR/writers/<writer>.lock           one per live writer (see :mod:`.writers`)
 
-A part is committed by renaming its runs file into place *after* its time-series file: a run counts as
-done only when its runs row exists, and a time-series file without its runs file (a crash in between) is
-ignored and removed by a later start-up once its writer is dead. Temporary files never have a ``.parquet``
+A part is committed by renaming its runs file into place *after* its time-series and robots files: a run
+counts as done only when its runs row exists, and a time-series or robots file without its runs file (a
+crash in between) is ignored and removed by a later start-up once its writer is dead. Temporary files never have a ``.parquet``
 suffix, so a kill -9 at any moment leaves either a whole part or nothing. Parts are named
 ``<time ns>-<seq>.<writer>`` so that later parts sort later and every part and temporary file names the
 writer that made it (parts of older versions have no writer: ``<time ns>-<random>``); a key that appears
@@ -33,13 +34,16 @@ import pyarrow.parquet as pq
 
 from maps.errors import InvalidInput
 
-from ..schema import THRESHOLD_COLUMNS, runs_table, timeseries_table  # noqa: F401  (THRESHOLD_COLUMNS: re-exported)
+from ..schema import THRESHOLD_COLUMNS, robots_table, runs_table, timeseries_table  # noqa: F401  (re-export)
 from .identity import difference
 from .text import clip
 
 PARTS = "parts"
 RUNS_SUFFIX = ".runs.parquet"
 TS_SUFFIX = ".timeseries.parquet"
+ROBOTS_SUFFIX = ".robots.parquet"
+COMPANIONS = (TS_SUFFIX, ROBOTS_SUFFIX)
+"""Files of a part written before its runs file (and removed with it when a writer died in between)."""
 SPEC_FILE = "campaign.toml"
 WRITER_ID = r"[A-Za-z0-9_-]{1,40}-[0-9]{1,10}-[0-9a-f]{8}"
 """``<host>-<pid>-<nonce>`` (see :func:`swarm.campaign.writers.new_writer_id`)."""
@@ -136,8 +140,10 @@ class ResultsStore:
         for name in names:
             if name.startswith(".") and name.endswith(".tmp"):
                 out.append((self.parts / name, writer_of(name)))
-            elif name.endswith(TS_SUFFIX) and name.replace(TS_SUFFIX, RUNS_SUFFIX) not in present:
-                out.append((self.parts / name, writer_of(name)))
+            else:
+                for suffix in COMPANIONS:
+                    if name.endswith(suffix) and name[: -len(suffix)] + RUNS_SUFFIX not in present:
+                        out.append((self.parts / name, writer_of(name)))
         return out
 
     # ----------------------------------------------------------------------------------- writing ----
@@ -147,20 +153,25 @@ class ResultsStore:
         return f"{time.time_ns():020d}-{next(self._seq) % 1_000_000:06d}.{writer}"
 
     def write_part(self, runs: list[dict[str, Any]], timeseries: list[dict[str, Any]],
-                   writer: str | None = None) -> str:
-        """Commit a batch of finished runs; returns the part id. On an OSError nothing of the part is left
-        (no temporary file, no time-series file without its runs) and :class:`CommitError` is raised."""
+                   writer: str | None = None, robots: list[dict[str, Any]] | None = None) -> str:
+        """Commit a batch of finished runs (``robots``: their per-robot rows, if any); returns the part id. On
+        an OSError nothing of the part is left (no temporary file, no time-series or robots file without its
+        runs) and :class:`CommitError` is raised."""
         part = self.new_part_id(writer)
         ts_path = self.parts / f"{part}{TS_SUFFIX}"
+        robots_path = self.parts / f"{part}{ROBOTS_SUFFIX}"
         runs_path = self.parts / f"{part}{RUNS_SUFFIX}"
         try:
             if timeseries:
                 _write_table(ts_path, timeseries_table(timeseries), owned=writer is not None)
+            if robots:
+                _write_table(robots_path, robots_table(robots), owned=writer is not None)
             _write_table(runs_path, runs_table(runs), owned=writer is not None)
         except OSError as exc:
             if not runs_path.exists():
-                with contextlib.suppress(OSError):
-                    ts_path.unlink(missing_ok=True)
+                for path in (ts_path, robots_path):
+                    with contextlib.suppress(OSError):
+                        path.unlink(missing_ok=True)
             raise CommitError(self.folder, exc, len(runs)) from None
         return part
 
@@ -181,7 +192,16 @@ class ResultsStore:
         return _latest_per_key(table)
 
     def timeseries_table(self, keys: Iterable[str] | None = None) -> pa.Table | None:
-        runs = self.runs_table()
+        """The time-series rows of every run (or of ``keys``), from the part holding each run's latest row."""
+        return self._companion_table(TS_SUFFIX, keys)
+
+    def robots_table(self, keys: Iterable[str] | None = None) -> pa.Table | None:
+        """The per-robot rows (key, tick, robot, comm metrics) of every run (or of ``keys``); None when no
+        part has any (a campaign with ``output.robot_series_every = 0``, or of an older version)."""
+        return self._companion_table(ROBOTS_SUFFIX, keys)
+
+    def _companion_table(self, suffix: str, keys: Iterable[str] | None) -> pa.Table | None:
+        runs = self.runs_table(columns=("key",))
         if runs is None:
             return None
         wanted = dict(zip(runs.column("key").to_pylist(), runs.column("part").to_pylist()))
@@ -190,7 +210,7 @@ class ResultsStore:
             wanted = {k: p for k, p in wanted.items() if k in keys}
         tables = []
         for part in sorted(set(wanted.values())):
-            path = self.parts / f"{part}{TS_SUFFIX}"
+            path = self.parts / f"{part}{suffix}"
             if path.exists():
                 t = self.read_part(path)
                 mask = pc.is_in(t.column("key"), value_set=pa.array([k for k, p in wanted.items() if p == part]))

@@ -8,6 +8,9 @@ Subcommand modules import heavy dependencies inside their functions so ``swarm -
 
 from __future__ import annotations
 
+import signal
+import threading
+
 import click
 
 from maps.errors import InvalidInput
@@ -46,9 +49,17 @@ def _usage_message(exc: click.UsageError) -> str:
     return f"{msg} (see '{ctx.command_path} --help')"
 
 
+def _terminated(signum: int, frame: object) -> None:
+    """SIGTERM (``kill``, a batch system's time limit) unwinds like Ctrl-C: what finished is written, pool
+    workers are stopped, locks are released; the command exits 143."""
+    raise SystemExit(128 + signum)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``swarm`` console command; returns the exit status."""
     _register()
+    if threading.current_thread() is threading.main_thread() and signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _terminated)
     try:
         status = cli.main(args=argv, prog_name="swarm", standalone_mode=False)
         if isinstance(status, int) and not isinstance(status, bool):  # click returns an Exit's code here

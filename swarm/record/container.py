@@ -27,7 +27,10 @@ from maps.errors import InvalidInput
 MAGIC = b"\x89SWR\r\n\x1a\n"
 """PNG-style: a high byte catches 7-bit transfers, CR LF and the EOF byte catch text-mode mangling."""
 FORMAT_NAME = "swarm-recording"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+"""Version 2 (issue 34) added the communication streams: failed deliveries, groups, map merges, contacts."""
+READABLE_VERSIONS = (1, 2)
+"""Versions this reader opens: a version 1 file simply has no communication streams."""
 CHUNK_HEADER = struct.Struct("<4sII")  # kind, payload length, CRC-32 of the payload
 HEAD, BLOCK, TAIL = b"HEAD", b"BLCK", b"TAIL"
 MAX_CHUNK_BYTES = 1 << 30
@@ -39,7 +42,8 @@ DTYPES = ("<f8", "<u4", "<u2", "<i2", "|u1")
 
 def bad(path: str, problem: str) -> InvalidInput:
     """The one error for an unusable recording: names the file and what is wrong with it."""
-    return InvalidInput("recording", path, f"a complete swarm recording (.swr version {FORMAT_VERSION}); {problem}")
+    versions = " or ".join(str(v) for v in READABLE_VERSIONS)
+    return InvalidInput("recording", path, f"a complete swarm recording (.swr version {versions}); {problem}")
 
 
 # ------------------------------------------------------------------------------------- arrays ----

@@ -94,6 +94,20 @@ def _record_links(link: np.ndarray, rssi: np.ndarray, link_mirror: np.ndarray, r
     return nt, nr
 
 
+@njit(cache=True)
+def _record_changes(current: np.ndarray, mirror: np.ndarray, idx: np.ndarray, vals: np.ndarray) -> int:
+    """Flat int64 arrays: the indices where ``current`` differs from ``mirror`` and the new values into
+    ``idx`` and ``vals``, the mirror updated; returns how many (the age-of-information matrix each tick)."""
+    m = 0
+    for k in range(current.size):
+        if current[k] != mirror[k]:
+            mirror[k] = current[k]
+            idx[m] = k
+            vals[m] = current[k]
+            m += 1
+    return m
+
+
 def changed_cells(current: np.ndarray, mirror: np.ndarray, words: np.ndarray | None = None) -> np.ndarray:
     """Sorted flat indices where ``current`` differs from ``mirror`` (same shape, C-contiguous, 1-byte
     cells, bool or uint8); copies the new values into ``mirror``."""

@@ -7,6 +7,9 @@ truncated file raises :class:`maps.errors.InvalidInput` here, never half-way thr
 Reconstruction replays the per-tick deltas from tick 0 with whole-array numpy operations; a state for one
 tick of a 16-robot, 11 000-tick run takes tens of milliseconds, fine for tests and analysis (the browser
 viewer keeps its own keyframes for scrubbing).
+
+Version 1 files (before the communication streams) still load: their messages have no failed deliveries
+listed and :meth:`Recording.comm_at` says the file has no communication streams.
 """
 
 from __future__ import annotations
@@ -22,19 +25,25 @@ import numpy as np
 from maps.errors import InvalidInput
 from maps.model import Map
 
-from .container import BLOCK, FORMAT_NAME, FORMAT_VERSION, HEAD, TAIL, bad, iter_chunks, unpack_array
+from .container import BLOCK, FORMAT_NAME, HEAD, READABLE_VERSIONS, TAIL, bad, iter_chunks, unpack_array
 from .kernels import RSSI_NAN, RSSI_NEG_INF, RSSI_POS_INF
 
-STREAMS = ("known", "seen", "link", "rssi", "msg", "act")
-_BLOCK_ARRAYS = ("pose", "metrics", "known_gap", "known_val", "seen_gap", "link_idx", "rssi_idx", "rssi_val",
-                 "msg_sender", "msg_seq", "msg_type", "msg_size", "msg_recv_n", "msg_recv", "msg_rssi",
-                 "act_robot", *(f"{s}_n" for s in STREAMS))
+STREAMS_V1 = ("known", "seen", "link", "rssi", "msg", "act")
+STREAMS = (*STREAMS_V1, "group", "aoi", "contact")
+_ARRAYS_V1 = ("pose", "metrics", "known_gap", "known_val", "seen_gap", "link_idx", "rssi_idx", "rssi_val",
+              "msg_sender", "msg_seq", "msg_type", "msg_size", "msg_recv_n", "msg_recv", "msg_rssi",
+              "act_robot", *(f"{s}_n" for s in STREAMS_V1))
+_BLOCK_ARRAYS = (*_ARRAYS_V1, "msg_via", "msg_lost_n", "msg_lost", "msg_lost_cause", "group_robot", "group_id",
+                 "aoi_idx", "aoi_val", "contact_robot", "team_free", "group_n", "aoi_n", "contact_n")
 
 
 @dataclass(frozen=True)
 class MessageRecord:
-    """One broadcast: sent at ``tick`` by ``sender`` (its ``seq``-th message), ``size`` bytes on the wire,
-    delivered next tick to ``receivers``; ``rssi_dbm[k]`` is what ``receivers[k]`` received (quantised)."""
+    """One transmission: sent at ``tick`` by ``transmitter`` (the ``sender`` itself, or a robot relaying
+    the ``sender``'s ``seq``-th message), ``size`` bytes on the wire, delivered next tick to ``receivers``;
+    ``rssi_dbm[k]`` is what ``receivers[k]`` received (quantised). ``lost`` lists ``(robot, cause)`` for the
+    other robots it failed to reach, ``cause`` one of :data:`swarm.comm.LOSS_CAUSES` (empty in a version 1
+    file)."""
 
     tick: int
     sender: int
@@ -43,6 +52,8 @@ class MessageRecord:
     size: int
     receivers: tuple[int, ...]
     rssi_dbm: tuple[float, ...]
+    transmitter: int = -1
+    lost: tuple[tuple[int, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -58,6 +69,20 @@ class TickState:
     explored: float
     coverage: float
     actions: list[Any]      # per robot: {"goal", "velocity", "clear_goal", "debug"} or None
+
+
+@dataclass(frozen=True)
+class CommState:
+    """The communication picture at one tick, equal to the run's ``RunResult.comm`` row at that tick where
+    it has one (docs/comm-metrics.md)."""
+
+    tick: int
+    groups: list[frozenset[int]]  # sorted by smallest member, as radio.LinkState.groups()
+    merged_at: np.ndarray         # int64[R, R]: when robot i last merged (a map holding) robot s's map
+    aoi_age: np.ndarray           # float64[R]: mean over the others of tick - merged_at (ticks)
+    since_contact: np.ndarray     # int64[R]: ticks since the robot last received a message
+    missing_free: np.ndarray      # float64[R]: share of the team's known free cells its map lacks
+    team_free: int                # the team's known free cells
 
 
 def _cat(parts: list[np.ndarray], dtype: str) -> np.ndarray:
@@ -125,8 +150,17 @@ class Recording:
         path = self.path
         if h.get("format") != FORMAT_NAME:
             raise bad(path, "HEAD does not name the swarm-recording format")
-        if h.get("version") != FORMAT_VERSION:
-            raise bad(path, f"format version {h.get('version')!r}; this reader knows {FORMAT_VERSION}")
+        version = h.get("version")
+        if version not in READABLE_VERSIONS:
+            raise bad(path, f"format version {version!r}; this reader knows {READABLE_VERSIONS[0]} to "
+                            f"{READABLE_VERSIONS[-1]} (a newer swarm wrote it?)")
+        self.version: int = version
+        self.has_comm: bool = version >= 2
+        """Whether the file has the communication streams (failed deliveries, groups, merges, contacts)."""
+        causes = h.get("loss_causes", [])
+        if self.has_comm and not (isinstance(causes, list) and causes and all(isinstance(c, str) for c in causes)):
+            raise bad(path, "HEAD field 'loss_causes' missing or not a list of names")
+        self.loss_causes: tuple[str, ...] = tuple(causes)
         n, shape = h.get("n_robots"), h.get("shape")
         if not isinstance(n, int) or not 1 <= n <= 65535:
             raise bad(path, f"n_robots {n!r}")
@@ -149,10 +183,17 @@ class Recording:
 
     def _arrays(self, body: dict[str, Any], index: int) -> dict[str, np.ndarray]:
         out = {}
-        for name in _BLOCK_ARRAYS:
+        for name in _BLOCK_ARRAYS if self.has_comm else _ARRAYS_V1:
             if name not in body:
                 raise bad(self.path, f"block {index} has no {name!r}")
             out[name] = unpack_array(body[name], f"block {index}.{name}", self.path)
+        if not self.has_comm:  # version 1: no communication streams, every message its sender's own
+            n, msgs = body.get("n"), len(out["msg_sender"])
+            zeros = np.zeros(n if isinstance(n, int) and n > 0 else 0, dtype=np.uint32)
+            out.update(msg_via=out["msg_sender"], msg_lost_n=np.zeros(msgs, dtype=np.uint16), group_n=zeros,
+                       aoi_n=zeros, contact_n=zeros, team_free=zeros,
+                       **{k: np.zeros(0, dtype=np.uint16) for k in ("msg_lost", "msg_lost_cause", "group_robot",
+                                                                    "group_id", "aoi_idx", "aoi_val", "contact_robot")})
         return out
 
     def _load_blocks(self, bodies: list[dict[str, Any]]) -> None:
@@ -168,8 +209,8 @@ class Recording:
             if body.get("t0") != tick or not isinstance(n, int) or n < 1:
                 raise bad(path, f"block {k} starts at tick {body.get('t0')!r} with {n!r} ticks; expected tick {tick}")
             a = self._arrays(body, k)
-            if a["pose"].size != n * r * 3 or a["metrics"].size != 2 * n:
-                raise bad(path, f"block {k}: pose or metrics length does not match {n} ticks x {r} robots")
+            if a["pose"].size != n * r * 3 or a["metrics"].size != 2 * n or a["team_free"].size != n:
+                raise bad(path, f"block {k}: pose, metrics or team_free length does not match {n} ticks x {r} robots")
             for s in STREAMS:
                 if a[f"{s}_n"].size != n:
                     raise bad(path, f"block {k}: {s}_n has {a[f'{s}_n'].size} entries for {n} ticks")
@@ -178,7 +219,11 @@ class Recording:
                       "link_idx": sums["link"], "rssi_idx": sums["rssi"], "rssi_val": sums["rssi"],
                       "msg_sender": sums["msg"], "msg_seq": sums["msg"], "msg_type": sums["msg"],
                       "msg_size": sums["msg"], "msg_recv_n": sums["msg"], "act_robot": sums["act"],
-                      "msg_recv": int(a["msg_recv_n"].sum()), "msg_rssi": int(a["msg_recv_n"].sum())}
+                      "msg_recv": int(a["msg_recv_n"].sum()), "msg_rssi": int(a["msg_recv_n"].sum()),
+                      "msg_via": sums["msg"], "msg_lost_n": sums["msg"], "msg_lost": int(a["msg_lost_n"].sum()),
+                      "msg_lost_cause": int(a["msg_lost_n"].sum()), "group_robot": sums["group"],
+                      "group_id": sums["group"], "aoi_idx": sums["aoi"], "aoi_val": sums["aoi"],
+                      "contact_robot": sums["contact"]}
             for name, size in expect.items():
                 if a[name].size != size:
                     raise bad(path, f"block {k}: {name} has {a[name].size} entries, its counts say {size}")
@@ -217,12 +262,26 @@ class Recording:
         for name, values, limit in (("knowledge", self._known_idx, r * h * w), ("seen", self._seen_idx, h * w),
                                     ("link", self._link_idx, r * r), ("rssi", self._rssi_idx, r * r),
                                     ("message sender", cat["msg_sender"], r), ("receiver", cat["msg_recv"], r),
-                                    ("action robot", cat["act_robot"], r)):
+                                    ("action robot", cat["act_robot"], r), ("transmitter", cat["msg_via"], r),
+                                    ("lost receiver", cat["msg_lost"], r),
+                                    ("loss cause", cat["msg_lost_cause"], len(self.loss_causes)),
+                                    ("group robot", cat["group_robot"], r), ("group", cat["group_id"], r),
+                                    ("merge", cat["aoi_idx"], r * r), ("contact robot", cat["contact_robot"], r)):
             if len(values) and (int(values.min()) < 0 or int(values.max()) >= limit):
                 raise bad(path, f"a {name} index is outside the map or robot range")
         if len(self._known_val) and int(self._known_val.max()) > 2:
             raise bad(path, "a knowledge value is not UNSEEN, FREE or SOLID")
-        self._msg = {k: cat[f"msg_{k}"].astype(np.int64) for k in ("sender", "seq", "size", "recv_n", "recv")}
+        self._msg = {k: cat[f"msg_{k}"].astype(np.int64)
+                     for k in ("sender", "seq", "size", "recv_n", "recv", "via", "lost_n", "lost", "lost_cause")}
+        self._msg_lost_off = _offsets(self._msg["lost_n"])
+        self._group_robot = cat["group_robot"].astype(np.int64)
+        self._group_id = cat["group_id"].astype(np.int64)
+        self._aoi_idx = cat["aoi_idx"].astype(np.int64)
+        self._aoi_val = cat["aoi_val"].astype(np.int64)
+        self._contact_robot = cat["contact_robot"].astype(np.int64)
+        self._contact_tick = np.repeat(np.arange(tick, dtype=np.int64), np.diff(self._off["contact"]))
+        self.team_free: np.ndarray = cat["team_free"].astype(np.int64)
+        """Per tick: the team's known free cells (0 in a version 1 file)."""
         self._msg["type"] = _cat(types, "i8")
         self._msg_rssi = dequantise_rssi(cat["msg_rssi"].astype(np.int16), self.quantum)
         self._msg_recv_off = _offsets(self._msg["recv_n"])
@@ -311,9 +370,36 @@ class Recording:
     def _message(self, k: int, tick: int) -> MessageRecord:
         m = self._msg
         a, b = self._msg_recv_off[k], self._msg_recv_off[k + 1]
+        c, d = self._msg_lost_off[k], self._msg_lost_off[k + 1]
+        lost = tuple((robot, self.loss_causes[cause]) for robot, cause in zip(m["lost"][c:d].tolist(),
+                                                                              m["lost_cause"][c:d].tolist()))
         return MessageRecord(tick=tick, sender=int(m["sender"][k]), seq=int(m["seq"][k]),
                              type=self.message_types[int(m["type"][k])], size=int(m["size"][k]),
-                             receivers=tuple(m["recv"][a:b].tolist()), rssi_dbm=tuple(self._msg_rssi[a:b].tolist()))
+                             receivers=tuple(m["recv"][a:b].tolist()), rssi_dbm=tuple(self._msg_rssi[a:b].tolist()),
+                             transmitter=int(m["via"][k]), lost=lost)
+
+    def comm_at(self, tick: int) -> CommState:
+        """Groups, age of information, time since contact and missing share of every robot at ``tick``
+        (docs/comm-metrics.md), from the recorded groups, merges, contacts and knowledge maps."""
+        t = self._check_tick(tick)
+        if not self.has_comm:
+            raise bad(self.path, f"format version {self.version} has no communication streams (record the run again)")
+        r = self.n_robots
+        end = self._off["group"][t + 1]
+        label = _last_wins(r, self._group_robot[:end], self._group_id[:end], -1, np.int64)
+        groups = [frozenset(np.flatnonzero(label == g).tolist()) for g in sorted(set(label.tolist()))]
+        end = self._off["aoi"][t + 1]
+        merged_at = _last_wins(r * r, self._aoi_idx[:end], self._aoi_val[:end], 0, np.int64).reshape(r, r)
+        end = self._off["contact"][t + 1]
+        last = _last_wins(r, self._contact_robot[:end], self._contact_tick[:end], -1, np.int64)
+        team = int(self.team_free[t])
+        if r < 2:  # a lone robot has no one to miss, wait for or hear (as the run's metrics)
+            zero = np.zeros(r)
+            return CommState(t, groups, merged_at, zero, np.zeros(r, dtype=np.int64), zero, team)
+        off = merged_at.sum(axis=1) - merged_at.diagonal()
+        free = (self.known_at(t) == 1).reshape(r, -1).sum(axis=1)
+        missing = np.clip(1.0 - free / team, 0.0, 1.0) if team > 0 else np.zeros(r)
+        return CommState(t, groups, merged_at, t - off / (r - 1), t - np.maximum(last, 0), missing, team)
 
     def state_at(self, tick: int) -> TickState:
         t = self._check_tick(tick)
@@ -348,4 +434,4 @@ def load_recording(path: str | Path) -> Recording:
     return Recording(read_bytes(path), str(path))
 
 
-__all__ = ["MessageRecord", "Recording", "TickState", "dequantise_rssi", "load_recording", "read_bytes"]
+__all__ = ["CommState", "MessageRecord", "Recording", "TickState", "dequantise_rssi", "load_recording", "read_bytes"]

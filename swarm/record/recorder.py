@@ -19,14 +19,24 @@ per-tick work does not depend on how much the robots did:
   ``benchmarks/speed/bench_record.py``, docs/performance-history.md).
 - the union ``seen`` raster the same way; the link matrix by toggles; RSSI quantised (see below).
 - messages and actions are Python loops over what was sent/decided this tick (a handful per robot);
-  an action is stored only when its packed form differs from the robot's previous one.
+  an action is stored only when its packed form differs from the robot's previous one. A tick's messages
+  are written at the next tick (or at :meth:`Recorder.finish`): with ``comm.link_at = "receive"`` the
+  medium judges them only then. Their failed deliveries come from the medium itself, which lists them per
+  envelope once the recorder sets :attr:`swarm.comm.Medium.note_losses` (off, it does no work for them).
+- communication, as the run's own bookkeeping has it (:mod:`swarm.metrics`): the tick's groups
+  (``LinkState.groups()``), who merged whose map when (``InfoAges.merged_at``, changed entries only), who
+  received a message this tick (the medium's ``last_contact``) and the team's known free cells (the
+  missing share's denominator, ``CommMetrics.team_free``). With these and the knowledge maps a reader
+  gets every robot's age of information, time since contact and missing share at every tick, equal to the
+  run's ``RunResult.comm`` rows at theirs.
 
 Chunks of ``block_ticks`` ticks are compressed as they fill, so memory holds only compressed bytes.
 
 **What is exact.** Poses (float64), explored/coverage (float64), every robot's knowledge map, the union
-``seen`` raster, the boolean link matrix, every message's (sender, seq, type, size, receivers) and each
-robot's action (goal, velocity, clear_goal, debug, after :func:`plain` normalisation) are reproduced
-exactly at every tick. RSSI is stored in units of ``rssi_quantum_db`` (0.25 dB) and an entry is rewritten
+``seen`` raster, the boolean link matrix, every message's (sender, seq, type, size, receivers,
+transmitter, failed deliveries and their causes), each robot's action (goal, velocity, clear_goal, debug,
+after :func:`plain` normalisation), the groups, ``merged_at``, contacts and the team's free cells are
+reproduced exactly at every tick. RSSI is stored in units of ``rssi_quantum_db`` (0.25 dB) and an entry is rewritten
 when it drifts more than ``rssi_update_db`` (1 dB) from the stored value, or its link toggles, so the stored
 matrix is always within 1.125 dB of the truth; the exact RSSI is recomputable from the exact poses
 (:meth:`swarm.record.Recording.link_state`). Identical specs give byte-identical recordings.
@@ -46,8 +56,9 @@ from maps.errors import InvalidInput
 from maps.io import atomic_write_bytes, map_to_bytes
 from maps.materials import colour_of
 
+from ..comm import LOSS_CAUSES
 from .container import BLOCK, FORMAT_NAME, FORMAT_VERSION, HEAD, MAGIC, TAIL, encode_chunk, pack_array
-from .kernels import RSSI_NAN, _record_links, changed_cells, quantise_rssi
+from .kernels import RSSI_NAN, _record_changes, _record_links, changed_cells, quantise_rssi
 
 if TYPE_CHECKING:
     from ..simulation import Simulation, TickView
@@ -113,16 +124,25 @@ class _Block:
         self.t0 = t0
         self.poses: list[np.ndarray] = []
         self.metrics: list[tuple[float, float]] = []
-        self.counts: dict[str, list[int]] = {k: [] for k in ("known", "seen", "link", "rssi", "msg", "act")}
+        self.counts: dict[str, list[int]] = {k: [] for k in ("known", "seen", "link", "rssi", "msg", "act",
+                                                              "group", "aoi", "contact")}
         self.known_idx: list[np.ndarray] = []
         self.known_val: list[np.ndarray] = []
         self.seen_idx: list[np.ndarray] = []
         self.link_idx: list[np.ndarray] = []
         self.rssi_idx: list[np.ndarray] = []
         self.rssi_val: list[np.ndarray] = []
-        self.msg_cols: list[tuple[int, int, int, int, int]] = []  # sender, seq, type, size, receivers
+        self.msg_cols: list[tuple[int, ...]] = []  # sender, seq, type, size, receivers, transmitter, lost
         self.msg_recv: list[int] = []
         self.msg_rssi: list[int] = []
+        self.msg_lost: list[int] = []
+        self.msg_lost_cause: list[int] = []
+        self.group_robot: list[int] = []
+        self.group_id: list[int] = []
+        self.aoi_idx: list[np.ndarray] = []
+        self.aoi_val: list[np.ndarray] = []
+        self.contact_robot: list[int] = []
+        self.team_free: list[int] = []
         self.msg_types: dict[str, int] = {}
         self.act_robot: list[int] = []
         self.act: list[bytes] = []
@@ -134,7 +154,7 @@ class _Block:
         def cat(parts: list[np.ndarray], dtype: str, shuffle: bool = False) -> list[Any]:
             return pack_array(np.concatenate(parts) if parts else np.zeros(0), dtype, shuffle)
 
-        msg = np.array(self.msg_cols, dtype=np.int64).reshape(-1, 5)
+        msg = np.array(self.msg_cols, dtype=np.int64).reshape(-1, 7)
         return {
             "t0": self.t0, "n": len(self),
             "pose": pack_array(np.stack(self.poses), "<f8", shuffle=True),
@@ -150,6 +170,14 @@ class _Block:
             "msg_recv": pack_array(np.array(self.msg_recv), "<u2"),
             "msg_rssi": pack_array(np.array(self.msg_rssi), "<i2"),
             "msg_types": list(self.msg_types),
+            "msg_via": pack_array(msg[:, 5], "<u2"), "msg_lost_n": pack_array(msg[:, 6], "<u2"),
+            "msg_lost": pack_array(np.array(self.msg_lost), "<u2"),
+            "msg_lost_cause": pack_array(np.array(self.msg_lost_cause), "|u1"),
+            "group_robot": pack_array(np.array(self.group_robot), "<u2"),
+            "group_id": pack_array(np.array(self.group_id), "<u2"),
+            "aoi_idx": cat(self.aoi_idx, "<u4"), "aoi_val": cat(self.aoi_val, "<u4", True),
+            "contact_robot": pack_array(np.array(self.contact_robot), "<u2"),
+            "team_free": pack_array(np.array(self.team_free), "<u4", shuffle=True),
             "act_robot": pack_array(np.array(self.act_robot), "<u2"), "act": list(self.act),
         }
 
@@ -173,6 +201,16 @@ class Recorder:
         self._link = np.zeros((n, n), dtype=np.bool_)
         self._rssi = np.full((n, n), RSSI_NAN, dtype=np.int16)
         self._acts: list[bytes | None] = [None] * n
+        self._groups = [-1] * n                                  # each robot's group (its smallest member)
+        self._merged_at = np.zeros(n * n, dtype=np.int64)        # mirror of sim.ages.merged_at
+        self._aoi_idx = np.empty(n * n, dtype=np.int64)          # scratch for its changes
+        self._aoi_val = np.empty(n * n, dtype=np.int64)
+        self._links_changed = True                               # since the groups were last labelled
+        self._contact = list(sim.medium.stats.last_contact)      # the medium's last_contact at the last tick
+        self._ages, self._stats = sim.ages, sim.medium.stats     # the run's own comm bookkeeping
+        self._team_free = sim.comm_metrics.team_free
+        self._pending: tuple[Sequence[Sequence[Any]], Any] | None = None  # last tick's (outboxes, links)
+        sim.medium.note_losses = True
         self._words = np.empty(n * h * w // 8 + 1, dtype=np.int64)   # scratch for changed_cells
         self._toggled = np.empty(n * n, dtype=np.int64)             # scratch for the link kernel
         self._rssi_idx = np.empty(n * n, dtype=np.int64)
@@ -201,7 +239,7 @@ class Recorder:
             "sensitivity_dbm": [float(v) for v in sim.links.config.sensitivity_array(self.n)],
             "radio_model": sim.links.config.model,
             "rssi_quantum_db": self.quantum, "rssi_update_db": float(rssi_update_db),
-            "block_ticks": self.block_ticks,
+            "block_ticks": self.block_ticks, "loss_causes": list(LOSS_CAUSES),
         }
 
     # ------------------------------------------------------------------------------------ ticks ----
@@ -216,6 +254,7 @@ class Recorder:
         poses = sim.world.poses
         links = sim.links.evaluate(poses[:, :2])  # a pure function of positions: the run's own picture
         self._capture(self._next_tick, poses, sim.known, sim.tracker, links, [], [])
+        self._capture_pending()
         self._flush()
         summary: dict[str, Any] = {}
         if result is not None:
@@ -230,6 +269,9 @@ class Recorder:
             raise RuntimeError("the recording is finished")
         if tick != self._next_tick:
             raise RuntimeError(f"recorder expected tick {self._next_tick}, got {tick} (one recorder per run)")
+        self._capture_pending()
+        if len(self._block) >= self.block_ticks:
+            self._flush()
         b = self._block
         b.poses.append(np.array(poses, dtype=np.float64))
         b.metrics.append((float(tracker.explored), float(tracker.coverage)))
@@ -241,11 +283,17 @@ class Recorder:
         b.counts["seen"].append(len(idx))
         b.seen_idx.append(idx)
         self._capture_links(b, links)
-        self._capture_messages(b, sent, links)
+        self._capture_comm(b, tick, known, tracker, links)
         self._capture_actions(b, actions)
+        self._pending = (sent, links)
         self._next_tick += 1
-        if len(b) >= self.block_ticks:
-            self._flush()
+
+    def _capture_pending(self) -> None:
+        """The last captured tick's messages, into the current block (which ends with that tick)."""
+        if self._pending is not None:
+            sent, links = self._pending
+            self._pending = None
+            self._capture_messages(self._block, sent, links)
 
     def _capture_links(self, b: _Block, links: Any) -> None:
         link = np.ascontiguousarray(links.link).reshape(-1)
@@ -253,6 +301,7 @@ class Recorder:
         nt, nr = _record_links(link, rssi, self._link.reshape(-1), self._rssi.reshape(-1), self.quantum,
                                self.update_units, self._toggled, self._rssi_idx, self._rssi_val)
         b.counts["link"].append(nt)
+        self._links_changed |= nt > 0
         b.link_idx.append(self._toggled[:nt].copy())
         b.counts["rssi"].append(nr)
         b.rssi_idx.append(self._rssi_idx[:nr].copy())
@@ -266,7 +315,12 @@ class Recorder:
                 message_type = getattr(type(env.message), "message_type", type(env.message).__name__)
                 code = b.msg_types.setdefault(message_type, len(b.msg_types))
                 receivers = list(env.delivered_to)
-                b.msg_cols.append((env.sender, env.seq, code, len(env.data), len(receivers)))
+                lost = env.lost or ()
+                b.msg_cols.append((env.sender, env.seq, code, len(env.data), len(receivers), env.transmitter,
+                                   len(lost)))
+                for robot, cause in lost:
+                    b.msg_lost.append(robot)
+                    b.msg_lost_cause.append(cause)
                 if receivers:
                     if q is None:
                         q = quantise_rssi(links.rssi, self.quantum)
@@ -274,6 +328,39 @@ class Recorder:
                     b.msg_rssi.extend(q[receivers, env.transmitter].tolist())  # a relayed copy: its relay's signal
                 count += 1
         b.counts["msg"].append(count)
+
+    def _capture_comm(self, b: _Block, tick: int, known: np.ndarray, tracker: Any, links: Any) -> None:
+        """Groups, map merges, contacts and the team's free cells of this tick, as the run's metrics have
+        them at this tick's row (merges and the tracker do not change between the row and the observers)."""
+        n = self.n
+        changed: list[int] = []
+        if self._links_changed:  # groups are a function of the link matrix alone
+            self._links_changed = False
+            label = [0] * n
+            for members in (links.groups() if n > 1 else [frozenset({0})]):
+                first = min(members)
+                for robot in members:
+                    label[robot] = first
+            changed = [i for i in range(n) if label[i] != self._groups[i]]
+            for i in changed:
+                b.group_robot.append(i)
+                b.group_id.append(label[i])
+            self._groups = label
+        b.counts["group"].append(len(changed))
+        m = _record_changes(self._ages.merged_at.reshape(-1), self._merged_at, self._aoi_idx, self._aoi_val)
+        b.counts["aoi"].append(m)
+        if m:
+            b.aoi_idx.append(self._aoi_idx[:m].copy())
+            b.aoi_val.append(self._aoi_val[:m].copy())
+        # The medium sets last_contact[i] = t + 1 when it delivers a message of tick t: at send time (now,
+        # after the run's row for this tick) or, with link_at = "receive", during tick t + 1. So robot i got a
+        # message at this tick when its entry is this tick now or was at the last tick.
+        now, before = self._stats.last_contact, self._contact
+        contact = [i for i in range(n) if now[i] == tick or before[i] == tick]
+        b.counts["contact"].append(len(contact))
+        b.contact_robot.extend(contact)
+        self._contact = list(now)
+        b.team_free.append(self._team_free(known, tracker.seen_free_cells))
 
     def _capture_actions(self, b: _Block, actions: Sequence[Any]) -> None:
         count = 0

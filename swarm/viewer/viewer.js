@@ -4,7 +4,11 @@
  * zlib streams inflated with the browser's DecompressionStream, their bodies msgpack (decoded below).
  * The format is docs/recording-format.md; the Python reader is swarm/record/reader.py.
  *
- * For tests and scripting, window.swarmViewer exposes setTick, select, pose, robotScreenPosition, ...
+ * Version 2 recordings add the communication streams: failed deliveries with their cause, the tick's groups,
+ * map merges (age of information) and contacts; version 1 files still play, without those layers.
+ *
+ * For tests and scripting, window.swarmViewer exposes setTick, select, pose, robotScreenPosition, and what
+ * the last frame drew: drawnLosses(), drawnGroups(), aoi() ...
  */
 (function () {
   'use strict';
@@ -13,6 +17,16 @@
   const UNSEEN = 0, FREE = 1, SOLID = 2;
   const RSSI_NAN = -32768, RSSI_NEG_INF = -32767, RSSI_POS_INF = 32767;
   const FLASH_TICKS = 6;          // a message stays visible this many ticks, fading
+  const LOST_TICKS = 6;           // so does a failed delivery
+  const TRAIL_POINTS = 600;       // points per robot and trail (fading or limited trails are redrawn every frame)
+  const TRAIL_BANDS = 10;         // a fading trail is drawn in this many bands of equal age, oldest faintest
+  const READABLE_VERSIONS = [1, 2];
+  const CAUSE_STYLE = {           // colour and explanation of each failed-delivery cause (HEAD loss_causes)
+    link: [[200, 0, 0], 'no link: the receiver is out of the radio\'s reach (or failed)'],
+    loss: [[230, 0, 180], 'random packet loss (comm.loss)'],
+    bandwidth: [[30, 30, 30], 'the link\'s byte budget for the tick was spent (comm.bandwidth)'],
+    packet_error: [[255, 130, 0], 'a packet error on a link above the sensitivity (radio.per)'],
+  };
   const KEYFRAME_BUDGET = 96e6;   // bytes of state snapshots kept for fast scrubbing
 
   // ------------------------------------------------------------------------------ decoding ----
@@ -151,11 +165,18 @@
     }
     const head = chunks[0][1];
     const tail = chunks[chunks.length - 1][1];
+    if (!READABLE_VERSIONS.includes(head.version)) {
+      throw new Error(`format version ${head.version}; this viewer knows ${READABLE_VERSIONS.join(' and ')}`);
+    }
+    const hasComm = head.version >= 2;
     const blocks = chunks.slice(1, -1).map((c) => c[1]);
-    const streams = ['known', 'seen', 'link', 'rssi', 'msg', 'act'];
+    const commStreams = ['group', 'aoi', 'contact'];
+    const streams = ['known', 'seen', 'link', 'rssi', 'msg', 'act', ...(hasComm ? commStreams : [])];
+    const commArrays = ['msg_via', 'msg_lost_n', 'msg_lost', 'msg_lost_cause', 'group_robot', 'group_id', 'aoi_idx',
+                        'aoi_val', 'contact_robot', 'team_free'];
     const arrays = ['pose', 'metrics', 'known_gap', 'known_val', 'seen_gap', 'link_idx', 'rssi_idx', 'rssi_val',
                     'msg_sender', 'msg_seq', 'msg_type', 'msg_size', 'msg_recv_n', 'msg_recv', 'msg_rssi',
-                    'act_robot', ...streams.map((s) => s + '_n')];
+                    'act_robot', ...streams.map((s) => s + '_n'), ...(hasComm ? commArrays : [])];
     const parts = {};
     for (const name of arrays) parts[name] = [];
     const typeNames = [], typeCode = {}, msgTypeParts = [], acts = [];
@@ -173,8 +194,16 @@
     for (const name of arrays) cat[name] = concat(parts[name], parts[name].length ? parts[name][0].constructor : Uint8Array);
     const R = head.n_robots, H = head.shape[0], W = head.shape[1];
     const T = tail.ticks;
+    if (!hasComm) {   // version 1: no communication streams; every message is its sender's own
+      const none = new Uint16Array(0), zeros = new Uint32Array(T);
+      Object.assign(cat, { msg_via: cat.msg_sender, msg_lost_n: new Uint16Array(cat.msg_sender.length),
+                           msg_lost: none, msg_lost_cause: new Uint8Array(0), group_robot: none, group_id: none,
+                           aoi_idx: new Uint32Array(0), aoi_val: new Uint32Array(0), contact_robot: none,
+                           team_free: zeros });
+      for (const s of commStreams) cat[s + '_n'] = zeros;
+    }
     const off = {};
-    for (const s of streams) off[s] = prefix(cat[s + '_n']);
+    for (const s of [...streams, ...(hasComm ? [] : commStreams)]) off[s] = prefix(cat[s + '_n']);
     const explored = new Float64Array(T), coverage = new Float64Array(T);
     for (let t = 0; t < T; t++) { explored[t] = cat.metrics[2 * t]; coverage[t] = cat.metrics[2 * t + 1]; }
     const msgTick = new Uint32Array(cat.msg_sender.length);
@@ -182,13 +211,19 @@
     const actTick = new Uint32Array(acts.length);
     for (let t = 0; t < T; t++) for (let k = off.act[t]; k < off.act[t + 1]; k++) actTick[k] = t;
     return {
-      head, tail, R, H, W, T, off, explored, coverage,
+      head, tail, R, H, W, T, off, explored, coverage, hasComm,
       poses: cat.pose, material: typed(head.material),
       knownIdx: ungap(cat.known_gap, off.known), knownVal: cat.known_val,
       seenIdx: ungap(cat.seen_gap, off.seen), linkIdx: cat.link_idx,
       rssiIdx: cat.rssi_idx, rssiVal: cat.rssi_val,
       msg: { sender: cat.msg_sender, seq: cat.msg_seq, type: concat(msgTypeParts, Uint16Array), size: cat.msg_size,
-             recvOff: prefix(cat.msg_recv_n), recv: cat.msg_recv, rssi: cat.msg_rssi, tick: msgTick, types: typeNames },
+             recvOff: prefix(cat.msg_recv_n), recv: cat.msg_recv, rssi: cat.msg_rssi, tick: msgTick, types: typeNames,
+             via: cat.msg_via, lostOff: prefix(cat.msg_lost_n), lost: cat.msg_lost, lostCause: cat.msg_lost_cause },
+      causes: head.loss_causes || [],
+      group: { robot: cat.group_robot, id: cat.group_id },
+      aoi: { idx: cat.aoi_idx, val: cat.aoi_val },
+      contact: { robot: cat.contact_robot },
+      teamFree: cat.team_free,
       act: { robot: cat.act_robot, data: acts, tick: actTick, decoded: new Map() },
     };
   }
@@ -205,9 +240,12 @@
       this.rssi = new Int16Array(R * R).fill(RSSI_NAN);
       this.counts = new Float64Array(3 * R);   // per robot: cells UNSEEN, FREE, SOLID
       for (let i = 0; i < R; i++) this.counts[3 * i] = H * W;
+      this.groupOf = new Int32Array(R).fill(-1);       // per robot: its group's smallest member
+      this.mergedAt = new Float64Array(R * R);         // [i * R + s]: when i last merged (a map holding) s's map
+      this.lastContact = new Float64Array(R).fill(-1); // per robot: the last tick it received a message
       this.cells = H * W;
       this.tick = -1;
-      const snapshotBytes = R * H * W + H * W + 3 * R * R;
+      const snapshotBytes = R * H * W + H * W + 11 * R * R;
       const count = Math.max(1, Math.floor(KEYFRAME_BUDGET / snapshotBytes));
       this.every = Math.max(32, Math.ceil(T / count));
       this.keyframes = [];
@@ -219,12 +257,14 @@
 
     snapshot() {
       return { tick: this.tick, known: this.known.slice(), seen: this.seen.slice(), link: this.link.slice(),
-               rssi: this.rssi.slice(), counts: this.counts.slice() };
+               rssi: this.rssi.slice(), counts: this.counts.slice(), groupOf: this.groupOf.slice(),
+               mergedAt: this.mergedAt.slice(), lastContact: this.lastContact.slice() };
     }
 
     restore(k) {
       this.known.set(k.known); this.seen.set(k.seen); this.link.set(k.link); this.rssi.set(k.rssi);
-      this.counts.set(k.counts);
+      this.counts.set(k.counts); this.groupOf.set(k.groupOf); this.mergedAt.set(k.mergedAt);
+      this.lastContact.set(k.lastContact);
       this.tick = k.tick;
     }
 
@@ -240,6 +280,9 @@
       for (let k = off.seen[t]; k < off.seen[t + 1]; k++) this.seen[r.seenIdx[k]] = 1;
       for (let k = off.link[t]; k < off.link[t + 1]; k++) this.link[r.linkIdx[k]] ^= 1;
       for (let k = off.rssi[t]; k < off.rssi[t + 1]; k++) this.rssi[r.rssiIdx[k]] = r.rssiVal[k];
+      for (let k = off.group[t]; k < off.group[t + 1]; k++) this.groupOf[r.group.robot[k]] = r.group.id[k];
+      for (let k = off.aoi[t]; k < off.aoi[t + 1]; k++) this.mergedAt[r.aoi.idx[k]] = r.aoi.val[k];
+      for (let k = off.contact[t]; k < off.contact[t + 1]; k++) this.lastContact[r.contact.robot[k]] = t;
       this.tick = t;
     }
 
@@ -289,6 +332,35 @@
     return String(s).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[c]));
   }
 
+  function plural(n, word) { return `${n} ${word}${n === 1 ? '' : 's'}`; }
+
+  function causeColour(cause) { return (CAUSE_STYLE[cause] || [[90, 90, 90]])[0]; }
+  function causeText(cause) { return (CAUSE_STYLE[cause] || [null, cause])[1]; }
+
+  /** Convex hull of [x, y] points (Andrew's monotone chain), counter-clockwise; 1 or 2 points as given. */
+  function convexHull(points) {
+    const p = points.slice().sort((a, b) => a[0] - b[0] || a[1] - b[1]);
+    if (p.length < 3) return p;
+    const cross = (o, a, b) => (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+    const lower = [], upper = [];
+    for (const q of p) {
+      while (lower.length >= 2 && cross(lower[lower.length - 2], lower[lower.length - 1], q) <= 0) lower.pop();
+      lower.push(q);
+    }
+    for (let i = p.length - 1; i >= 0; i--) {
+      const q = p[i];
+      while (upper.length >= 2 && cross(upper[upper.length - 2], upper[upper.length - 1], q) <= 0) upper.pop();
+      upper.push(q);
+    }
+    return lower.slice(0, -1).concat(upper.slice(0, -1));
+  }
+
+  function segmentDistance(px, py, x1, y1, x2, y2) {
+    const dx = x2 - x1, dy = y2 - y1, len = dx * dx + dy * dy;
+    const f = len ? Math.max(0, Math.min(1, ((px - x1) * dx + (py - y1) * dy) / len)) : 0;
+    return Math.hypot(px - x1 - f * dx, py - y1 - f * dy);
+  }
+
   // ------------------------------------------------------------------------------ viewer ----
   class Viewer {
     constructor(rec, cfg) {
@@ -317,6 +389,13 @@
       this.messageTotals = this.cumulativeMessages();
       this.trails = document.createElement('canvas');
       this.trailTick = -1;
+      this.trailRange = [0, 0];
+      this.groupLayer = document.createElement('canvas');
+      this.drawn = { losses: [], groups: [] };
+      this.tip = document.getElementById('tooltip');
+      this.trailSeconds = document.getElementById('trail-seconds');
+      this.trailFade = document.getElementById('trail-fade');
+      this.hiddenCauses = new Set();
       this.layout();
       this.bind();
       this.renderLegend();
@@ -340,7 +419,7 @@
       const s = new Float64Array(R), b = new Float64Array(R), r = new Float64Array(R);
       for (let t = 0; t < T; t++) {
         for (let k = off.msg[t]; k < off.msg[t + 1]; k++) {
-          s[msg.sender[k]]++; b[msg.sender[k]] += msg.size[k];
+          s[msg.via[k]]++; b[msg.via[k]] += msg.size[k];   // the transmitter (a relay sends copies)
           for (let q = msg.recvOff[k]; q < msg.recvOff[k + 1]; q++) r[msg.recv[q]]++;
         }
         sent.set(s, t * R); bytes.set(b, t * R); received.set(r, t * R);
@@ -417,16 +496,23 @@
       s.addEventListener('input', () => this.setTick(Number(s.value)));
       document.getElementById('play').addEventListener('click', () => (this.playing ? this.pause() : this.play()));
       this.speed = document.getElementById('speed');
-      for (const id of ['show-links', 'show-messages', 'show-trails', 'show-debug']) {
+      for (const id of ['show-links', 'show-messages', 'show-trails', 'show-debug', 'show-groups', 'show-lost',
+                        'trail-fade']) {
         document.getElementById(id).addEventListener('change', () => this.draw());
       }
+      this.trailSeconds.addEventListener('input', () => this.draw());
+      this.canvas.addEventListener('mousemove', (e) => {
+        const rect = this.canvas.getBoundingClientRect();
+        this.showTip(e.clientX - rect.left, e.clientY - rect.top, e.clientX, e.clientY);
+      });
+      this.canvas.addEventListener('mouseleave', () => { this.tip.hidden = true; });
       this.canvas.addEventListener('click', (e) => {
         const rect = this.canvas.getBoundingClientRect();
         this.select(this.robotAt(e.clientX - rect.left, e.clientY - rect.top));
       });
       document.getElementById('robot-close').addEventListener('click', () => this.select(null));
       document.addEventListener('keydown', (e) => {
-        if (e.target && (e.target.tagName === 'SELECT')) return;
+        if (e.target && (e.target.tagName === 'SELECT' || e.target.type === 'number')) return;
         if (e.key === ' ') { e.preventDefault(); this.playing ? this.pause() : this.play(); }
         if (e.target === this.slider) return;
         const step = e.shiftKey ? 10 : 1;
@@ -495,13 +581,17 @@
       const ctx = this.ctx;
       ctx.imageSmoothingEnabled = false;
       ctx.drawImage(this.base, 0, 0, this.canvas.width, this.canvas.height);
+      this.drawn = { losses: [], groups: [] };
+      if (this.rec.hasComm && document.getElementById('show-groups').checked) this.drawGroups();
       if (document.getElementById('show-trails').checked) this.drawTrails();
       if (document.getElementById('show-links').checked) this.drawLinks();
       if (document.getElementById('show-messages').checked) this.drawMessages();
+      if (document.getElementById('show-lost').checked) this.drawLosses();
       if (this.selectedRobot !== null && document.getElementById('show-debug').checked) this.drawDebug(this.selectedRobot);
       this.drawRobots();
       this.drawCurve();
       this.updateReadout();
+      this.updateAoi();
       if (this.selectedRobot !== null) this.updatePanel(this.selectedRobot);
     }
 
@@ -537,10 +627,45 @@
       this.baseCtx.putImageData(this.image, 0, 0);
     }
 
-    /** Trails live on their own canvas, extended incrementally as time moves forward (a full redraw of
-     *  16 long trails costs ~50 ms in software rendering; a few new segments cost nothing). */
+    /** Trails: the whole run's path, or the last N seconds of it (``trail-seconds``), fading with age
+     *  (``trail-fade``): a faded or limited trail is redrawn every frame from at most TRAIL_POINTS points per
+     *  robot, in TRAIL_BANDS bands of equal age, the oldest faintest. */
     drawTrails() {
+      const seconds = Math.max(0, Number(this.trailSeconds.value) || 0);
+      const fade = this.trailFade.checked;
+      if (!fade && !seconds) { this.drawWholeTrails(); return; }
+      const t = this.tick, ctx = this.ctx;
+      const from = seconds ? Math.max(0, t - Math.round(seconds / this.head.tick_s)) : 0;
+      this.trailRange = [from, t];
+      const span = t - from;
+      if (span < 1) return;
+      const stride = Math.max(1, Math.ceil(span / TRAIL_POINTS));
+      const bands = fade ? Math.min(TRAIL_BANDS, span) : 1;
+      ctx.save();
+      ctx.lineWidth = 1.5; ctx.lineJoin = 'round'; ctx.lineCap = 'butt';
+      for (let i = 0; i < this.rec.R; i++) {
+        const colour = mix(this.colour(i), [255, 255, 255], 0.35);
+        for (let b = 0; b < bands; b++) {
+          const a = from + Math.floor(b * span / bands), z = from + Math.floor((b + 1) * span / bands);
+          ctx.strokeStyle = rgb(colour, fade ? 0.08 + 0.92 * (b + 1) / bands : 1);
+          ctx.beginPath();
+          ctx.moveTo(...this.worldToCanvas(...this.pose(i, a)));
+          for (let s = (Math.floor(a / stride) + 1) * stride; s < z; s += stride) {
+            ctx.lineTo(...this.worldToCanvas(...this.pose(i, s)));
+          }
+          ctx.lineTo(...this.worldToCanvas(...this.pose(i, z)));
+          ctx.stroke();
+        }
+      }
+      ctx.restore();
+    }
+
+    /** The whole run's trails, unfaded, live on their own canvas, extended incrementally as time moves
+     *  forward (a full redraw of 16 long trails costs ~50 ms in software rendering; a few new segments cost
+     *  nothing). */
+    drawWholeTrails() {
       const t = this.tick, layer = this.trails;
+      this.trailRange = [0, t];
       if (layer.width !== this.canvas.width || layer.height !== this.canvas.height || t < this.trailTick) {
         layer.width = this.canvas.width; layer.height = this.canvas.height;
         this.trailTick = -1;
@@ -568,6 +693,190 @@
         this.trailTick = t;
       }
       this.ctx.drawImage(layer, 0, 0);
+    }
+
+    /** Communication groups (as radio.LinkState.groups(): strongly connected over the tick's links) of two
+     *  or more robots: the convex hull of their positions, widened by a robot, in the colour of the group's
+     *  smallest member (so it stays put while the group keeps that member). */
+    drawGroups() {
+      const groups = this.groups().filter((g) => g.length > 1);
+      if (!groups.length) return;
+      const layer = this.groupLayer, pad = this.robotPx + 6;
+      if (layer.width !== this.canvas.width || layer.height !== this.canvas.height) {
+        layer.width = this.canvas.width; layer.height = this.canvas.height;
+      }
+      const g = layer.getContext('2d');
+      g.clearRect(0, 0, layer.width, layer.height);
+      g.lineJoin = 'round'; g.lineCap = 'round'; g.lineWidth = 2 * pad;
+      let x0 = Infinity, y0 = Infinity, x1 = -Infinity, y1 = -Infinity;
+      for (const members of groups) {
+        const hull = convexHull(members.map((i) => this.worldToCanvas(...this.pose(i))));
+        const colour = this.colour(members[0]);
+        g.fillStyle = g.strokeStyle = rgb(colour);
+        g.beginPath();
+        hull.forEach(([x, y], k) => (k ? g.lineTo(x, y) : g.moveTo(x, y)));
+        g.closePath(); g.fill(); g.stroke();
+        for (const [x, y] of hull) {
+          x0 = Math.min(x0, x); y0 = Math.min(y0, y); x1 = Math.max(x1, x); y1 = Math.max(y1, y);
+        }
+        this.drawn.groups.push({ members, colour, hull });
+      }
+      // drawn opaque on their own layer, then blended once (overlapping strokes do not darken), only the
+      // part the hulls cover: compositing the whole canvas costs milliseconds in software rendering
+      x0 = Math.max(0, Math.floor(x0 - pad - 1)); y0 = Math.max(0, Math.floor(y0 - pad - 1));
+      x1 = Math.min(layer.width, Math.ceil(x1 + pad + 1)); y1 = Math.min(layer.height, Math.ceil(y1 + pad + 1));
+      if (x1 <= x0 || y1 <= y0) return;
+      this.ctx.save(); this.ctx.globalAlpha = 0.3;
+      this.ctx.drawImage(layer, x0, y0, x1 - x0, y1 - y0, x0, y0, x1 - x0, y1 - y0);
+      this.ctx.restore();
+    }
+
+    /** Failed deliveries of the last LOST_TICKS ticks' transmissions, fading: a dashed line in the cause's
+     *  colour from the transmitter three quarters of the way to the robot it did not reach, ending in a
+     *  cross. With a robot selected, only those from or to it. One path per tick and cause (a stroke per
+     *  line cost milliseconds a frame when 16 robots share maps out of reach). */
+    drawLosses() {
+      const ctx = this.ctx, m = this.rec.msg, off = this.rec.off.msg, causes = this.rec.causes;
+      const sel = this.selectedRobot;
+      ctx.save();
+      ctx.lineWidth = 2;
+      for (let t = Math.max(0, this.tick - LOST_TICKS + 1); t <= this.tick; t++) {
+        const lines = new Map();
+        for (let k = off[t]; k < off[t + 1]; k++) {
+          if (m.lostOff[k] === m.lostOff[k + 1]) continue;
+          const from = m.via[k];
+          const [sx, sy] = this.worldToCanvas(...this.pose(from));
+          for (let q = m.lostOff[k]; q < m.lostOff[k + 1]; q++) {
+            const cause = causes[m.lostCause[q]], to = m.lost[q];
+            if (this.hiddenCauses.has(cause) || (sel !== null && from !== sel && to !== sel)) continue;
+            if (!lines.has(cause)) lines.set(cause, [new Path2D(), new Path2D()]);
+            const [dashed, crosses] = lines.get(cause);
+            const [rx, ry] = this.worldToCanvas(...this.pose(to));
+            const ex = sx + 0.75 * (rx - sx), ey = sy + 0.75 * (ry - sy);
+            dashed.moveTo(sx, sy); dashed.lineTo(ex, ey);
+            crosses.moveTo(ex - 3.5, ey - 3.5); crosses.lineTo(ex + 3.5, ey + 3.5);
+            crosses.moveTo(ex + 3.5, ey - 3.5); crosses.lineTo(ex - 3.5, ey + 3.5);
+            this.drawn.losses.push({ tick: t, from, to, sender: m.sender[k], seq: m.seq[k], cause,
+                                     type: m.types[m.type[k]], x1: sx, y1: sy, x2: ex, y2: ey,
+                                     colour: causeColour(cause) });
+          }
+        }
+        const alpha = 1 - (this.tick - t) / LOST_TICKS;
+        for (const [cause, [dashed, crosses]] of lines) {
+          ctx.strokeStyle = rgb(causeColour(cause), alpha);
+          ctx.setLineDash([5, 4]); ctx.stroke(dashed);
+          ctx.setLineDash([]); ctx.stroke(crosses);
+        }
+      }
+      ctx.restore();
+    }
+
+    /** The tooltip for what is under the mouse: a failed delivery (the newest first), else a group. */
+    showTip(cx, cy, pageX, pageY) {
+      let text = '';
+      let best = 6;
+      for (const d of this.drawn.losses) {
+        const dist = segmentDistance(cx, cy, d.x1, d.y1, d.x2, d.y2);
+        if (dist <= best) {   // ties: the newest, drawn last, on top
+          best = dist;
+          const relay = d.from !== d.sender ? ` relayed by ${d.from}` : '';
+          const margin = this.margin(d.to, d.from);
+          const m = isFinite(margin) ? `; RSSI margin now ${fmt(margin, 1)} dB` : '';
+          text = `Lost at tick ${d.tick} (${(d.tick * this.head.tick_s).toFixed(1)} s): robot ${d.sender} → ` +
+                 `robot ${d.to}, ${d.type} #${d.seq}${relay}. Cause: ${d.cause}: ${causeText(d.cause)}${m}.`;
+        }
+      }
+      if (!text) {
+        const pad = this.robotPx + 6;
+        for (const g of this.drawn.groups) {
+          const h = g.hull;
+          let near = false;
+          for (let k = 0; k < h.length && !near; k++) {
+            const [x1, y1] = h[k], [x2, y2] = h[(k + 1) % h.length];
+            near = segmentDistance(cx, cy, x1, y1, x2, y2) <= pad;
+          }
+          if (near || (h.length > 2 && this.insidePolygon(cx, cy, h))) {
+            text = `Communication group of ${g.members.length}: robots ${g.members.join(', ')}`;
+          }
+        }
+      }
+      this.tip.hidden = !text;
+      if (text) {
+        this.tip.textContent = text;
+        this.tip.style.left = (pageX + 14 + window.scrollX) + 'px';
+        this.tip.style.top = (pageY + 10 + window.scrollY) + 'px';
+      }
+    }
+
+    insidePolygon(x, y, poly) {
+      let inside = false;
+      for (let i = 0, j = poly.length - 1; i < poly.length; j = i++) {
+        const [xi, yi] = poly[i], [xj, yj] = poly[j];
+        if ((yi > y) !== (yj > y) && x < (xj - xi) * (y - yi) / (yj - yi) + xi) inside = !inside;
+      }
+      return inside;
+    }
+
+    /** The tick's communication groups, each its members in order, sorted by smallest member (none in a
+     *  version 1 recording). */
+    groups() {
+      if (!this.rec.hasComm) return [];
+      const by = new Map(), of = this.state.groupOf;
+      for (let i = 0; i < this.rec.R; i++) {
+        if (!by.has(of[i])) by.set(of[i], []);
+        by.get(of[i]).push(i);
+      }
+      return [...by.values()].sort((a, b) => a[0] - b[0]);
+    }
+
+    /** Per robot at this tick, as the run's metrics define them (docs/comm-metrics.md): its group (smallest
+     *  member), age of information and time since contact (ticks) and the share of the team's known free
+     *  cells its map lacks. */
+    commState() {
+      const R = this.rec.R, st = this.state, t = this.tick, team = this.rec.teamFree[t];
+      const out = [];
+      for (let i = 0; i < R; i++) {
+        let age = 0, since = 0, missing = 0;
+        if (R > 1) {  // a lone robot has no one to miss, wait for or hear
+          let sum = 0;
+          for (let s = 0; s < R; s++) if (s !== i) sum += st.mergedAt[i * R + s];
+          age = t - sum / (R - 1);
+          since = t - Math.max(st.lastContact[i], 0);
+          if (team > 0) missing = Math.min(Math.max(1 - st.counts[3 * i + FREE] / team, 0), 1);
+        }
+        out.push({ robot: i, group: st.groupOf[i], age, since, missing });
+      }
+      return out;
+    }
+
+    /** The age-of-information panel: a row per robot, bars scaled to the largest age at this tick. */
+    updateAoi() {
+      const body = document.getElementById('aoi-rows');
+      if (!this.rec.hasComm) return;
+      const rows = this.commState(), tickS = this.head.tick_s;
+      const sizes = new Map();
+      for (const r of rows) sizes.set(r.group, (sizes.get(r.group) || 0) + 1);
+      const scale = Math.max(10, ...rows.map((r) => r.age));
+      if (body.children.length !== rows.length) {
+        body.innerHTML = rows.map((r) => `<tr data-robot="${r.robot}"><td><span class="swatch" ` +
+          `style="background:${rgb(this.colour(r.robot))}"></span>${r.robot}</td><td class="grp"></td>` +
+          '<td class="num since"></td><td class="bar age"><span></span><em></em></td>' +
+          '<td class="bar missing"><span></span><em></em></td></tr>').join('');
+      }
+      rows.forEach((r, i) => {
+        const tr = body.children[i];
+        tr.dataset.group = String(r.group); tr.dataset.age = String(r.age);
+        tr.dataset.since = String(r.since); tr.dataset.missing = String(r.missing);
+        const n = sizes.get(r.group);
+        tr.querySelector('.grp').innerHTML = `<span class="swatch" style="background:${rgb(this.colour(r.group))}">` +
+          `</span>${n > 1 ? 'with ' + (n - 1) : 'alone'}`;
+        tr.querySelector('.since').textContent = (r.since * tickS).toFixed(1) + ' s';
+        const age = tr.querySelector('.age'), missing = tr.querySelector('.missing');
+        age.querySelector('span').style.width = (100 * r.age / scale).toFixed(1) + '%';
+        age.querySelector('em').textContent = (r.age * tickS).toFixed(1) + ' s';
+        missing.querySelector('span').style.width = (100 * r.missing).toFixed(1) + '%';
+        missing.querySelector('em').textContent = (100 * r.missing).toFixed(0) + ' %';
+      });
     }
 
     margin(receiver, sender) {
@@ -605,7 +914,7 @@
         const age = this.tick - m.tick[k];
         const alpha = 1 - age / FLASH_TICKS;
         const colour = typeColour(m.types[m.type[k]]);
-        const [sx, sy] = this.worldToCanvas(...this.pose(m.sender[k]));
+        const [sx, sy] = this.worldToCanvas(...this.pose(m.via[k]));
         ctx.lineWidth = 2;
         ctx.strokeStyle = rgb(colour, 0.8 * alpha);
         for (let q = m.recvOff[k]; q < m.recvOff[k + 1]; q++) {
@@ -718,7 +1027,14 @@
       document.getElementById('readout').textContent =
         `tick ${t} / ${this.rec.T - 1} (${(t * this.head.tick_s).toFixed(1)} s) · explored ` +
         `${(100 * this.rec.explored[t]).toFixed(1)} % · coverage ${(100 * this.rec.coverage[t]).toFixed(1)} % · ` +
-        `${this.linkCount()} links · ${off[t + 1] - off[t]} messages sent`;
+        `${this.linkCount()} links · ${off[t + 1] - off[t]} messages sent` +
+        (this.rec.hasComm
+          ? ` · ${this.lostCount(t)} deliveries lost · ${plural(this.groups().length, 'group')}` : '');
+    }
+
+    lostCount(t) {
+      const m = this.rec.msg, off = this.rec.off.msg;
+      return m.lostOff[off[t + 1]] - m.lostOff[off[t]];
     }
 
     updatePanel(i) {
@@ -738,6 +1054,7 @@
         ['knows', `${free} free + ${solid} wall cells`],
         ['goal', goal ? `${fmt(goal[0])}, ${fmt(goal[1])} m` : '—'],
         ['messages', `${sent} sent (${bytes} B), ${received} received`],
+        ...(this.rec.hasComm ? this.commFacts(i) : []),
         ['action', act === null ? (j >= 0 ? 'none (agent failed)' : '—') :
           (act.velocity ? `velocity ${fmt(act.velocity[0])} m/s, ${fmt(act.velocity[1])} rad/s` : 'navigate')],
       ];
@@ -750,6 +1067,21 @@
       document.getElementById('robot-links').textContent = heard.length ? heard.join(', ') : 'nobody';
       document.getElementById('robot-debug').textContent =
         act && act.debug !== null && act.debug !== undefined ? JSON.stringify(act.debug, null, 1) : '(none)';
+    }
+
+    /** The robot panel's communication rows: its group, last contact, and how old its information about
+     *  each other robot is. */
+    commFacts(i) {
+      const R = this.rec.R, t = this.tick, tickS = this.head.tick_s, c = this.commState()[i];
+      const mates = this.groups().find((g) => g.includes(i)).filter((j) => j !== i);
+      const ages = [];
+      for (let s = 0; s < R; s++) {
+        if (s !== i) ages.push(`${s}: ${((t - this.state.mergedAt[i * R + s]) * tickS).toFixed(1)} s`);
+      }
+      return [['group', mates.length ? `with ${mates.join(', ')}` : 'alone'],
+              ['last contact', `${(c.since * tickS).toFixed(1)} s ago`],
+              ['missing', `${(100 * c.missing).toFixed(1)} % of the team's free cells`],
+              ['info age', `${(c.age * tickS).toFixed(1)} s on average; ${ages.join(', ')}`]];
     }
 
     renderLegend() {
@@ -766,6 +1098,26 @@
         items.push(`<span><span class="swatch" style="background:${rgb(typeColour(name))}"></span>${escapeHtml(name)}</span>`);
       }
       document.getElementById('legend').innerHTML = items.join('');
+      const totals = new Map();
+      for (const code of this.rec.msg.lostCause) totals.set(code, (totals.get(code) || 0) + 1);
+      const lost = [...totals.keys()].sort().map((code) => {
+        const cause = this.rec.causes[code];
+        return `<label title="${escapeHtml(causeText(cause))}"><input type="checkbox" data-cause="${escapeHtml(cause)}" checked>` +
+          `<span class="lost-key" style="border-color:${rgb(causeColour(cause))}"></span>${escapeHtml(cause)} ` +
+          `(${totals.get(code)})</label>`;
+      });
+      const box = document.getElementById('lost-legend');
+      box.innerHTML = this.rec.hasComm
+        ? (lost.length ? '<span>lost deliveries (select a robot for its own):</span>' + lost.join('')
+          : '<span>no delivery was lost in this run</span>')
+        : '<span>format version 1: no lost messages, groups or age of information recorded</span>';
+      for (const input of box.querySelectorAll('input[data-cause]')) {
+        input.addEventListener('change', () => {
+          if (input.checked) this.hiddenCauses.delete(input.dataset.cause); else this.hiddenCauses.add(input.dataset.cause);
+          this.draw();
+        });
+      }
+      document.getElementById('aoi-panel').hidden = !this.rec.hasComm;
       const s = this.rec.tail.summary || {};
       const bits = [`${this.rec.R} robots`, `${this.rec.W} × ${this.rec.H} cells`, `radio ${this.head.radio_model}`];
       if (s.stop_reason) bits.push(`stopped at tick ${s.ticks} (${s.stop_reason})`);
@@ -794,6 +1146,15 @@
         linkCount: () => v.linkCount(),
         knownCell: (i, row, col) => v.state.known[(i * v.rec.H + row) * v.rec.W + col],
         seenCell: (row, col) => v.state.seen[row * v.rec.W + col],
+        hasComm: v.rec.hasComm,
+        groups: () => v.groups(),
+        aoi: () => v.commState(),
+        drawnLosses: () => v.drawn.losses.map((d) => ({ ...d })),
+        drawnGroups: () => v.drawn.groups.map((g) => ({ members: g.members.slice(), colour: g.colour.slice(),
+                                                        hull: g.hull.map((p) => p.slice()) })),
+        causeColour: (cause) => causeColour(cause).slice(),
+        trailRange: () => v.trailRange.slice(),
+        tooltipAt: (cx, cy) => { v.showTip(cx, cy, 0, 0); return v.tip.hidden ? '' : v.tip.textContent; },
       };
     }
   }

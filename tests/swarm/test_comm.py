@@ -7,7 +7,7 @@ import pytest
 
 from maps import Map, generate
 from radio import RadioConfig, build_link_model
-from swarm.api import CELL_M
+from swarm.api import CELL_M, FREE
 from swarm.comm import CommSpec, MapSharing, Medium
 from swarm.messages import MapUpdate, decode, encode
 from swarm.simulation import Simulation
@@ -427,15 +427,20 @@ def test_full_maps_reach_up_to_date_receivers_as_deltas_with_the_same_result(rea
     """On monotone maps a broadcast full map is merged, into each receiver that holds every earlier update
     of its sender, as the cells since the sender's previous update: maps, messages and books must come
     out as merging the whole map does, through gaps, requests, robots that hear only some updates, and
-    full maps an algorithm sends itself."""
+    full maps an algorithm sends itself. Ages of information and counts of FREE cells come out as those of a
+    service that compares whole maps (no ``lidar_reach``, none of the shortcuts)."""
     from swarm.messages import full_update
+    from swarm.metrics import FreeCounts, InfoAges
 
     rng = np.random.default_rng(21)
     shape = (80, 60)
     spec = CommSpec(share_every=2)
-    services = [MapSharing(n, shape, spec, lidar_reach=reach, monotone=m) for m in (False, True)]
+    kinds = [(reach, False), (reach, True), (None, False)]
+    ages, free = [InfoAges(n) for _ in kinds], [FreeCounts(n, exact=True) for _ in kinds]
+    services = [MapSharing(n, shape, spec, lidar_reach=r, monotone=m, ages=a, free=f)
+                for (r, m), a, f in zip(kinds, ages, free)]
     maps = [np.zeros((n, *shape), np.uint8) for _ in services]
-    pending: list[list] = [[], []]  # each service's deliveries: its own message objects (they carry its notes)
+    pending: list[list] = [[] for _ in services]  # each service's deliveries: its own message objects (notes)
     live = np.ones(n, bool)
     quick = 0
     for tick in range(80):
@@ -444,17 +449,24 @@ def test_full_maps_reach_up_to_date_receivers_as_deltas_with_the_same_result(rea
         cols = np.clip((poses[:, 0] / CELL_M).astype(int)[:, None] + rng.integers(-3, 4, (n, 4)), 0, shape[1] - 1)
         values = rng.integers(1, 3, (n, 4)).astype(np.uint8)
         lists = []
-        for sharing, known, deliveries in zip(services, maps, pending):
-            for r in range(n):  # what a ternary lidar writes near each robot: maxima only
+        for sharing, known, deliveries, counts in zip(services, maps, pending, free):
+            for r in range(n):  # what a ternary lidar writes near each robot: maxima only (and counts them)
+                had = int((known[r] == FREE).sum())
                 known[r, rows[r], cols[r]] = np.maximum(known[r, rows[r], cols[r]], values[r])
+                counts.freed[r] += int((known[r] == FREE).sum()) - had
             sharing.scanned(poses)
-            lists.append(sharing.receive_tick(deliveries, known, live))
-        assert np.array_equal(maps[0], maps[1]), tick
-        assert (services[0].seen_seq, services[0].requests, services[0].full_requested) == \
-            (services[1].seen_seq, services[1].requests, services[1].full_requested), tick
-        quick += sum(a is None and b is not None for x, y in zip(*lists) for a, b in zip(x, y))
+            lists.append(sharing.receive_tick(deliveries, known, live, tick=tick))
+        for k in (1, 2):
+            assert np.array_equal(maps[0], maps[k]), tick
+            assert (services[0].seen_seq, services[0].requests, services[0].full_requested) == \
+                (services[k].seen_seq, services[k].requests, services[k].full_requested), tick
+            assert np.array_equal(ages[0].merged_at, ages[k].merged_at), tick
+        for counts, known in zip(free, maps):
+            assert counts.read(known).tolist() == (known == FREE).sum(axis=(1, 2)).tolist(), tick
+        quick += sum(a is None and b is not None for x, y in zip(lists[0], lists[1]) for a, b in zip(x, y))
         out = [s.outgoing(tick, k, poses) for s, k in zip(services, maps)]
-        assert [[encode(m) for m in msgs] for msgs in out[0]] == [[encode(m) for m in msgs] for msgs in out[1]], tick
+        for k in (1, 2):
+            assert [[encode(m) for m in msgs] for msgs in out[0]] == [[encode(m) for m in msgs] for msgs in out[k]]
         reach_of = {(s, k): [r for r in range(n) if r != s and rng.random() < 0.8]
                     for s in range(n) for k in range(len(out[0][s]))}
         pending = [[(m, reach_of[s, k]) for s in range(n) for k, m in enumerate(o[s])] for o in out]
@@ -464,3 +476,45 @@ def test_full_maps_reach_up_to_date_receivers_as_deltas_with_the_same_result(rea
             for deliveries in pending:
                 deliveries.append((fake, [0]))
     assert quick > 5 or n == 2, "full maps were taken as deltas (with 2 robots only the requester hears them)"
+    assert ages[0].merges > 0 and (ages[0].merged_at > 0).any(), "merges counted for the ages"
+
+
+@pytest.mark.parametrize("loss,bandwidth,relay", [(0.0, 0, "none"), (0.3, 30, "none"), (0.3, 30, "flood")])
+def test_a_medium_noting_losses_lists_every_failed_delivery_and_changes_nothing(loss, bandwidth, relay):
+    """With ``note_losses`` (the recorder's) every envelope lists each other robot it failed to reach, once, with
+    the cause the counts give it; inboxes, delivered_to and counts are those of a medium that does not note."""
+    from swarm.comm import LOSS_CAUSES, Envelope
+
+    rng = np.random.default_rng(7)
+    n = 6
+    spec = CommSpec(loss=loss, bandwidth=bandwidth, relay=relay)
+    noting, plain = Medium(n, spec, np.random.default_rng(1)), Medium(n, spec, np.random.default_rng(1))
+    noting.note_losses = True
+    causes = {c: 0 for c in LOSS_CAUSES}
+    for tick in range(30):
+        link = rng.random((n, n)) < 0.6
+        np.fill_diagonal(link, False)
+        sizes = [[int(s) for s in rng.integers(1, 25, rng.integers(0, 3))] for _ in range(n)]
+        boxes = [[[Envelope(j, 100 * tick + k, bytes(s), Ping(sender=j, tick=tick)) for k, s in enumerate(row)]
+                  for j, row in enumerate(sizes)] for _ in range(2)]
+        for medium, box in zip((noting, plain), boxes):
+            if medium.relaying:
+                medium.add_relays(box, np.zeros(n, dtype=bool))
+        got, want = noting.deliver(tick, boxes[0], link), plain.deliver(tick, boxes[1], link)
+        assert [[(e.sender, e.seq, e.hop) for e in inbox] for inbox in got] == \
+            [[(e.sender, e.seq, e.hop) for e in inbox] for inbox in want]
+        for env, other in zip((e for row in boxes[0] for e in row), (e for row in boxes[1] for e in row)):
+            assert other.lost is None and env.delivered_to == other.delivered_to
+            missed = [robot for robot, _ in env.lost]
+            assert len(set(missed)) == len(missed) and not set(missed) & set(env.delivered_to)
+            assert env.transmitter not in missed
+            if relay == "none":
+                assert sorted(missed + env.delivered_to) == [i for i in range(n) if i != env.transmitter]
+            for robot, cause in env.lost:
+                assert link[robot, env.transmitter] == (LOSS_CAUSES[cause] != "link")
+                causes[LOSS_CAUSES[cause]] += 1
+    stats = noting.stats
+    assert stats.as_dict() == plain.stats.as_dict()
+    assert (causes["link"], causes["loss"], causes["bandwidth"]) == \
+        (stats.dropped_link, stats.dropped_loss, stats.dropped_bandwidth)
+    assert causes["link"] > 0 and (causes["loss"] > 0) == (loss > 0) and (causes["bandwidth"] > 0) == (bandwidth > 0)

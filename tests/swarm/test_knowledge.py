@@ -9,8 +9,8 @@ from maps import InvalidInput, Map
 from swarm.api import FREE, SOLID, UNSEEN
 from swarm.knowledge import (
     ExplorationTracker, LogOddsGrid, active_flags, classify_logodds, count_cells, count_known, empty_knowledge,
-    merge, merge_cells, merge_cells_many_changed, sync_box, sync_boxes_flat, sync_changes, sync_regions,
-    sync_regions_flat,
+    merge, merge_cells, merge_cells_many_changed, merge_cells_many_counted, sync_box, sync_boxes_flat, sync_changes,
+    sync_regions, sync_regions_flat,
 )
 
 
@@ -346,3 +346,27 @@ def test_merge_cells_many_changed_lists_exactly_the_cells_each_merge_raised() ->
         assert out[start:ends[k]].tolist() == np.flatnonzero(expected != before[row].reshape(-1)).tolist()
         start = ends[k]
     assert np.array_equal(stack[[1, 2]], before[[1, 2]])
+
+
+def test_merge_cells_many_changed_counts_free_cells_as_the_counted_merge_does() -> None:
+    """With ``freed`` the raised cells are listed as without it and each robot's count of FREE cells changes
+    as :func:`merge_cells_many_counted` changes it (UNSEEN -> FREE adds one, FREE -> SOLID takes one)."""
+    rng = np.random.default_rng(9)
+    stack = rng.integers(0, 3, size=(6, 10, 11), dtype=np.uint8)
+    idx = np.sort(rng.choice(10 * 11, 50, replace=False)).astype(np.int64)
+    values = rng.integers(0, 3, 50).astype(np.uint8)
+    rows = np.array([5, 1, 2], dtype=np.int64)
+    robots = np.array([7, 0, 3], dtype=np.int64)  # the robot of each map need not be its row
+    plain, counted, listed = stack.copy(), stack.copy(), stack.copy()
+    want = np.full(8, 4, np.int64)
+    merge_cells_many_counted(counted, rows, idx, values, robots, want)
+    out, ends = np.empty(3 * 50, np.int64), np.empty(3, np.int64)
+    merge_cells_many_changed(plain, rows, idx, values, out, ends)
+    out2, ends2, got = np.empty(3 * 50, np.int64), np.empty(3, np.int64), np.full(8, 4, np.int64)
+    merge_cells_many_changed(listed, rows, idx, values, out2, ends2, robots, got)
+    assert np.array_equal(listed, counted) and np.array_equal(listed, plain)
+    assert ends2.tolist() == ends.tolist() and out2[:ends[-1]].tolist() == out[:ends[-1]].tolist()
+    assert got.tolist() == want.tolist()
+    for k, row in enumerate(rows.tolist()):
+        assert got[robots[k]] - 4 == int((listed[row] == FREE).sum()) - int((stack[row] == FREE).sum())
+    assert (got != 4).any(), "some merge changed a count"

@@ -38,11 +38,11 @@ import pandas as pd
 from maps.errors import InvalidInput
 
 from ..store import ResultsStore
-from . import effects, figures, stats, tables
-from .load import DIMS, CampaignData, load
+from . import comm, comm_figures, effects, figures, stats, tables
+from .load import CampaignData, load
 from .layout import FigureLayout, check_layout, load_layout
 from .output import ReportWriter, slug
-from .series import sample
+from .series import sample, sample_columns
 
 COMPARE = ("algorithm", "radio", "comm")
 PREFIX = {"algorithm": "algorithms", "radio": "radio", "comm": "comm", None: "cells"}
@@ -92,6 +92,26 @@ class PairedSection:
 
 
 @dataclass
+class CommSection:
+    """The communication section (:mod:`.comm`): tables, findings and figures."""
+
+    available: bool
+    talk: list[str] = field(default_factory=list)
+    """The compared talk-only dimensions (radio, comm, axes) that vary."""
+    cells: tables.Table | None = None
+    cell_rows: int = 0
+    pooled: tables.Table | None = None
+    pooled_rows: int = 0
+    effects: tables.Table | None = None
+    effects_rows: int = 0
+    findings: list[comm.Finding] = field(default_factory=list)
+    against: list[tuple[str, str, str]] = field(default_factory=list)
+    """(title, figure, data) of exploration time and comm metrics against a compared dimension."""
+    over_time: list[tuple[str, str]] = field(default_factory=list)
+    single_robot_runs: int = 0
+
+
+@dataclass
 class Report:
     """What the README is rendered from (paths are relative to the report folder)."""
 
@@ -116,6 +136,7 @@ class Report:
     comm_compared: int = 0
     comm_single: int = 0
     maes: dict[str, Any] | None = None
+    communication: CommSection | None = None
     notes: list[str] = field(default_factory=list)
     written: list[str] = field(default_factory=list)
 
@@ -199,6 +220,7 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
         _summary(rep, out)
         _paired(rep, out)
         _comm(rep, out)
+        _communication(rep, out, ok.assign(cell=cell_id), store)
     _run_tables(rep, out)
     _notes(rep)
     if maes_csv:
@@ -214,7 +236,7 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
 
 # ------------------------------------------------------------------------------------------ parts ----
 def comparisons(data: CampaignData) -> list[str | None]:
-    found: list[str | None] = [d for d in COMPARE if d in data.dims and data.varies(d)]
+    found: list[str | None] = [d for d in (*COMPARE, *data.axes) if d in data.dims and data.varies(d)]
     return found or [None]  # nothing compared: one figure per cell
 
 
@@ -222,7 +244,8 @@ def describe(values: dict[str, str]) -> str:
     """A figure title from cell labels, e.g. 'building, size 150, 16 robots, spawn together, radio multiwall'."""
     words = {"map": "{}", "size": "size {}", "robots": "{} robots", "spawn": "spawn {}", "algorithm": "algorithm {}",
              "radio": "radio {}", "comm": "comm {}", "transport": "transport {}"}
-    return ", ".join("1 robot" if (d, v) == ("robots", "1") else words[d].format(v) for d, v in values.items())
+    return ", ".join("1 robot" if (d, v) == ("robots", "1") else words[d].format(v) if d in words else f"{d} {v}"
+                     for d, v in values.items())
 
 
 class _Names:
@@ -258,7 +281,7 @@ def _figures(rep: Report, out: ReportWriter, ok: pd.DataFrame, sampled: Any) -> 
             if compare is not None and len(grp) < 2:
                 continue  # a single line compares nothing
             values = dict(zip(fig_dims, (str(k) for k in keys)))
-            name, title = names(PREFIX[compare], values), describe(values)
+            name, title = names(PREFIX.get(compare) or slug(str(compare)), values), describe(values)
             curves, times, rows = [], [], []
             for _, cell in grp.iterrows():
                 c = int(cell["cell"])
@@ -340,6 +363,11 @@ def _summary(rep: Report, out: ReportWriter) -> None:
 
 NOUN = {"algorithm": "algorithms", "radio": "radio models", "comm": "comm settings", "transport": "transports",
         "robots": "robot counts", "spawn": "spawn modes"}
+
+
+def noun(dim: str) -> str:
+    """What the values of a dimension are called in captions (an axis by its name: 'values of comm.loss')."""
+    return NOUN.get(dim, f"values of {dim}")
 READING = ("Pairs share map and start poses (same replicate). Ticks to target, a DNF counted at max_ticks; a "
            "pair of two DNFs is a tie. a/b: median over maps of the ratio of ticks, a to b, with a 95 % percentile "
            "bootstrap interval. r: matched-pairs rank-biserial correlation, +1 when a is slower on every map. p: "
@@ -351,11 +379,11 @@ def _paired(rep: Report, out: ReportWriter) -> None:
     """Per varying dimension: the per-cell table of paired statistics; then every cell pooled."""
     dims = list(rep.data.dims)
     pooled = []
-    for k, dim in enumerate(d for d in effects.PAIRED_DIMS if d in dims and rep.data.varies(d)):
+    for k, dim in enumerate(d for d in (*effects.PAIRED_DIMS, *rep.data.axes) if d in dims and rep.data.varies(d)):
         cell = [d for d in dims if d != dim]
         pairs = stats.pair_runs(rep.runs_t, dims, dim)
         single = 0
-        if dim in effects.COMM_DIMS and "robots" in cell and len(pairs):
+        if effects.talk_only(dim) and "robots" in cell and len(pairs):
             lone = effects.single_robot(pairs)
             single = len(pairs.loc[lone, cell].drop_duplicates())
             pairs = pairs[~lone].reset_index(drop=True)
@@ -363,15 +391,15 @@ def _paired(rep: Report, out: ReportWriter) -> None:
             continue
         df = effects.summarise(pairs, [*cell, "a", "b"], cell=cell)
         tested, nominal, holm = effects.tally(df)
-        name = "paired" if dim == "algorithm" else f"paired_{dim}"
-        family = (f"Holm family: the {tested or ''} tested comparisons of this table (every pair of {NOUN[dim]} "
+        name = "paired" if dim == "algorithm" else f"paired_{slug(dim)}"
+        family = (f"Holm family: the {tested or ''} tested comparisons of this table (every pair of {noun(dim)} "
                   f"in every cell){'' if tested else '; none here'}.").replace("the  tested", "the tested")
         if single:
             family += f" The {single} 1-robot cells are left out: a lone robot talks to no one."
-        caption = f"Paired comparison of {NOUN[dim]} per cell. {READING} {family}"
+        caption = f"Paired comparison of {noun(dim)} per cell. {READING} {family}"
         table = effects.effects_table(df, [*cell, "a", "b"])
         _write_table(out, name, df, table, caption)
-        out.write(f"tables/{'pairs' if dim == 'algorithm' else f'pairs_{dim}'}.csv", tables.csv_text(pairs))
+        out.write(f"tables/{'pairs' if dim == 'algorithm' else f'pairs_{slug(dim)}'}.csv", tables.csv_text(pairs))
         rep.paired.append(PairedSection(dim, name, table, caption, family, len(df), tested, nominal, holm, single))
         order = {lab: i for i, lab in enumerate(rep.data.orders[dim])}
         pooled.append(pd.DataFrame({
@@ -433,6 +461,152 @@ def _comm(rep: Report, out: ReportWriter) -> None:
                  "(not judged in 1-robot cells, where every model gives the same run).")
 
 
+AGAINST_METRICS = (("ttt_or_max", "ticks to target\n(DNF = max)"), ("missing_pct", "missing (%)"),
+                   ("aoi_age_s", "AoI age (s)"), ("delivered_pct", "delivered (%)"))
+OVER_TIME = (("missing_free_mean", "missing (%)", 100.0, "share of the team's known free cells a robot misses"),
+             ("aoi_age_mean", "AoI age (s)", 0.1, "age of a robot's information about the others"),
+             ("biggest_group", "biggest group (%)", 100.0, "the biggest communication group's share of the robots"))
+MAX_AGAINST_PANELS = 6
+
+
+def _communication(rep: Report, out: ReportWriter, ok: pd.DataFrame, store: ResultsStore) -> None:
+    """The communication section: per-cell and pooled means, paired effects with their findings, and the
+    figures (:mod:`.comm`)."""
+    data = rep.data
+    if not comm.has_comm(rep.runs_t):
+        rep.communication = CommSection(available=False)
+        return
+    frame = comm.derive(rep.runs_t)
+    talk = comm.talk_dims(data.dims, {d: data.varies(d) for d in data.dims})
+    sec = rep.communication = CommSection(available=True, talk=talk)
+    multi = frame[comm.robots_of(frame) > 1]
+    sec.single_robot_runs = len(frame) - len(multi)
+    causes = comm.causes_seen(frame)
+    by = [d for d in data.dims if d != "algorithm"] + ["algorithm"]
+    df = comm.cell_means(frame, by)
+    sec.cells, sec.cell_rows = comm.means_table(df, by, causes), len(df)
+    _write_table(out, "comm", df, sec.cells, "Communication per cell and algorithm: means over the cell's runs. "
+                 + COMM_READING)
+    pooled = [comm.cell_means(multi, [dim, "algorithm"]).rename(columns={dim: "value"}).assign(dimension=dim)
+              for dim in talk] if talk else []
+    if pooled:
+        df = pd.concat(pooled, ignore_index=True)
+        df = df[["dimension", "value", *[c for c in df.columns if c not in ("dimension", "value")]]]
+        sec.pooled, sec.pooled_rows = comm.means_table(df, ["dimension", "value", "algorithm"], causes), len(df)
+        _write_table(out, "comm_pooled", df, sec.pooled, "Communication per compared value and algorithm, every "
+                     "other dimension pooled (multi-robot runs). " + COMM_READING)
+    eff = comm.paired_effects(frame, list(data.dims), talk, data.orders)
+    if len(eff):
+        sec.effects, sec.effects_rows = comm.effects_table(eff), len(eff)
+        sec.findings = comm.findings(eff)
+        _write_table(out, "comm_effects", eff, sec.effects, EFFECTS_CAPTION)
+    for dim in talk:
+        _against_figure(rep, out, multi, dim)
+    if rep.cell_figures and len(multi):
+        _over_time_figures(rep, out, ok, store, talk[0] if talk else "algorithm")
+
+
+COMM_READING = ("Delivered %: the share of the other robots each message reached; lost %: failed deliveries of "
+                "every transmission (relayed copies included), per cause; "
+                "biggest group and all connected: over the recorded rows; contact gap: seconds since a robot "
+                "last received anything; missing: share of the team's known free cells a robot does not know; "
+                "AoI age: how old a robot's information about the others is (seconds since it last merged "
+                "their maps); means over robots and rows, then runs.")
+EFFECTS_CAPTION = ("Each value against the first (reference) value of its dimension, per algorithm, every other "
+                   "dimension pooled; pairs share map and start poses; 1-robot runs left out. Ticks b/a: median "
+                   "over maps of the ratio of ticks to target with its 95 % bootstrap interval; p (Holm): "
+                   "Wilcoxon signed-rank on the log ratios, Holm over the rows of this table. Each metric a → b: "
+                   "means over the paired runs; the CSV has the median paired difference per map and its "
+                   "Wilcoxon p with Holm's correction per metric over the rows.")
+
+
+def _numeric(labels: list[str]) -> np.ndarray | None:
+    try:
+        return np.array([float(v) for v in labels])
+    except ValueError:
+        return None
+
+
+def _against_figure(rep: Report, out: ReportWriter, multi: pd.DataFrame, dim: str) -> None:
+    """Exploration time and the key comm metrics against the values of ``dim``, a line per algorithm, a
+    column per map and size (per map when there are more than :data:`MAX_AGAINST_PANELS`)."""
+    data = rep.data
+    labels = [lab for lab in data.orders[dim] if (multi[dim].astype(str) == lab).any()]
+    if len(labels) < 2:
+        return
+    values = _numeric(labels)
+    x = values if values is not None else np.arange(len(labels), dtype=float)
+    # only the cells that have every value (an [[include]] may add a value to some cells only)
+    keys = [d for d in data.dims if d != dim] + ["replicate"]
+    complete = multi.groupby(keys, observed=True)[dim].transform("nunique") == len(labels)
+    partial = not complete.all()
+    multi = multi[complete]
+    panel_dims = ["map", "size"]
+    if len(multi.groupby(panel_dims, observed=True)) > MAX_AGAINST_PANELS:
+        panel_dims = ["map"]
+    pooled = [d for d in data.dims if d not in (*panel_dims, dim, "algorithm") and data.varies(d)]
+    panels, rows = [], []
+    for keys, grp in multi.groupby(panel_dims, observed=True, sort=True):
+        keys = keys if isinstance(keys, tuple) else (keys,)
+        title = describe(dict(zip(panel_dims, map(str, keys))))
+        lines = []
+        for alg in data.orders["algorithm"]:
+            runs = grp[grp["algorithm"].astype(str) == alg]
+            if runs.empty:
+                continue
+            line = comm_figures.Line(alg, data.orders["algorithm"].index(alg), x)
+            for key, _ in AGAINST_METRICS:
+                stacked = np.full((max(runs[dim].astype(str).value_counts().max(), 1), len(labels)), np.nan)
+                for j, lab in enumerate(labels):
+                    v = runs.loc[runs[dim].astype(str) == lab, key].to_numpy(float)
+                    stacked[:len(v), j] = v
+                mean, lo, hi, n = stats.mean_band(stacked)
+                line.bands[key] = comm_figures.Band(mean, lo, hi)
+                rows.append(pd.DataFrame({"panel": title, "algorithm": alg, "metric": key, "value": labels,
+                                          "mean": mean, "ci95_low": lo, "ci95_high": hi, "runs": n}))
+            lines.append(line)
+        panels.append(comm_figures.Panel(title, lines))
+    name = f"comm/against_{slug(dim)}"
+    what = tables.header(dim) if dim not in ("radio", "comm") else {"radio": "radio model", "comm": "comm setting"}[dim]
+    left_out = "1-robot runs" + (" and cells without every value" if partial else "") + " left out"
+    title = f"Exploration time and communication against {what} (" + (
+        f"pooled over {', '.join(pooled)}; " if pooled else "") + f"{left_out})"
+    xlabel = tables.header(dim) if dim not in ("radio", "comm") else what
+    out.write(f"{name}.{rep.fmt}", comm_figures.against_figure(panels, AGAINST_METRICS, xlabel, (x, labels), title,
+                                                               rep.fmt))
+    out.write(f"{name}.csv", tables.csv_text(pd.concat(rows, ignore_index=True)))
+    rep.communication.against.append((title, f"{name}.{rep.fmt}", f"{name}.csv"))
+
+
+def _over_time_figures(rep: Report, out: ReportWriter, ok: pd.DataFrame, store: ResultsStore, compare: str) -> None:
+    """Per cell (every dimension but ``compare``), multi-robot cells only: missing share, AoI age and the
+    biggest group over time, a line per value of ``compare``."""
+    data = rep.data
+    columns = [c for c, _, _, _ in OVER_TIME]
+    sampled = sample_columns(store, ok, ok["cell"].to_numpy(), data.every, columns)
+    cells = ok.drop_duplicates("cell").sort_values("cell")
+    cells = cells[comm.robots_of(cells) > 1]
+    fig_dims = [d for d in data.dims if d != compare]
+    names = _Names()
+    for keys, grp in cells.groupby(fig_dims, observed=True, sort=True):
+        values = dict(zip(fig_dims, (str(k) for k in keys)))
+        panels = []
+        for column, ylabel, scale, panel_title in OVER_TIME:
+            series = []
+            for _, cell in grp.iterrows():
+                c = int(cell["cell"])
+                sampled_c = sampled[column]
+                mean, lo, hi, _ = stats.mean_band(scale * sampled_c.cell_values[c].astype(np.float64))
+                label = str(cell[compare])
+                series.append(comm_figures.Series(label, data.orders[compare].index(label), sampled_c.cell_ticks[c],
+                                                  comm_figures.Band(mean, lo, hi), len(sampled_c.cell_rows[c])))
+            panels.append((panel_title, ylabel, series))
+        name = f"comm/{names(PREFIX.get(compare) or slug(compare), values)}.{rep.fmt}"
+        title = describe(values)
+        out.write(name, comm_figures.over_time_figure(panels, title, rep.fmt))
+        rep.communication.over_time.append((title, name))
+
+
 def _write_table(out: ReportWriter, name: str, df: pd.DataFrame, table: tables.Table, caption: str) -> None:
     out.write(f"tables/{name}.md", f"*{caption}*\n\n" + tables.markdown(table))
     out.write(f"tables/{name}.tex", tables.latex(table, caption, f"tab:{name.replace('_', '-')}"))
@@ -441,11 +615,11 @@ def _write_table(out: ReportWriter, name: str, df: pd.DataFrame, table: tables.T
 
 def _run_tables(rep: Report, out: ReportWriter) -> None:
     data = rep.data
-    cols = ["key", *DIMS, "replicate", "status", "stop_reason", "ticks", "max_ticks", "explored", "map_seed"]
+    cols = ["key", *data.all_dims, "replicate", "status", "stop_reason", "ticks", "max_ticks", "explored", "map_seed"]
     runs = data.runs[cols].merge(rep.runs_t[["key", "ttt", "success"]], on="key", how="left")
     runs["success"] = runs["success"].fillna(False).astype(bool)
     out.write("tables/runs.csv", tables.csv_text(runs.rename(columns={"ttt": "ticks_to_target"})))
-    failed = data.failed[["key", *DIMS, "replicate", "error"]]
+    failed = data.failed[["key", *data.all_dims, "replicate", "error"]]
     out.write("tables/failed.csv", tables.csv_text(failed))
 
 

@@ -10,7 +10,8 @@ Hook
 
 - ``data``: :class:`.load.CampaignData` (``load.load(results_dir)``).
 - ``comparisons``: ``[(name, filter_a, filter_b), ...]``. A filter maps grid dimensions (``map``, ``size``,
-  ``robots``, ``spawn``, ``algorithm``, ``radio``, ``comm``, ``transport``) to a label or a list of labels
+  ``robots``, ``spawn``, ``algorithm``, ``radio``, ``comm``, ``transport``, and radio/comm parameter axes
+  such as ``radio.sensitivity_dbm``) to a label or a list of labels
   (numbers are accepted for numeric labels: ``{"robots": 16}``); a dimension a filter leaves out takes any
   value. The dimensions where the two filters differ are the *contrast*; runs of A and B pair when they
   agree on every other dimension and on the replicate (the same map and start poses), e.g.
@@ -66,11 +67,12 @@ import numpy as np
 import pandas as pd
 from scipy import stats as sps
 
+from ..spec import is_axis
 from ..store import ResultsStore
 from . import stats
 from .load import DIMS, CampaignData
 from .series import sample
-from .tables import HEADERS, Table, p_value, ticks
+from .tables import Table, header, p_value, ticks
 
 MIN_UNITS = 6
 """Units (maps) that differ needed for a test, and units needed for an interval."""
@@ -83,7 +85,8 @@ LEVEL = 0.95
 UNITS = ("map", "size", "replicate")
 """A map: the same world and start poses in every cell that shares it."""
 COMM_DIMS = ("radio", "comm", "transport")
-"""Dimensions that only change how robots talk: 1-robot cells tie on them by construction."""
+"""Dimensions that only change how robots talk: 1-robot cells tie on them by construction (and so do the
+radio and comm parameter axes: :func:`talk_only`)."""
 PAIRED_DIMS = ("algorithm", "radio", "comm", "transport", "robots", "spawn")
 """Dimensions compared pairwise; map kind and size change the map itself, so their runs share nothing."""
 COLUMNS = ("cells", "pairs", "maps", "a_wins", "b_wins", "ties", "dnf_pairs", "median_a", "median_b", "mean_diff",
@@ -246,6 +249,16 @@ def summarise(pairs: pd.DataFrame, by: Sequence[str], *, units: Sequence[str] = 
     return out
 
 
+def talk_only(dim: str) -> bool:
+    """A dimension that only changes how robots talk (:data:`COMM_DIMS` or a radio/comm parameter axis)."""
+    return dim in COMM_DIMS or is_axis(dim)
+
+
+def dims_of(frame: pd.DataFrame) -> list[str]:
+    """The grid dimensions a frame of runs has: :data:`.load.DIMS` and any radio/comm parameter axes."""
+    return [*DIMS, *(c for c in frame.columns if is_axis(c))]
+
+
 def single_robot(frame: pd.DataFrame) -> np.ndarray:
     """Rows whose ``robots`` label is the number 1."""
     return (pd.to_numeric(frame["robots"].astype(str), errors="coerce") == 1).to_numpy()
@@ -297,8 +310,9 @@ def _label(value: Any) -> str:
 def _selection(name: str, side: str, flt: Mapping[str, Any], runs: pd.DataFrame) -> dict[str, frozenset[str]]:
     out = {}
     for dim, value in flt.items():
-        if dim not in DIMS:
-            raise ValueError(f"{name}: filter {side} names {dim!r}, not a grid dimension ({', '.join(DIMS)})")
+        if dim not in dims_of(runs):
+            raise ValueError(f"{name}: filter {side} names {dim!r}, not a grid dimension "
+                             f"({', '.join(dims_of(runs))})")
         values = value if isinstance(value, (list, tuple, set, frozenset)) else [value]
         labels = frozenset(_label(v) for v in values)
         known = set(runs[dim].astype(str))
@@ -322,13 +336,14 @@ def contrast_pairs(runs_t: pd.DataFrame, filter_a: Mapping[str, Any], filter_b: 
     (``<dim>_a``, ``<dim>_b``)."""
     ok = runs_t[runs_t["status"] == "ok"]
     sel_a, sel_b = _selection(name, "A", filter_a, ok), _selection(name, "B", filter_b, ok)
-    contrast = [d for d in DIMS if sel_a.get(d) != sel_b.get(d)]
+    dims = dims_of(ok)
+    contrast = [d for d in dims if sel_a.get(d) != sel_b.get(d)]
     if not contrast:
         raise ValueError(f"{name}: filters A and B select the same cells")
     if {"map", "size"} & set(contrast):
         raise ValueError(f"{name}: A and B differ in map or size; runs on different maps do not pair")
-    keys = [d for d in DIMS if d not in contrast] + ["replicate", "map_seed"]
-    drop_single = all(d in COMM_DIMS for d in contrast) if single_robot_cells is None else not single_robot_cells
+    keys = [d for d in dims if d not in contrast] + ["replicate", "map_seed"]
+    drop_single = all(talk_only(d) for d in contrast) if single_robot_cells is None else not single_robot_cells
     sides = []
     for side, sel in (("A", sel_a), ("B", sel_b)):
         mask = np.ones(len(ok), dtype=bool)
@@ -336,8 +351,8 @@ def contrast_pairs(runs_t: pd.DataFrame, filter_a: Mapping[str, Any], filter_b: 
             mask &= ok[dim].astype(str).isin(labels).to_numpy()
         if drop_single:
             mask &= ~single_robot(ok)
-        part = ok.loc[mask, [*DIMS, "replicate", "map_seed", "ttt_or_max", "success", "key"]].copy()
-        for dim in DIMS:
+        part = ok.loc[mask, [*dims, "replicate", "map_seed", "ttt_or_max", "success", "key"]].copy()
+        for dim in dims:
             part[dim] = part[dim].astype(str)
         dup = part.duplicated(keys)
         if dup.any():
@@ -373,7 +388,7 @@ def compare_runs(runs_t: pd.DataFrame, comparisons: Sequence[tuple[str, Mapping[
         ok = runs_t[runs_t["status"] == "ok"]
         described[name] = (_describe(_selection(name, "A", flt_a, ok)), _describe(_selection(name, "B", flt_b, ok)))
         if len(p):
-            keys = [d for d in DIMS if f"{d}_a" not in p.columns and d in p.columns]
+            keys = [d for d in dims_of(runs_t) if f"{d}_a" not in p.columns and d in p.columns]
             p = p.assign(name=name, order=order, cell=p.groupby(keys, sort=False).ngroup())
             frames.append(p[["name", "order", "cell", *UNITS, "t_a", "t_b", "ok_a", "ok_b", "winner"]])
     pairs = pd.concat(frames, ignore_index=True).sort_values("order", kind="stable") if frames else pd.DataFrame(
@@ -398,7 +413,8 @@ def ratio_text(r: pd.Series) -> str:
 def effects_table(df: pd.DataFrame, labels: Sequence[str], *, cells: bool = False, maps: bool = False) -> Table:
     """A :func:`summarise` / :func:`compare_cells` frame as a table: ``labels`` first (grid dimensions get
     their usual headers), then counts, medians, the ratio with its interval, r, p and Holm's p."""
-    head = [HEADERS.get(c, {"name": "Comparison", "dimension": "Dimension"}.get(c, c)) for c in labels]
+    head = [{"name": "Comparison", "dimension": "Dimension"}.get(c) or (header(c) if c in DIMS or is_axis(c) else c)
+            for c in labels]
     head += (["Cells"] if cells else []) + ["Pairs"] + (["Maps"] if maps else [])
     head += ["a faster", "b faster", "Ties", "DNF", "Median a", "Median b", "a/b (95 % CI)", "r", "p", "p (Holm)"]
     rows = []

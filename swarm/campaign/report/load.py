@@ -18,17 +18,20 @@ import pandas as pd
 
 from maps.errors import InvalidInput
 
-from ...schema import RUNS, THRESHOLD_COLUMNS
-from ..spec import CampaignSpec, campaign_from_mapping
+from ...schema import COMM_RUN_COLUMNS, RUNS, THRESHOLD_COLUMNS
+from ..spec import CampaignSpec, campaign_from_mapping, is_axis
 from ..store import ResultsStore
 
 DIMS = ("map", "size", "robots", "spawn", "algorithm", "radio", "comm", "transport")
-"""Grid dimensions as the runs table names them."""
+"""Grid dimensions as the runs table names them; a campaign may add radio and comm parameter axes
+(``radio.sensitivity_dbm``: :attr:`CampaignData.axes`), after these."""
 ALWAYS_SHOWN = ("map", "size", "robots", "spawn", "algorithm", "radio")
 """Shown in names and tables even when constant, so a figure name says which world it shows."""
 RUN_COLUMNS = ("key", *DIMS, "replicate", "map_kind", "radio_model", "map_seed", "status", "error", "stop_reason",
-               "ticks", "max_ticks", "explored_target", "explored", "coverage", *THRESHOLD_COLUMNS.values(), "part")
-"""The runs-table columns the report reads (:data:`swarm.schema.RUNS`, plus the store's ``part``)."""
+               "ticks", "max_ticks", "explored_target", "explored", "coverage", *THRESHOLD_COLUMNS.values(), "part",
+               "msgs_sent", "bytes_sent", "msgs_delivered", "bytes_delivered", "msgs_dropped", *COMM_RUN_COLUMNS)
+"""The runs-table columns the report reads (:data:`swarm.schema.RUNS`, plus the store's ``part``); results of
+older versions lack the communication columns (they read as missing)."""
 assert set(RUN_COLUMNS) <= {*RUNS, "part"}
 
 
@@ -46,11 +49,18 @@ class CampaignData:
     (so ``groupby(..., observed=True)`` lists groups in spec order)."""
     orders: dict[str, list[str]]
     dims: tuple[str, ...]
-    """Dimensions shown: ``ALWAYS_SHOWN`` plus comm/transport when they take several values."""
+    """Dimensions shown: ``ALWAYS_SHOWN`` plus comm/transport and axes when they take several values."""
     total: int | None
     """Runs the spec defines (None when the spec could not be read)."""
     every: int
     spec_error: str = ""
+    axes: tuple[str, ...] = ()
+    """Radio and comm parameter axes of the grid (``radio.sensitivity_dbm``), after :data:`DIMS`."""
+
+    @property
+    def all_dims(self) -> tuple[str, ...]:
+        """Every grid dimension, the axes included, in grid order."""
+        return (*DIMS, *self.axes)
 
     @property
     def ok(self) -> pd.DataFrame:
@@ -77,17 +87,21 @@ def load(results_dir: str | Path) -> CampaignData:
     source = store.spec_source()
     spec, spec_error = _read_spec(source)
     table = store.runs_table()
-    runs = _runs_frame(table.to_pandas() if table is not None else None)
-    orders = _orders(spec, runs)
-    for dim in DIMS:
+    frame = table.to_pandas() if table is not None else None
+    columns = frame.columns if frame is not None else ()
+    axes = spec.axes if spec is not None else tuple(c for c in columns if is_axis(c))
+    runs = _runs_frame(frame, axes)
+    orders = _orders(spec, runs, axes)
+    for dim in (*DIMS, *axes):
         runs[dim] = pd.Categorical(runs[dim], categories=orders[dim], ordered=True)
-    runs = runs.sort_values([*DIMS, "replicate", "key"], kind="stable").reset_index(drop=True)
-    dims = tuple(d for d in DIMS if d in ALWAYS_SHOWN or runs[d].nunique() > 1)
+    runs = runs.sort_values([*DIMS, *axes, "replicate", "key"], kind="stable").reset_index(drop=True)
+    dims = tuple(d for d in (*DIMS, *axes) if d in ALWAYS_SHOWN or runs[d].nunique() > 1)
     every = spec.timeseries_every if spec is not None else 10
     name = spec.name if spec is not None else (str(runs["campaign"].iloc[0]) if len(runs) else folder.name)
     return CampaignData(folder=folder, name=name, description=spec.description if spec else "", source=source,
                         spec=spec, runs=runs, orders=orders, dims=dims,
-                        total=expected_runs(spec) if spec is not None else None, every=every, spec_error=spec_error)
+                        total=expected_runs(spec) if spec is not None else None, every=every, spec_error=spec_error,
+                        axes=axes)
 
 
 def _read_spec(source: str) -> tuple[CampaignSpec | None, str]:
@@ -113,17 +127,19 @@ def expected_runs(spec: CampaignSpec) -> int:
     return len(distinct) * spec.replicates
 
 
-def _runs_frame(df: pd.DataFrame | None) -> pd.DataFrame:
+def _runs_frame(df: pd.DataFrame | None, axes: tuple[str, ...] = ()) -> pd.DataFrame:
+    columns = (*RUN_COLUMNS, *axes)
     if df is None:
-        df = pd.DataFrame({c: pd.Series(dtype=object) for c in RUN_COLUMNS})
-    for col in RUN_COLUMNS:
+        df = pd.DataFrame({c: pd.Series(dtype=object) for c in columns})
+    for col in columns:
         if col not in df:
             df[col] = None
-    df = df[[*RUN_COLUMNS, *([c for c in ("campaign",) if c in df])]].copy()
-    for dim in DIMS:
+    df = df[[*columns, *([c for c in ("campaign",) if c in df])]].copy()
+    for dim in (*DIMS, *axes):
         df[dim] = df[dim].astype(str)
     for col in ("ticks", "max_ticks", "explored_target", "explored", "coverage", "t50", "t75", "t90", "t95",
-                "t98", "t99", "replicate", "map_seed"):
+                "t98", "t99", "replicate", "map_seed", "msgs_sent", "bytes_sent", "msgs_delivered",
+                "bytes_delivered", "msgs_dropped", *COMM_RUN_COLUMNS):
         df[col] = pd.to_numeric(df[col], errors="coerce")
     df["error"] = df["error"].fillna("").astype(str)
     df["status"] = df["status"].fillna("failed").astype(str)
@@ -131,10 +147,10 @@ def _runs_frame(df: pd.DataFrame | None) -> pd.DataFrame:
     return df
 
 
-def _orders(spec: CampaignSpec | None, runs: pd.DataFrame) -> dict[str, list[str]]:
+def _orders(spec: CampaignSpec | None, runs: pd.DataFrame, axes: tuple[str, ...] = ()) -> dict[str, list[str]]:
     """Per dimension: the spec's labels in spec order, then labels only the data has (from [[include]])."""
     orders: dict[str, list[str]] = {}
-    for dim in DIMS:
+    for dim in (*DIMS, *axes):
         labels = [o.label for o in spec.grid.get(dim, ())] if spec is not None else []
         extra = sorted(set(runs[dim]) - set(labels), key=_natural)
         orders[dim] = [*labels, *extra] if labels or extra else []

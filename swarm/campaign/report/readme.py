@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING
 
-from . import effects, tables
+from . import comm, effects, tables
 
 if TYPE_CHECKING:
     from .build import PairedSection, Report
@@ -22,9 +22,14 @@ SECTION = {"algorithm": "Algorithms compared", "radio": "Radio models compared",
            None: "Every cell"}
 
 
+def section(compare: str | None) -> str:
+    """The heading of a comparison's figures (an axis: 'Values of radio.sensitivity_dbm compared')."""
+    return SECTION.get(compare, f"Values of {compare} compared")
+
+
 def render(rep: Report) -> str:
     parts = [_head(rep), _runs(rep), _campaign(rep), _layout(rep), _summary(rep), _curves(rep), _cactus(rep), _paired(rep),
-             _comm(rep), _failed(rep), _maes(rep), _method(rep), _files(rep)]
+             _comm(rep), _communication(rep), _failed(rep), _maes(rep), _method(rep), _files(rep)]
     return "\n".join(p for p in parts if p).rstrip() + "\n"
 
 
@@ -121,7 +126,7 @@ def _curves(rep: Report) -> str:
              "final value. The dotted line is the target. Each figure has its numbers in a CSV next to it.", ""]
     embed = sum(1 for _ in rep.figures) <= EMBED_FIGURES
     for compare in dict.fromkeys(f.compare for f in rep.figures):
-        lines += [f"### {SECTION[compare]}", ""]
+        lines += [f"### {section(compare)}", ""]
         for f in (f for f in rep.figures if f.compare == compare):
             if embed:
                 lines += [f"**{f.title}** ([data]({f.data}))", "", f"![{f.title}]({f.curves})", ""]
@@ -138,7 +143,7 @@ def _cactus(rep: Report) -> str:
              "Left: runs that reached the target sorted by ticks (log scale), as maes-csv-reader's cactus plot. "
              "Right: the fraction of all runs done by a given tick; it stops at the success rate.", ""]
     for compare in dict.fromkeys(f.compare for f in rep.figures):
-        lines += [f"### {SECTION[compare]}", ""]
+        lines += [f"### {section(compare)}", ""]
         lines += [f"- [{f.title}]({f.cactus})" for f in rep.figures if f.compare == compare]
         lines.append("")
     return "\n".join(lines)
@@ -181,7 +186,8 @@ def _paired(rep: Report) -> str:
                   ""]
         lines += _inline(sec.table, sec.rows, sec.name)
     for sec in rep.paired:
-        lines += [f"### {PAIRED_TITLE[sec.dim]}, per cell", "", sec.family + " " + _tally(sec), ""]
+        title = PAIRED_TITLE.get(sec.dim, f"Values of {sec.dim}")
+        lines += [f"### {title}, per cell", "", sec.family + " " + _tally(sec), ""]
         lines += _inline(sec.table, sec.rows, sec.name)
         if sec.dim == "algorithm" and rep.paired_figures:
             lines += ["Per-replicate scatter plots (a point above the diagonal: b took longer than a on that map):",
@@ -200,6 +206,52 @@ def _comm(rep: Report) -> str:
              + (f"; the {rep.comm_single} 1-robot cells are not judged (*As expected* = –): a lone robot talks "
                 "to no one, so every model gives the same run." if rep.comm_single else "."), ""]
     return "\n".join(lines + _inline(rep.comm, rep.comm_rows, "comm_effect"))
+
+
+VERDICTS = ("identical", "slower", "faster", "no established difference", "not tested")
+
+
+def _communication(rep: Report) -> str:
+    sec = rep.communication
+    if sec is None:
+        return ""
+    lines = ["## Communication", ""]
+    if not sec.available:
+        return "\n".join(lines + ["These results hold no communication metrics (they were written by a version "
+                                  "of swarm that did not record them).", ""])
+    lines += ["What the radio carried and lost, how the robots stayed in touch, and how complete and fresh their "
+              "knowledge of the team was. *Missing* is the share of the team's known free cells (those in some "
+              "robot's map) a robot's own map lacks; *AoI age* how long ago, on average, a robot last merged each "
+              "other robot's map (directly, or inside a third robot's map it merged); both are means over robots "
+              "and the recorded rows. Definitions: swarm's `docs/comm-metrics.md`.", ""]
+    if sec.findings:
+        counts = {v: sum(f.verdict == v for f in sec.findings) for v in VERDICTS}
+        said = ", ".join(f"{v} in {n}" for v, n in counts.items() if n)
+        lines += ["### What made a difference", "",
+                  f"Each value against the first of its dimension (the reference), per algorithm, every other "
+                  f"dimension pooled, paired by map; exploration time was {said} of {len(sec.findings)} "
+                  "comparisons. Each line says which metric shows why (thresholds in [Method](#method)).", ""]
+        for dim in dict.fromkeys(f.dimension for f in sec.findings):
+            lines += [f"**{dim}** (reference: `{next(f.a for f in sec.findings if f.dimension == dim)}`)", ""]
+            lines += [f"- {f.text}" for f in sec.findings if f.dimension == dim] + [""]
+        lines += _inline(sec.effects, sec.effects_rows, "comm_effects")
+    elif not sec.talk:
+        lines += ["No radio or comm setting varies in this campaign: the tables below describe communication "
+                  "under the one setting it has.", ""]
+    for title, path, data in sec.against:
+        lines += [f"**{title}** ([data]({data}))", "", f"![{title}]({path})", ""]
+    if sec.pooled is not None:
+        lines += ["### Pooled per compared value", ""] + _inline(sec.pooled, sec.pooled_rows, "comm_pooled")
+    lines += ["### Per cell", ""]
+    if sec.single_robot_runs:
+        lines += [f"{sec.single_robot_runs} runs have a single robot: it talks to no one, so it sends and misses "
+                  "nothing.", ""]
+    lines += _inline(sec.cells, sec.cell_rows, "comm")
+    if sec.over_time:
+        lines += ["Missing share, AoI age and the biggest group over time, per cell (mean over runs with a 95 % "
+                  "t-interval band):", ""]
+        lines += [f"- [{title}]({path})" for title, path in sec.over_time] + [""]
+    return "\n".join(lines)
 
 
 def _failed(rep: Report) -> str:
@@ -259,6 +311,18 @@ def _method(rep: Report) -> str:
         f"({effects.RESAMPLES} resamples of the maps from a generator seeded with {effects.SEED} and the row's "
         f"labels: the same numbers every time; none below {effects.MIN_UNITS} maps); *r* is the matched-pairs "
         "rank-biserial correlation (W+ − W−) / (W+ + W−) of the same signed ranks.",
+        "- **Communication**: the delivered share is the share of the other robots each message reached, "
+        "deliveries over `(msgs_sent - msgs_relayed) x (robots - 1)`; lost shares count failed deliveries of "
+        "every transmission, relayed copies included, over `msgs_sent x (robots - 1)`. In *What made a "
+        "difference* each value of a radio or comm dimension is paired with the dimension's first value per algorithm (every other dimension pooled, "
+        "the map as the unit, 1-robot runs left out) and its exploration time judged as in the paired tables "
+        "(Holm over that table's rows): *identical* when every pair ties. The sentence then names the metric "
+        f"that explains it: the same deliveries (within {comm.SAME_DELIVERED_PP:g} percentage point), lost "
+        f"messages but the same knowledge (missing within {comm.SAME_MISSING_PP:g} point) because robots stayed "
+        f"in groups (mean biggest group at least {comm.GROUPED_PCT:g} % of the robots) or because their "
+        f"information was as fresh (AoI age within {100 * comm.SAME_AGE:g} %), or lost knowledge that did not "
+        "show in time. The metrics' own paired Wilcoxon p-values (Holm per metric) are in "
+        "`tables/comm_effects.csv`.",
         "- **Failed runs** (an exception in the run) are listed and excluded, and so are the pairs they would "
         "have formed; **pending** runs are simply absent.",
         ""])

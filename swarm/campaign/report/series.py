@@ -77,53 +77,100 @@ def grid_step(max_tick: int, every: int) -> int:
     return every * max(1, -(-int(max_tick) // (every * (MAX_POINTS - 1))))
 
 
+@dataclass
+class _Layout:
+    """Where each run's grid points sit in one flat buffer: runs of a cell contiguous, ``points[c]`` each."""
+
+    cell_id: np.ndarray
+    steps: np.ndarray
+    points: np.ndarray
+    offset: np.ndarray
+    by_cell: np.ndarray
+    size: int
+
+    @classmethod
+    def of(cls, runs: pd.DataFrame, cell_id: np.ndarray, every: int) -> "_Layout":
+        """A cell's grid ends at the latest final tick among its runs."""
+        n_runs = len(runs)
+        cell_id = np.asarray(cell_id, dtype=np.int64)
+        n_cells = int(cell_id.max()) + 1 if n_runs else 0
+        final = runs["ticks"].fillna(0).to_numpy(dtype=np.int64)
+        cell_max = np.zeros(n_cells, dtype=np.int64)
+        np.maximum.at(cell_max, cell_id, final)
+        steps = np.array([grid_step(int(m), every) for m in cell_max], dtype=np.int64)
+        points = cell_max // np.maximum(steps, 1) + 1 + (cell_max % np.maximum(steps, 1) > 0)
+        by_cell = np.argsort(cell_id, kind="stable")
+        row_len = points[cell_id[by_cell]]
+        starts_sorted = np.concatenate([[0], np.cumsum(row_len)[:-1]]).astype(np.int64)
+        offset = np.empty(n_runs, dtype=np.int64)
+        offset[by_cell] = starts_sorted
+        return cls(cell_id, steps, points, offset, by_cell, int(row_len.sum()))
+
+    def slots(self, ridx: np.ndarray, tick: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Buffer positions of rows (run index, tick) and a mask of the last row of each slot."""
+        run_step, run_points = self.steps[self.cell_id[ridx]], self.points[self.cell_id[ridx]]
+        slot = np.minimum(-(-tick // run_step), run_points - 1)
+        flat = self.offset[ridx] + slot
+        last = np.ones(len(flat), dtype=bool)
+        last[:-1] = flat[1:] != flat[:-1]
+        return flat, last
+
+    def cells(self, buffer: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarray], list[np.ndarray]]:
+        """Per cell: grid ticks, values [runs, points] (carried forward) and run indices."""
+        cell_ticks, cell_values, cell_rows = [], [], []
+        n_cells = len(self.points)
+        bounds = np.searchsorted(self.cell_id[self.by_cell], np.arange(n_cells + 1))
+        for c in range(n_cells):
+            members = self.by_cell[bounds[c]:bounds[c + 1]]
+            start = int(self.offset[members[0]]) if len(members) else 0
+            block = buffer[start:start + len(members) * int(self.points[c])].reshape(len(members), int(self.points[c]))
+            cell_values.append(_ffill(block))
+            cell_ticks.append(np.arange(int(self.points[c]), dtype=np.int64) * int(self.steps[c]))
+            cell_rows.append(members)
+        return cell_ticks, cell_values, cell_rows
+
+
 def sample(store: ResultsStore, runs: pd.DataFrame, cell_id: np.ndarray, every: int, target: float) -> Sampled:
     """Resample the explored series of ``runs`` (positional index = run index) cell by cell.
 
     ``cell_id[i]`` is run i's cell; a cell's grid ends at the latest final tick among its runs.
     """
-    n_runs = len(runs)
-    cell_id = np.asarray(cell_id, dtype=np.int64)
-    n_cells = int(cell_id.max()) + 1 if n_runs else 0
-    final = runs["ticks"].fillna(0).to_numpy(dtype=np.int64)
-    cell_max = np.zeros(n_cells, dtype=np.int64)
-    np.maximum.at(cell_max, cell_id, final)
-    steps = np.array([grid_step(int(m), every) for m in cell_max], dtype=np.int64)
-    points = cell_max // np.maximum(steps, 1) + 1 + (cell_max % np.maximum(steps, 1) > 0)
-    # runs of a cell are contiguous in the buffer: sort run indices by cell, then lay out rows
-    by_cell = np.argsort(cell_id, kind="stable")
-    row_len = points[cell_id[by_cell]]
-    starts_sorted = np.concatenate([[0], np.cumsum(row_len)[:-1]]).astype(np.int64)
-    offset = np.empty(n_runs, dtype=np.int64)
-    offset[by_cell] = starts_sorted
-    buffer = np.full(int(row_len.sum()), np.nan, dtype=np.float32)
-    first_at = np.full(n_runs, -1, dtype=np.int64)
-
-    run_step, run_points = steps[cell_id], points[cell_id]
+    layout = _Layout.of(runs, cell_id, every)
+    buffer = np.full(layout.size, np.nan, dtype=np.float32)
+    first_at = np.full(len(runs), -1, dtype=np.int64)
     for ridx, table in iter_parts(store, runs, ("tick", "explored")):
         tick = table.column("tick").to_numpy().astype(np.int64)
         value = table.column("explored").to_numpy(zero_copy_only=False).astype(np.float64)
-        slot = np.minimum(-(-tick // run_step[ridx]), run_points[ridx] - 1)
-        flat = offset[ridx] + slot
-        last = np.ones(len(flat), dtype=bool)
-        last[:-1] = flat[1:] != flat[:-1]
+        flat, last = layout.slots(ridx, tick)
         buffer[flat[last]] = value[last]
         reached = value >= target
         r_runs, r_ticks = ridx[reached], tick[reached]
         first = np.ones(len(r_runs), dtype=bool)
         first[1:] = r_runs[1:] != r_runs[:-1]
         first_at[r_runs[first]] = r_ticks[first]
-
-    cell_ticks, cell_values, cell_rows = [], [], []
-    bounds = np.searchsorted(cell_id[by_cell], np.arange(n_cells + 1))
-    for c in range(n_cells):
-        members = by_cell[bounds[c]:bounds[c + 1]]
-        start = int(offset[members[0]]) if len(members) else 0
-        block = buffer[start:start + len(members) * int(points[c])].reshape(len(members), int(points[c]))
-        cell_values.append(_ffill(block))
-        cell_ticks.append(np.arange(int(points[c]), dtype=np.int64) * int(steps[c]))
-        cell_rows.append(members)
+    cell_ticks, cell_values, cell_rows = layout.cells(buffer)
     return Sampled(cell_ticks=cell_ticks, cell_values=cell_values, cell_rows=cell_rows, first_at_target=first_at)
+
+
+def sample_columns(store: ResultsStore, runs: pd.DataFrame, cell_id: np.ndarray, every: int,
+                   columns: Sequence[str]) -> dict[str, Sampled]:
+    """:func:`sample` for other time-series columns (one pass over the parts for all of them): per column, its
+    values on each cell's grid (NaN for runs whose parts lack the column, as parts of older versions do);
+    ``first_at_target`` is left at -1."""
+    layout = _Layout.of(runs, cell_id, every)
+    buffers = {c: np.full(layout.size, np.nan, dtype=np.float32) for c in columns}
+    for ridx, table in iter_parts(store, runs, ("tick", *columns)):
+        tick = table.column("tick").to_numpy().astype(np.int64)
+        flat, last = layout.slots(ridx, tick)
+        for c in columns:
+            if c in table.column_names:
+                value = table.column(c).to_numpy(zero_copy_only=False).astype(np.float64)
+                buffers[c][flat[last]] = value[last]
+    out = {}
+    for c in columns:
+        cell_ticks, cell_values, cell_rows = layout.cells(buffers[c])
+        out[c] = Sampled(cell_ticks, cell_values, cell_rows, np.full(len(runs), -1, dtype=np.int64))
+    return out
 
 
 def _ffill(block: np.ndarray) -> np.ndarray:

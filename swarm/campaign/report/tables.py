@@ -14,6 +14,26 @@ import pandas as pd
 
 HEADERS = {"map": "Map", "size": "Size", "robots": "Robots", "spawn": "Spawn", "algorithm": "Algorithm",
            "radio": "Radio", "comm": "Comm", "transport": "Transport"}
+AXIS_TITLES = {"radio.sensitivity_dbm": "Sensitivity (dBm)", "radio.tx_power_dbm": "Tx power (dBm)",
+               "radio.frequency_ghz": "Frequency (GHz)", "comm.loss": "Loss (per message)",
+               "comm.bandwidth": "Bandwidth (bytes/tick)", "comm.share_every": "Map share period (ticks)"}
+"""Headers of the radio and comm parameter axes the report knows; others are named by :func:`header`."""
+UNITS = {"_dbm": "dBm", "_db": "dB", "_ghz": "GHz", "_m": "m"}
+
+
+def header(dim: str) -> str:
+    """A column header for a grid dimension or axis: ``Radio``, ``Sensitivity (dBm)``; an axis the report
+    does not know is named from its parameter: ``radio.shadowing_sigma_db`` -> ``Shadowing sigma (dB)``."""
+    if dim in HEADERS:
+        return HEADERS[dim]
+    if dim in AXIS_TITLES:
+        return AXIS_TITLES[dim]
+    name = dim.partition(".")[2] or dim
+    unit = next((u for suffix, u in UNITS.items() if name.endswith(suffix)), None)
+    if unit is not None:
+        name = name[: name.rindex("_")]
+    words = name.replace("_", " ").strip().capitalize()
+    return f"{words} ({unit})" if unit else words
 
 
 @dataclass
@@ -46,7 +66,7 @@ def p_value(p: float) -> str:
 
 
 def summary_table(df: pd.DataFrame, dims: Sequence[str]) -> Table:
-    headers = [HEADERS[d] for d in dims] + ["Runs", "Successes", "Success rate", "DNF", "Timeouts", "Mean ticks",
+    headers = [header(d) for d in dims] + ["Runs", "Successes", "Success rate", "DNF", "Timeouts", "Mean ticks",
                                            "Median ticks", "Mean ticks (DNF = max)", "Fastest", "Slowest"]
     rows = [[str(r[d]) for d in dims] + [str(r["runs"]), str(r["successes"]), rate(r["success_rate"]), str(r["dnf"]),
                                          str(r["timeouts"]), ticks(r["mean_ticks"]), ticks(r["median_ticks"]),
@@ -69,7 +89,7 @@ def comm_table(df: pd.DataFrame, cell: Sequence[str], labels: Sequence[str]) -> 
     rows = [[str(r[d]) for d in cell] + [mean_cell(r, lab) for lab in labels]
             + [str(r["ordering"]), flag[r["as_expected"] if r["as_expected"] in (True, False) else None]]
             for _, r in df.iterrows()]
-    return Table([HEADERS[d] for d in cell] + list(labels) + ["Ordering (fastest first)", "As expected"], rows,
+    return Table([header(d) for d in cell] + list(labels) + ["Ordering (fastest first)", "As expected"], rows,
                  [False] * len(cell) + [True] * len(labels) + [False, False])
 
 

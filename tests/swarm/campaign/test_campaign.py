@@ -8,6 +8,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -236,3 +237,81 @@ def test_kill_9_then_resume_gives_every_run_once_and_identical_results(tmp_path)
     run_campaign(load_campaign(spec_file), reference, executor=make_executor(inline=True), progress=False)
     assert deterministic_rows(killed) == deterministic_rows(reference)
     assert not [p for p in (killed / "parts").iterdir() if p.name.startswith(".")], "no temporary files left"
+
+
+SLOW = """
+[campaign]
+name = "slow"
+seed = 3
+replicates = 4
+
+[grid]
+map = ["building"]
+size = [150]
+robots = [8]
+spawn = ["together"]
+algorithm = ["greed"]
+radio = ["multiwall"]
+
+[stop]
+max_ticks = 36000
+"""
+
+
+def _children(pid: int) -> list[int]:
+    """Live child processes of ``pid`` (read from /proc: every pool worker of a campaign process)."""
+    out = subprocess.run(["ps", "-o", "pid=", "--ppid", str(pid)], capture_output=True, text=True).stdout
+    return [int(p) for p in out.split()]
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return not Path(f"/proc/{pid}/stat").read_text().split(") ")[-1].startswith("Z")
+
+
+def _start_slow_campaign(tmp_path: Path) -> tuple[subprocess.Popen, list[int]]:
+    """A campaign of long runs on 2 pool workers, and its workers' pids once both are busy."""
+    spec_file = tmp_path / "slow.toml"
+    spec_file.write_text(SLOW)
+    cmd = [sys.executable, "-m", "swarm", "campaign", "run", str(spec_file), "-o", str(tmp_path / "out"),
+           "--workers", "2", "--no-warmup", "--quiet"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 120
+    workers: list[int] = []
+    while time.monotonic() < deadline and proc.poll() is None:
+        workers = [p for p in _children(proc.pid) if "spawn_main" in Path(f"/proc/{p}/cmdline").read_text()]
+        if len(workers) >= 2:
+            break
+        time.sleep(0.2)
+    assert proc.poll() is None and len(workers) >= 2, "the pool did not start"
+    time.sleep(3)  # the workers are inside their first runs (minutes each)
+    return proc, workers
+
+
+@pytest.mark.timeout(300)
+def test_sigterm_stops_a_campaign_and_its_workers_at_once(tmp_path):
+    proc, workers = _start_slow_campaign(tmp_path)
+    t0 = time.monotonic()
+    proc.send_signal(signal.SIGTERM)
+    proc.wait(60)
+    assert proc.returncode == 143, proc.stderr.read()
+    assert time.monotonic() - t0 < 30, "a terminated campaign must not wait for its runs in flight"
+    deadline = time.monotonic() + 10
+    while any(_alive(w) for w in workers) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not any(_alive(w) for w in workers), "pool workers outlived the campaign"
+    assert "Traceback" not in proc.stderr.read()
+
+
+@pytest.mark.timeout(300)
+def test_pool_workers_exit_when_the_campaign_is_killed(tmp_path):
+    proc, workers = _start_slow_campaign(tmp_path)
+    proc.kill()  # SIGKILL: the campaign gets no chance to stop its pool
+    proc.wait(30)
+    deadline = time.monotonic() + 15
+    while any(_alive(w) for w in workers) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not any(_alive(w) for w in workers), "orphaned pool workers kept running"

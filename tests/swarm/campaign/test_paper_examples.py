@@ -94,3 +94,18 @@ def test_frontier_recheck_example_pairs_the_two_recheck_periods_on_the_same_maps
         assert a.map == b.map and a.robots == b.robots and a.seed == b.seed
         assert a.algorithm.params == {**b.algorithm.params, "recheck_ticks": 20}
         assert b.algorithm.params["recheck_ticks"] == 40
+
+
+def test_comm_sweep_example_sweeps_sensitivity_and_loss_from_the_best_radio() -> None:
+    spec = load_campaign(ROOT / "examples" / "comm-sweep.toml")
+    labels = {dim: [o.label for o in opts] for dim, opts in spec.grid.items()}
+    assert labels["algorithm"] == ["greed", "tnf", "minotaur"] and labels["map"] == ["building", "cave"]
+    assert spec.axes == ("radio.sensitivity_dbm", "comm.loss", "comm.relay")
+    assert labels["radio.sensitivity_dbm"] == ["-88", "-82", "-76", "-70"], "the reference (first) is the best radio"
+    runs = spec.runs()
+    assert {r.spec.radio.model for r in runs} == {"multiwall"} and spec.replicates >= 6
+    flood = {(r.cell["map"], r.cell["size"], r.cell["algorithm"], r.cell["radio.sensitivity_dbm"], r.replicate)
+             for r in runs if r.spec.comm.relay == "flood"}
+    plain = {(r.cell["map"], r.cell["size"], r.cell["algorithm"], r.cell["radio.sensitivity_dbm"], r.replicate)
+             for r in runs if r.spec.comm.relay == "none" and r.spec.comm.loss == 0}
+    assert flood and flood < plain, "every relaying run has its pair without relaying"

@@ -1,5 +1,7 @@
 """The replay page in headless Chromium, driven by Playwright: robots drawn where the recording puts them,
-the slider moves time, clicking a robot opens its panel, the JavaScript decoder agrees with Python's.
+the slider moves time, clicking a robot opens its panel, the JavaScript decoder agrees with Python's, lost
+messages and communication groups are drawn, the age-of-information panel shows the run's values, trails
+fade and can be limited, and a version 1 recording still plays.
 
 Needs Debian's chromium (``/usr/bin/chromium``) and the ``playwright`` package; ``.ci/run`` installs both.
 Playwright's own browser download does not work here, so we launch the system Chromium.
@@ -10,6 +12,7 @@ from __future__ import annotations
 import io
 import os
 import shutil
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -39,8 +42,11 @@ try:
 except ImportError:
     _missing("the 'playwright' package is not installed (pip install '.[test]')")
 
-SPEC = {"seed": 2, "map": {"kind": "building", "size": 30}, "robots": {"count": 4}, "stop": {"max_ticks": 900}}
+SPEC = {"seed": 2, "map": {"kind": "building", "size": 30}, "robots": {"count": 4}, "stop": {"max_ticks": 900},
+        "radio": {"tx_power_dbm": -30.0}, "comm": {"loss": 0.2}}
+"""Weak radios and random loss: messages are lost for want of a link and to loss, groups come and go."""
 TICK = 400
+V1_FILE = Path(__file__).parents[1] / "record" / "data" / "v1-building20.swr"
 
 
 @pytest.fixture(scope="module")
@@ -52,7 +58,7 @@ def recording(tmp_path_factory):
     recorder.finish(sim, result)
     path = recorder.save(folder / "run.swr")
     html = write_html(path, folder / "run.html")
-    return load_recording(path), html
+    return load_recording(path), html, result
 
 
 @pytest.fixture(scope="module")
@@ -63,9 +69,8 @@ def browser():
         b.close()
 
 
-@pytest.fixture
-def page(browser, recording):
-    _, html = recording
+def open_page(browser, html):
+    """A page of ``html`` once its script is ready; after the test: no errors, nothing fetched."""
     context = browser.new_context(viewport={"width": 1280, "height": 800}, device_scale_factor=1)
     pg = context.new_page()
     errors: list[str] = []
@@ -80,6 +85,11 @@ def page(browser, recording):
     assert errors == []
     assert all(url.startswith(("file:", "data:", "blob:")) for url in requests), requests  # no network
     context.close()
+
+
+@pytest.fixture
+def page(browser, recording):
+    yield from open_page(browser, recording[1])
 
 
 def canvas_pixel(pg, x: float, y: float) -> tuple[int, int, int]:
@@ -102,7 +112,7 @@ def set_layers(pg, **on: bool) -> None:
 
 
 def test_robots_are_drawn_at_their_recorded_positions(page, recording):
-    rec, _ = recording
+    rec = recording[0]
     page.evaluate(f"swarmViewer.setTick({TICK})")
     assert page.evaluate("swarmViewer.tick()") == TICK
     radius = page.evaluate("swarmViewer.robotScreenPosition(0).radius")
@@ -121,8 +131,8 @@ def test_robots_are_drawn_at_their_recorded_positions(page, recording):
 
 
 def test_walls_are_coloured_by_material(page, recording):
-    rec, _ = recording
-    set_layers(page, links=False, messages=False, trails=False)
+    rec = recording[0]
+    set_layers(page, links=False, messages=False, trails=False, lost=False, groups=False)
     page.evaluate(f"swarmViewer.setTick({rec.last_tick})")
     seen, truth = rec.seen_at(rec.last_tick), rec.truth
     rows, cols = np.nonzero(truth.solid & seen)
@@ -137,7 +147,7 @@ def test_walls_are_coloured_by_material(page, recording):
 
 
 def test_the_slider_moves_time(page, recording):
-    rec, _ = recording
+    rec = recording[0]
     slider = page.locator("#timeline")
     assert slider.get_attribute("max") == str(rec.last_tick)
     box = slider.bounding_box()
@@ -156,7 +166,7 @@ def test_the_slider_moves_time(page, recording):
 
 
 def test_clicking_a_robot_shows_its_panel_and_its_own_map(page, recording):
-    rec, _ = recording
+    rec = recording[0]
     page.evaluate(f"swarmViewer.setTick({TICK})")
     assert page.locator("#robot-panel").is_hidden()
     robot = 2
@@ -175,7 +185,7 @@ def test_clicking_a_robot_shows_its_panel_and_its_own_map(page, recording):
     assert f"{len(sent)} sent ({sum(m.size for m in sent)} B), {received} received" in text
     # the map now shows this robot's knowledge: a free cell others saw but it did not is drawn differently
     # from one it knows
-    set_layers(page, links=False, messages=False, trails=False, debug=False)
+    set_layers(page, links=False, messages=False, trails=False, debug=False, lost=False, groups=False)
     others_only = np.argwhere(rec.seen_at(TICK) & (known == 0) & ~rec.truth.solid)
     mine = np.argwhere((known == 1) & ~rec.truth.solid)
     far = lambda rc: min(np.hypot(*(rec.poses[TICK, :, :2] - ((rc[1] + 0.5) * 0.5, (rc[0] + 0.5) * 0.5)).T)) > 1.5
@@ -190,7 +200,7 @@ def test_clicking_a_robot_shows_its_panel_and_its_own_map(page, recording):
 
 def test_javascript_reconstruction_equals_python_at_several_ticks(page, recording):
     """Forward, backward and long jumps (keyframes) all give the reader's state."""
-    rec, _ = recording
+    rec = recording[0]
     h, w = rec.shape
     for tick in (rec.last_tick, 3, TICK, 0, TICK + 1, rec.last_tick // 2):
         page.evaluate(f"swarmViewer.setTick({tick})")
@@ -226,3 +236,170 @@ def test_screenshot_is_not_blank(page, tmp_path):
     assert len(np.unique(image.reshape(-1, 3), axis=0)) > 50
     canvas = np.asarray(Image.open(io.BytesIO(page.locator("#map").screenshot())).convert("RGB"))
     assert canvas.shape[0] > 200 and canvas.std() > 20
+
+
+# ------------------------------------------------------------------------------ communication ----
+ONLY = dict(links=False, messages=False, trails=False, debug=False, lost=False, groups=False)
+
+
+def map_image(pg) -> np.ndarray:
+    """The map canvas as the screen shows it (device scale 1: one canvas pixel per screen pixel)."""
+    from PIL import Image
+
+    return np.asarray(Image.open(io.BytesIO(pg.locator("#map").screenshot())).convert("RGB")).astype(int)
+
+
+def near_segment(shape: tuple[int, ...], a, b, lo: float, hi: float, width: float) -> np.ndarray:
+    """Pixels whose centre is within ``width`` of the part [lo, hi] of the segment a -> b."""
+    ys, xs = np.mgrid[0:shape[0], 0:shape[1]] + 0.5
+    d = np.subtract(b, a)
+    f = np.clip(((xs - a[0]) * d[0] + (ys - a[1]) * d[1]) / (d @ d), lo, hi)
+    return np.hypot(xs - a[0] - f * d[0], ys - a[1] - f * d[1]) <= width
+
+
+def test_a_lost_message_is_drawn_from_whom_to_whom_with_its_cause(page, recording):
+    rec = recording[0]
+    lost = [(m, robot, cause) for m in rec.messages() for robot, cause in m.lost]
+    assert {"link", "loss"} <= {cause for _, _, cause in lost}, "the run loses messages for both reasons"
+    radius = page.evaluate("swarmViewer.robotScreenPosition(0).radius")
+
+    def apart(m, robot):  # a line long enough to see, no third robot near it
+        a, b = (np.array(expected_canvas_xy(page, rec, *rec.poses[m.tick, k, :2])) for k in (m.transmitter, robot))
+        points = a + np.linspace(0, 1, 30)[:, None] * (b - a)
+        others = [np.array(expected_canvas_xy(page, rec, *rec.poses[m.tick, j, :2])) for j in range(rec.n_robots)
+                  if j not in (m.transmitter, robot)]
+        return np.hypot(*(b - a)) > 10 * radius and all(np.hypot(*(points - o).T).min() > 3 * radius for o in others)
+
+    m, robot, cause = next((m, r, c) for m, r, c in lost if c == "loss" and apart(m, r))
+    tick = m.tick
+    set_layers(page, **{**ONLY, "lost": True})
+    page.evaluate(f"swarmViewer.setTick({tick})")
+    drawn = page.evaluate("swarmViewer.drawnLosses()")
+    want = sorted((x.tick, x.transmitter, r, c) for x, r, c in lost if tick - 6 < x.tick <= tick)
+    assert sorted((d["tick"], d["from"], d["to"], d["cause"]) for d in drawn) == want
+
+    # on the canvas: a dashed line in the cause's colour from the transmitter toward the robot it missed
+    a = expected_canvas_xy(page, rec, *rec.poses[tick, m.transmitter, :2])
+    b = expected_canvas_xy(page, rec, *rec.poses[tick, robot, :2])
+    colour = page.evaluate(f"swarmViewer.causeColour('{cause}')")
+    assert colour != page.evaluate("swarmViewer.causeColour('link')")
+    image = map_image(page)
+    line = near_segment(image.shape, a, b, 0.15, 0.7, 1.5)
+    match = (image == colour).all(axis=2)
+    assert match[line].sum() >= 10
+    assert match[~near_segment(image.shape, a, b, 0.0, 0.9, 8.0)].sum() < match[line].sum()  # not everywhere
+    x, y = np.add(a, 0.4 * np.subtract(b, a))
+    tip = page.evaluate(f"swarmViewer.tooltipAt({x}, {y})")
+    assert f"robot {m.sender} → robot {robot}" in tip and f"tick {tick}" in tip and "comm.loss" in tip, tip
+    set_layers(page, lost=False)
+    assert not (map_image(page) == colour).all(axis=2)[line].any()
+
+
+def test_communication_groups_are_drawn_as_hulls(page, recording):
+    rec = recording[0]
+    radius = page.evaluate("swarmViewer.robotScreenPosition(0).radius")
+
+    def candidate(tick):
+        groups = rec.comm_at(tick).groups
+        if len(groups) < 2:
+            return None
+        for g in groups:
+            if len(g) == 2:
+                i, j = sorted(g)
+                mid = np.mean([expected_canvas_xy(page, rec, *rec.poses[tick, k, :2]) for k in (i, j)], axis=0)
+                if all(np.hypot(*(np.array(expected_canvas_xy(page, rec, *rec.poses[tick, k, :2])) - mid)) > 3 * radius
+                       for k in range(rec.n_robots)):
+                    return groups, sorted(g), mid
+        return None
+
+    tick, (groups, pair, mid) = next((t, c) for t in range(0, rec.ticks, 5) if (c := candidate(t)))
+    assert groups == rec.link_state(tick).groups()  # the radio's, recomputed from the exact poses
+    set_layers(page, **{**ONLY, "groups": True})
+    page.evaluate(f"swarmViewer.setTick({tick})")
+    assert page.evaluate("swarmViewer.groups()") == [sorted(g) for g in groups]
+    drawn = page.evaluate("swarmViewer.drawnGroups()")
+    assert [d["members"] for d in drawn] == [sorted(g) for g in groups if len(g) > 1]
+    colour = np.array(next(d["colour"] for d in drawn if d["members"] == pair))
+    on = map_image(page)
+    set_layers(page, groups=False)
+    off = map_image(page)
+    x, y = int(mid[0]), int(mid[1])
+    assert not np.array_equal(on[y, x], off[y, x])
+    assert np.abs(on[y, x] - colour).sum() < np.abs(off[y, x] - colour).sum()  # tinted toward the group's colour
+    ys, xs = np.mgrid[0:on.shape[0], 0:on.shape[1]]
+    far = np.ones(on.shape[:2], dtype=bool)
+    for k in range(rec.n_robots):
+        cx, cy = expected_canvas_xy(page, rec, *rec.poses[tick, k, :2])
+        far &= np.hypot(xs - cx, ys - cy) > 30 * radius
+    assert far.any() and np.array_equal(on[far], off[far])  # nothing drawn away from the robots
+    set_layers(page, groups=True)
+    assert f"robots {pair[0]}, {pair[1]}" in page.evaluate(f"swarmViewer.tooltipAt({mid[0]}, {mid[1]})")
+
+
+def test_the_age_of_information_panel_shows_the_runs_values(page, recording):
+    rec, _, result = recording
+    rows, robots = result.comm["series"]["tick"], result.comm["robots"]
+    assert page.locator("#aoi-panel").is_visible()
+    shown = []
+    for k in (len(rows) // 3, 2 * len(rows) // 3, len(rows) - 1):
+        page.evaluate(f"swarmViewer.setTick({rows[k]})")
+        cells = page.evaluate("Array.from(document.querySelectorAll('#aoi-rows tr'))"
+                              ".map((tr) => ({ ...tr.dataset, text: tr.innerText }))")
+        assert [int(c["robot"]) for c in cells] == list(range(rec.n_robots))
+        for i, c in enumerate(cells):
+            age, since, missing = robots["aoi_age"][k][i], robots["since_contact"][k][i], robots["missing_free"][k][i]
+            assert (float(c["age"]), float(c["since"]), float(c["missing"])) == (age, since, missing)
+            numbers = [float(v) for v in c["text"].replace("%", " ").replace("s", " ").split()
+                       if v.replace(".", "").isdigit()]
+            assert numbers[-3:-1] == pytest.approx([since / 10, age / 10], abs=0.051)  # seconds, 1 decimal
+            assert numbers[-1] == pytest.approx(100 * missing, abs=0.501)             # whole per cent
+            members = next(g for g in rec.comm_at(rows[k]).groups if i in g)
+            assert int(c["group"]) == min(members)
+            assert (f"with {len(members) - 1}" if len(members) > 1 else "alone") in c["text"]
+        shown.append([c["age"] for c in cells])
+    assert len({tuple(x) for x in shown}) == 3  # it follows the playback
+    assert max(max(a) for a in robots["aoi_age"]) > 50  # ... of a run where robots lose touch
+
+
+def test_trails_fade_and_can_be_limited_to_the_last_seconds(page, recording):
+    rec = recording[0]
+    t, old = rec.last_tick, rec.last_tick - 400
+    set_layers(page, **{**ONLY, "trails": True})
+    page.evaluate(f"swarmViewer.setTick({t})")
+    cell = page.evaluate("document.getElementById('map').width") / rec.shape[1]
+    xy = rec.poses[: t + 1, :, :2] / 0.5 * cell
+
+    def lonely(i):  # robot i's position at `old`, far from every other part of every trail
+        p = xy[old, i]
+        d = np.hypot(*(xy - p).transpose(2, 0, 1))
+        d[max(0, old - 40): old + 40, i] = np.inf
+        return d.min() > 8
+
+    robot = next(i for i in range(rec.n_robots) if lonely(i))
+    x, y = expected_canvas_xy(page, rec, *rec.poses[old, robot, :2])
+    page.locator("#trail-fade").uncheck()
+    page.fill("#trail-seconds", "0")
+    assert page.evaluate("swarmViewer.trailRange()") == [0, t]
+    whole = map_image(page)[int(y), int(x)]
+    page.fill("#trail-seconds", "5")
+    assert page.evaluate("swarmViewer.trailRange()") == [t - 50, t]
+    limited = map_image(page)[int(y), int(x)]
+    set_layers(page, trails=False)
+    base = map_image(page)[int(y), int(x)]
+    assert not np.array_equal(whole, base) and np.array_equal(limited, base)
+    set_layers(page, trails=True)
+    page.fill("#trail-seconds", "0")
+    page.locator("#trail-fade").check()
+    faded = map_image(page)[int(y), int(x)]
+    assert np.abs(faded - base).sum() < np.abs(whole - base).sum()  # 40 s old: faded toward the map
+
+
+def test_a_version_1_recording_plays_without_the_communication_layers(browser, tmp_path):
+    html = write_html(V1_FILE, tmp_path / "v1.html")
+    for pg in open_page(browser, html):
+        assert pg.evaluate("swarmViewer.hasComm") is False
+        pg.evaluate("swarmViewer.setTick(30)")
+        assert "tick 30 / 40" in pg.inner_text("#readout")
+        assert pg.evaluate("swarmViewer.drawnLosses()") == [] and pg.evaluate("swarmViewer.drawnGroups()") == []
+        assert pg.locator("#aoi-panel").is_hidden()
+        assert "format version 1" in pg.inner_text("#lost-legend")

@@ -1,0 +1,132 @@
+"""Radio and comm parameters as grid axes: both ways of writing them, rules that name them, their values in
+every run spec and in the runs table, and one-line errors that name the field."""
+
+from __future__ import annotations
+
+import pytest
+
+from maps import InvalidInput
+from swarm.campaign import make_executor, parse_campaign, run_campaign
+from swarm.campaign.store import ResultsStore
+
+HEAD = """
+[campaign]
+name = "axes"
+seed = 3
+replicates = 1
+
+[grid]
+map = ["building"]
+size = [20]
+robots = [2]
+spawn = ["together"]
+algorithm = ["greed"]
+"""
+NESTED = HEAD + """
+radio.model = ["global", "multiwall"]
+radio.sensitivity_dbm = [-70, -88.5]
+comm.loss = [0, 0.25]
+
+[stop]
+max_ticks = 30
+"""
+QUOTED = HEAD + """
+radio = ["global", "multiwall"]
+"radio.sensitivity_dbm" = [-70, -88.5]
+"comm.loss" = [0, 0.25]
+
+[stop]
+max_ticks = 30
+"""
+
+
+def error_of(text: str) -> InvalidInput:
+    with pytest.raises(InvalidInput) as info:
+        parse_campaign(text)
+    assert "\n" not in str(info.value) and len(str(info.value)) < 400, str(info.value)
+    return info.value
+
+
+def test_nested_and_quoted_axes_give_the_same_runs():
+    nested, quoted = parse_campaign(NESTED), parse_campaign(QUOTED)
+    assert nested.axes == quoted.axes == ("radio.sensitivity_dbm", "comm.loss")
+    assert [r.key for r in nested.runs()] == [r.key for r in quoted.runs()]
+    runs = nested.runs()
+    assert len(runs) == 2 * 2 * 2
+    seen = {(r.cell["radio"], r.cell["radio.sensitivity_dbm"], r.cell["comm.loss"]):
+            (r.spec.radio.model, r.spec.radio.sensitivity_dbm, r.spec.comm.loss) for r in runs}
+    assert seen[("multiwall", "-88.5", "0.25")] == ("multiwall", -88.5, 0.25)
+    assert seen[("global", "-70", "0")] == ("global", -70.0, 0.0)
+
+
+def test_radio_axes_alone_sweep_the_default_model():
+    spec = parse_campaign(HEAD + "radio.sensitivity_dbm = [-70, -80]\n")
+    assert [o.label for o in spec.grid["radio"]] == ["multiwall"]
+    assert {r.spec.radio.sensitivity_dbm for r in spec.runs()} == {-70.0, -80.0}
+
+
+def test_an_axis_overrides_run_and_rules_name_axes():
+    text = NESTED + '[run]\ncomm = {loss = 0.5, bandwidth = 900}\n'
+    text += '\n[[exclude]]\n"radio.sensitivity_dbm" = -70\nradio = "global"\n'
+    text += '\n[[exclude]]\ncomm.loss = 0.25\nradio.model = "global"\n'
+    runs = parse_campaign(text).runs()
+    cells = {(r.cell["radio"], r.cell["radio.sensitivity_dbm"], r.cell["comm.loss"]) for r in runs}
+    assert cells == {("global", "-88.5", "0"), ("multiwall", "-70", "0"), ("multiwall", "-70", "0.25"),
+                     ("multiwall", "-88.5", "0"), ("multiwall", "-88.5", "0.25")}
+    assert all(r.spec.comm.bandwidth == 900 and r.spec.comm.loss in (0.0, 0.25) for r in runs)
+
+
+def test_an_include_adds_a_value_outside_the_axis():
+    rule = '\n[[include]]\nradio = "multiwall"\n"radio.sensitivity_dbm" = -94\n"comm.loss" = 0\n'
+    spec = parse_campaign(NESTED + rule)
+    extra = [r for r in spec.runs() if r.cell["radio.sensitivity_dbm"] == "-94"]
+    assert len(extra) == 1 and extra[0].spec.radio.sensitivity_dbm == -94.0
+
+
+@pytest.mark.parametrize("old, new, field, needle", [
+    ("comm.loss = [0, 0.25]", "comm.loss = [0, 1.5]", "grid.comm.loss[1]", ">= 0 and <= 1"),
+    ("comm.loss = [0, 0.25]", "comm.lost = [0]", "grid.comm.lost", "a comm parameter with plain values"),
+    ("comm.loss = [0, 0.25]", "comm.loss = 0.25", "grid.comm.loss", "a list"),
+    ("comm.loss = [0, 0.25]", "comm.loss = [0, 0.0]", "grid.comm.loss", "distinct values"),
+    ("comm.loss = [0, 0.25]", 'comm.loss = [0, "x"]', "grid.comm.loss[1]", "a finite number"),
+    ("radio.sensitivity_dbm = [-70, -88.5]", "radio.sensitivity_dbm = [-70, [1]]", "grid.radio.sensitivity_dbm[1]",
+     "a plain value"),
+    ("radio.sensitivity_dbm = [-70, -88.5]", "radio.max_range_m = [3.0]", "grid.radio.max_range_m[0]",
+     "only with model = 'los'"),
+    ("radio.sensitivity_dbm = [-70, -88.5]", "radio.materials = [1]", "grid.radio.materials",
+     "a radio parameter with plain values"),
+])
+def test_a_bad_axis_is_one_line_naming_the_field(old, new, field, needle):
+    assert old in NESTED
+    err = error_of(NESTED.replace(old, new))
+    assert err.field == field and needle in str(err), str(err)
+
+
+def test_an_entry_setting_an_axis_parameter_is_refused():
+    text = QUOTED.replace('radio = ["global", "multiwall"]',
+                          'radio = [{model = "multiwall", sensitivity_dbm = -80, label = "mw"}]')
+    err = error_of(text)
+    assert err.field == "grid.radio" and "radio.sensitivity_dbm is a grid axis" in str(err)
+
+
+def test_output_robot_series_every_must_fit_the_time_series():
+    assert parse_campaign(NESTED + "[output]\nrobot_series_every = 0\n").robot_series_every == 0
+    err = error_of(NESTED + "[output]\ntimeseries_every = 10\nrobot_series_every = 15\n")
+    assert err.field == "output.robot_series_every" and "multiple of timeseries_every (10)" in str(err)
+
+
+def test_axis_labels_and_comm_metrics_reach_the_parquet_results(tmp_path):
+    spec = parse_campaign(NESTED + "[output]\ntimeseries_every = 5\nrobot_series_every = 10\n")
+    run_campaign(spec, tmp_path, executor=make_executor(inline=True), progress=False)
+    store = ResultsStore(tmp_path)
+    runs = store.runs_table().to_pandas()
+    assert sorted(set(runs["radio.sensitivity_dbm"])) == ["-70", "-88.5"] and set(runs["comm.loss"]) == {"0", "0.25"}
+    assert runs["aoi_age_mean"].notna().all() and runs["msgs_dropped_loss"].sum() > 0
+    ts = store.timeseries_table().to_pandas()
+    assert {"missing_free_mean", "aoi_age_max", "msgs_dropped_link"} <= set(ts.columns)
+    robots = store.robots_table().to_pandas()
+    assert set(robots["robot"]) == {0, 1} and {"missing_free", "aoi_age", "since_contact", "group"} <= set(robots)
+    per_run = robots.groupby("key")["tick"].agg(lambda t: sorted(set(t)))
+    finals = dict(zip(runs["key"], runs["ticks"]))
+    for key, ticks in per_run.items():
+        assert all(t % 10 == 0 for t in ticks[:-1]) and ticks[-1] == finals[key]
