@@ -32,7 +32,8 @@ from numba import njit
 from maps.params import OMIT_DEFAULT, check_choice, check_float, check_int
 
 from .api import CELL_M
-from .knowledge import check_writable_map, merge_cells_many, merge_cells_many_counted, sync_box_unchecked, sync_changes
+from .knowledge import (check_writable_map, merge_cells_many, merge_cells_many_changed, merge_cells_many_counted,
+                        sync_box_unchecked, sync_changes)
 from .metrics import FreeCounts, InfoAges
 from .messages import MAX_MESSAGE_BYTES, MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
 from .schema import DROP_CAUSES
@@ -423,7 +424,7 @@ class MapSharing:
     """The map-sharing service: builds each robot's MapUpdates and merges the ones it receives."""
 
     def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None,
-                 ages: InfoAges | None = None, free: FreeCounts | None = None) -> None:
+                 monotone: bool = False, ages: InfoAges | None = None, free: FreeCounts | None = None) -> None:
         """``ages``: told of every update sent and of every merge that leaves a receiver holding the sender's
         whole map; ``free``: told how the merges change each map's count of FREE cells (age of information,
         docs/comm-metrics.md).
@@ -432,17 +433,22 @@ class MapSharing:
         the maps, within ``lidar_reach`` cells (rows and columns) of each robot's cell, and that it reports
         every scan with :meth:`scanned` from the start. A delta then compares only the places written since the robot's
         last update (:func:`swarm.knowledge.sync_box`), not both whole maps: the same cells. Without it
-        (None) every delta compares the whole maps."""
+        (None) every delta compares the whole maps. ``monotone``: the owner's promise that no cell of a map
+        ever decreases (the ternary lidar; a log-odds lidar may turn SOLID back to FREE), which lets a
+        broadcast full map reach most receivers as a delta (:meth:`_merge_full`)."""
         self.n = n
         self.spec = spec
         self.enabled = spec.map_sharing in ("delta", "full") and n > 1  # the maes modes: swarm.maes_merge
         self.last_shared = np.zeros((n, *shape), dtype=np.uint8) if spec.map_sharing == "delta" else None
         self.seq = [0] * n
         self.seen_seq = [[0] * n for _ in range(n)]          # [receiver][sender] last seq merged
+        self._complete = [[True] * n for _ in range(n)]      # [receiver][sender] merged each of its updates so far
         self.whole = [[True] * n for _ in range(n)]          # [receiver][sender] holds all the sender's updates
+        self.monotone = monotone
         self.ages = ages
         self.free = free
         self._merges: list[tuple[np.ndarray, int, int]] = []  # this tick's (receivers, sender, sent tick): ages
+        self._raised = np.zeros(0, dtype=np.int64)  # scratch: the cells a delta raised, receiver after receiver
         self.full_requested = [False] * n
         self.requests: list[list[int]] = [[] for _ in range(n)]  # targets each robot will ask next tick
         self.lidar_reach = lidar_reach if self.enabled and self.last_shared is not None else None
@@ -476,17 +482,25 @@ class MapSharing:
                 continue
             self.full_requested[i] = False
             if full:
-                if self.last_shared is not None:
+                since = None
+                if self.last_shared is not None and self.monotone:  # the cells since the previous update: _merge_full
+                    changed = self._changed_since_update(i, known[i])  # last_shared[i] becomes known[i]
+                    since = (self.seq[i], changed, known[i].reshape(-1)[changed])
+                elif self.last_shared is not None:
                     self.last_shared[i] = known[i]
                     self._forget_writes(i)
                 self.seq[i] += 1
-                out[i].append(full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i])))
+                update = full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]))
+                update.__dict__["_since"] = since  # this process's note (see _take); never on the wire
+                out[i].append(update)
                 continue
             assert self.last_shared is not None
             changed = self._changed_since_update(i, known[i])  # ascending, as delta_update wants them
             if len(changed):
                 self.seq[i] += 1
-                out[i].append(delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed))
+                update = delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed)
+                update.__dict__["_since"] = None  # built here (see _take): never on the wire
+                out[i].append(update)
         if self.ages is not None:
             self.ages.sent(tick)
         return out
@@ -572,36 +586,40 @@ class MapSharing:
         if not isinstance(msg, MapUpdate):
             return
         tracking = self.lidar_reach is not None
-        idx: np.ndarray | None = None
+        sender, seq = msg.sender, msg.seq
+        ours = "_since" in msg.__dict__  # built by this service, not sent by an algorithm
+        whole: list[int] = []  # the receivers that now hold the sender's whole map (for ages)
+        everyone = len(ids)
         if msg.full:
-            dense = msg.dense()
-            for row in rows.tolist():
-                flat = stack[row].reshape(-1)
-                np.maximum(flat, dense, out=flat)
+            carried = self._merge_full(msg, ids, stack, rows)
             if self.free is not None:
                 self.free.dirty[robots] = True  # counted afresh when next read
         else:
             idx, values = msg.cells()  # int64 and uint8, in range: checked when decoded
-            if self.free is not None:
+            if ours and tracking:  # the common case: merged and its receivers' books kept in one tight loop
+                ids, at, whole = self._take_delta(ids, stack, rows, robots, idx, values, sender, seq, lists)
+                lists = None if lists is None else [lists[k] for k in at]
+            elif self.free is not None:
                 merge_cells_many_counted(stack, rows, idx, values, robots, self.free.freed)
             else:
                 merge_cells_many(stack, rows, idx, values)
+            carried = [idx] * len(ids)
         delta_gap = not msg.full and self.spec.map_sharing == "delta"
-        sender, seq = msg.sender, msg.seq
         if lists is not None:
-            for carried in lists:
-                carried.append(idx)
-        whole: list[int] = []  # the receivers that now hold the sender's whole map (for ages)
-        for r in ids:
+            for cells, into in zip(carried, lists):
+                into.append(cells)
+        for r, cells in zip(ids, carried):
             if tracking:
-                if idx is None:
+                if cells is None:
                     self._whole[r] = True  # any cell may have changed: the next delta compares all
                 else:
-                    self._merged[r].append(idx)
+                    self._merged[r].append(cells)
             seen = self.seen_seq[r]
             last = seen[sender]
             if delta_gap and seq != last + 1 and sender not in self.requests[r]:
                 self.requests[r].append(sender)
+            if not ours or msg.full or seq != last + 1:  # an update an algorithm sent counts as a gap
+                self._complete[r][sender] = ours and msg.full
             holds = self.whole[r]
             if msg.full:
                 holds[sender] = True
@@ -612,9 +630,78 @@ class MapSharing:
             elif seq > last:
                 holds[sender] = False  # a gap: partial until the full map it asks for
             seen[sender] = seq if msg.full else max(last, seq)
-        if whole:
-            self._merges.append((robots if len(whole) == len(ids) else np.array(whole, dtype=np.int64), sender,
+        if whole:  # (the order of the receivers does not matter: swarm.metrics.InfoAges.merged)
+            self._merges.append((robots if len(whole) == everyone else np.array(whole, dtype=np.int64), sender,
                                  msg.tick))
+
+    def _take_delta(self, ids: list[int], stack: np.ndarray, rows: np.ndarray, robots: np.ndarray,
+                    idx: np.ndarray, values: np.ndarray, sender: int, seq: int,
+                    lists: list[list[np.ndarray | None]] | None) -> tuple[list[int], list[int], list[int]]:
+        """Merge this service's delta ``seq`` from ``sender`` (cells ``idx``) into robots ``ids`` (``robots``
+        as an array; maps ``stack[rows]``), counting their FREE cells for :attr:`free`, and keep the books of
+        every receiver that had merged the sender's previous update: the cells the merge raised in its map
+        are listed for its next delta (and in ``lists``) and the update becomes its last merged one; nothing
+        else changes. Returns the other receivers and their positions in ``ids`` (a gap or an old update:
+        :meth:`_take`'s general rules), and the receivers booked here that now hold the sender's whole map
+        (for :attr:`ages`). Each delta reaches up to n - 1 robots, so this runs n^2 times a sharing tick: it
+        keeps to what that case needs, and lists only what changed (robots that share maps mostly know what
+        they hear already), which the receivers' next deltas then compare (docs/performance-history.md)."""
+        need = len(ids) * len(idx)
+        if self._raised.shape[0] < need:
+            self._raised = np.empty(2 * need, dtype=np.int64)
+        ends = np.empty(len(ids), dtype=np.int64)
+        merge_cells_many_changed(stack, rows, idx, values, self._raised, ends,
+                                 robots, None if self.free is None else self.free.freed)
+        raised = self._raised
+        merged, seen_seq, holds = self._merged, self.seen_seq, self.whole
+        gapped: list[int] = []
+        rest: list[int] = []
+        whole: list[int] = []
+        before, start = seq - 1, 0
+        for k, (r, end) in enumerate(zip(ids, ends.tolist())):
+            seen = seen_seq[r]
+            if seen[sender] == before:
+                seen[sender] = seq
+                if holds[r][sender]:
+                    whole.append(r)
+                if end > start:
+                    cells = raised[start:end].copy()
+                    merged[r].append(cells)
+                    if lists is not None:
+                        lists[k].append(cells)
+            else:
+                gapped.append(k)
+                rest.append(r)
+            start = end
+        return rest, gapped, whole
+
+    def _merge_full(self, msg: MapUpdate, ids: list[int], stack: np.ndarray,
+                    rows: np.ndarray) -> list[np.ndarray | None]:
+        """Merge a full map into robots ``ids`` (maps ``stack[rows]``); per receiver, the cells the merge may
+        have changed (None: any). A full map this service built in delta mode on monotone maps notes the cells
+        where it differs from its sender's previous update (``outgoing``). A receiver that merged every update
+        of the sender up to that one already holds at least the previous update everywhere (merges take
+        maxima and no cell decreases), so taking just those cells gives the same map: a broadcast full map
+        then costs its receivers a delta's work instead of the whole map's each, which grew with the square of
+        the team (docs/performance-history.md)."""
+        since = msg.__dict__.get("_since")
+        quick: list[int] = []
+        if since is not None:
+            prev, cells, values = since
+            sender = msg.sender
+            quick = [k for k, r in enumerate(ids) if self._complete[r][sender] and self.seen_seq[r][sender] == prev]
+        carried: list[np.ndarray | None] = [None] * len(ids)
+        if quick:
+            merge_cells_many(stack, rows[quick], cells, values)
+            for k in quick:
+                carried[k] = cells
+        if len(quick) < len(ids):
+            dense = msg.dense()
+            for k, row in enumerate(rows.tolist()):
+                if carried[k] is None:
+                    flat = stack[row].reshape(-1)
+                    np.maximum(flat, dense, out=flat)
+        return carried
 
 
 @njit(cache=True)

@@ -138,6 +138,42 @@ def merge_cells_many(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, value
     _merge_cells_many_kernel(stack, rows, idx, values)
 
 
+def merge_cells_many_changed(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray,
+                             out: np.ndarray, ends: np.ndarray, robots: np.ndarray | None = None,
+                             freed: np.ndarray | None = None) -> None:
+    """:func:`merge_cells_many` that also lists, per map, the cells the merge raised: map ``rows[k]``'s at
+    ``out[ends[k-1]:ends[k]]``, ascending when ``idx`` is (``out``: int64 with room for every row's every
+    cell; ``ends``: int64[len(rows)]). A receiver's next map update compares only these, not every cell it
+    was sent: robots that share maps mostly know what they hear already. With ``freed`` it also keeps
+    count as :func:`merge_cells_many_counted` does (``robots``: the robot of each row)."""
+    if freed is None:
+        robots, freed = rows, np.zeros(0, dtype=np.int64)
+    _merge_cells_many_changed_kernel(stack, rows, idx, values, out, ends, robots, freed)
+
+
+@njit(cache=True)
+def _merge_cells_many_changed_kernel(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray,
+                                     out: np.ndarray, ends: np.ndarray, robots: np.ndarray,
+                                     freed: np.ndarray) -> None:  # pragma: no cover - compiled
+    """``freed`` empty: no count kept."""
+    m = 0
+    for k in range(rows.shape[0]):
+        flat = stack[rows[k]].reshape(-1)
+        change = 0
+        for j in range(idx.shape[0]):
+            i = idx[j]
+            v = values[j]
+            old = flat[i]
+            if v > old:
+                change += (v == FREE) - (old == FREE)
+                flat[i] = v
+                out[m] = i
+                m += 1
+        ends[k] = m
+        if freed.shape[0]:
+            freed[robots[k]] += change
+
+
 def merge_cells_unchecked(flat: np.ndarray, idx: np.ndarray, values: np.ndarray) -> None:
     """:func:`merge_cells` on a flat writable map with int64 indices (in range) and uint8 values, for callers
     whose cells already are (decoded map updates); :func:`merge_cells_many` merges into several maps."""
@@ -273,21 +309,67 @@ def sync_regions_flat(current: np.ndarray, last: np.ndarray, centres: np.ndarray
         raise InvalidInput("last", getattr(last, "shape", None), f"a C-contiguous stack shaped like current {current.shape}")
     n = current.shape[0]
     act = active_flags(n, active)
+    extra, bounds = _listed_cells(cells, act)
+    side = 2 * reach + 1
+    out = np.empty(n * side * side + len(extra), dtype=np.int64)
+    _sync_windows_kernel(current, last, np.ascontiguousarray(centres, dtype=np.int64), reach, act, extra, bounds, out)
+    return out, bounds
+
+
+def sync_boxes_flat(current: np.ndarray, last: np.ndarray, boxes: np.ndarray,
+                    cells: Sequence[Sequence[np.ndarray]], active: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`sync_regions_flat` with a box per map instead of a window: map k is compared in rows
+    ``boxes[k, 0]:boxes[k, 1]`` x columns ``boxes[k, 2]:boxes[k, 3]`` (clipped; empty when r0 >= r1) and at
+    its listed ``cells[k]``. For a caller that knows where each map was written: the runtime gives each
+    robot the window its lidar may have written, empty for a robot it did not cast."""
+    if current.shape != last.shape or current.ndim != 3 or not (current.flags.c_contiguous and last.flags.c_contiguous):
+        raise InvalidInput("last", getattr(last, "shape", None), f"a C-contiguous stack shaped like current {current.shape}")
+    n, rows, cols = current.shape
+    box = np.ascontiguousarray(boxes, dtype=np.int64)
+    if box.shape != (n, 4):
+        raise InvalidInput("boxes", box.shape, f"an int64 array of shape ({n}, 4): r0, r1, c0, c1 per map")
+    act = active_flags(n, active)
+    extra, bounds = _listed_cells(cells, act)
+    return _sync_boxes_kernel(current, last, box, act, extra, bounds), bounds
+
+
+def _listed_cells(cells: Sequence[Sequence[np.ndarray]], act: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The listed cells of the active maps as one int64 array and where each map's end (int64[n])."""
     flags = act.tolist()
     pieces: list[np.ndarray] = []
-    ends = [0] * n  # where map k's extra cells end in ``extra``; the kernel overwrites them with out's ends
+    ends = [0] * len(flags)
     total = 0
-    for k in range(n) if any(cells) else ():  # most ticks nothing merged at all
-        if flags[k] and cells[k]:  # most robots merged nothing this tick
+    for k in range(len(flags)) if any(cells) else ():  # most ticks nothing merged at all
+        if flags[k] and cells[k]:
             pieces.extend(cells[k])
             total += sum(len(a) for a in cells[k])
         ends[k] = total
     extra = np.concatenate(pieces).astype(np.int64, copy=False) if pieces else _NO_CELLS
-    side = 2 * reach + 1
-    out = np.empty(n * side * side + total, dtype=np.int64)
-    bounds = np.array(ends, dtype=np.int64)
-    _sync_windows_kernel(current, last, np.ascontiguousarray(centres, dtype=np.int64), reach, act, extra, bounds, out)
-    return out, bounds
+    return extra, np.array(ends, dtype=np.int64)
+
+
+@njit(cache=True)
+def _sync_boxes_kernel(current: np.ndarray, last: np.ndarray, boxes: np.ndarray, active: np.ndarray, extra: np.ndarray,
+                       ends: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """:func:`_sync_windows_kernel` with a box per map; returns ``out`` (room for every active box's cells
+    and every listed cell)."""
+    rows, cols = current.shape[1], current.shape[2]
+    room = extra.shape[0]
+    for k in range(current.shape[0]):
+        if active[k]:
+            tall = max(min(boxes[k, 1], rows) - max(boxes[k, 0], 0), 0)
+            room += tall * max(min(boxes[k, 3], cols) - max(boxes[k, 2], 0), 0)
+    out = np.empty(room, dtype=np.int64)
+    m = 0
+    e0 = 0
+    for k in range(current.shape[0]):
+        e1 = ends[k]
+        if active[k]:
+            m = _sync_rect(current[k].reshape(-1), last[k].reshape(-1), cols, max(boxes[k, 0], 0),
+                           min(boxes[k, 1], rows), max(boxes[k, 2], 0), min(boxes[k, 3], cols), extra, e0, e1, out, m)
+        e0 = e1
+        ends[k] = m
+    return out
 
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)

@@ -123,14 +123,20 @@ def decode(data: bytes) -> Any:
         raise MessageError(f"unknown message type {items[0]!r}")
     if items[1] != cls.message_version:  # type: ignore[attr-defined]
         raise MessageError(f"{items[0]} version {items[1]!r}, expected {cls.message_version}")  # type: ignore[attr-defined]
-    fields = dataclasses.fields(cls)
-    if len(items) - 2 != len(fields):
-        raise MessageError(f"{items[0]} needs {len(fields)} fields, got {len(items) - 2}")
-    values = [_restore(v, f.type) for v, f in zip(items[2:], fields)]
+    tuples = _TUPLES.get(cls)
+    if tuples is None:
+        tuples = _TUPLES[cls] = tuple(_tuple_depth(f.type) for f in dataclasses.fields(cls))
+    if len(items) - 2 != len(tuples):
+        raise MessageError(f"{items[0]} needs {len(tuples)} fields, got {len(items) - 2}")
+    values = items[2:]
+    for k, depth in enumerate(tuples):
+        if depth and type(values[k]) is list:
+            values[k] = _as_tuple(values[k], depth)
     if not isinstance(values[0], int) or isinstance(values[0], bool):
         raise MessageError(f"{items[0]}: sender must be an integer")
+    build = _BUILDERS.get(cls)
     try:
-        msg = cls(*values)
+        msg = build(**dict(zip(_FIELDS[cls], values))) if build is not None else cls(*values)
     except Exception as exc:
         raise MessageError(f"{items[0]}: {type(exc).__name__}: {exc}") from None
     check = getattr(msg, "validate", None)
@@ -152,11 +158,21 @@ def _finite(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
-def _restore(value: Any, annotation: Any) -> Any:
-    """Lists come back for tuples; turn them back so decoded messages equal the originals."""
-    if isinstance(value, list) and "tuple" in str(annotation):
-        return tuple(_restore(v, "tuple" if "tuple[tuple" in str(annotation) else "") for v in value)
-    return value
+_TUPLES: dict[type, tuple[int, ...]] = {}
+"""Per message type, per field: how many levels of lists to turn back into tuples (2 for ``tuple[tuple...``,
+1 for another ``tuple``, 0 otherwise), read off the annotations once per type, not per message."""
+
+
+def _tuple_depth(annotation: Any) -> int:
+    text = str(annotation)
+    return 2 if "tuple[tuple" in text else 1 if "tuple" in text else 0
+
+
+def _as_tuple(value: list, depth: int) -> tuple:
+    """Lists come back for tuples; turn them back (``depth`` levels) so decoded messages equal the originals."""
+    if depth == 1:
+        return tuple(value)
+    return tuple(tuple(v) if isinstance(v, list) else v for v in value)
 
 
 # ------------------------------------------------------------------------------------ built-ins ----
@@ -180,12 +196,14 @@ class MapUpdate:
     pose: tuple[float, float, float]
 
     def validate(self) -> None:
-        if (not isinstance(self.shape, tuple) or len(self.shape) != 2
-                or not all(_is_int(v) and 0 < v <= 100_000 for v in self.shape)):
+        shape, pose = self.shape, self.pose  # unrolled: every robot decodes every update it hears
+        if (not isinstance(shape, tuple) or len(shape) != 2 or not (_is_int(shape[0]) and 0 < shape[0] <= 100_000)
+                or not (_is_int(shape[1]) and 0 < shape[1] <= 100_000)):
             raise MessageError("map_update: bad shape")
         if not (_is_int(self.seq) and self.seq >= 0 and _is_int(self.tick) and isinstance(self.full, bool)):
             raise MessageError("map_update: bad seq, tick or full flag")
-        if not (isinstance(self.pose, tuple) and len(self.pose) == 3 and all(_finite(v) for v in self.pose)):
+        if not (isinstance(pose, tuple) and len(pose) == 3 and _finite(pose[0]) and _finite(pose[1])
+                and _finite(pose[2])):
             raise MessageError("map_update: bad pose")
         if not isinstance(self.payload, bytes) or not isinstance(self.count, int) or self.count < 0:
             raise MessageError("map_update: bad payload")
@@ -298,6 +316,9 @@ def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tupl
 
 
 _new_update = frozen_builder(MapUpdate)
+_BUILDERS: dict[type, Callable[..., Any]] = {MapUpdate: _new_update}
+"""Message types :func:`decode` builds without their frozen ``__init__`` (see :func:`swarm.api.frozen_builder`):
+the map updates every robot decodes every sharing tick, whose generated ``__init__`` only stores the fields."""
 
 
 def _compressed_update(plain: bytes, **fields: Any) -> MapUpdate:

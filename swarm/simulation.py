@@ -35,7 +35,7 @@ from radio import build_link_model
 from .api import Action, Pose, RobotInfo
 from .comm import Envelope, MapSharing, Medium
 from .grid._validate import vouch_known
-from .knowledge import sync_changes, sync_regions_flat
+from .knowledge import sync_boxes_flat, sync_changes
 from . import registry
 from .maes_merge import MaesMerge
 from .maes_merge import resolve as resolve_maes_merge
@@ -76,6 +76,7 @@ class TransportOptions:
     run_id: str | None = None
     times: PhaseTimes | None = field(default=None, compare=False)  # benchmarks: where the ticks go
     secret: RunSecret | None = field(default=None, repr=False)  # remote agents' tokens derive from it (a fresh one if None)
+    share_maps: bool = True  # zenoh: local agents read the runtime's maps in place (False: ship them the changes)
 
 
 @dataclass
@@ -146,7 +147,7 @@ class Simulation:
         self.ages = InfoAges(n)  # who last merged whose map, when (age of information)
         self.free = FreeCounts(n, exact=self.lidar_params.mode == "ternary")  # each map's FREE cells
         self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach,  # told of every scan
-                                  ages=self.ages, free=self.free)
+                                  monotone=self.lidar_params.mode == "ternary", ages=self.ages, free=self.free)
         merge = resolve_maes_merge(self.comm.map_sharing, self.comm.share_every, registry.load(self.spec.algorithm.name))
         self.maes_merge = MaesMerge(n, *merge, ages=self.ages) if merge is not None else None
         self._in_flight: list[list[Envelope]] | None = None  # link_at = "receive": last tick's outboxes
@@ -186,7 +187,8 @@ class Simulation:
     def run(self) -> RunResult:
         opts = self.transport
         host = make_host(self.spec.transport, self.spec.key, listen=opts.listen, remote=opts.remote,
-                         timeout_s=opts.timeout_s, run_id=opts.run_id, times=opts.times, secret=opts.secret)
+                         timeout_s=opts.timeout_s, run_id=opts.run_id, times=opts.times, secret=opts.secret,
+                         share_maps=opts.share_maps)
         if opts.times is not None:
             self._time_phases(opts.times)
         try:
@@ -390,15 +392,19 @@ class Simulation:
         live = ~self.failed
         navs = [nav.status() if ok else None for nav, ok in zip(self.navigators, live.tolist())]
         at = poses.copy()  # the world moves these in place next tick; a late read must see this tick's
-        changed = (lambda: self._changed_cells(at, merged)) if self._mirror is not None else None
+        changed = None
+        if self._mirror is not None:
+            cast = self.lidar.cast.copy()  # whose lidar may have written this tick (the next scan overwrites it)
+            changed = lambda: self._changed_cells(at, cast, merged)  # noqa: E731
         return TickBatch(tick, live, poses, pose_tuples, collided, self.world.distance, self.world.rotation, navs,
                          self.known, self._views, inboxes, lambda: self._sight(at), changed)
 
-    def _changed_cells(self, poses: np.ndarray, merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:
+    def _changed_cells(self, poses: np.ndarray, cast: np.ndarray,
+                       merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:
         """``(cells, ends)``: per robot, flat indices (ascending) of its knowledge cells changed since its last
         observation, robot i's at ``cells[ends[i-1]:ends[i]]`` (none for failed robots): the lidar only writes
-        within range of the robot, delta merges report their cells, so only those places are compared, all
-        robots in one compiled call; after a full-map merge the whole map is."""
+        within range of the robots it ``cast`` this tick, delta merges report their cells, so only those
+        places are compared, all robots in one compiled call; after a full-map merge the whole map is."""
         assert self._mirror is not None
         windowed = ~self.failed
         full = []
@@ -406,7 +412,10 @@ class Simulation:
             full = [i for i, cells in enumerate(merged) if cells and any(m is None for m in cells) and windowed[i]]
             windowed[full] = False
         centres = (poses[:, 1::-1] / CELL_M).astype(np.int64)  # (row, col); truncation, as int() did
-        cells, ends = sync_regions_flat(self.known, self._mirror, centres, self._reach, merged, windowed)
+        boxes = np.column_stack((centres[:, 0] - self._reach, centres[:, 0] + self._reach + 1,
+                                 centres[:, 1] - self._reach, centres[:, 1] + self._reach + 1))
+        boxes[~cast, 1] = boxes[~cast, 0]  # a robot its lidar did not cast wrote nothing: an empty window
+        cells, ends = sync_boxes_flat(self.known, self._mirror, boxes, merged, windowed)
         if not full:
             return cells, ends
         bounds = ends.tolist()

@@ -1,6 +1,6 @@
 """Transport and map-sharing costs on the issue-3 workload (16 robots, 150 x 150 building, frontier).
 
-    python benchmarks/speed/bench_transport.py [--ticks 3000] [--robots 16] [--split] [--no-sharing]
+    python benchmarks/speed/bench_transport.py [--ticks 3000] [--robots 16] [--split] [--no-sharing] [--pairs N]
 
 Prints, for the same spec: ticks per wall and CPU second with the in-process and the zenoh transport
 (agents in the runtime's process, so every observation and action goes through a real zenoh session),
@@ -9,21 +9,28 @@ runs twice and the faster run is reported (the machine may be shared).
 
 ``--split`` adds one run per transport with phase timers on (:mod:`swarm.transport.timing`; the timers
 slow those runs a little, so their ticks/s are printed apart) and splits the zenoh transport's extra time
-per tick into zenoh's own share (inside the obs and act ``put``: delivery and callbacks, minus the
-agents' decoding that runs inside the obs callbacks; remote replies awaited), our encoding and decoding on both sides, and the algorithm's own difference.
+per tick into zenoh's own share (the obs and act ``put``: delivery and the callbacks that keep the
+packets; remote replies awaited), our encoding and decoding on both sides, and the algorithm's own
+difference. Agents in the runtime's process are served by one batch each way per tick
+(:mod:`swarm.transport.batch`), so each phase is one call a tick.
+
+``--pairs N`` is the figure to quote: N in-process and N zenoh runs of the same spec alternated in this one
+process (the machine's speed drifts within minutes, so only neighbouring runs compare), and the zenoh
+transport's extra time per tick, pair by pair, in wall and in CPU time: median, quartiles and range.
 """
 
 from __future__ import annotations
 
 import argparse
+import statistics
 import time
 
 from swarm.simulation import Simulation, TransportOptions
 from swarm.transport import PhaseTimes
 
 SHOWN = ("host: inputs", "host: batch", "host: changed cells", "host: neighbours", "host: obs encode",
-         "zenoh: obs put", "agent: observe", "agent: obs decode", "agent: inbox decode", "agent: answer",
-         "agent: algorithm", "agent: act encode", "zenoh: act put", "host: act decode")
+         "zenoh: obs put", "agent: observe", "agent: algorithm", "agent: act encode", "zenoh: act put",
+         "host: act decode")
 
 
 def measure(spec: dict) -> tuple[float, float, dict]:
@@ -70,20 +77,46 @@ def split(base: dict) -> None:
         a, b = ti.seconds[phase] if ti.calls.get(phase) else None, tz.seconds[phase] if tz.calls.get(phase) else None
         print(f"  {phase:26s} {'' if a is None else f'{1e3 * a / ni:10.3f}':>10s} "
               f"{'' if b is None else f'{1e3 * b / nz:8.3f}':>8s}")
-    zenoh_own = (tz.own("zenoh: obs put", "agent: observe") + tz.get("zenoh: act put")
-                 + tz.get("zenoh: wait for remote replies"))
-    ours = (tz.get("host: batch") + tz.get("host: obs encode") + tz.get("agent: observe")
-            + tz.own("agent: answer", "agent: algorithm") + tz.get("host: act decode") - ti.get("host: inputs"))
+    zenoh_own = tz.get("zenoh: obs put") + tz.get("zenoh: act put") + tz.get("zenoh: wait for remote replies")
+    ours = (tz.get("host: batch") + tz.get("host: changed cells") + tz.get("host: neighbours")
+            + tz.get("host: obs encode") + tz.get("agent: observe") + tz.get("agent: act encode")
+            + tz.get("host: act decode"))
+    ours = ours / nz - (ti.get("host: batch") + ti.get("host: inputs")) / ni
     algorithm = tz.get("agent: algorithm") / nz - ti.get("agent: algorithm") / ni
     total = sz - si
     per_call = timer_cost()
     timers = per_call * (sum(tz.calls.values()) / nz - sum(ti.calls.values()) / ni)
-    print(f"zenoh overhead {1e3 * total:.3f} ms/tick = zenoh's own (obs and act puts, deliveries, "
-          f"minus the agents' work inside them) "
-          f"{1e3 * zenoh_own / nz:.3f} + our encoding/decoding (batch + obs encode + agent decode/encode "
-          f"+ act decode - in-process inputs) {1e3 * ours / nz:.3f} + algorithm {1e3 * algorithm:+.3f} "
-          f"+ rest of the loop {1e3 * (total - zenoh_own / nz - ours / nz - algorithm):+.3f} (of which the "
-          f"extra phase timers, {1e6 * per_call:.2f} us a call, about {1e3 * timers:.3f})")
+    print(f"zenoh overhead {1e3 * total:.3f} ms/tick = zenoh's own (obs and act puts, deliveries) "
+          f"{1e3 * zenoh_own / nz:.3f} + our encoding/decoding (batch, changed cells, neighbours, obs encode, "
+          f"agent observe, act encode and decode, less in-process batch and inputs) {1e3 * ours:.3f} + algorithm "
+          f"{1e3 * algorithm:+.3f} + rest of the loop {1e3 * (total - zenoh_own / nz - ours - algorithm):+.3f} "
+          f"(of which the extra phase timers, {1e6 * per_call:.2f} us a call, about {1e3 * timers:.3f})")
+
+
+def pairs(spec: dict, n: int) -> None:
+    """Alternate in-process and zenoh runs of ``spec`` ``n`` times each (the order flips every pair, so neither
+    side always runs on the warmer caches) and print zenoh's extra wall and CPU time per tick, pair by pair."""
+    extra: dict[str, list[float]] = {"wall": [], "cpu": []}
+    per_tick = {}
+    for k in range(n):
+        order = ("inprocess", "zenoh") if k % 2 == 0 else ("zenoh", "inprocess")
+        for transport in order:
+            sim = Simulation({**spec, "transport": transport})
+            cpu0 = time.process_time()
+            s = sim.run().summary
+            per_tick[transport] = (s["wall_time_s"] / s["ticks"], (time.process_time() - cpu0) / s["ticks"], s)
+        (wi, ci, si), (wz, cz, sz) = per_tick["inprocess"], per_tick["zenoh"]
+        if si["final_poses"] != sz["final_poses"]:
+            raise SystemExit("the transports gave different runs")
+        extra["wall"].append(wz - wi)
+        extra["cpu"].append(cz - ci)
+        print(f"pair {k + 1}: in-process {1e3 * wi:.3f} ms/tick ({1e3 * ci:.3f} CPU), zenoh {1e3 * wz:.3f} "
+              f"({1e3 * cz:.3f} CPU): +{1e3 * (wz - wi):.3f} ms wall, +{1e3 * (cz - ci):.3f} ms CPU", flush=True)
+    for what, values in extra.items():
+        ms = sorted(1e3 * v for v in values)
+        q = statistics.quantiles(ms, n=4) if len(ms) > 1 else [ms[0]] * 3
+        print(f"zenoh extra {what:4s} per tick over {len(ms)} pairs: median {statistics.median(ms):.3f} ms "
+              f"(quartiles {q[0]:.3f}-{q[2]:.3f}, range {ms[0]:.3f}-{ms[-1]:.3f})")
 
 
 def main() -> None:
@@ -93,9 +126,17 @@ def main() -> None:
     ap.add_argument("--size", type=int, default=150)
     ap.add_argument("--split", action="store_true", help="also split the zenoh overhead per tick (timed runs)")
     ap.add_argument("--no-sharing", action="store_true", help="skip the map-sharing comparison")
+    ap.add_argument("--pairs", type=int, default=0, metavar="N",
+                    help="only the interleaved comparison: N in-process and N zenoh runs, alternated")
     args = ap.parse_args()
     base = {"seed": 1, "map": {"kind": "building", "size": args.size}, "robots": {"count": args.robots},
             "stop": {"max_ticks": args.ticks}}
+    if args.pairs < 0:
+        ap.error(f"--pairs: {args.pairs} is not allowed; give a whole number >= 1")
+    if args.pairs:
+        Simulation({**base, "transport": "zenoh", "stop": {"max_ticks": 50}}).run()  # load every kernel first
+        pairs(base, args.pairs)
+        return
     results = {}
     for transport in ("inprocess", "zenoh"):
         wall, cpu, summary = measure({**base, "transport": transport})

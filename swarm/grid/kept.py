@@ -33,10 +33,12 @@ from numba import njit
 from ._kernels import grid_configuration_space, grid_view_cells
 from .local import NO_TARGET, mark_targets, search_targets
 
-MAX_ENTRIES = 32
-"""Maps kept per thread: one per robot of a large team. Each entry holds four map-sized byte arrays (360
-KB for a 150 m map); the least recently searched map is dropped first, and all of them when a map of
-another size comes (as :mod:`swarm.grid.memo` does)."""
+MAX_ENTRIES = 64
+"""Maps kept per thread: one per robot of a team of up to 64. Each entry holds four map-sized byte arrays
+(360 KB for a 150 m map, 1.4 MB for a 300 m one); the least recently searched map is dropped first, and
+all of them when a map of another size comes (as :mod:`swarm.grid.memo` does). A team larger than this
+searches its maps round robin, so every search would find its entry dropped and rebuild it: at 32 entries
+that made a 64-robot run cost 2.3x a 32-robot one instead of 2x (docs/performance-history.md)."""
 
 _NEVER = 255
 """Fills a new entry's copy: no knowledge map holds it, so the first refresh recomputes every row."""

@@ -27,9 +27,10 @@ from typing import NamedTuple
 
 import numpy as np
 
-MAX_ENTRIES = 32
-"""Searches remembered per thread: one or two per robot of a large team. Each refers to its search's kept
-map and space (no copies of its own), and all are of one map size (a new size clears them)."""
+MAX_ENTRIES = 128
+"""Searches remembered per thread: one or two per robot of a team of up to 64 (see
+:data:`swarm.grid.kept.MAX_ENTRIES`). Each refers to its search's kept map and space (no copies of its own),
+and all are of one map size (a new size clears them)."""
 
 Params = tuple[float, float, bool]
 """(radius_m, margin_m, unseen_traversable): what the configuration space was built with."""

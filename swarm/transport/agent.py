@@ -13,6 +13,7 @@ import numpy as np
 
 from .. import registry
 from ..api import Observation, frozen_builder
+from ..grid._validate import vouch_known
 from ..messages import MessageError, decode
 from .inprocess import check_action
 from .timing import PhaseTimes, timed
@@ -51,6 +52,19 @@ class InboxDecoder:
             out.append(msg)
         return tuple(out)
 
+    def decode_table(self, blobs: Sequence[bytes]) -> list[Any]:
+        """Each of ``blobs`` decoded (an ``obs_batch``'s message table, which holds every message once: no
+        lookup by bytes, whose hashing cost more than it saved), None for those that do not decode (counted
+        in :attr:`undecodable`)."""
+        out = []
+        for b in blobs:
+            try:
+                out.append(decode(b))
+            except MessageError:
+                self.undecodable += 1
+                out.append(None)
+        return out
+
 
 class AgentRunner:
     def __init__(self, reset: ResetPacket, algorithm: str | None = None, inbox: InboxDecoder | None = None,
@@ -64,6 +78,7 @@ class AgentRunner:
         self._flat = self.known.reshape(-1)
         self._view = self.known.view()
         self._view.flags.writeable = False
+        vouch_known(self._view)  # values are checked (0..2) before a packet writes them
         self._inbox = timed(times, "agent: inbox decode", (inbox or InboxDecoder()).decode)
         self._decode = timed(times, "agent: obs decode", ObsDecoder(self.known.size))
         self._act = timed(times, "agent: algorithm", self.algorithm.act)

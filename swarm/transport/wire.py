@@ -170,16 +170,20 @@ class PackedNeighbours(Neighbours):
     """Neighbours as they arrive in an obs packet, turned into :class:`Neighbour` tuples only when first read,
     like the in-process transport's :class:`~swarm.api.Neighbours` (most algorithms never look)."""
 
-    __slots__ = ("_raw",)
+    __slots__ = ("_raw", "_span")
 
-    def __init__(self, raw: bytes) -> None:  # not super().__init__: that takes the runtime's arrays
-        self._source = None
+    def __init__(self, raw: bytes, start: int = 0, end: int | None = None) -> None:
+        """The records in ``raw[start:end]`` (a batch's column holds every robot's, one after another)."""
+        self._source = None  # not super().__init__: that takes the runtime's arrays
         self._items = None
         self._raw = raw
+        self._span = (start, end)
 
     def _all(self) -> tuple[Neighbour, ...]:
         if self._items is None:
-            self._items = tuple(Neighbour._make(r) for r in NEIGHBOUR.iter_unpack(self._raw))
+            start, end = self._span
+            raw = self._raw if start == 0 and end is None else memoryview(self._raw)[start:end]
+            self._items = tuple(Neighbour._make(r) for r in NEIGHBOUR.iter_unpack(raw))
         return self._items
 
     def __bool__(self) -> bool:

@@ -6,17 +6,22 @@ Key expressions (``<run>`` is unique per run, so parallel runs never cross-talk)
 * ``swarm/<run>/robot/<id>/obs``    runtime -> agent: the observation of tick t
 * ``swarm/<run>/robot/<id>/act``    agent -> runtime: the action for tick t
 * ``swarm/<run>/robot/<id>/alive``  liveliness token of a remote agent (its loss = the agent died)
+* ``swarm/<run>/local/obs``         runtime -> the agents in its own process: one ``obs_batch`` per tick
+* ``swarm/<run>/local/act``         those agents -> runtime: one ``act_batch`` per tick
 * ``swarm/<run>/end``               runtime -> agents: the run is over
 
-Agents in the runtime's process share its session with ``Callback(indirect=False)`` subscribers, so a
-put runs the agent synchronously (docs/measurements.md A4 has the cost of each layout). Remote
+Agents in the runtime's process share its session and are served together
+(:class:`~swarm.transport.group.AgentGroup`): one batched put per tick to a ``Callback(indirect=False)``
+subscriber, which keeps the packet within the put; the group then decides for all of them and answers
+with one batched put (docs/measurements.md A4 has the cost of each layout; :mod:`swarm.transport.batch`
+the packets). They read their maps in the runtime's memory unless ``share_maps`` is False. Remote
 agents connect to the runtime's ``listen`` endpoint; the runtime waits for every live agent's action for
 tick t before advancing, so thread timing never changes a result. A remote agent that loses its
 liveliness token or stays silent for ``timeout_s`` is marked failed at that tick and its robot stops.
 Sessions open in peer mode with multicast scouting off and no endpoints unless given (loopback only).
 
-**Trust** (:mod:`swarm.transport.auth`). Local robots' keys never leave this session: their ``obs``
-publishers and ``act`` subscribers are session-local, so no packet from the network can act for them.
+**Trust** (:mod:`swarm.transport.auth`). Local robots' keys never leave this session: the ``local/obs`` and
+``local/act`` publishers and subscribers are session-local, so no packet from the network can act for them.
 A listening runtime admits only sessions that pass zenoh's usrpwd authentication as a remote robot's user
 and lets each see and send only its own robot's keys (zenoh access control). Every act packet of a
 remote robot must carry a valid HMAC tag for its tick under that robot's key; the first signed reply per
@@ -33,18 +38,21 @@ import time
 import uuid
 from typing import Callable, Sequence
 
+import numpy as np
 import zenoh
 
-from ..api import Action, Observation
-from .agent import AgentRunner, InboxDecoder
+from ..api import Action
 from .auth import Credentials, RunSecret, access_control, check_run_id, verify_act
 from .base import HostStats, TickBatch
+from .batch import ActBatchDecoder, BatchEncoder
+from .group import AgentGroup
 from .packing import ObsEncoder
 from .sessions import open_session, session_config
 from .timing import PhaseTimes, timed
 from .wire import ResetPacket, WireError, decode_act, encode_reset
 
 BLOCK = zenoh.CongestionControl.BLOCK
+_NO_CELLS = np.zeros(0, dtype=np.int64)
 
 
 def new_run_id(key: str) -> str:
@@ -64,15 +72,16 @@ def robot_of(key_expr: object) -> int | None:
 
 
 class ZenohHost:
-    mirrors = True  # obs packets carry each map's changed cells
-
     def __init__(self, run_id: str, listen: Sequence[str] = (), remote: Sequence[int] = (),
                  timeout_s: float = 10.0, join_timeout_s: float = 60.0, times: PhaseTimes | None = None,
-                 secret: RunSecret | None = None) -> None:
+                 secret: RunSecret | None = None, share_maps: bool = True) -> None:
         """``listen``: endpoints remote agents connect to (authenticated with robot tokens derived from
         ``secret``, a fresh one if None); ``times`` (for benchmarks): where the ticks go, see
-        :mod:`swarm.transport.timing`."""
+        :mod:`swarm.transport.timing`; ``share_maps``: the agents in this process read the runtime's maps in
+        place (False: they keep mirrors fed with the changed cells, as remote agents do)."""
         self.stats = HostStats()
+        self.share_maps = share_maps
+        self.mirrors = bool(remote) or not share_maps  # packets carry changed cells to someone
         self._times = times
         self._decode_act = timed(times, "host: act decode", decode_act)
         self.run_id = check_run_id(run_id, "run id")
@@ -100,53 +109,45 @@ class ZenohHost:
         self._replies: dict[int, bytes] = {}
         self._alive: set[int] = set()
         self._lost: set[int] = set()
-        self._runners: dict[int, AgentRunner] = {}
         self._publishers: dict[int, zenoh.Publisher] = {}
         self._puts: dict[int, Callable[[bytes], None]] = {}  # the obs publishers' put, timed when asked
         self._declared: list = []
-        self._pending: list[tuple[Callable, Callable, Observation]] = []  # local agents' observations to answer
-        self._inbox = InboxDecoder()  # shared by the local agents: each broadcast decoded once per tick
+        self.group: AgentGroup | None = None  # the agents in this process
+        self._local_obs: list[bytes] = []     # what the local keys' callbacks received (one packet a tick)
+        self._local_act: list[bytes] = []
+        self._decode_batch = timed(times, "host: act decode", ActBatchDecoder())
         if self.remote:
             self._declared.append(self.session.liveliness().declare_subscriber(
                 f"{self.prefix}/robot/*/alive", zenoh.handlers.Callback(self._on_alive, indirect=False), history=True))
 
     # ---------------------------------------------------------------------------------- callbacks ----
     def _act_subscriber(self, robot: int) -> None:
-        """One subscriber per robot's act key, so a reply needs no key parsing. A local robot's takes only
-        this session's samples (its agent answers synchronously inside the obs put); a remote robot's takes
-        only the network's, checks each reply's signature and tick, keeps the first and wakes act()."""
+        """One subscriber per remote robot's act key, so a reply needs no key parsing: it takes only the
+        network's samples, checks each reply's signature and tick, keeps the first and wakes act()."""
         replies = self._replies
-        if robot not in self.remote:
-            def on_act(sample: zenoh.Sample) -> None:
-                # Local agents answer inside act()'s own put, in its thread: no lock needed.
-                replies[robot] = sample.payload.to_bytes()
+        token = self._tokens[robot]
+        key = token.act_key
+        stats = self.stats
+        taken = self._taken
 
-            origin = LOCAL
-        else:
-            token = self._tokens[robot]
-            key = token.act_key
-            stats = self.stats
-            taken = self._taken
+        def on_act(sample: zenoh.Sample) -> None:
+            data = sample.payload.to_bytes()
+            attachment = sample.attachment
+            tick = verify_act(token, key, attachment.to_bytes() if attachment is not None else None, data)
+            with self._cond:
+                if tick is None:
+                    stats.count("refused", robot)
+                elif tick == self._tick and robot not in replies:
+                    replies[robot] = data
+                    taken[robot] = tick
+                    self._cond.notify_all()
+                elif tick <= taken.get(robot, -1):  # a second reply (or a replay) for a tick already answered
+                    stats.count("duplicate", robot)
+                else:  # a tick not asked yet, or one given up on
+                    stats.count("late", robot)
 
-            def on_act(sample: zenoh.Sample) -> None:
-                data = sample.payload.to_bytes()
-                attachment = sample.attachment
-                tick = verify_act(token, key, attachment.to_bytes() if attachment is not None else None, data)
-                with self._cond:
-                    if tick is None:
-                        stats.count("refused", robot)
-                    elif tick == self._tick and robot not in replies:
-                        replies[robot] = data
-                        taken[robot] = tick
-                        self._cond.notify_all()
-                    elif tick <= taken.get(robot, -1):  # a second reply (or a replay) for a tick already answered
-                        stats.count("duplicate", robot)
-                    else:  # a tick not asked yet, or one given up on
-                        stats.count("late", robot)
-
-            origin = REMOTE
         self._declared.append(self.session.declare_subscriber(
-            f"{self.prefix}/robot/{robot}/act", zenoh.handlers.Callback(on_act, indirect=False), allowed_origin=origin))
+            f"{self.prefix}/robot/{robot}/act", zenoh.handlers.Callback(on_act, indirect=False), allowed_origin=REMOTE))
 
     def _on_alive(self, sample: zenoh.Sample) -> None:
         robot = robot_of(sample.key_expr)
@@ -159,47 +160,66 @@ class ZenohHost:
                 self._lost.add(robot)
             self._cond.notify_all()
 
-    def _local_agent(self, robot: int, runner: AgentRunner) -> None:
-        """An agent in this session. Its obs callback only decodes the packet; the agent answers in
-        :meth:`_answer_local`, after every robot's obs has been delivered. Decoding all packets in a row,
-        then running the algorithms, then sending all actions keeps each step's code and data in cache
-        (interleaved, each step ran cold after an algorithm: twice the decoding's cost)."""
-        publisher = self.session.declare_publisher(f"{self.prefix}/robot/{robot}/act", congestion_control=BLOCK,
-                                                   allowed_destination=LOCAL)
-        self._declared.append(publisher)
-        put = timed(self._times, "zenoh: act put", publisher.put)
-        answer = timed(self._times, "agent: answer", runner.answer)
-        observe = timed(self._times, "agent: observe", runner.observe)
-        pending = self._pending
+    def _local_group(self, resets: Sequence[ResetPacket]) -> None:
+        """The agents of this process as one :class:`AgentGroup` behind the session-local ``local/obs`` and
+        ``local/act`` keys. Their callbacks run inside the puts, in :meth:`act`'s thread, and only keep the
+        packet; the group answers in :meth:`_answer_local`, outside zenoh's callback, so an algorithm that
+        raises stops the run exactly as it does in process."""
+        self.group = AgentGroup(resets, times=self._times)
+        obs = self.session.declare_publisher(f"{self.prefix}/local/obs", congestion_control=BLOCK,
+                                             allowed_destination=LOCAL)
+        act = self.session.declare_publisher(f"{self.prefix}/local/act", congestion_control=BLOCK,
+                                             allowed_destination=LOCAL)
+        self._declared += [obs, act]
+        self._put_obs_batch = timed(self._times, "zenoh: obs put", obs.put)
+        self._put_act_batch = timed(self._times, "zenoh: act put", act.put)
+        for key, inbox in (("obs", self._local_obs), ("act", self._local_act)):
+            self._declared.append(self.session.declare_subscriber(
+                f"{self.prefix}/local/{key}", zenoh.handlers.Callback(lambda sample, inbox=inbox: inbox.append(
+                    sample.payload.to_bytes()), indirect=False), allowed_origin=LOCAL))
 
-        def on_obs(sample: zenoh.Sample) -> None:
-            pending.append((put, answer, observe(sample.payload.to_bytes())))
-
-        self._declared.append(self.session.declare_subscriber(
-            f"{self.prefix}/robot/{robot}/obs", zenoh.handlers.Callback(on_obs, indirect=False), allowed_origin=LOCAL))
-
-    def _answer_local(self) -> None:
-        """Every local agent's action for the observations delivered since the last call, in robot order."""
-        pending = self._pending
-        for put, answer, obs in pending:
-            put(answer(obs))
-        pending.clear()
+    def _answer_local(self, tick: int, ids: list[int]) -> bytes | None:
+        """The local agents' act batch for the obs batch just delivered (None, the robots marked failed, if
+        the group refused it or nothing arrived)."""
+        delivered, replies = self._local_obs, self._local_act
+        replies.clear()
+        if len(delivered) != 1:
+            reason = "the local agents' observation was not delivered once"
+        else:
+            try:
+                self._put_act_batch(self.group.handle(delivered.pop()))
+            except WireError as exc:
+                reason = f"the local agents refused their observation ({str(exc)[:80]})"
+            else:
+                if len(replies) == 1:
+                    return replies.pop()
+                reason = "the local agents' action was not delivered once"
+        delivered.clear()
+        replies.clear()
+        for i in ids:
+            self.stats.failures[i] = (tick, reason)
+        return None
 
     # ---------------------------------------------------------------------------------- interface ----
     def start(self, resets: Sequence[ResetPacket]) -> None:
-        # local agents: nothing to save by compressing
-        self._encode = timed(self._times, "host: obs encode", ObsEncoder(len(resets), compress=self.remote))
+        n = len(resets)
+        local = [r for r in resets if r.robot.id not in self.remote]
+        self._local_mask = np.zeros(n, dtype=bool)
+        self._local_mask[[r.robot.id for r in local]] = True
+        self._encode = timed(self._times, "host: obs encode", ObsEncoder(n, compress=self.remote))
+        self._encode_batch = timed(self._times, "host: obs encode", BatchEncoder([r.robot.id for r in local], n))
+        self._no_ends = np.zeros(n, dtype=np.int64)
+        if local:
+            self._local_group(local)
         for reset in resets:
             i = reset.robot.id
+            if i not in self.remote:
+                continue
             self._act_subscriber(i)
             publisher = self.session.declare_publisher(f"{self.prefix}/robot/{i}/obs", congestion_control=BLOCK,
-                                                       allowed_destination=REMOTE if i in self.remote else LOCAL)
+                                                       allowed_destination=REMOTE)
             self._publishers[i] = publisher
             self._puts[i] = timed(self._times, "zenoh: obs put", publisher.put)
-            if i not in self.remote:
-                runner = AgentRunner(reset, inbox=self._inbox, times=self._times)
-                self._runners[i] = runner
-                self._local_agent(i, runner)
         if self.remote:
             deadline = time.monotonic() + self.join_timeout_s
             with self._cond:
@@ -222,23 +242,57 @@ class ZenohHost:
         with self._cond:
             self._replies.clear()
             self._tick = tick
-        cells, ends = batch.changed()
+        cells, ends = batch.changed() if self.mirrors else (_NO_CELLS, self._no_ends)
         distance, near = batch.sight()
-        inboxes = [tuple([env.data for env in inbox]) if inbox else () for inbox in batch.inboxes]
-        packets = self._encode(tick, asked, batch.poses, batch.collided, batch.travelled,
-                               batch.travelled + batch.rotation, batch.navs, batch.known, cells, ends, inboxes, near,
-                               distance)
-        puts = self._puts
-        live = []
-        for i, packet in enumerate(packets):
-            if packet is not None:
-                live.append(i)
-                puts[i](packet)
-        self._answer_local()
-        waiting = [i for i in live if i in self.remote]
-        if waiting:
-            self._wait(waiting)
-        actions: list[Action | None] = [None] * len(packets)
+        energy = batch.travelled + batch.rotation
+        actions: list[Action | None] = [None] * len(asked)
+        remote = []
+        if self.remote:  # first, so remote agents work while the local ones do
+            inboxes = [tuple([env.data for env in inbox]) if inbox else () for inbox in batch.inboxes]
+            packets = self._encode(tick, asked & ~self._local_mask, batch.poses, batch.collided, batch.travelled,
+                                   energy, batch.navs, batch.known, cells, ends, inboxes, near, distance)
+            for i, packet in enumerate(packets):
+                if packet is not None:
+                    remote.append(i)
+                    self._puts[i](packet)
+        if self.group is not None:
+            self._act_local(tick, asked, batch, energy, cells, ends, near, distance, actions)
+        if remote:
+            self._wait(remote)
+            self._take_remote(tick, remote, actions)
+        return actions
+
+    def _act_local(self, tick: int, asked: np.ndarray, batch: TickBatch, energy: np.ndarray, cells: np.ndarray,
+                   ends: np.ndarray, near: np.ndarray, distance: np.ndarray, actions: list[Action | None]) -> None:
+        """The local agents' actions into ``actions``: one batch put, answered synchronously by the group."""
+        if self.share_maps:
+            self.group.share_maps(batch.views)  # once: the runtime keeps its views for the whole run
+            cells, ends = _NO_CELLS, self._no_ends
+        packet, ids = self._encode_batch(tick, asked, batch.poses, batch.collided, batch.travelled, energy,
+                                         batch.navs, batch.known, cells, ends, batch.inboxes, near, distance)
+        if packet is None:
+            return
+        self._put_obs_batch(packet)
+        reply = self._answer_local(tick, ids)
+        if reply is None:
+            return
+        try:
+            taken = self._decode_batch(reply, tick, ids)
+        except WireError:
+            for i in ids:
+                self.stats.count("malformed", i)
+                actions[i] = Action()
+            return
+        for i, (action, bad) in zip(ids, taken):
+            if action is None:
+                self.stats.count("malformed", i)
+                action = Action()
+            elif bad:
+                self.stats.count("bad_messages", i, bad)
+            actions[i] = action
+
+    def _take_remote(self, tick: int, live: list[int], actions: list[Action | None]) -> None:
+        """The remote agents' replies for ``tick`` into ``actions``: decoded, checked and counted."""
         with self._cond:
             replies = dict(self._replies)
             lost = set(self._lost)
@@ -261,7 +315,6 @@ class ZenohHost:
             if packet.bad_messages:
                 self.stats.count("bad_messages", i, packet.bad_messages)
             actions[i] = packet.action
-        return actions
 
     def _wait(self, waiting: list[int]) -> None:
         """Until every robot in ``waiting`` has replied or is lost, or ``timeout_s`` has passed."""

@@ -7,7 +7,7 @@ import pytest
 
 from maps import Map, generate
 from radio import RadioConfig, build_link_model
-from swarm.api import CELL_M
+from swarm.api import CELL_M, FREE
 from swarm.comm import CommSpec, MapSharing, Medium
 from swarm.messages import MapUpdate, decode, encode
 from swarm.simulation import Simulation
@@ -419,6 +419,64 @@ def test_medium_delivers_as_the_receiver_by_receiver_reference(loss, bandwidth):
         assert [[e.delivered_to for e in row] for row in boxes_fast] == [[e.delivered_to for e in row] for row in boxes_slow]
         assert fast.stats.as_dict() == slow.stats.as_dict()
     assert fast.stats.delivered > 0 and (fast.stats.dropped_bandwidth > 0) == (bandwidth > 0)
+
+
+@pytest.mark.parametrize("reach", [None, 4])
+@pytest.mark.parametrize("n", [2, 5])  # with 2 robots no third one relays what a gap lost
+def test_full_maps_reach_up_to_date_receivers_as_deltas_with_the_same_result(reach, n):
+    """On monotone maps a broadcast full map is merged, into each receiver that holds every earlier update
+    of its sender, as the cells since the sender's previous update: maps, messages and books must come
+    out as merging the whole map does, through gaps, requests, robots that hear only some updates, and
+    full maps an algorithm sends itself. Ages of information and counts of FREE cells come out as those of a
+    service that compares whole maps (no ``lidar_reach``, none of the shortcuts)."""
+    from swarm.messages import full_update
+    from swarm.metrics import FreeCounts, InfoAges
+
+    rng = np.random.default_rng(21)
+    shape = (80, 60)
+    spec = CommSpec(share_every=2)
+    kinds = [(reach, False), (reach, True), (None, False)]
+    ages, free = [InfoAges(n) for _ in kinds], [FreeCounts(n, exact=True) for _ in kinds]
+    services = [MapSharing(n, shape, spec, lidar_reach=r, monotone=m, ages=a, free=f)
+                for (r, m), a, f in zip(kinds, ages, free)]
+    maps = [np.zeros((n, *shape), np.uint8) for _ in services]
+    pending: list[list] = [[] for _ in services]  # each service's deliveries: its own message objects (notes)
+    live = np.ones(n, bool)
+    quick = 0
+    for tick in range(80):
+        poses = np.column_stack([rng.uniform(0, 29, n), rng.uniform(0, 39, n), np.zeros(n)])
+        rows = np.clip((poses[:, 1] / CELL_M).astype(int)[:, None] + rng.integers(-3, 4, (n, 4)), 0, shape[0] - 1)
+        cols = np.clip((poses[:, 0] / CELL_M).astype(int)[:, None] + rng.integers(-3, 4, (n, 4)), 0, shape[1] - 1)
+        values = rng.integers(1, 3, (n, 4)).astype(np.uint8)
+        lists = []
+        for sharing, known, deliveries, counts in zip(services, maps, pending, free):
+            for r in range(n):  # what a ternary lidar writes near each robot: maxima only (and counts them)
+                had = int((known[r] == FREE).sum())
+                known[r, rows[r], cols[r]] = np.maximum(known[r, rows[r], cols[r]], values[r])
+                counts.freed[r] += int((known[r] == FREE).sum()) - had
+            sharing.scanned(poses)
+            lists.append(sharing.receive_tick(deliveries, known, live, tick=tick))
+        for k in (1, 2):
+            assert np.array_equal(maps[0], maps[k]), tick
+            assert (services[0].seen_seq, services[0].requests, services[0].full_requested) == \
+                (services[k].seen_seq, services[k].requests, services[k].full_requested), tick
+            assert np.array_equal(ages[0].merged_at, ages[k].merged_at), tick
+        for counts, known in zip(free, maps):
+            assert counts.read(known).tolist() == (known == FREE).sum(axis=(1, 2)).tolist(), tick
+        quick += sum(a is None and b is not None for x, y in zip(lists[0], lists[1]) for a, b in zip(x, y))
+        out = [s.outgoing(tick, k, poses) for s, k in zip(services, maps)]
+        for k in (1, 2):
+            assert [[encode(m) for m in msgs] for msgs in out[0]] == [[encode(m) for m in msgs] for msgs in out[k]]
+        reach_of = {(s, k): [r for r in range(n) if r != s and rng.random() < 0.8]
+                    for s in range(n) for k in range(len(out[0][s]))}
+        pending = [[(m, reach_of[s, k]) for s in range(n) for k, m in enumerate(o[s])] for o in out]
+        if tick % 9 == 4:  # an algorithm's own full map of some other knowledge: not the service's
+            other = np.where(rng.random(shape) < 0.01, rng.integers(1, 3, shape), 0).astype(np.uint8)
+            fake = full_update(1, 10_000 + tick, tick, other, (0.0, 0.0, 0.0))
+            for deliveries in pending:
+                deliveries.append((fake, [0]))
+    assert quick > 5 or n == 2, "full maps were taken as deltas (with 2 robots only the requester hears them)"
+    assert ages[0].merges > 0 and (ages[0].merged_at > 0).any(), "merges counted for the ages"
 
 
 @pytest.mark.parametrize("loss,bandwidth,relay", [(0.0, 0, "none"), (0.3, 30, "none"), (0.3, 30, "flood")])

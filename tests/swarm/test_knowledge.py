@@ -9,7 +9,8 @@ from maps import InvalidInput, Map
 from swarm.api import FREE, SOLID, UNSEEN
 from swarm.knowledge import (
     ExplorationTracker, LogOddsGrid, active_flags, classify_logodds, count_cells, count_known, empty_knowledge,
-    merge, merge_cells, sync_box, sync_changes, sync_regions, sync_regions_flat,
+    merge, merge_cells, merge_cells_many_changed, merge_cells_many_counted, sync_box, sync_boxes_flat, sync_changes,
+    sync_regions, sync_regions_flat,
 )
 
 
@@ -295,3 +296,77 @@ def test_sync_regions_flat_equals_the_window_rule_on_random_maps_and_windows() -
                 want = _sync_reference(current[k], expected_last[k], span(r, rows), span(c, cols), extra)
                 assert flat[bounds[k]:bounds[k + 1]].tolist() == want.tolist()
             assert np.array_equal(last, expected_last)
+
+
+def test_sync_boxes_flat_finds_every_change_inside_the_boxes_and_the_listed_cells() -> None:
+    """The boxes' scan (the runtime's per-robot box of lidar changes) against the plain rule: the cells
+    that differ inside each clipped box or at its listed cells, copied into ``last``; inactive maps alone."""
+    rng = np.random.default_rng(12)
+    for rows, cols in ((30, 25), (17, 13), (3, 2)):
+        current = rng.integers(0, 3, size=(4, rows, cols), dtype=np.uint8)
+        last, expected_last = current.copy(), current.copy()
+        for _ in range(30):
+            changes = rng.integers(0, current.size, size=int(rng.integers(0, 30)))
+            current.reshape(-1)[changes] = rng.integers(0, 3, size=changes.size, dtype=np.uint8)
+            r0, c0 = rng.integers(-3, rows + 1, 4), rng.integers(-3, cols + 1, 4)
+            boxes = np.stack([r0, r0 + rng.integers(-1, 8, 4), c0, c0 + rng.integers(-1, 8, 4)], axis=1)
+            cells = [[rng.integers(0, rows * cols, size=int(rng.integers(0, 4)))] if rng.random() < 0.4 else []
+                     for _ in range(4)]
+            active = rng.random(4) < 0.8
+            flat, ends = sync_boxes_flat(current, last, boxes, cells, active)
+            bounds = [0, *ends.tolist()]
+            for k in range(4):
+                if not active[k]:
+                    assert bounds[k] == bounds[k + 1]
+                    continue
+                clip = lambda a, b, size: (min(max(a, 0), size), max(min(b, size), 0))  # noqa: E731
+                extra = np.concatenate(cells[k]) if cells[k] else None
+                want = _sync_reference(current[k], expected_last[k], clip(boxes[k, 0], boxes[k, 1], rows),
+                                       clip(boxes[k, 2], boxes[k, 3], cols), extra)
+                assert flat[bounds[k]:bounds[k + 1]].tolist() == want.tolist()
+            assert np.array_equal(last, expected_last)
+    with pytest.raises(InvalidInput, match="boxes"):
+        sync_boxes_flat(current, last, np.zeros((3, 4), np.int64), [[]] * 4, None)
+
+
+def test_merge_cells_many_changed_lists_exactly_the_cells_each_merge_raised() -> None:
+    rng = np.random.default_rng(5)
+    stack = rng.integers(0, 3, size=(5, 12, 9), dtype=np.uint8)
+    before = stack.copy()
+    idx = np.sort(rng.choice(12 * 9, 40, replace=False)).astype(np.int64)
+    values = rng.integers(0, 3, 40).astype(np.uint8)
+    rows = np.array([3, 0, 4], dtype=np.int64)
+    out, ends = np.empty(3 * 40, np.int64), np.empty(3, np.int64)
+    merge_cells_many_changed(stack, rows, idx, values, out, ends)
+    start = 0
+    for k, row in enumerate(rows.tolist()):
+        expected = before[row].copy().reshape(-1)
+        expected[idx] = np.maximum(expected[idx], values)
+        assert np.array_equal(stack[row].reshape(-1), expected)
+        assert out[start:ends[k]].tolist() == np.flatnonzero(expected != before[row].reshape(-1)).tolist()
+        start = ends[k]
+    assert np.array_equal(stack[[1, 2]], before[[1, 2]])
+
+
+def test_merge_cells_many_changed_counts_free_cells_as_the_counted_merge_does() -> None:
+    """With ``freed`` the raised cells are listed as without it and each robot's count of FREE cells changes
+    as :func:`merge_cells_many_counted` changes it (UNSEEN -> FREE adds one, FREE -> SOLID takes one)."""
+    rng = np.random.default_rng(9)
+    stack = rng.integers(0, 3, size=(6, 10, 11), dtype=np.uint8)
+    idx = np.sort(rng.choice(10 * 11, 50, replace=False)).astype(np.int64)
+    values = rng.integers(0, 3, 50).astype(np.uint8)
+    rows = np.array([5, 1, 2], dtype=np.int64)
+    robots = np.array([7, 0, 3], dtype=np.int64)  # the robot of each map need not be its row
+    plain, counted, listed = stack.copy(), stack.copy(), stack.copy()
+    want = np.full(8, 4, np.int64)
+    merge_cells_many_counted(counted, rows, idx, values, robots, want)
+    out, ends = np.empty(3 * 50, np.int64), np.empty(3, np.int64)
+    merge_cells_many_changed(plain, rows, idx, values, out, ends)
+    out2, ends2, got = np.empty(3 * 50, np.int64), np.empty(3, np.int64), np.full(8, 4, np.int64)
+    merge_cells_many_changed(listed, rows, idx, values, out2, ends2, robots, got)
+    assert np.array_equal(listed, counted) and np.array_equal(listed, plain)
+    assert ends2.tolist() == ends.tolist() and out2[:ends[-1]].tolist() == out[:ends[-1]].tolist()
+    assert got.tolist() == want.tolist()
+    for k, row in enumerate(rows.tolist()):
+        assert got[robots[k]] - 4 == int((listed[row] == FREE).sum()) - int((stack[row] == FREE).sum())
+    assert (got != 4).any(), "some merge changed a count"

@@ -20,6 +20,7 @@ from swarm.api import Action
 from swarm.comm import CommSpec, MapSharing, Medium
 from swarm.messages import Heartbeat, MapRequest, MessageError, decode, delta_update, encode, full_update, registered
 from swarm.transport.auth import sign_act
+from swarm.transport.batch import ActBatchDecoder, ActBatchEncoder, ObsBatchDecoder
 from swarm.transport.wire import (WIRE_VERSION, ObsDecoder, WireError, decode_act, decode_reset, encode_act,
                                   encode_obs, encode_reset)
 
@@ -51,6 +52,22 @@ def valid_obs() -> list:
     packet = encode_obs(3, 1, Pose(1.0, 2.0, 0.5), np.array([0, 5, 17]), np.array([1, 2, 1], np.uint8),
                         (encode(Heartbeat(0, 2, 1.0, 1.0, 0.0)),), (), False, NavStatus(), 1.5, 2.5)
     return msgpack.unpackb(packet)
+
+
+def valid_obs_batch() -> list:
+    from tests.swarm.transport.test_batch import valid_batch
+    return valid_batch()[0]
+
+
+def valid_act_batch() -> list:
+    return msgpack.unpackb(ActBatchEncoder()(7, [0, 1], [Action(goal=(1.0, 2.0)), Action(
+        velocity=(0.5, 0.0), messages=(Heartbeat(1, 7, 1.0, 2.0, 0.5),), debug={"k": 1})]))
+
+
+def batch_decoders() -> dict:
+    """The batch decoders as the runtime's side calls them (3 robots, a 30 x 40 map; acts of robots 0, 1)."""
+    obs = ObsBatchDecoder(3, 30 * 40)
+    return {"obs_batch": obs, "act_batch": lambda blob: ActBatchDecoder()(blob, 7, [0, 1])}
 
 
 def valid_reset() -> list:
@@ -85,7 +102,8 @@ def mutated(template: list, data: st.DataObject) -> bytes:
 @given(st.binary(max_size=400))
 def test_random_bytes_never_escape_the_decoders(blob):
     for decoder, error in ((decode_act, WireError), (ObsDecoder(SHAPE[0] * SHAPE[1]), WireError),
-                           (decode_reset, WireError), (decode, MessageError)):
+                           (decode_reset, WireError), (decode, MessageError),
+                           *((d, WireError) for d in batch_decoders().values())):
         try:
             decoder(blob)
         except error:
@@ -95,11 +113,13 @@ def test_random_bytes_never_escape_the_decoders(blob):
 @FUZZ
 @given(st.data())
 def test_mutated_packets_decode_or_raise_only_wire_errors(data):
-    kind = data.draw(st.sampled_from(["act", "obs", "reset"]))
-    template = {"act": valid_act, "obs": valid_obs, "reset": valid_reset}[kind]()
+    kind = data.draw(st.sampled_from(["act", "obs", "reset", "obs_batch", "act_batch"]))
+    template = {"act": valid_act, "obs": valid_obs, "reset": valid_reset, "obs_batch": valid_obs_batch,
+                "act_batch": valid_act_batch}[kind]()
     blob = mutated(template, data)
     try:
-        {"act": decode_act, "obs": ObsDecoder(SHAPE[0] * SHAPE[1]), "reset": decode_reset}[kind](blob)
+        {"act": decode_act, "obs": ObsDecoder(SHAPE[0] * SHAPE[1]), "reset": decode_reset,
+         **batch_decoders()}[kind](blob)
     except WireError:
         pass
 

@@ -180,24 +180,25 @@ def test_malformed_actions_are_dropped_and_counted():
 
 def test_phase_timers_see_each_step_and_change_no_result():
     """``TransportOptions.times`` (bench_transport --split) measures without changing the run, and an
-    unmeasured run calls the plain functions (no wrapper)."""
+    unmeasured run calls the plain functions (no wrapper). The local agents are served by one batch each way
+    per tick, whichever way their maps reach them."""
     from swarm.transport.timing import PhaseTimes, timed
 
     strip = lambda r: {k: v for k, v in r.deterministic_view().items() if k not in ("spec", "key")}  # noqa: E731
     plain = Simulation({**SPEC, "transport": "zenoh"}).run()
-    times = {t: PhaseTimes() for t in ("inprocess", "zenoh")}
-    runs = {t: Simulation({**SPEC, "transport": t}, transport=TransportOptions(times=times[t])).run() for t in times}
-    assert strip(runs["zenoh"]) == strip(plain) == strip(runs["inprocess"])
     ticks, robots = plain.summary["ticks"], SPEC["robots"]["count"]
-    z, i = times["zenoh"], times["inprocess"]
-    for phase in ("zenoh: obs put", "agent: observe", "agent: obs decode", "agent: answer", "agent: algorithm",
-                  "agent: act encode", "zenoh: act put", "host: act decode"):
-        assert z.calls[phase] == ticks * robots, phase
-    for phase in ("host: batch", "host: changed cells", "host: neighbours", "host: obs encode"):
-        assert z.calls[phase] == ticks, phase
-    assert i.calls["agent: algorithm"] == ticks * robots and i.calls["host: inputs"] == ticks
-    assert z.get("zenoh: obs put") > z.get("agent: observe") > z.get("agent: obs decode") > 0
-    assert z.get("agent: answer") > z.get("agent: algorithm") > 0
-    assert z.own("zenoh: obs put", "agent: observe") == z.get("zenoh: obs put") - z.get("agent: observe")
+    for share_maps in (True, False):
+        times = {t: PhaseTimes() for t in ("inprocess", "zenoh")}
+        runs = {t: Simulation({**SPEC, "transport": t},
+                              transport=TransportOptions(times=times[t], share_maps=share_maps)).run() for t in times}
+        assert strip(runs["zenoh"]) == strip(plain) == strip(runs["inprocess"])
+        z, i = times["zenoh"], times["inprocess"]
+        for phase in ("zenoh: obs put", "agent: observe", "agent: act encode", "zenoh: act put", "host: act decode",
+                      "host: batch", "host: neighbours", "host: obs encode"):
+            assert z.calls[phase] == ticks, phase
+        assert z.calls["agent: algorithm"] == ticks * robots
+        assert z.calls.get("host: changed cells", 0) == (0 if share_maps else ticks)
+        assert i.calls["agent: algorithm"] == ticks * robots and i.calls["host: inputs"] == ticks
+        assert z.get("agent: observe") > 0 and z.get("zenoh: obs put") > 0
     fn = len
     assert timed(None, "x", fn) is fn
