@@ -42,8 +42,11 @@ class RunResult:
         return atomic_write_bytes(Path(path), self.to_json(indent=1).encode())
 
     def deterministic_view(self) -> dict[str, Any]:
-        """Everything except wall-clock fields: equal for two runs of the same spec."""
-        return _strip_times(self.to_dict())
+        """Everything except wall-clock fields and the source commit (which depends on where the code runs
+        from, not on the run): equal for two runs of the same spec."""
+        view = _strip_times(self.to_dict())
+        view["provenance"] = {k: v for k, v in view["provenance"].items() if k != "source"}
+        return view
 
     def one_line(self) -> str:
         s = self.summary

@@ -490,18 +490,14 @@ class Simulation:
 
 
 def provenance(spec: RunSpec) -> dict[str, Any]:
-    """What computes runs of ``spec``: this swarm's version and the algorithm's distribution and version."""
-    from importlib.metadata import PackageNotFoundError, version
-
+    """What computes runs of ``spec``: this swarm's version, its commit when it runs from a git checkout
+    (:mod:`swarm.source`), and the algorithm's distribution and version."""
     from .registry import distribution
+    from .source import package_version, source_commit
 
-    try:
-        swarm_version = version("swarm-sim")
-    except PackageNotFoundError:  # a source tree that was never installed
-        swarm_version = None
     dist = distribution(spec.algorithm.name)
-    return {"swarm": swarm_version, "algorithm": {"name": spec.algorithm.name, "distribution": dist and dist[0],
-                                                  "version": dist and dist[1]}}
+    return {"swarm": package_version(), "source": source_commit(),
+            "algorithm": {"name": spec.algorithm.name, "distribution": dist and dist[0], "version": dist and dist[1]}}
 
 
 def run(spec: RunSpec | Mapping[str, Any]) -> RunResult:

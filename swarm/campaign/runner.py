@@ -7,7 +7,6 @@ import time
 from array import array
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
-from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any, Callable
 
@@ -17,6 +16,7 @@ from .executors import Executor, make_executor
 from .spec import CampaignSpec, Run, parse_campaign
 from ..schema import (COMM_ROBOT_SERIES, COMM_SERIES_COLUMNS, NONDETERMINISTIC_COLUMNS, TIMESERIES_COLUMNS,
                       comm_columns, summary_columns)
+from ..source import version_label
 from .store import ResultsStore
 from .writers import Writer, live_writers
 
@@ -24,10 +24,9 @@ from .writers import Writer, live_writers
 
 
 def swarm_version() -> str:
-    try:
-        return version("swarm-sim")
-    except PackageNotFoundError:  # running from a source tree without installing
-        return "unknown"
+    """The runs table's ``swarm_version``: the package version, with the commit when run from a git
+    checkout (:func:`swarm.source.version_label`)."""
+    return version_label()
 
 
 @dataclass

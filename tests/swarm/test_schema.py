@@ -12,6 +12,7 @@ from swarm.campaign.runner import runs_row
 from swarm.campaign.store import ResultsStore
 from swarm.schema import RUNS, THRESHOLD_COLUMNS, TIMESERIES, MessageCounts, Summary, dropped, summary_columns
 from swarm.simulation import Simulation
+from swarm.source import source_commit, version_label
 
 from tests.swarm.campaign.test_campaign import TINY
 
@@ -55,3 +56,6 @@ def test_results_record_the_algorithms_distribution(tmp_path):
     run_campaign(spec, tmp_path, executor=make_executor(inline=True), progress=False, shard=(0, 24))
     table = ResultsStore(tmp_path).runs_table()
     assert table.column("algorithm_dist").to_pylist() == ["swarm-sim"]
+    # and which source: the package version, with the commit when it runs from a git checkout
+    assert r.provenance["source"] == source_commit()
+    assert table.column("swarm_version").to_pylist() == [version_label()]
