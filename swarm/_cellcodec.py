@@ -25,6 +25,23 @@ def put_u32(buf: np.ndarray, at: int, v: int) -> None:  # pragma: no cover - com
 
 
 @njit(cache=True, inline="always")
+def put_raw_cells(buf: np.ndarray, p: int, cells: np.ndarray, first: int, last: int,
+                  row: np.ndarray) -> int:  # pragma: no cover - compiled
+    """Write the changed cells ``cells[first:last]`` (ascending flat indices) of the map ``row`` (flat) as an
+    obs packet carries them: their uint32 gaps (the first from 0), then one raw byte per cell. Returns the
+    position after them; ``buf`` needs ``5 * (last - first)`` bytes from ``p``."""
+    prev = 0
+    for k in range(first, last):
+        put_u32(buf, p, cells[k] - prev)
+        prev = cells[k]
+        p += 4
+    for k in range(first, last):
+        buf[p] = row[cells[k]]
+        p += 1
+    return p
+
+
+@njit(cache=True, inline="always")
 def get_u32(raw: np.ndarray, at: int) -> np.int64:  # pragma: no cover - compiled
     """The little-endian uint32 at ``raw[at:at + 4]`` as an int64."""
     return (np.int64(raw[at]) | (np.int64(raw[at + 1]) << 8) | (np.int64(raw[at + 2]) << 16)

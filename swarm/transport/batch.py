@@ -26,7 +26,7 @@ from typing import Any, NamedTuple, Sequence
 import numpy as np
 from numba import njit
 
-from .._cellcodec import get_u32, put_u32
+from .._cellcodec import get_u32, put_raw_cells
 from ..api import Action, NavStatus, frozen_builder
 from ..messages import MessageError, decode, encode
 from ..neighbours import _bearing
@@ -168,15 +168,7 @@ def _write_columns(tick, robots, live, poses, collided, travelled, energy, nav, 
         k = last - first
         counts[m, CELLS] = k
         counts[m, INBOX] = 0
-        p = 5 * c
-        prev = 0
-        for j in range(first, last):
-            put_u32(cell_buf, p, cells[j] - prev)
-            prev = cells[j]
-            p += 4
-        for j in range(first, last):
-            cell_buf[p] = flat[i, cells[j]]
-            p += 1
+        put_raw_cells(cell_buf, 5 * c, cells, first, last, flat[i])
         c += k
         seen = 0
         for j in range(n):

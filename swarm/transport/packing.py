@@ -19,7 +19,7 @@ from typing import Sequence
 import numpy as np
 from numba import njit
 
-from .._cellcodec import put_u32
+from .._cellcodec import put_raw_cells
 from ..api import NavStatus, Pose
 from ..neighbours import _bearing
 from .wire import (COLLIDED, HAS_GOAL, NEIGHBOUR, NEIGHBOUR_DTYPE, OBS_STATE, RAW_CELLS_BELOW, WIRE_VERSION,
@@ -184,14 +184,7 @@ def _obs_packets(tick, live, poses, collided, travelled, energy, nav_f, nav_i, k
             p += 2
         else:
             p = _put_bin_header(buf, p, 5 * m)
-            prev = 0
-            for k in range(first, last):
-                put_u32(buf, p, cells[k] - prev)
-                prev = cells[k]
-                p += 4
-            for k in range(first, last):
-                buf[p] = known[i, cells[k]]
-                p += 1
+            p = put_raw_cells(buf, p, cells, first, last, known[i])
         spans[i, INBOX] = p
         buf[p] = 0x90  # an empty inbox
         p += 1
