@@ -45,7 +45,6 @@ matrix is always within 1.125 dB of the truth; the exact RSSI is recomputable fr
 from __future__ import annotations
 
 from collections.abc import Sequence
-from importlib import metadata
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -57,6 +56,7 @@ from maps.io import atomic_write_bytes, map_to_bytes
 from maps.materials import colour_of
 
 from ..comm import LOSS_CAUSES
+from ..source import package_version
 from .container import BLOCK, FORMAT_NAME, FORMAT_VERSION, HEAD, MAGIC, TAIL, encode_chunk, pack_array
 from .kernels import RSSI_NAN, _record_changes, _record_links, changed_cells, quantise_rssi
 
@@ -69,10 +69,8 @@ _U32 = 1 << 32
 
 
 def software_version() -> str:
-    try:
-        return metadata.version("swarm-sim")
-    except metadata.PackageNotFoundError:  # pragma: no cover - running from a source tree
-        return "unknown"
+    """The swarm version a recording names (``unknown`` in a source tree never installed)."""
+    return package_version() or "unknown"
 
 
 def plain(obj: Any) -> Any:
