@@ -107,21 +107,35 @@ def _merge_cells_many_kernel(stack: np.ndarray, rows: np.ndarray, idx: np.ndarra
         _merge_cells_kernel(stack[rows[k]].reshape(-1), idx, values)
 
 
+@njit(cache=True, inline="always")
+def _merge_counting(flat: np.ndarray, idx: np.ndarray, values: np.ndarray, out: np.ndarray,
+                    m: int) -> tuple[int, int]:  # pragma: no cover - compiled
+    """Merge ``values`` into the flat map ``flat`` at ``idx`` (each cell keeps the maximum), listing each
+    cell it raises at ``out[m:]`` unless ``out`` is empty. Returns the FREE cells the map gained less those
+    it lost, and the list's new end: the one loop of the counted and the listing merges."""
+    record = out.shape[0] > 0
+    change = 0
+    for j in range(idx.shape[0]):
+        i = idx[j]
+        v = values[j]
+        old = flat[i]
+        if v > old:
+            change += (v == FREE) - (old == FREE)
+            flat[i] = v
+            if record:
+                out[m] = i
+                m += 1
+    return change, m
+
+
 @njit(cache=True)
 def _merge_cells_many_counted_kernel(stack: np.ndarray, rows: np.ndarray, idx: np.ndarray, values: np.ndarray,
                                      robots: np.ndarray, freed: np.ndarray) -> None:  # pragma: no cover - compiled
     """:func:`_merge_cells_many_kernel`, adding to ``freed[robots[k]]`` how many FREE cells map
     ``stack[rows[k]]`` gained (UNSEEN -> FREE) less those it lost (FREE -> SOLID)."""
+    no_list = np.empty(0, dtype=np.int64)
     for k in range(rows.shape[0]):
-        flat = stack[rows[k]].reshape(-1)
-        change = 0
-        for j in range(idx.shape[0]):
-            i = idx[j]
-            v = values[j]
-            old = flat[i]
-            if v > old:
-                change += (v == FREE) - (old == FREE)
-                flat[i] = v
+        change, _ = _merge_counting(stack[rows[k]].reshape(-1), idx, values, no_list, 0)
         freed[robots[k]] += change
 
 
@@ -158,17 +172,7 @@ def _merge_cells_many_changed_kernel(stack: np.ndarray, rows: np.ndarray, idx: n
     """``freed`` empty: no count kept."""
     m = 0
     for k in range(rows.shape[0]):
-        flat = stack[rows[k]].reshape(-1)
-        change = 0
-        for j in range(idx.shape[0]):
-            i = idx[j]
-            v = values[j]
-            old = flat[i]
-            if v > old:
-                change += (v == FREE) - (old == FREE)
-                flat[i] = v
-                out[m] = i
-                m += 1
+        change, m = _merge_counting(stack[rows[k]].reshape(-1), idx, values, out, m)
         ends[k] = m
         if freed.shape[0]:
             freed[robots[k]] += change
