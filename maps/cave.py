@@ -29,7 +29,6 @@ from typing import Any, Mapping
 
 import numpy as np
 from scipy import ndimage
-from scipy.spatial import cKDTree
 
 from .errors import InvalidInput
 from .materials import DEFAULT_TABLE, DEFAULT_WALL_MATERIALS
@@ -191,6 +190,8 @@ def _connect_regions(wall: np.ndarray, radius: int) -> np.ndarray:
         others = (labels > 0) & ~main
         connected_edges = _edges(main)
         other_edges = _edges(others)
+        from scipy.spatial import cKDTree  # here, not at import: scipy.spatial costs a building run ~13 MB
+
         tree = cKDTree(connected_edges)
         dist, idx = tree.query(other_edges)
         best = int(np.argmin(dist))

@@ -8,9 +8,20 @@ holds.
 
 from __future__ import annotations
 
-from typing import Any, Mapping, TypedDict
+from typing import TYPE_CHECKING, Any, Literal, Mapping, TypedDict
 
-import pyarrow as pa
+if TYPE_CHECKING:  # pyarrow is imported only where a table is built: a run does not need its ~25 MB
+    import pyarrow as pa
+
+ArrowType = Literal["int64", "float64", "bool_", "string"]
+"""A column's Arrow type by the name of its ``pyarrow`` factory (``"int64"`` ...): :func:`arrow_type`."""
+
+
+def arrow_type(name: ArrowType) -> "pa.DataType":
+    """The ``pyarrow`` type a column's type name stands for (imports pyarrow)."""
+    import pyarrow as pa
+
+    return getattr(pa, name)()
 
 # ------------------------------------------------------------------------------------- thresholds ----
 THRESHOLDS: tuple[float, ...] = (0.5, 0.75, 0.9, 0.95, 0.98, 0.99)
@@ -93,21 +104,21 @@ class Summary(TypedDict):
 
 
 # ------------------------------------------------------------------------------------ time series ----
-TIMESERIES: dict[str, tuple[pa.DataType, str]] = {
-    "tick": (pa.int64(), "the tick of the row (every record_every ticks, and the last)"),
-    "explored": (pa.float64(), "fraction of free cells seen by some robot"),
-    "coverage": (pa.float64(), "fraction of free cells covered by some robot's disc"),
-    "distance_m": (pa.float64(), "metres driven by all robots so far"),
-    "collisions": (pa.int64(), "contacts begun so far"),
-    "msgs_sent": (pa.int64(), "messages broadcast so far"),
-    "bytes_sent": (pa.int64(), "their bytes"),
-    "msgs_delivered": (pa.int64(), "deliveries so far (one per receiver)"),
-    "bytes_delivered": (pa.int64(), "their bytes"),
-    "msgs_dropped": (pa.int64(), "messages dropped on the way so far, all causes (DROP_CAUSES)"),
-    "comm_groups": (pa.int64(), "communication groups (strongly connected) at this tick"),
-    "biggest_group": (pa.float64(), "the biggest group's share of the robots"),
-    "all_connected": (pa.bool_(), "one group holds every robot"),
-    "mean_pair_distance_m": (pa.float64(), "mean distance between robots"),
+TIMESERIES: dict[str, tuple[ArrowType, str]] = {
+    "tick": ("int64", "the tick of the row (every record_every ticks, and the last)"),
+    "explored": ("float64", "fraction of free cells seen by some robot"),
+    "coverage": ("float64", "fraction of free cells covered by some robot's disc"),
+    "distance_m": ("float64", "metres driven by all robots so far"),
+    "collisions": ("int64", "contacts begun so far"),
+    "msgs_sent": ("int64", "messages broadcast so far"),
+    "bytes_sent": ("int64", "their bytes"),
+    "msgs_delivered": ("int64", "deliveries so far (one per receiver)"),
+    "bytes_delivered": ("int64", "their bytes"),
+    "msgs_dropped": ("int64", "messages dropped on the way so far, all causes (DROP_CAUSES)"),
+    "comm_groups": ("int64", "communication groups (strongly connected) at this tick"),
+    "biggest_group": ("float64", "the biggest group's share of the robots"),
+    "all_connected": ("bool_", "one group holds every robot"),
+    "mean_pair_distance_m": ("float64", "mean distance between robots"),
 }
 """Time-series columns (``RunResult.timeseries``, ``*.timeseries.parquet`` with a ``key`` column first)."""
 TIMESERIES_COLUMNS: tuple[str, ...] = tuple(TIMESERIES)
@@ -115,29 +126,29 @@ TIMESERIES_COLUMNS: tuple[str, ...] = tuple(TIMESERIES)
 # ---------------------------------------------------------------------------- communication ----
 # ``RunResult.comm`` (docs/comm-metrics.md defines every quantity): its own summary and series, so the run's
 # ``summary``, ``timeseries`` and ``events`` (what benchmarks/result_digests.py hashes) stay as they were.
-COMM_SERIES: dict[str, tuple[pa.DataType, str]] = {
-    "tick": (pa.int64(), "the tick of the row (the time series' ticks)"),
-    **{f"msgs_{cause}": (pa.int64(), f"deliveries failed so far for cause '{cause}' (one per receiver)")
+COMM_SERIES: dict[str, tuple[ArrowType, str]] = {
+    "tick": ("int64", "the tick of the row (the time series' ticks)"),
+    **{f"msgs_{cause}": ("int64", f"deliveries failed so far for cause '{cause}' (one per receiver)")
        for cause in DROP_CAUSES},
-    "bytes_dropped": (pa.int64(), "bytes of the deliveries that failed so far, all causes"),
-    "map_merges": (pa.int64(), "map merges so far that left the receiver holding the sender's whole map"),
-    "since_contact_mean": (pa.float64(), "ticks since each robot last received a message, mean over robots"),
-    "since_contact_max": (pa.int64(), "the same, the longest"),
-    "missing_free_mean": (pa.float64(), "share of the team's known free cells a robot does not know, mean over "
+    "bytes_dropped": ("int64", "bytes of the deliveries that failed so far, all causes"),
+    "map_merges": ("int64", "map merges so far that left the receiver holding the sender's whole map"),
+    "since_contact_mean": ("float64", "ticks since each robot last received a message, mean over robots"),
+    "since_contact_max": ("int64", "the same, the longest"),
+    "missing_free_mean": ("float64", "share of the team's known free cells a robot does not know, mean over "
                                         "robots"),
-    "missing_free_max": (pa.float64(), "the same, the robot missing most"),
-    "aoi_age_mean": (pa.float64(), "age of a robot's information about the others (ticks), mean over robots"),
-    "aoi_age_max": (pa.float64(), "the same, the robot with the oldest"),
+    "missing_free_max": ("float64", "the same, the robot missing most"),
+    "aoi_age_mean": ("float64", "age of a robot's information about the others (ticks), mean over robots"),
+    "aoi_age_max": ("float64", "the same, the robot with the oldest"),
 }
 """Per-row communication columns (``RunResult.comm["series"]``; in a campaign, extra columns of
 ``*.timeseries.parquet``). The drop columns follow :data:`DROP_CAUSES`."""
 COMM_SERIES_COLUMNS: tuple[str, ...] = tuple(COMM_SERIES)
 
-COMM_ROBOT_SERIES: dict[str, tuple[pa.DataType, str]] = {
-    "missing_free": (pa.float64(), "share of the team's known free cells this robot does not know"),
-    "aoi_age": (pa.float64(), "mean over the other robots of the ticks since this robot last merged their map"),
-    "since_contact": (pa.int64(), "ticks since this robot last received a message (since the start if never)"),
-    "group": (pa.int64(), "its communication group at this tick (groups numbered by their lowest robot id)"),
+COMM_ROBOT_SERIES: dict[str, tuple[ArrowType, str]] = {
+    "missing_free": ("float64", "share of the team's known free cells this robot does not know"),
+    "aoi_age": ("float64", "mean over the other robots of the ticks since this robot last merged their map"),
+    "since_contact": ("int64", "ticks since this robot last received a message (since the start if never)"),
+    "group": ("int64", "its communication group at this tick (groups numbered by their lowest robot id)"),
 }
 """Per robot and row (``RunResult.comm["robots"][name][row][robot]``; in a campaign the long table
 ``*.robots.parquet``: key, tick, robot and these columns)."""
@@ -162,13 +173,13 @@ class CommSummary(TypedDict):
     per_robot: dict[str, list[float]]  # missing_free_mean, aoi_age_mean, since_contact_mean: per robot
 
 
-COMM_RUN_COLUMNS: dict[str, pa.DataType] = {
-    **{f"msgs_{cause}": pa.int64() for cause in DROP_CAUSES}, "msgs_relayed": pa.int64(),
-    "msgs_duplicates": pa.int64(), "bytes_dropped": pa.int64(),
-    "map_merges": pa.int64(), "comm_groups_mean": pa.float64(), "biggest_group_mean": pa.float64(),
-    "all_connected_share": pa.float64(), "since_contact_mean": pa.float64(), "since_contact_max": pa.int64(),
-    "missing_free_mean": pa.float64(), "missing_free_max": pa.float64(), "aoi_age_mean": pa.float64(),
-    "aoi_age_max": pa.float64(),
+COMM_RUN_COLUMNS: dict[str, ArrowType] = {
+    **{f"msgs_{cause}": "int64" for cause in DROP_CAUSES}, "msgs_relayed": "int64",
+    "msgs_duplicates": "int64", "bytes_dropped": "int64",
+    "map_merges": "int64", "comm_groups_mean": "float64", "biggest_group_mean": "float64",
+    "all_connected_share": "float64", "since_contact_mean": "float64", "since_contact_max": "int64",
+    "missing_free_mean": "float64", "missing_free_max": "float64", "aoi_age_mean": "float64",
+    "aoi_age_max": "float64",
 }
 """Runs-table columns from a run's messages and :class:`CommSummary` (None for failed runs and for results
 of versions that did not record them)."""
@@ -190,24 +201,23 @@ def comm_columns(summary: Summary | Mapping[str, Any] | None, comm: Mapping[str,
 
 
 # ------------------------------------------------------------------------------------- runs table ----
-RUNS: dict[str, pa.DataType] = {
-    "key": pa.string(), "campaign": pa.string(), "index": pa.int64(), "replicate": pa.int64(),
-    "map": pa.string(), "size": pa.string(), "robots": pa.int64(), "spawn": pa.string(), "algorithm": pa.string(),
-    "radio": pa.string(), "comm": pa.string(), "transport": pa.string(), "map_kind": pa.string(),
-    "algorithm_name": pa.string(), "radio_model": pa.string(), "map_seed": pa.int64(), "spawn_seed": pa.int64(),
-    "run_seed": pa.int64(), "status": pa.string(), "error": pa.string(), "explored_target": pa.float64(),
-    "max_ticks": pa.int64(), "ticks": pa.int64(), "stop_reason": pa.string(), "explored": pa.float64(),
-    "coverage": pa.float64(), **{col: pa.int64() for col in THRESHOLD_COLUMNS.values()}, "distance_m": pa.float64(),
-    "collisions": pa.int64(), "msgs_sent": pa.int64(), "bytes_sent": pa.int64(), "msgs_delivered": pa.int64(),
-    "bytes_delivered": pa.int64(), "msgs_dropped": pa.int64(), "failed_robots": pa.int64(), "spec_json": pa.string(),
-    "wall_time_s": pa.float64(), "cpu_time_s": pa.float64(), "jit_time_s": pa.float64(), "worker_pid": pa.int64(),
-    "worker_rss_mb": pa.float64(), "swarm_version": pa.string(), "algorithm_dist": pa.string(),
-    "algorithm_version": pa.string(), **COMM_RUN_COLUMNS,
+RUNS: dict[str, ArrowType] = {
+    "key": "string", "campaign": "string", "index": "int64", "replicate": "int64",
+    "map": "string", "size": "string", "robots": "int64", "spawn": "string", "algorithm": "string",
+    "radio": "string", "comm": "string", "transport": "string", "map_kind": "string",
+    "algorithm_name": "string", "radio_model": "string", "map_seed": "int64", "spawn_seed": "int64",
+    "run_seed": "int64", "status": "string", "error": "string", "explored_target": "float64",
+    "max_ticks": "int64", "ticks": "int64", "stop_reason": "string", "explored": "float64",
+    "coverage": "float64", **{col: "int64" for col in THRESHOLD_COLUMNS.values()}, "distance_m": "float64",
+    "collisions": "int64", "msgs_sent": "int64", "bytes_sent": "int64", "msgs_delivered": "int64",
+    "bytes_delivered": "int64", "msgs_dropped": "int64", "failed_robots": "int64", "spec_json": "string",
+    "wall_time_s": "float64", "cpu_time_s": "float64", "jit_time_s": "float64", "worker_pid": "int64",
+    "worker_rss_mb": "float64", "swarm_version": "string", "algorithm_dist": "string",
+    "algorithm_version": "string", **COMM_RUN_COLUMNS,
 }
 """One row per run (``*.runs.parquet``); the store adds ``part`` (the file a row came from) when reading.
 ``wall_time_s`` and ``cpu_time_s`` time the whole run in its worker, ``jit_time_s`` the part of it in numba's
 compiler (compiling or loading cached kernels: non-zero in a worker's first runs)."""
-RUNS_SCHEMA = pa.schema(list(RUNS.items()))
 NONDETERMINISTIC_COLUMNS = ("wall_time_s", "cpu_time_s", "jit_time_s", "worker_pid", "worker_rss_mb", "part",
                             "swarm_version")
 """Columns that may differ between two executions of the same run."""
@@ -230,27 +240,35 @@ def summary_columns(summary: Summary | Mapping[str, Any] | None) -> dict[str, An
             "failed_robots": len(summary["failed_robots"])}
 
 
-def timeseries_table(rows: list[dict[str, Any]]) -> pa.Table:
+def timeseries_table(rows: list[dict[str, Any]]) -> "pa.Table":
     """Time-series rows (``key`` first, the communication columns after the others) as a table of the
     schema's types (extra columns inferred)."""
+    import pyarrow as pa
+
     table = pa.Table.from_pylist(rows)
-    return _cast_known(table, {"key": pa.string(), **{c: t for c, (t, _) in TIMESERIES.items()},
+    return _cast_known(table, {"key": "string", **{c: t for c, (t, _) in TIMESERIES.items()},
                                **{c: t for c, (t, _) in COMM_SERIES.items()}})
 
 
-def robots_table(rows: list[dict[str, Any]]) -> pa.Table:
+def robots_table(rows: list[dict[str, Any]]) -> "pa.Table":
     """Per-robot rows (key, tick, robot, :data:`COMM_ROBOT_SERIES`) as a table of the schema's types."""
+    import pyarrow as pa
+
     table = pa.Table.from_pylist(rows)
-    return _cast_known(table, {"key": pa.string(), "tick": pa.int64(), "robot": pa.int64(),
+    return _cast_known(table, {"key": "string", "tick": "int64", "robot": "int64",
                                **{c: t for c, (t, _) in COMM_ROBOT_SERIES.items()}})
 
 
-def runs_table(rows: list[dict[str, Any]]) -> pa.Table:
+def runs_table(rows: list[dict[str, Any]]) -> "pa.Table":
     """Runs rows as a table of :data:`RUNS`'s types, so a column that is None in every row of a part still
     has its type (extra columns inferred)."""
+    import pyarrow as pa
+
     return _cast_known(pa.Table.from_pylist(rows), RUNS)
 
 
-def _cast_known(table: pa.Table, types: Mapping[str, pa.DataType]) -> pa.Table:
-    fields = [pa.field(f.name, types.get(f.name, f.type)) for f in table.schema]
+def _cast_known(table: "pa.Table", types: Mapping[str, ArrowType]) -> "pa.Table":
+    import pyarrow as pa
+
+    fields = [pa.field(f.name, arrow_type(types[f.name]) if f.name in types else f.type) for f in table.schema]
     return table.cast(pa.schema(fields))
