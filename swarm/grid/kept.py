@@ -5,8 +5,9 @@ map's configuration space, its view cells and the mask of targets (view cells in
 scratch they are about a third of a search, yet a robot's map changes little between two of its
 searches: only a few percent of its rows differ (figures: docs/performance-history.md).
 
-So each map keeps :class:`KeptInputs`: a copy of the map the arrays describe, the space (also padded as the
-search reads it) and the targets (its view cells in the space). :func:`refresh` compares the map with the
+So each map keeps :class:`KeptInputs`: a copy of the map the arrays describe, the space padded as the
+search reads it (the unpadded space is a view of its interior) and the targets (its view cells in the
+space). :func:`refresh` compares the map with the
 copy row by row and recomputes only the rows within ``margin`` of a changed row, where ``margin`` covers
 everything a row depends on (the erosion's row offsets for the space; ``reach`` steps plus the frontier
 test's neighbour for the view cells). It runs the same kernels on a slice of the map that extends
@@ -46,7 +47,7 @@ _NEVER = 255
 
 class KeptInputs(NamedTuple):
     copy: np.ndarray      # uint8[H, W]: the map the other arrays describe
-    space: np.ndarray     # uint8[H, W]: its configuration space (0/1)
+    space: np.ndarray     # uint8[H, W]: its configuration space (0/1): the interior of ``pad``, not a copy
     pad: np.ndarray       # uint8[H + 2, W + 2]: the space with a blocked one-cell border, as the search reads it
     targets: np.ndarray   # uint8[H + 2, W + 2]: view cells (no exclusion) in the space, padded like ``pad``
     row_targets: np.ndarray  # int64[H]: targets per row, so the total costs H additions
@@ -112,8 +113,10 @@ def note_far(key: Key, far: bool) -> None:
 
 
 def _new_inputs(h: int, w: int) -> KeptInputs:
-    return KeptInputs(np.full((h, w), _NEVER, np.uint8), np.zeros((h, w), np.uint8), np.zeros((h + 2, w + 2), np.uint8),
-                      np.zeros((h + 2, w + 2), np.uint8), np.zeros(h, np.int64), np.zeros(1, np.int64))
+    pad = np.zeros((h + 2, w + 2), np.uint8)  # the space is its interior: one array less per kept map (-0.36 MB
+    # per robot on a 300-tile map; docs/performance-history.md)
+    return KeptInputs(np.full((h, w), _NEVER, np.uint8), pad[1:-1, 1:-1], pad, np.zeros((h + 2, w + 2), np.uint8),
+                      np.zeros(h, np.int64), np.zeros(1, np.int64))
 
 
 def clean_workspace(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -138,7 +141,7 @@ def refresh(known, copy, space, pad, targets, row_targets, version, unseen_ok, r
             reach, margin):  # pragma: no cover - compiled
     """Bring the arrays of :class:`KeptInputs` up to date with ``known`` (``version`` counts up when
     anything changed); ``margin`` >= the erosion depth and >= ``reach + 1``. Returns the number of
-    targets."""
+    targets. ``pad`` is written through ``space``, its interior."""
     h, w = known.shape
     changed = np.zeros(h, np.bool_)
     any_change = False
@@ -164,7 +167,7 @@ def refresh(known, copy, space, pad, targets, row_targets, version, unseen_ok, r
         a = r
         while r < h and changed[r]:
             r += 1
-        _recompute_band(known, a, r, space, pad, targets, row_targets, unseen_ok, row_offsets,
+        _recompute_band(known, a, r, space, targets, row_targets, unseen_ok, row_offsets,
                         half_widths, reach, margin)
     if any_change:
         version[0] += 1
@@ -175,7 +178,7 @@ def refresh(known, copy, space, pad, targets, row_targets, version, unseen_ok, r
 
 
 @njit(cache=True, inline="always")
-def _recompute_band(known, a, b, space, pad, targets, row_targets, unseen_ok, row_offsets, half_widths,
+def _recompute_band(known, a, b, space, targets, row_targets, unseen_ok, row_offsets, half_widths,
                     reach, margin):  # pragma: no cover - compiled
     """Rows ``a:b`` of the space and targets, from the slice of ``known`` that extends
     ``margin`` rows beyond them (clipped to the map, whose edge the kernels treat as the map's edge)."""
@@ -190,13 +193,11 @@ def _recompute_band(known, a, b, space, pad, targets, row_targets, unseen_ok, ro
     for r in range(a, b):
         sp = part_space[r - lo]
         vw = seen[r - lo]
-        krow = space[r]
-        prow = pad[r + 1]
+        krow = space[r]  # pad's row r + 1, within its border
         trow = targets[r + 1]
         count = 0
         for c in range(w):
             krow[c] = sp[c]
-            prow[c + 1] = sp[c]
             t = vw[c] & (sp[c] != 0)
             trow[c + 1] = t
             count += t
