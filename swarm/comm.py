@@ -32,10 +32,10 @@ from numba import njit
 from maps.params import OMIT_DEFAULT, check_choice, check_float, check_int
 
 from .api import CELL_M
-from .knowledge import (check_writable_map, merge_cells_many, merge_cells_many_changed, merge_cells_many_counted,
-                        sync_box_unchecked, sync_changes)
+from .knowledge import check_writable_map, merge_cells_many, merge_cells_many_changed, merge_cells_many_counted
 from .metrics import FreeCounts, InfoAges
 from .messages import MAX_MESSAGE_BYTES, MapRequest, MapUpdate, MessageError, decode, delta_update, encode, full_update
+from .packed_maps import packed_copy, packed_size, sync_box_packed, sync_changes_packed
 from .schema import DROP_CAUSES
 
 if TYPE_CHECKING:
@@ -439,7 +439,10 @@ class MapSharing:
         self.n = n
         self.spec = spec
         self.enabled = spec.map_sharing in ("delta", "full") and n > 1  # the maes modes: swarm.maes_merge
-        self.last_shared = np.zeros((n, *shape), dtype=np.uint8) if spec.map_sharing == "delta" else None
+        # Each robot's map as of its last update, 2 bits a cell (swarm.packed_maps): deltas are the cells
+        # that differ from it
+        self.last_shared = (np.zeros((n, packed_size(shape[0] * shape[1])), dtype=np.uint8)
+                            if spec.map_sharing == "delta" else None)
         self.seq = [0] * n
         self.seen_seq = [[0] * n for _ in range(n)]          # [receiver][sender] last seq merged
         self._complete = [[True] * n for _ in range(n)]      # [receiver][sender] merged each of its updates so far
@@ -487,7 +490,7 @@ class MapSharing:
                     changed = self._changed_since_update(i, known[i])  # last_shared[i] becomes known[i]
                     since = (self.seq[i], changed, known[i].reshape(-1)[changed])
                 elif self.last_shared is not None:
-                    self.last_shared[i] = known[i]
+                    self.last_shared[i] = packed_copy(known[i])
                     self._forget_writes(i)
                 self.seq[i] += 1
                 update = full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]))
@@ -510,10 +513,10 @@ class MapSharing:
         assert self.last_shared is not None
         if self.lidar_reach is None or self._whole[i]:
             self._forget_writes(i)
-            return sync_changes(known, self.last_shared[i])
+            return sync_changes_packed(known, self.last_shared[i])
         merged = self._merged[i]
         extra = merged[0] if len(merged) == 1 else np.concatenate(merged) if merged else _NO_CELLS
-        changed = sync_box_unchecked(known, self.last_shared[i], self._boxes[i], extra)
+        changed = sync_box_packed(known, self.last_shared[i], self._boxes[i], extra)
         self._forget_writes(i)
         return changed
 
