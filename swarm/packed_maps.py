@@ -20,7 +20,8 @@ from numba import njit
 
 from ._cellcodec import pack2
 
-__all__ = ["packed_copy", "packed_size", "sync_box_packed", "sync_changes_packed", "unpacked"]
+__all__ = ["copy_cell_if_changed", "pack8", "packed_copy", "packed_size", "same_as_packed", "sync_box_packed",
+           "sync_changes_packed", "unpacked"]
 
 _M1 = np.uint64(0x000F000F000F000F)
 _M2 = np.uint64(0x000000FF000000FF)
@@ -45,7 +46,7 @@ def unpacked(packed: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
 
 
 @njit(cache=True, inline="always")
-def _pack8(x: np.uint64) -> np.uint64:  # pragma: no cover - compiled
+def pack8(x: np.uint64) -> np.uint64:  # pragma: no cover - compiled
     """Eight cells (one little-endian byte each, 0..3) packed into the low 16 bits, cell j in bits 2j."""
     x = (x | (x >> np.uint64(6))) & _M1
     x = (x | (x >> np.uint64(12))) & _M2
@@ -53,7 +54,7 @@ def _pack8(x: np.uint64) -> np.uint64:  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _copy_if_changed2(cur: np.ndarray, prev: np.ndarray, i: int) -> bool:  # pragma: no cover - compiled
+def copy_cell_if_changed(cur: np.ndarray, prev: np.ndarray, i: int) -> bool:  # pragma: no cover - compiled
     """Write flat cell ``i`` of ``cur`` into the 2-bit copy ``prev`` if it differs there; True if it did."""
     j = i >> 2
     s = (i & 3) << 1
@@ -73,7 +74,7 @@ def _same_words2(cur64: np.ndarray, prev16: np.ndarray, a: int, b: int) -> bool:
     if last >= cur64.shape[0]:
         return False
     for w in range(a >> 3, last + 1):
-        if _pack8(cur64[w]) != np.uint64(prev16[w]):
+        if pack8(cur64[w]) != np.uint64(prev16[w]):
             return False
     return True
 
@@ -94,11 +95,11 @@ def _sync_box_packed_kernel(current: np.ndarray, prev: np.ndarray, box: np.ndarr
             if _same_words2(cur64, prev16, a, b):
                 continue
             for i in range(a, b):
-                if _copy_if_changed2(cur, prev, i):
+                if copy_cell_if_changed(cur, prev, i):
                     out[m] = i
                     m += 1
     for j in range(extra.shape[0]):
-        if _copy_if_changed2(cur, prev, extra[j]):
+        if copy_cell_if_changed(cur, prev, extra[j]):
             out[m] = extra[j]
             m += 1
     if extra.shape[0]:
@@ -113,13 +114,13 @@ def _sync_changes_packed_kernel(cur: np.ndarray, prev: np.ndarray) -> np.ndarray
     out = np.empty(cur.shape[0], dtype=np.int64)
     m = 0
     for k in range(words):
-        if _pack8(cur64[k]) != np.uint64(prev16[k]):
+        if pack8(cur64[k]) != np.uint64(prev16[k]):
             for i in range(8 * k, 8 * k + 8):
-                if _copy_if_changed2(cur, prev, i):
+                if copy_cell_if_changed(cur, prev, i):
                     out[m] = i
                     m += 1
     for i in range(8 * words, cur.shape[0]):
-        if _copy_if_changed2(cur, prev, i):
+        if copy_cell_if_changed(cur, prev, i):
             out[m] = i
             m += 1
     return out[:m].copy()
@@ -136,3 +137,24 @@ def sync_changes_packed(current: np.ndarray, prev: np.ndarray) -> np.ndarray:
     """:func:`swarm.knowledge.sync_changes` against the 2-bit copy ``prev``: every cell of ``current`` that
     differs, ascending, written into ``prev`` (after the call ``prev`` is ``current``'s copy)."""
     return _sync_changes_packed_kernel(np.ascontiguousarray(current).reshape(-1), prev)
+
+
+@njit(cache=True)
+def _same_kernel(cur: np.ndarray, prev: np.ndarray) -> bool:  # pragma: no cover - compiled
+    words = cur.shape[0] // 8
+    cur64, prev16 = cur[:8 * words].view(np.uint64), prev[:2 * words].view(np.uint16)
+    for k in range(words):
+        if pack8(cur64[k]) != np.uint64(prev16[k]):
+            return False
+    for i in range(8 * words, cur.shape[0]):
+        if (np.int64(prev[i >> 2]) >> ((i & 3) << 1)) & 3 != cur[i]:
+            return False
+    return True
+
+
+def same_as_packed(current: np.ndarray, prev: np.ndarray) -> bool:
+    """Whether ``current`` (uint8, values 0..3) holds exactly what its 2-bit copy ``prev`` holds (a copy of
+    another size never does)."""
+    if prev.shape[0] != packed_size(current.size):
+        return False
+    return bool(_same_kernel(np.ascontiguousarray(current).reshape(-1), prev))

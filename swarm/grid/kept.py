@@ -5,10 +5,10 @@ map's configuration space, its view cells and the mask of targets (view cells in
 scratch they are about a third of a search, yet a robot's map changes little between two of its
 searches: only a few percent of its rows differ (figures: docs/performance-history.md).
 
-So each map keeps :class:`KeptInputs`: a copy of the map the arrays describe, the space padded as the
-search reads it (the unpadded space is a view of its interior) and the targets (its view cells in the
-space). :func:`refresh` compares the map with the
-copy row by row and recomputes only the rows within ``margin`` of a changed row, where ``margin`` covers
+So each map keeps :class:`KeptInputs`: a 2-bit copy of the map the arrays describe
+(:mod:`swarm.packed_maps`), the space padded as the search reads it (the unpadded space is a view of its
+interior) and the targets (its view cells in the space). :func:`refresh` compares the map with the copy
+eight cells at a time and recomputes only the rows within ``margin`` of a changed row, where ``margin`` covers
 everything a row depends on (the erosion's row offsets for the space; ``reach`` steps plus the frontier
 test's neighbour for the view cells). It runs the same kernels on a slice of the map that extends
 ``margin`` rows beyond the band and keeps the band's rows, which the slice's edges cannot reach, so every
@@ -31,6 +31,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
+from ..packed_maps import copy_cell_if_changed, pack8, packed_size
 from ._kernels import grid_configuration_space, grid_view_cells
 from .local import NO_TARGET, mark_targets, search_targets
 
@@ -42,11 +43,12 @@ searches its maps round robin, so every search would find its entry dropped and 
 that made a 64-robot run cost 2.3x a 32-robot one instead of 2x (docs/performance-history.md)."""
 
 _NEVER = 255
-"""Fills a new entry's copy: no knowledge map holds it, so the first refresh recomputes every row."""
+"""Fills a new entry's copy (every cell 3): no knowledge map holds it, so the first refresh recomputes
+every row."""
 
 
 class KeptInputs(NamedTuple):
-    copy: np.ndarray      # uint8[H, W]: the map the other arrays describe
+    copy: np.ndarray      # uint8[ceil(H W / 4)]: the map the other arrays describe, 2 bits a cell
     space: np.ndarray     # uint8[H, W]: its configuration space (0/1): the interior of ``pad``, not a copy
     pad: np.ndarray       # uint8[H + 2, W + 2]: the space with a blocked one-cell border, as the search reads it
     targets: np.ndarray   # uint8[H + 2, W + 2]: view cells (no exclusion) in the space, padded like ``pad``
@@ -83,7 +85,7 @@ def inputs_for(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: b
     entries = _KEPT.entries
     entry = entries.get(key)
     if entry is None:
-        if entries and next(iter(entries.values())).copy.shape != (h, w):
+        if entries and next(iter(entries.values())).space.shape != (h, w):
             forget_all()  # another run's map size: those entries can never be found again
         entry = entries[key] = _new_inputs(h, w)
         while len(entries) > MAX_ENTRIES:
@@ -115,7 +117,7 @@ def note_far(key: Key, far: bool) -> None:
 def _new_inputs(h: int, w: int) -> KeptInputs:
     pad = np.zeros((h + 2, w + 2), np.uint8)  # the space is its interior: one array less per kept map (-0.36 MB
     # per robot on a 300-tile map; docs/performance-history.md)
-    return KeptInputs(np.full((h, w), _NEVER, np.uint8), pad[1:-1, 1:-1], pad, np.zeros((h + 2, w + 2), np.uint8),
+    return KeptInputs(np.full(packed_size(h * w), _NEVER, np.uint8), pad[1:-1, 1:-1], pad, np.zeros((h + 2, w + 2), np.uint8),
                       np.zeros(h, np.int64), np.zeros(1, np.int64))
 
 
@@ -143,21 +145,24 @@ def refresh(known, copy, space, pad, targets, row_targets, version, unseen_ok, r
     anything changed); ``margin`` >= the erosion depth and >= ``reach + 1``. Returns the number of
     targets. ``pad`` is written through ``space``, its interior."""
     h, w = known.shape
+    cur = known.reshape(-1)
+    words = cur.shape[0] // 8
+    cur64, prev16 = cur[:8 * words].view(np.uint64), copy[:2 * words].view(np.uint16)
+    dirty = np.zeros(h, np.bool_)
+    for k in range(words):  # a map differs from its last search's in a few words: compare 8 cells at once
+        if pack8(cur64[k]) != np.uint64(prev16[k]):
+            for i in range(8 * k, 8 * k + 8):
+                if copy_cell_if_changed(cur, copy, i):
+                    dirty[i // w] = True
+    for i in range(8 * words, cur.shape[0]):
+        if copy_cell_if_changed(cur, copy, i):
+            dirty[i // w] = True
     changed = np.zeros(h, np.bool_)
     any_change = False
     for r in range(h):
-        a = known[r]
-        b = copy[r]
-        diff = 0
-        for c in range(w):  # branch-free, so the comparison vectorises
-            diff |= a[c] ^ b[c]
-        if diff != 0:
+        if dirty[r]:
             any_change = True
-            for c in range(w):
-                b[c] = a[c]
-            lo = max(r - margin, 0)
-            hi = min(r + margin + 1, h)
-            for rr in range(lo, hi):
+            for rr in range(max(r - margin, 0), min(r + margin + 1, h)):
                 changed[rr] = True
     r = 0
     while r < h:

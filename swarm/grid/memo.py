@@ -27,6 +27,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..packed_maps import same_as_packed
+
 MAX_ENTRIES = 128
 """Searches remembered per thread: one or two per robot of a team of up to 64 (see
 :data:`swarm.grid.kept.MAX_ENTRIES`). Each refers to its search's kept map and space (no copies of its own),
@@ -37,7 +39,7 @@ Params = tuple[float, float, bool]
 
 
 class SearchPlan(NamedTuple):
-    known: np.ndarray        # the map searched: the kept copy (swarm.grid.kept), valid while version holds
+    known: np.ndarray        # the map searched: the kept 2-bit copy (swarm.grid.kept), valid while version holds
     space: np.ndarray        # its configuration space (a read-only view of the kept space)
     start: tuple[int, int]   # the snapped start the search ran from
     goal: tuple[int, int]    # the target it found
@@ -57,13 +59,13 @@ _MEMO = _Memo()
 def remember(known: np.ndarray, version: np.ndarray, params: Params, start_cell: tuple[int, int],
              space: np.ndarray, start: tuple[int, int], goal: tuple[int, int], path: np.ndarray) -> None:
     """Keep a whole-map target search: from the robot's cell ``start_cell`` (snapped to ``start``) to
-    ``goal`` on the kept map copy ``known`` with configuration space ``space`` (both valid while the
+    ``goal`` on the kept 2-bit map copy ``known`` with configuration space ``space`` (both valid while the
     counter ``version`` keeps its present value), and the path read off its distances."""
     space = space.view()
     space.flags.writeable = False  # this view only: the kept space itself stays writable for its updates
     path.flags.writeable = False
     entries = _MEMO.entries
-    if entries and next(iter(entries.values())).known.shape != known.shape:
+    if entries and next(iter(entries.values())).space.shape != space.shape:
         entries.clear()  # another run's map: its searches can never match again, so hold no memory for them
     key = (params, start_cell, goal)
     entries[key] = SearchPlan(known, space, start, goal, path, version, int(version[0]))
@@ -77,8 +79,9 @@ def recall(known: np.ndarray, params: Params, start_cell: tuple[int, int], goal:
     """The remembered search from ``start_cell`` to ``goal`` with these parameters, if it ran on a map
     equal to ``known``."""
     entry = _MEMO.entries.get((params, start_cell, goal))
-    if entry is None or entry.version[0] != entry.seen or not np.array_equal(entry.known, known):
-        return None  # (unequal shapes are unequal too)
+    if (entry is None or entry.version[0] != entry.seen or entry.space.shape != known.shape
+            or not same_as_packed(known, entry.known)):
+        return None
     return entry
 
 

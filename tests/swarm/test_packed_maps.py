@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 
 from swarm.knowledge import sync_box, sync_changes
-from swarm.packed_maps import packed_copy, packed_size, sync_box_packed, sync_changes_packed, unpacked
+from swarm.packed_maps import (packed_copy, packed_size, same_as_packed, sync_box_packed, sync_changes_packed,
+                                unpacked)
 
 
 def test_a_packed_copy_holds_the_map_in_a_quarter_of_the_bytes() -> None:
@@ -51,3 +52,16 @@ def test_sync_box_packed_equals_sync_box_on_a_byte_copy() -> None:
         got = sync_box_packed(current, copy, box, extra.astype(np.int64))
         assert got.tolist() == want.tolist(), case
         assert np.array_equal(unpacked(copy, (h, w)), byte_copy), case  # the same cells written, no others
+
+
+def test_same_as_packed_tells_a_map_from_its_copy_by_every_cell() -> None:
+    rng = np.random.default_rng(21)
+    for h, w in ((1, 3), (5, 5), (9, 13)):
+        known = rng.integers(0, 3, (h, w), dtype=np.uint8)
+        copy = packed_copy(known)
+        assert same_as_packed(known, copy)
+        for i in range(h * w):                      # whole words and the tail past the last one
+            other = known.copy()
+            other.reshape(-1)[i] = (other.reshape(-1)[i] + 1) % 3
+            assert not same_as_packed(other, copy), i
+        assert not same_as_packed(np.zeros((h * w + 4, 1), np.uint8), copy)

@@ -17,6 +17,7 @@ from swarm.grid.cspace import _erosion_rows
 from swarm.grid.local import TARGET_FOUND, erosion_depth, window_target
 from swarm.grid.search import _WORK
 from swarm.grid.targets import default_view_reach_cells
+from swarm.packed_maps import unpacked
 
 
 def growing_maps(seed: int, steps: int) -> tuple[np.ndarray, list[np.ndarray]]:
@@ -62,7 +63,7 @@ def test_kept_inputs_equal_a_fresh_computation_after_every_change(radius: float,
             total = kept.refresh(robot_map, *inputs, unseen_ok, rows, widths, reach, band)
             space = grid.configuration_space(robot_map, radius, margin, unseen_ok).view(np.uint8)
             view = grid.view_cells(robot_map, reach)
-            assert np.array_equal(inputs.copy, robot_map)
+            assert np.array_equal(unpacked(inputs.copy, robot_map.shape), robot_map)
             assert np.array_equal(inputs.pad[1:-1, 1:-1], space)
             assert not inputs.pad[[0, -1]].any() and not inputs.pad[:, [0, -1]].any()
             assert np.array_equal(inputs.targets[1:-1, 1:-1], (view & (space != 0)).view(np.uint8))
@@ -191,7 +192,7 @@ def test_kept_entries_hold_one_map_size_at_a_time() -> None:
     for m in (small, big):
         m[5:15, 5:15] = FREE
         grid.nearest_reachable_unseen(m, (10, 10), local_first_m=None)
-    assert [entry.copy.shape for entry in kept._KEPT.entries.values()] == [big.shape]
+    assert [entry.space.shape for entry in kept._KEPT.entries.values()] == [big.shape]
 
 
 def test_a_remembered_search_is_not_recalled_once_its_kept_inputs_moved_on() -> None:
@@ -210,7 +211,7 @@ def test_a_remembered_search_is_not_recalled_once_its_kept_inputs_moved_on() -> 
     assert not np.array_equal(maps[-1], maps[-2])
     other = free[-1]
     grid.nearest_reachable_unseen(robot_map, other, local_first_m=None)   # refreshes the kept inputs in place
-    assert np.array_equal(kept.inputs_for(robot_map, 0.3, 0.05, False, 2).copy, robot_map)
+    assert np.array_equal(unpacked(kept.inputs_for(robot_map, 0.3, 0.05, False, 2).copy, robot_map.shape), robot_map)
     assert memo.recall(robot_map, params, start, found[0]) is None
 
 
