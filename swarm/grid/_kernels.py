@@ -52,6 +52,14 @@ def _grid_relax(q, nd, fk, dist, ring, count, n, s1, s2):  # pragma: no cover - 
             count[s2] += 1
 
 
+@njit(cache=True, inline="always")
+def _is_target(targets, p, bits):  # pragma: no cover - compiled
+    """Whether cell ``p`` is marked in ``targets``, a byte or (``bits``) a bit per cell."""
+    if bits:
+        return (targets[p >> 3] >> (p & 7)) & 1 != 0
+    return targets[np.uint64(p)] != 0
+
+
 @njit(cache=True)
 def grid_bucket_search(free: np.ndarray, wp: int, seeds: np.ndarray, goal: int, targets: np.ndarray,
                        max_d: float, dist: np.ndarray, ring: np.ndarray,
@@ -59,7 +67,9 @@ def grid_bucket_search(free: np.ndarray, wp: int, seeds: np.ndarray, goal: int, 
     """Exact octile Dijkstra from ``seeds`` over cells with ``free[p] != 0``.
 
     free: uint8[n] padded flat grid. seeds: int64[K] flat indices of free cells. goal: a flat index to
-    stop at, or -1. targets: uint8[n] to stop at the nearest of, or an empty array. max_d: stop once the
+    stop at, or -1. targets: the cells to stop at the nearest of, a byte each (uint8[n]) or a bit each
+    (uint8[ceil(n / 8)], cell p in bit p % 8 of byte p // 8, as ``np.packbits(..., bitorder="little")``
+    lays them out: an eighth of the memory for targets kept between searches), or an empty array. max_d: stop once the
     settled distance passes this (cells). dist: float64[n] workspace, overwritten with the result; ring:
     int32 workspace of at least 3 n entries. touched: an empty array (:data:`NO_TOUCHED`), or an int32
     array of at least 4 n entries; then ``dist`` must be all inf on entry (it is not filled: for a whole
@@ -77,6 +87,8 @@ def grid_bucket_search(free: np.ndarray, wp: int, seeds: np.ndarray, goal: int, 
     nt = 0
     count = np.zeros(3, dtype=np.int64)
     has_targets = targets.shape[0] == n
+    target_bits = n > 8 and targets.shape[0] == (n + 7) // 8  # (a padded grid has at least 9 cells)
+    has_targets = has_targets or target_bits
     for i in range(seeds.shape[0]):
         s = seeds[i]
         if dist[s] != 0.0:
@@ -108,7 +120,7 @@ def grid_bucket_search(free: np.ndarray, wp: int, seeds: np.ndarray, goal: int, 
             for i in range(m):
                 p = ring[np.uint64(base + i)]
                 d = dist[np.uint64(p)]
-                if d >= fk and targets[np.uint64(p)] != 0:
+                if d >= fk and _is_target(targets, p, target_bits):
                     if d < best_d - EPS or (d <= best_d + EPS and p < best):
                         best = p
                         best_d = d

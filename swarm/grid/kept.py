@@ -51,7 +51,8 @@ class KeptInputs(NamedTuple):
     copy: np.ndarray      # uint8[ceil(H W / 4)]: the map the other arrays describe, 2 bits a cell
     space: np.ndarray     # uint8[H, W]: its configuration space (0/1): the interior of ``pad``, not a copy
     pad: np.ndarray       # uint8[H + 2, W + 2]: the space with a blocked one-cell border, as the search reads it
-    targets: np.ndarray   # uint8[H + 2, W + 2]: view cells (no exclusion) in the space, padded like ``pad``
+    targets: np.ndarray   # uint8[ceil((H + 2) (W + 2) / 8)]: view cells (no exclusion) in the space, a bit
+    #                       per cell of ``pad`` (swarm.grid._kernels.grid_bucket_search's bit layout)
     row_targets: np.ndarray  # int64[H]: targets per row, so the total costs H additions
     version: np.ndarray   # int64[1]: counts the refreshes that changed something (see swarm.grid.memo)
 
@@ -117,8 +118,8 @@ def note_far(key: Key, far: bool) -> None:
 def _new_inputs(h: int, w: int) -> KeptInputs:
     pad = np.zeros((h + 2, w + 2), np.uint8)  # the space is its interior: one array less per kept map (-0.36 MB
     # per robot on a 300-tile map; docs/performance-history.md)
-    return KeptInputs(np.full(packed_size(h * w), _NEVER, np.uint8), pad[1:-1, 1:-1], pad, np.zeros((h + 2, w + 2), np.uint8),
-                      np.zeros(h, np.int64), np.zeros(1, np.int64))
+    return KeptInputs(np.full(packed_size(h * w), _NEVER, np.uint8), pad[1:-1, 1:-1], pad,
+                      np.zeros(((h + 2) * (w + 2) + 7) // 8, np.uint8), np.zeros(h, np.int64), np.zeros(1, np.int64))
 
 
 def clean_workspace(n: int) -> tuple[np.ndarray, np.ndarray]:
@@ -199,12 +200,13 @@ def _recompute_band(known, a, b, space, targets, row_targets, unseen_ok, row_off
         sp = part_space[r - lo]
         vw = seen[r - lo]
         krow = space[r]  # pad's row r + 1, within its border
-        trow = targets[r + 1]
+        q = (r + 1) * (w + 2) + 1  # the bit of (r, 0) in the padded layout
         count = 0
         for c in range(w):
             krow[c] = sp[c]
             t = vw[c] & (sp[c] != 0)
-            trow[c + 1] = t
+            j, b = (q + c) >> 3, (q + c) & 7
+            targets[j] = (np.int64(targets[j]) & ~(1 << b)) | (np.int64(t) << b)
             count += t
         row_targets[r] = count
 
@@ -225,10 +227,10 @@ def map_target(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, s
     marks = targets
     if exclude.shape[0] == h:
         seen = np.zeros((h, w), np.bool_)
-        marks = np.zeros((h + 2, w + 2), np.uint8)
+        marks = np.zeros((h + 2) * (w + 2), np.uint8)  # a byte per cell, computed for this search only
         total = 0
         if grid_view_cells(known, exclude, reach, seen) > 0:
-            total = mark_targets(seen, pad, exclude, marks)
+            total = mark_targets(seen, pad, exclude, marks.reshape(h + 2, w + 2))
     if total == 0:
         return NO_TARGET, -1, -1, np.inf, -1, -1, np.empty((0, 0), np.uint8), np.empty((0, 2), np.int64)
     return search_targets(space, pad, marks, sr, sc, snap, True, dist, ring, touched)

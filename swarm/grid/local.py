@@ -159,8 +159,8 @@ def _target_search(window, exclude, reach, unseen_ok, row_offsets, half_widths, 
 @njit(cache=True)
 def search_targets(space, pad, targets, sr, sc, snap, with_path, dist, ring,
                    touched):  # pragma: no cover - compiled
-    """Snap ``(sr, sc)`` into ``space`` and find the nearest cell of ``targets`` (both padded like ``pad``,
-    the space with a blocked border): (status, row, col, distance in cells, snapped row, snapped col,
+    """Snap ``(sr, sc)`` into ``space`` and find the nearest cell of ``targets`` (padded like ``pad``, the
+    space with a blocked border; a byte or a bit per cell, see :func:`swarm.grid._kernels.grid_bucket_search`): (status, row, col, distance in cells, snapped row, snapped col,
     space, path), the path read off the search's distances only ``with_path``. Shared by the window
     stage and the whole-map stage (:func:`swarm.grid.kept.map_target`). ``touched``: empty, or (with an
     all-inf ``dist``) where the search lists the cells it gave a distance, which are set back to inf

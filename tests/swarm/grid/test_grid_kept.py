@@ -20,6 +20,12 @@ from swarm.grid.targets import default_view_reach_cells
 from swarm.packed_maps import unpacked
 
 
+
+def target_grid(inputs: kept.KeptInputs, shape: tuple[int, int]) -> np.ndarray:
+    """The kept targets (a bit per padded cell) as a padded uint8 grid."""
+    h, w = shape[0] + 2, shape[1] + 2
+    return np.unpackbits(inputs.targets, bitorder="little")[:h * w].reshape(h, w)
+
 def growing_maps(seed: int, steps: int) -> tuple[np.ndarray, list[np.ndarray]]:
     """A building revealed step by step, as a robot's map grows: a disc around a wandering point (the
     lidar), scattered cells in random rows (merged updates from others) and now and then a FREE cell that
@@ -66,8 +72,9 @@ def test_kept_inputs_equal_a_fresh_computation_after_every_change(radius: float,
             assert np.array_equal(unpacked(inputs.copy, robot_map.shape), robot_map)
             assert np.array_equal(inputs.pad[1:-1, 1:-1], space)
             assert not inputs.pad[[0, -1]].any() and not inputs.pad[:, [0, -1]].any()
-            assert np.array_equal(inputs.targets[1:-1, 1:-1], (view & (space != 0)).view(np.uint8))
-            assert not inputs.targets[[0, -1]].any() and not inputs.targets[:, [0, -1]].any()
+            targets = target_grid(inputs, robot_map.shape)
+            assert np.array_equal(targets[1:-1, 1:-1], (view & (space != 0)).view(np.uint8))
+            assert not targets[[0, -1]].any() and not targets[:, [0, -1]].any()
             assert total == int(np.count_nonzero(view & (space != 0)))
             partial += 0 < np.count_nonzero((before != robot_map).any(axis=1)) < robot_map.shape[0] // 2
     assert partial >= 20  # most steps changed some rows only: the band updates were exercised
@@ -103,7 +110,7 @@ def test_one_changed_cell_is_recomputed_as_far_as_it_reaches_in_every_direction(
         space = grid.configuration_space(robot_map, radius, margin, unseen_ok).view(np.uint8)
         view = grid.view_cells(robot_map, reach)
         assert np.array_equal(inputs.pad[1:-1, 1:-1], space)
-        assert np.array_equal(inputs.targets[1:-1, 1:-1], (view & (space != 0)).view(np.uint8))
+        assert np.array_equal(target_grid(inputs, robot_map.shape)[1:-1, 1:-1], (view & (space != 0)).view(np.uint8))
         assert total == int(np.count_nonzero(view & (space != 0)))
 
 
@@ -225,12 +232,13 @@ def test_a_map_converted_for_one_search_is_not_kept() -> None:
     assert len(kept._KEPT.entries) == 1
 
 
-def test_a_recording_search_lists_every_cell_it_gave_a_distance() -> None:
+def test_a_recording_search_lists_every_cell_it_gave_a_distance_and_reads_targets_as_bits_too() -> None:
     # the whole-map search skips filling its distance array: it relies on the search listing every cell
     # it wrote, so they can be set back to inf
     from swarm.grid._kernels import NO_TOUCHED, grid_bucket_search
 
     rng = np.random.default_rng(3)
+    found = 0
     for seed in range(2):
         _, maps = growing_maps(seed, 12)
         for known in maps[::3]:
@@ -242,7 +250,7 @@ def test_a_recording_search_lists_every_cell_it_gave_a_distance() -> None:
             if free.size == 0:
                 continue
             seeds = rng.choice(free, min(2, free.size), replace=False).astype(np.int64)
-            targets = (rng.random(pad.size) < 0.002).astype(np.uint8)
+            targets = (rng.random(pad.size) < 0.01).astype(np.uint8)
             for max_d in (np.inf, 12.0):
                 plain, ring = np.empty(pad.size), np.empty(3 * pad.size, np.int32)
                 a = grid_bucket_search(pad.reshape(-1), w + 2, seeds, -1, targets, max_d, plain, ring, NO_TOUCHED)
@@ -250,6 +258,11 @@ def test_a_recording_search_lists_every_cell_it_gave_a_distance() -> None:
                 b = grid_bucket_search(pad.reshape(-1), w + 2, seeds, -1, targets, max_d, clean, ring, touched)
                 assert a[:2] == b[:2] and np.array_equal(plain.view(np.int64), clean.view(np.int64))
                 assert set(touched[:b[2]].tolist()) == set(np.flatnonzero(np.isfinite(clean)).tolist())
+                bits = np.packbits(targets, bitorder="little")  # the kept layout: a bit per cell
+                c = grid_bucket_search(pad.reshape(-1), w + 2, seeds, -1, bits, max_d, plain, ring, NO_TOUCHED)
+                assert c[:2] == a[:2]
+                found += a[0] >= 0
+    assert found > 5  # the searches stopped at targets, not only ran out
 
 
 def test_the_whole_map_search_leaves_its_workspace_clean() -> None:
