@@ -6,8 +6,10 @@ scratch they are about a third of a search, yet a robot's map changes little bet
 searches: only a few percent of its rows differ (figures: docs/performance-history.md).
 
 So each map keeps :class:`KeptInputs`: a 2-bit copy of the map the arrays describe
-(:mod:`swarm.packed_maps`), the space padded as the search reads it (the unpadded space is a view of its
-interior) and the targets (its view cells in the space). :func:`refresh` compares the map with the copy
+(:mod:`swarm.packed_maps`), its configuration space and its targets (view cells in the space), both a bit
+per cell of the padded grid the search reads; a search unpacks the space into this thread's padded byte
+grid (~20 us on a 600 x 600 map), so a kept map costs 180 KB instead of 1.4 MB (64 robots on a 300-tile
+map: 12 MB instead of 89; docs/performance-history.md). :func:`refresh` compares the map with the copy
 eight cells at a time and recomputes only the rows within ``margin`` of a changed row, where ``margin`` covers
 everything a row depends on (the erosion's row offsets for the space; ``reach`` steps plus the frontier
 test's neighbour for the view cells). It runs the same kernels on a slice of the map that extends
@@ -18,7 +20,7 @@ on growing maps).
 Entries are found by the map's buffer (a robot's knowledge map is one array for a whole run), but an entry
 is never trusted: any map is compared with the copy, so a reused buffer or a different map only means more
 rows to recompute. The targets kept are those without an exclusion mask; a search with one computes its
-own (the space is kept either way). :mod:`swarm.grid.memo` holds on to the copy and the space
+own (the space is kept either way). :mod:`swarm.grid.memo` holds on to the copy and the space's bits
 instead of copying them, and trusts them only while the entry's ``version`` is the one it saw.
 """
 
@@ -36,8 +38,8 @@ from ._kernels import grid_configuration_space, grid_view_cells
 from .local import NO_TARGET, mark_targets, search_targets
 
 MAX_ENTRIES = 64
-"""Maps kept per thread: one per robot of a team of up to 64. Each entry holds four map-sized byte arrays
-(360 KB for a 150 m map, 1.4 MB for a 300 m one); the least recently searched map is dropped first, and
+"""Maps kept per thread: one per robot of a team of up to 64. Each entry holds a 2-bit map and two 1-bit
+ones (45 KB for a 150 m map, 180 KB for a 300 m one); the least recently searched map is dropped first, and
 all of them when a map of another size comes (as :mod:`swarm.grid.memo` does). A team larger than this
 searches its maps round robin, so every search would find its entry dropped and rebuild it: at 32 entries
 that made a 64-robot run cost 2.3x a 32-robot one instead of 2x (docs/performance-history.md)."""
@@ -49,10 +51,10 @@ every row."""
 
 class KeptInputs(NamedTuple):
     copy: np.ndarray      # uint8[ceil(H W / 4)]: the map the other arrays describe, 2 bits a cell
-    space: np.ndarray     # uint8[H, W]: its configuration space (0/1): the interior of ``pad``, not a copy
-    pad: np.ndarray       # uint8[H + 2, W + 2]: the space with a blocked one-cell border, as the search reads it
-    targets: np.ndarray   # uint8[ceil((H + 2) (W + 2) / 8)]: view cells (no exclusion) in the space, a bit
-    #                       per cell of ``pad`` (swarm.grid._kernels.grid_bucket_search's bit layout)
+    space: np.ndarray     # uint8[ceil((H + 2) (W + 2) / 8)]: its configuration space with a blocked border
+    #                       (the search's padded grid), a bit per cell in np.packbits's little bit order
+    targets: np.ndarray   # the same layout: view cells (no exclusion) in the space, as
+    #                       swarm.grid._kernels.grid_bucket_search reads bit targets
     row_targets: np.ndarray  # int64[H]: targets per row, so the total costs H additions
     version: np.ndarray   # int64[1]: counts the refreshes that changed something (see swarm.grid.memo)
 
@@ -64,8 +66,10 @@ class _Kept(threading.local):
     def __init__(self) -> None:
         self.entries: OrderedDict[Key, KeptInputs] = OrderedDict()
         self.far: set[Key] = set()  # kept maps whose last target search went past its window (went_far)
+        self.shape: tuple[int, int] | None = None  # the size of every kept map (one size at a time)
         self.dist = np.zeros(0, dtype=np.float64)      # all inf between searches (see clean_workspace)
         self.touched = np.zeros(0, dtype=np.int32)
+        self.pad = np.zeros(0, dtype=np.uint8)         # the searched map's space, unpacked (see clean_workspace)
 
 
 _KEPT = _Kept()
@@ -86,8 +90,9 @@ def inputs_for(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: b
     entries = _KEPT.entries
     entry = entries.get(key)
     if entry is None:
-        if entries and next(iter(entries.values())).space.shape != (h, w):
+        if entries and _KEPT.shape != (h, w):
             forget_all()  # another run's map size: those entries can never be found again
+        _KEPT.shape = (h, w)
         entry = entries[key] = _new_inputs(h, w)
         while len(entries) > MAX_ENTRIES:
             _KEPT.far.discard(entries.popitem(last=False)[0])
@@ -116,35 +121,37 @@ def note_far(key: Key, far: bool) -> None:
 
 
 def _new_inputs(h: int, w: int) -> KeptInputs:
-    pad = np.zeros((h + 2, w + 2), np.uint8)  # the space is its interior: one array less per kept map (-0.36 MB
-    # per robot on a 300-tile map; docs/performance-history.md)
-    return KeptInputs(np.full(packed_size(h * w), _NEVER, np.uint8), pad[1:-1, 1:-1], pad,
-                      np.zeros(((h + 2) * (w + 2) + 7) // 8, np.uint8), np.zeros(h, np.int64), np.zeros(1, np.int64))
+    bits = ((h + 2) * (w + 2) + 7) // 8
+    return KeptInputs(np.full(packed_size(h * w), _NEVER, np.uint8), np.zeros(bits, np.uint8),
+                      np.zeros(bits, np.uint8), np.zeros(h, np.int64), np.zeros(1, np.int64))
 
 
-def clean_workspace(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """This thread's distance array for whole-map searches of ``n`` padded cells, all inf, and room for the
+def clean_workspace(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """This thread's distance array for whole-map searches of ``n`` padded cells, all inf, room for the
     list of cells a search touches (:func:`swarm.grid._kernels.grid_bucket_search`): the search sets those
-    back to inf, so the next one need not fill 730 KB (a 300 x 300 map) first, ~25 us in the run."""
+    back to inf, so the next one need not fill 730 KB (a 300 x 300 map) first, ~25 us in the run; and the
+    padded byte grid a kept space is unpacked into (its border stays 0)."""
     k = _KEPT
     if k.dist.shape[0] != n:
         k.dist = np.full(n, np.inf)
         k.touched = np.empty(4 * n, dtype=np.int32)
-    return k.dist, k.touched
+        k.pad = np.zeros(n, dtype=np.uint8)
+    return k.dist, k.touched, k.pad
 
 
 def forget_all() -> None:
     """Drop every kept entry of this thread, and the hints about them."""
     _KEPT.entries.clear()
     _KEPT.far.clear()
+    _KEPT.shape = None
 
 
 @njit(cache=True)
-def refresh(known, copy, space, pad, targets, row_targets, version, unseen_ok, row_offsets, half_widths,
+def refresh(known, copy, space, targets, row_targets, version, unseen_ok, row_offsets, half_widths,
             reach, margin):  # pragma: no cover - compiled
-    """Bring the arrays of :class:`KeptInputs` up to date with ``known`` (``version`` counts up when
-    anything changed); ``margin`` >= the erosion depth and >= ``reach + 1``. Returns the number of
-    targets. ``pad`` is written through ``space``, its interior."""
+    """Bring the arrays of :class:`KeptInputs` up to date with ``known`` (a checked, C-contiguous map:
+    values 0..2; ``version`` counts up when anything changed); ``margin`` >= the erosion depth and >=
+    ``reach + 1``. Returns the number of targets."""
     h, w = known.shape
     cur = known.reshape(-1)
     words = cur.shape[0] // 8
@@ -199,38 +206,59 @@ def _recompute_band(known, a, b, space, targets, row_targets, unseen_ok, row_off
     for r in range(a, b):
         sp = part_space[r - lo]
         vw = seen[r - lo]
-        krow = space[r]  # pad's row r + 1, within its border
         q = (r + 1) * (w + 2) + 1  # the bit of (r, 0) in the padded layout
         count = 0
         for c in range(w):
-            krow[c] = sp[c]
-            t = vw[c] & (sp[c] != 0)
+            s = np.int64(sp[c] != 0)
+            t = np.int64(vw[c]) & s
             j, b = (q + c) >> 3, (q + c) & 7
-            targets[j] = (np.int64(targets[j]) & ~(1 << b)) | (np.int64(t) << b)
+            space[j] = (np.int64(space[j]) & ~(1 << b)) | (s << b)
+            targets[j] = (np.int64(targets[j]) & ~(1 << b)) | (t << b)
             count += t
         row_targets[r] = count
 
 
 @njit(cache=True)
-def map_target(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap, dist, ring, touched, copy,
-               space, pad, targets, row_targets, version, margin):  # pragma: no cover - compiled
+def map_target(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap, dist, ring, touched,
+               pad, copy, space, targets, row_targets, version, margin):  # pragma: no cover - compiled
     """The whole-map stage of :func:`swarm.grid.nearest_reachable_unseen` in one call: :func:`refresh` the
-    kept inputs (``copy`` .. ``version``, see :class:`KeptInputs`), then snap and search
+    kept inputs (``copy`` .. ``version``, see :class:`KeptInputs`), unpack the space into ``pad`` (the
+    thread's padded grid of :func:`clean_workspace`), then snap and search
     (:func:`swarm.grid.local.search_targets`, on the all-inf ``dist`` of :func:`clean_workspace`, which it
     leaves all inf). With an exclusion mask (``exclude`` bool[H, W], or empty
     for none) the targets are computed afresh from the kept space. Returns what
-    ``search_targets`` returns, with the path to the target (for :mod:`swarm.grid.memo`) and the kept
-    space."""
+    ``search_targets`` returns, with the path to the target (for :mod:`swarm.grid.memo`) and the space
+    searched (a view of ``pad``)."""
     h, w = known.shape
-    total = refresh(known, copy, space, pad, targets, row_targets, version, unseen_ok, row_offsets,
+    total = refresh(known, copy, space, targets, row_targets, version, unseen_ok, row_offsets,
                     half_widths, reach, margin)
+    if total == 0 and exclude.shape[0] != h:
+        return NO_TARGET, -1, -1, np.inf, -1, -1, np.empty((0, 0), np.uint8), np.empty((0, 2), np.int64)
+    unpack_bits(space, pad)
+    grid = pad.reshape(h + 2, w + 2)
     marks = targets
     if exclude.shape[0] == h:
         seen = np.zeros((h, w), np.bool_)
         marks = np.zeros((h + 2) * (w + 2), np.uint8)  # a byte per cell, computed for this search only
         total = 0
         if grid_view_cells(known, exclude, reach, seen) > 0:
-            total = mark_targets(seen, pad, exclude, marks.reshape(h + 2, w + 2))
+            total = mark_targets(seen, grid, exclude, marks.reshape(h + 2, w + 2))
     if total == 0:
         return NO_TARGET, -1, -1, np.inf, -1, -1, np.empty((0, 0), np.uint8), np.empty((0, 2), np.int64)
-    return search_targets(space, pad, marks, sr, sc, snap, True, dist, ring, touched)
+    return search_targets(grid[1:-1, 1:-1], grid, marks, sr, sc, snap, True, dist, ring, touched)
+
+
+_BYTES_OF_BITS = np.array([sum(((x >> b) & 1) << (8 * b) for b in range(8)) for x in range(256)], dtype=np.uint64)
+"""Eight bits of a byte spread to eight bytes of 0 or 1 (little-endian bit and byte order)."""
+
+
+@njit(cache=True)
+def unpack_bits(bits, out):  # pragma: no cover - compiled
+    """``out`` (uint8[n]) = the first n bits of ``bits`` (np.packbits's little bit order), a byte each."""
+    n = out.shape[0]
+    whole = n // 8
+    out64 = out[:8 * whole].view(np.uint64)
+    for j in range(whole):
+        out64[j] = _BYTES_OF_BITS[bits[j]]
+    for i in range(8 * whole, n):
+        out[i] = (bits[i >> 3] >> (i & 7)) & 1

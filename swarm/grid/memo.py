@@ -40,12 +40,23 @@ Params = tuple[float, float, bool]
 
 class SearchPlan(NamedTuple):
     known: np.ndarray        # the map searched: the kept 2-bit copy (swarm.grid.kept), valid while version holds
-    space: np.ndarray        # its configuration space (a read-only view of the kept space)
+    space_bits: np.ndarray   # its configuration space: the kept bits of the padded grid (swarm.grid.kept)
+    shape: tuple[int, int]   # the map's size
     start: tuple[int, int]   # the snapped start the search ran from
     goal: tuple[int, int]    # the target it found
     path: np.ndarray         # int64[N, 2] from start to goal, as swarm.grid.plan gives it
     version: np.ndarray      # the kept inputs' version counter (int64[1])
     seen: int                # its value when the search ran
+
+    @property
+    def space(self) -> np.ndarray:
+        """The configuration space searched, bool[H, W], read-only; unpacked on each call (the navigator
+        reads it once per recalled plan)."""
+        h, w = self.shape
+        pad = np.unpackbits(self.space_bits, count=(h + 2) * (w + 2), bitorder="little").view(np.bool_)
+        space = pad.reshape(h + 2, w + 2)[1:-1, 1:-1]
+        space.flags.writeable = False
+        return space
 
 
 class _Memo(threading.local):
@@ -56,19 +67,19 @@ class _Memo(threading.local):
 _MEMO = _Memo()
 
 
-def remember(known: np.ndarray, version: np.ndarray, params: Params, start_cell: tuple[int, int],
-             space: np.ndarray, start: tuple[int, int], goal: tuple[int, int], path: np.ndarray) -> None:
-    """Keep a whole-map target search: from the robot's cell ``start_cell`` (snapped to ``start``) to
-    ``goal`` on the kept 2-bit map copy ``known`` with configuration space ``space`` (both valid while the
-    counter ``version`` keeps its present value), and the path read off its distances."""
-    space = space.view()
-    space.flags.writeable = False  # this view only: the kept space itself stays writable for its updates
+def remember(known: np.ndarray, space_bits: np.ndarray, shape: tuple[int, int], version: np.ndarray,
+             params: Params, start_cell: tuple[int, int], start: tuple[int, int], goal: tuple[int, int],
+             path: np.ndarray) -> None:
+    """Keep a whole-map target search on a map of ``shape``: from the robot's cell ``start_cell`` (snapped
+    to ``start``) to ``goal`` on the kept 2-bit map copy ``known`` with the configuration space's kept bits
+    ``space_bits`` (both valid while the counter ``version`` keeps its present value), and the path read
+    off its distances."""
     path.flags.writeable = False
     entries = _MEMO.entries
-    if entries and next(iter(entries.values())).space.shape != space.shape:
+    if entries and next(iter(entries.values())).shape != shape:
         entries.clear()  # another run's map: its searches can never match again, so hold no memory for them
     key = (params, start_cell, goal)
-    entries[key] = SearchPlan(known, space, start, goal, path, version, int(version[0]))
+    entries[key] = SearchPlan(known, space_bits, shape, start, goal, path, version, int(version[0]))
     entries.move_to_end(key)
     while len(entries) > MAX_ENTRIES:
         entries.popitem(last=False)
@@ -79,7 +90,7 @@ def recall(known: np.ndarray, params: Params, start_cell: tuple[int, int], goal:
     """The remembered search from ``start_cell`` to ``goal`` with these parameters, if it ran on a map
     equal to ``known``."""
     entry = _MEMO.entries.get((params, start_cell, goal))
-    if (entry is None or entry.version[0] != entry.seen or entry.space.shape != known.shape
+    if (entry is None or entry.version[0] != entry.seen or entry.shape != known.shape
             or not same_as_packed(known, entry.known)):
         return None
     return entry

@@ -162,19 +162,19 @@ class _TargetSearch:
         rows, widths = _erosion_rows(self.radius_m, self.margin_m)
         h, w = known.shape
         _, ring = _WORK.get((h + 2) * (w + 2))
-        dist, touched = kept.clean_workspace((h + 2) * (w + 2))
+        dist, touched, pad = kept.clean_workspace((h + 2) * (w + 2))
         ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude)
         inputs = kept.inputs_for(known, self.radius_m, self.margin_m, self.unseen_traversable, self.reach,
                                  keep=keep, key=key)
         margin = window_margin(self.radius_m, self.margin_m, self.reach)
         status, row, col, cells, sr, sc, space, path = kept.map_target(known, ex, self.reach, self.unseen_traversable,
                                                                        rows, widths, start[0], start[1], self.snap,
-                                                                       dist, ring, touched, *inputs, margin)
+                                                                       dist, ring, touched, pad, *inputs, margin)
         if status != TARGET_FOUND:
             return None
         cell, snapped = (int(row), int(col)), (int(sr), int(sc))
-        memo.remember(inputs.copy, inputs.version, (self.radius_m, self.margin_m, self.unseen_traversable), start,
-                      space.view(np.bool_), snapped, cell, path)
+        memo.remember(inputs.copy, inputs.space, (h, w), inputs.version,
+                      (self.radius_m, self.margin_m, self.unseen_traversable), start, snapped, cell, path)
         return cell, _distance_m(cells, snapped, start)
 
 

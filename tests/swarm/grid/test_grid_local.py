@@ -182,4 +182,4 @@ def test_the_memo_holds_one_map_size_at_a_time() -> None:
         found = grid.nearest_reachable_unseen(known, start, local_first_m=None)
         assert found is not None
         assert memo.recall(known, (0.3, 0.05, False), start, found[0]) is not None
-    assert {entry.space.shape for entry in memo._MEMO.entries.values()} == {big.shape}
+    assert {entry.shape for entry in memo._MEMO.entries.values()} == {big.shape}
