@@ -33,7 +33,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..packed_maps import copy_cell_if_changed, pack8, packed_size
+from ..packed_maps import CHUNK_WORDS, copy_cell_if_changed, differing_words, pack8, packed_size
 from ._kernels import grid_configuration_space, grid_view_cells
 from .local import NO_TARGET, mark_targets, search_targets
 
@@ -157,11 +157,15 @@ def refresh(known, copy, space, targets, row_targets, version, unseen_ok, row_of
     words = cur.shape[0] // 8
     cur64, prev16 = cur[:8 * words].view(np.uint64), copy[:2 * words].view(np.uint16)
     dirty = np.zeros(h, np.bool_)
-    for k in range(words):  # a map differs from its last search's in a few words: compare 8 cells at once
-        if pack8(cur64[k]) != np.uint64(prev16[k]):
-            for i in range(8 * k, 8 * k + 8):
-                if copy_cell_if_changed(cur, copy, i):
-                    dirty[i // w] = True
+    for k0 in range(0, words, CHUNK_WORDS):  # a map differs from its last search's in a few words
+        k1 = min(k0 + CHUNK_WORDS, words)
+        if differing_words(cur64, prev16, k0, k1) == 0:
+            continue
+        for k in range(k0, k1):
+            if pack8(cur64[k]) != np.uint64(prev16[k]):
+                for i in range(8 * k, 8 * k + 8):
+                    if copy_cell_if_changed(cur, copy, i):
+                        dirty[i // w] = True
     for i in range(8 * words, cur.shape[0]):
         if copy_cell_if_changed(cur, copy, i):
             dirty[i // w] = True
@@ -203,20 +207,52 @@ def _recompute_band(known, a, b, space, targets, row_targets, unseen_ok, row_off
     grid_configuration_space(part, unseen_ok, row_offsets, half_widths, part_space)
     seen = np.zeros((hi - lo, w), np.bool_)
     grid_view_cells(part, np.zeros((0, 0), np.bool_), reach, seen)
+    wp = w + 2
+    first = (a + 1) * wp  # the padded rows a + 1 .. b, borders included: bits first .. first + n - 1
+    n = (b - a) * wp
+    off = first & 7       # bytes laid out from bit 8 (first // 8), so eight of them make one byte of bits
+    space_bytes = np.zeros(8 * ((off + n + 7) // 8), np.uint8)
+    target_bytes = np.zeros(space_bytes.shape[0], np.uint8)
     for r in range(a, b):
         sp = part_space[r - lo]
         vw = seen[r - lo]
-        q = (r + 1) * (w + 2) + 1  # the bit of (r, 0) in the padded layout
+        q = off + (r - a) * wp + 1
+        srow = space_bytes[q:q + w]  # row slices: indices the compiler knows are not negative (3x faster)
+        trow = target_bytes[q:q + w]
         count = 0
         for c in range(w):
-            s = np.int64(sp[c] != 0)
-            t = np.int64(vw[c]) & s
-            j, b = (q + c) >> 3, (q + c) & 7
-            space[j] = (np.int64(space[j]) & ~(1 << b)) | (s << b)
-            targets[j] = (np.int64(targets[j]) & ~(1 << b)) | (t << b)
+            s = sp[c] != 0
+            t = vw[c] & s
+            srow[c] = s
+            trow[c] = t
             count += t
         row_targets[r] = count
+    _write_bits(space, first, n, space_bytes)
+    _write_bits(targets, first, n, target_bytes)
 
+
+_GATHER_BITS = np.uint64(0x0102040810204080)
+"""Times eight bytes of 0 or 1 (a little-endian uint64), the top byte holds them as bits, byte j in bit j."""
+
+
+@njit(cache=True, inline="always")
+def _write_bits(bits, first, n, values):  # pragma: no cover - compiled
+    """Bits ``first .. first + n - 1`` of ``bits`` (little bit order) = ``values[first % 8 ..]`` (uint8 0/1,
+    zero outside those places, a whole number of 8-byte words laid out from bit ``8 (first // 8)``); the
+    bits around them are kept. A multiply gathers eight values into a byte: 4x faster than a bit at a time."""
+    off = first & 7
+    end = (first + n) & 7
+    j0 = first >> 3
+    words = values.view(np.uint64)
+    m = words.shape[0]
+    for j in range(m):
+        v = (words[j] * _GATHER_BITS) >> np.uint64(56)
+        keep = 0
+        if j == 0 and off:
+            keep |= (1 << off) - 1
+        if j == m - 1 and end:
+            keep |= 0xFF & ~((1 << end) - 1)
+        bits[j0 + j] = (np.int64(bits[j0 + j]) & keep) | np.int64(v)
 
 @njit(cache=True)
 def map_target(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap, dist, ring, touched,
