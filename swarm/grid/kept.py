@@ -8,9 +8,9 @@ searches: only a few percent of its rows differ (figures: docs/performance-histo
 So each map keeps :class:`KeptInputs`: a 2-bit copy of the map the arrays describe
 (:mod:`swarm.packed_maps`), its configuration space and its targets (view cells in the space), both a bit
 per cell of the padded grid the search reads; a search unpacks the space into this thread's padded byte
-grid (~20 us on a 600 x 600 map), so a kept map costs 180 KB instead of 1.4 MB (64 robots on a 300-tile
+grid (~15 us on a 600 x 600 map), so a kept map costs 180 KB instead of 1.4 MB (64 robots on a 300-tile
 map: 12 MB instead of 89; docs/performance-history.md). :func:`refresh` compares the map with the copy
-eight cells at a time and recomputes only the rows within ``margin`` of a changed row, where ``margin`` covers
+512 cells at a time (then 8, where they differ) and recomputes only the rows within ``margin`` of a changed row, where ``margin`` covers
 everything a row depends on (the erosion's row offsets for the space; ``reach`` steps plus the frontier
 test's neighbour for the view cells). It runs the same kernels on a slice of the map that extends
 ``margin`` rows beyond the band and keeps the band's rows, which the slice's edges cannot reach, so every
