@@ -108,7 +108,8 @@ def over_time_figure(panels: Sequence[tuple[str, str, Sequence[Series]]], title:
         fig = _figure(width, height, left=0.6 / width, right=1 - 0.15 / width, bottom=0.14, top=0.82, wspace=0.3)
         fig.suptitle(_text(textwrap.fill(title, 150)))
         axes = fig.subplots(1, cols, squeeze=False)[0]
-        end = max((int(s.ticks[-1]) for _, _, series in panels for s in series if len(s.ticks)), default=1)
+        # at least one tick wide: runs that all ended at tick 0 would give matplotlib an empty range
+        end = max((int(s.ticks[-1]) for _, _, series in panels for s in series if len(s.ticks)), default=1) or 1
         for ax, (panel_title, ylabel, series) in zip(axes, panels):
             for s in series:
                 x = s.ticks / TICKS_PER_MINUTE
