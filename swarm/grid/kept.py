@@ -33,7 +33,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..packed_maps import CHUNK_WORDS, copy_cell_if_changed, differing_words, pack8, packed_size
+from ..packed_maps import CHUNK_WORDS, copy_cell_if_changed, differing_words, packed_size, sync_chunk
 from ._kernels import grid_configuration_space, grid_view_cells
 from .local import NO_TARGET, mark_targets, search_targets
 
@@ -157,15 +157,12 @@ def refresh(known, copy, space, targets, row_targets, version, unseen_ok, row_of
     words = cur.shape[0] // 8
     cur64, prev16 = cur[:8 * words].view(np.uint64), copy[:2 * words].view(np.uint16)
     dirty = np.zeros(h, np.bool_)
+    cells = np.empty(8 * CHUNK_WORDS, np.int64)
     for k0 in range(0, words, CHUNK_WORDS):  # a map differs from its last search's in a few words
         k1 = min(k0 + CHUNK_WORDS, words)
-        if differing_words(cur64, prev16, k0, k1) == 0:
-            continue
-        for k in range(k0, k1):
-            if pack8(cur64[k]) != np.uint64(prev16[k]):
-                for i in range(8 * k, 8 * k + 8):
-                    if copy_cell_if_changed(cur, copy, i):
-                        dirty[i // w] = True
+        if differing_words(cur64, prev16, k0, k1):
+            for j in range(sync_chunk(cur, copy, cur64, prev16, k0, k1, cells, 0)):
+                dirty[cells[j] // w] = True
     for i in range(8 * words, cur.shape[0]):
         if copy_cell_if_changed(cur, copy, i):
             dirty[i // w] = True
