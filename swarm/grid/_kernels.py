@@ -86,9 +86,8 @@ def grid_bucket_search(free: np.ndarray, wp: int, seeds: np.ndarray, goal: int, 
         dist[:] = np.inf
     nt = 0
     count = np.zeros(3, dtype=np.int64)
-    has_targets = targets.shape[0] == n
     target_bits = n > 8 and targets.shape[0] == (n + 7) // 8  # (a padded grid has at least 9 cells)
-    has_targets = has_targets or target_bits
+    has_targets = targets.shape[0] == n or target_bits
     for i in range(seeds.shape[0]):
         s = seeds[i]
         if dist[s] != 0.0:

@@ -10,8 +10,8 @@ So each map keeps :class:`KeptInputs`: a 2-bit copy of the map the arrays descri
 per cell of the padded grid the search reads; a search unpacks the space into this thread's padded byte
 grid (~15 us on a 600 x 600 map), so a kept map costs 180 KB instead of 1.4 MB (64 robots on a 300-tile
 map: 12 MB instead of 89; docs/performance-history.md). :func:`refresh` compares the map with the copy
-512 cells at a time (then 8, where they differ) and recomputes only the rows within ``margin`` of a changed row, where ``margin`` covers
-everything a row depends on (the erosion's row offsets for the space; ``reach`` steps plus the frontier
+512 cells at a time (then 8, where they differ) and recomputes only the rows within ``margin`` of a
+changed row, where ``margin`` covers everything a row depends on (the erosion's row offsets for the space; ``reach`` steps plus the frontier
 test's neighbour for the view cells). It runs the same kernels on a slice of the map that extends
 ``margin`` rows beyond the band and keeps the band's rows, which the slice's edges cannot reach, so every
 kept row is what a whole-map computation gives, bit for bit (``tests/swarm/grid/test_grid_kept.py`` checks it
@@ -251,6 +251,7 @@ def _write_bits(bits, first, n, values):  # pragma: no cover - compiled
             keep |= 0xFF & ~((1 << end) - 1)
         bits[j0 + j] = (np.int64(bits[j0 + j]) & keep) | np.int64(v)
 
+
 @njit(cache=True)
 def map_target(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, sc, snap, dist, ring, touched,
                pad, copy, space, targets, row_targets, version, margin):  # pragma: no cover - compiled
@@ -260,13 +261,12 @@ def map_target(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, s
     (:func:`swarm.grid.local.search_targets`, on the all-inf ``dist`` of :func:`clean_workspace`, which it
     leaves all inf). With an exclusion mask (``exclude`` bool[H, W], or empty
     for none) the targets are computed afresh from the kept space. Returns what
-    ``search_targets`` returns, with the path to the target (for :mod:`swarm.grid.memo`) and the space
-    searched (a view of ``pad``)."""
+    ``search_targets`` returns, with the path to the target (for :mod:`swarm.grid.memo`)."""
     h, w = known.shape
     total = refresh(known, copy, space, targets, row_targets, version, unseen_ok, row_offsets,
                     half_widths, reach, margin)
     if total == 0 and exclude.shape[0] != h:
-        return NO_TARGET, -1, -1, np.inf, -1, -1, np.empty((0, 0), np.uint8), np.empty((0, 2), np.int64)
+        return NO_TARGET, -1, -1, np.inf, -1, -1, np.empty((0, 2), np.int64)
     unpack_bits(space, pad)
     grid = pad.reshape(h + 2, w + 2)
     marks = targets
@@ -277,7 +277,7 @@ def map_target(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, s
         if grid_view_cells(known, exclude, reach, seen) > 0:
             total = mark_targets(seen, grid, exclude, marks.reshape(h + 2, w + 2))
     if total == 0:
-        return NO_TARGET, -1, -1, np.inf, -1, -1, np.empty((0, 0), np.uint8), np.empty((0, 2), np.int64)
+        return NO_TARGET, -1, -1, np.inf, -1, -1, np.empty((0, 2), np.int64)
     return search_targets(grid[1:-1, 1:-1], grid, marks, sr, sc, snap, True, dist, ring, touched)
 
 

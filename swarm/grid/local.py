@@ -124,7 +124,6 @@ def _window_plan(known, r0, r1, c0, c1, unseen_ok, row_offsets, half_widths, sr,
 
 NO_TARGET, TARGET_FOUND = 0, 1
 _NO_PATH = np.empty((0, 2), np.int64)
-_NO_SPACE = np.empty((0, 0), np.uint8)
 
 
 @njit(cache=True)
@@ -135,7 +134,7 @@ def window_target(known, r0, r1, c0, c1, exclude, reach, unseen_ok, row_offsets,
     ``exclude`` is the window of the exclusion mask or an empty array. Returns (TARGET_FOUND, row, col,
     distance in cells, snapped row, snapped col) in window coordinates, or NO_TARGET first."""
     window = np.ascontiguousarray(known[r0:r1, c0:c1])
-    status, row, col, best_d, s_r, s_c, _, _ = _target_search(window, exclude, reach, unseen_ok, row_offsets,
+    status, row, col, best_d, s_r, s_c, _ = _target_search(window, exclude, reach, unseen_ok, row_offsets,
                                                               half_widths, sr - r0, sc - c0, snap, dist, ring)
     return status, row, col, best_d, s_r, s_c
 
@@ -148,11 +147,11 @@ def _target_search(window, exclude, reach, unseen_ok, row_offsets, half_widths, 
     h, w = window.shape
     view = np.zeros((h, w), np.bool_)
     if grid_view_cells(window, exclude, reach, view) == 0:
-        return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_SPACE, _NO_PATH
+        return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_PATH
     space, pad = _space_and_pad(window, unseen_ok, row_offsets, half_widths)
     targets = np.zeros((h + 2, w + 2), np.uint8)
     if mark_targets(view, pad, exclude, targets) == 0:
-        return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_SPACE, _NO_PATH
+        return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_PATH
     return search_targets(space, pad, targets, sr, sc, snap, False, dist, ring, np.empty(0, np.int32))
 
 
@@ -160,15 +159,16 @@ def _target_search(window, exclude, reach, unseen_ok, row_offsets, half_widths, 
 def search_targets(space, pad, targets, sr, sc, snap, with_path, dist, ring,
                    touched):  # pragma: no cover - compiled
     """Snap ``(sr, sc)`` into ``space`` and find the nearest cell of ``targets`` (padded like ``pad``, the
-    space with a blocked border; a byte or a bit per cell, see :func:`swarm.grid._kernels.grid_bucket_search`): (status, row, col, distance in cells, snapped row, snapped col,
-    space, path), the path read off the search's distances only ``with_path``. Shared by the window
+    space with a blocked border; a byte or a bit per cell, see :func:`swarm.grid._kernels.grid_bucket_search`):
+    (status, row, col, distance in cells, snapped row, snapped col, path), the path read off the search's
+    distances only ``with_path``. Shared by the window
     stage and the whole-map stage (:func:`swarm.grid.kept.map_target`). ``touched``: empty, or (with an
     all-inf ``dist``) where the search lists the cells it gave a distance, which are set back to inf
     before returning (see :func:`swarm.grid._kernels.grid_bucket_search`)."""
     w = space.shape[1]
     s = grid_snap(space, sr, sc, snap)
     if s[0] < 0:
-        return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_SPACE, _NO_PATH
+        return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_PATH
     wp = w + 2
     seeds = np.empty(1, np.int64)
     seeds[0] = (s[0] + 1) * wp + s[1] + 1
@@ -181,8 +181,8 @@ def search_targets(space, pad, targets, sr, sc, snap, with_path, dist, ring,
     for i in range(nt):
         field[touched[i]] = np.inf
     if best < 0:
-        return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_SPACE, _NO_PATH
-    return TARGET_FOUND, best // wp - 1, best % wp - 1, best_d, s[0], s[1], space, path
+        return NO_TARGET, -1, -1, np.inf, -1, -1, _NO_PATH
+    return TARGET_FOUND, best // wp - 1, best % wp - 1, best_d, s[0], s[1], path
 
 
 @njit(cache=True)

@@ -167,9 +167,9 @@ class _TargetSearch:
         inputs = kept.inputs_for(known, self.radius_m, self.margin_m, self.unseen_traversable, self.reach,
                                  keep=keep, key=key)
         margin = window_margin(self.radius_m, self.margin_m, self.reach)
-        status, row, col, cells, sr, sc, space, path = kept.map_target(known, ex, self.reach, self.unseen_traversable,
-                                                                       rows, widths, start[0], start[1], self.snap,
-                                                                       dist, ring, touched, pad, *inputs, margin)
+        status, row, col, cells, sr, sc, path = kept.map_target(known, ex, self.reach, self.unseen_traversable,
+                                                                rows, widths, start[0], start[1], self.snap,
+                                                                dist, ring, touched, pad, *inputs, margin)
         if status != TARGET_FOUND:
             return None
         cell, snapped = (int(row), int(col)), (int(sr), int(sc))
