@@ -21,14 +21,6 @@ from .store import ResultsStore
 from .writers import Writer, live_writers
 
 
-
-
-def swarm_version() -> str:
-    """The runs table's ``swarm_version``: the package version, with the commit when run from a git
-    checkout (:func:`swarm.source.version_label`)."""
-    return version_label()
-
-
 @dataclass
 class Outcome:
     total: int
@@ -118,7 +110,7 @@ def runs_row(campaign: CampaignSpec, run: Run, result: dict[str, Any]) -> dict[s
     dist = result.get("algorithm_dist") or (None, None)
     row.update(spec_json=spec.to_json(), wall_time_s=result["wall_time_s"], cpu_time_s=result.get("cpu_time_s"),
                jit_time_s=result.get("jit_time_s"), worker_pid=result["worker_pid"],
-               worker_rss_mb=result["worker_rss_mb"], swarm_version=swarm_version(), algorithm_dist=dist[0],
+               worker_rss_mb=result["worker_rss_mb"], swarm_version=version_label(), algorithm_dist=dist[0],
                algorithm_version=dist[1])
     return row
 
