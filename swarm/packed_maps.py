@@ -20,8 +20,8 @@ from numba import njit
 
 from ._cellcodec import pack2
 
-__all__ = ["CHUNK_WORDS", "copy_cell_if_changed", "differing_words", "pack8", "packed_copy", "packed_size", "same_as_packed",
-           "sync_box_packed", "sync_changes_packed", "sync_chunk", "unpacked"]
+__all__ = ["CHUNK_WORDS", "copy_cell_if_changed", "differing_words", "pack8", "packed_copy", "packed_size",
+           "same_as_packed", "sync_box_packed", "sync_changes_packed", "sync_chunk", "unpacked"]
 
 _M1 = np.uint64(0x000F000F000F000F)
 _M2 = np.uint64(0x000000FF000000FF)

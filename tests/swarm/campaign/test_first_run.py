@@ -247,7 +247,8 @@ def test_a_report_is_rebuilt_only_when_it_is_stale(tmp_path, capsys):
     assert main([*report, "--target", "0.5", "--force"]) == 0 and "up to date" not in capsys.readouterr().out
 
 
-@pytest.mark.filterwarnings("error::UserWarning")  # its one-tick communication figures once warned of an empty x range
+# its one-tick communication figures once warned of an empty x range
+@pytest.mark.filterwarnings("error::UserWarning")
 def test_a_resumed_campaign_with_nothing_new_keeps_its_report(tmp_path, capsys):
     spec_file = tmp_path / "small.toml"
     spec_file.write_text(SMALL.replace("replicates = 3", "replicates = 1").replace('["building", "cave"]', '["cave"]')

@@ -20,11 +20,11 @@ from swarm.grid.targets import default_view_reach_cells
 from swarm.packed_maps import unpacked
 
 
-
 def padded_grid(bits: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     """Kept bits (the kept space or targets: a bit per padded cell) as a padded uint8 grid."""
     h, w = shape[0] + 2, shape[1] + 2
     return np.unpackbits(bits, bitorder="little")[:h * w].reshape(h, w)
+
 
 def growing_maps(seed: int, steps: int) -> tuple[np.ndarray, list[np.ndarray]]:
     """A building revealed step by step, as a robot's map grows: a disc around a wandering point (the
