@@ -212,8 +212,10 @@ class Minotaur:
             elif self.announce_now or before != self._heading():
                 self.outbox.append(Heading(self.id, *self._heading()))
         self.announce_now = False
+        debug = self._debug()
+        self._tick_cache = {}  # its two map-sized spaces would live until the next tick: 43 MB for 64 robots
         return Action(goal=action.goal, velocity=action.velocity, clear_goal=action.clear_goal,
-                      messages=tuple(self.outbox), debug=self._debug())
+                      messages=tuple(self.outbox), debug=debug)
 
     # ------------------------------------------------------------------------------------- radio ----
     def _read_inbox(self, obs: Observation) -> None:
