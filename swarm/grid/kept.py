@@ -67,9 +67,7 @@ class _Kept(threading.local):
         self.entries: OrderedDict[Key, KeptInputs] = OrderedDict()
         self.far: set[Key] = set()  # kept maps whose last target search went past its window (went_far)
         self.shape: tuple[int, int] | None = None  # the size of every kept map (one size at a time)
-        self.dist = np.zeros(0, dtype=np.float64)      # all inf between searches (see clean_workspace)
-        self.touched = np.zeros(0, dtype=np.int32)
-        self.pad = np.zeros(0, dtype=np.uint8)         # the searched map's space, unpacked (see clean_workspace)
+        self.pad = np.zeros(0, dtype=np.uint8)         # the searched map's space, unpacked (see unpack_buffer)
 
 
 _KEPT = _Kept()
@@ -126,17 +124,14 @@ def _new_inputs(h: int, w: int) -> KeptInputs:
                       np.zeros(bits, np.uint8), np.zeros(h, np.int64), np.zeros(1, np.int64))
 
 
-def clean_workspace(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """This thread's distance array for whole-map searches of ``n`` padded cells, all inf, room for the
-    list of cells a search touches (:func:`swarm.grid._kernels.grid_bucket_search`): the search sets those
-    back to inf, so the next one need not fill 730 KB (a 300 x 300 map) first, ~25 us in the run; and the
-    padded byte grid a kept space is unpacked into (its border stays 0)."""
+def unpack_buffer(n: int) -> np.ndarray:
+    """This thread's padded byte grid of ``n`` cells that a kept space is unpacked into for one search
+    (its border stays 0). The search's distance array and touched list are
+    :func:`swarm.grid.search`'s all-inf workspace, shared with :func:`swarm.grid.field_at`."""
     k = _KEPT
-    if k.dist.shape[0] != n:
-        k.dist = np.full(n, np.inf)
-        k.touched = np.empty(4 * n, dtype=np.int32)
+    if k.pad.shape[0] != n:
         k.pad = np.zeros(n, dtype=np.uint8)
-    return k.dist, k.touched, k.pad
+    return k.pad
 
 
 def forget_all() -> None:
@@ -257,9 +252,9 @@ def map_target(known, exclude, reach, unseen_ok, row_offsets, half_widths, sr, s
                pad, copy, space, targets, row_targets, version, margin):  # pragma: no cover - compiled
     """The whole-map stage of :func:`swarm.grid.nearest_reachable_unseen` in one call: :func:`refresh` the
     kept inputs (``copy`` .. ``version``, see :class:`KeptInputs`), unpack the space into ``pad`` (the
-    thread's padded grid of :func:`clean_workspace`), then snap and search
-    (:func:`swarm.grid.local.search_targets`, on the all-inf ``dist`` of :func:`clean_workspace`, which it
-    leaves all inf). With an exclusion mask (``exclude`` bool[H, W], or empty
+    thread's padded grid of :func:`unpack_buffer`), then snap and search
+    (:func:`swarm.grid.local.search_targets`, on the thread's all-inf ``dist`` and ``touched`` list of
+    ``swarm.grid.search``, which it leaves all inf). With an exclusion mask (``exclude`` bool[H, W], or empty
     for none) the targets are computed afresh from the kept space. Returns what
     ``search_targets`` returns, with the path to the target (for :mod:`swarm.grid.memo`)."""
     h, w = known.shape

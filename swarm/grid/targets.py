@@ -162,7 +162,8 @@ class _TargetSearch:
         rows, widths = _erosion_rows(self.radius_m, self.margin_m)
         h, w = known.shape
         _, ring = _WORK.get((h + 2) * (w + 2))
-        dist, touched, pad = kept.clean_workspace((h + 2) * (w + 2))
+        dist, touched, _ = _WORK.clean((h + 2) * (w + 2))
+        pad = kept.unpack_buffer((h + 2) * (w + 2))
         ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude)
         inputs = kept.inputs_for(known, self.radius_m, self.margin_m, self.unseen_traversable, self.reach,
                                  keep=keep, key=key)

@@ -14,6 +14,7 @@ from swarm import grid
 from swarm.api import FREE, SOLID, UNSEEN
 from swarm.grid import kept, memo
 from swarm.grid.cspace import _erosion_rows
+from swarm.grid.search import _WORK
 from swarm.grid.local import TARGET_FOUND, erosion_depth, window_target
 from swarm.grid.search import _WORK
 from swarm.grid.targets import default_view_reach_cells
@@ -275,9 +276,28 @@ def test_the_whole_map_search_leaves_its_workspace_clean() -> None:
         free = np.argwhere(known == FREE)
         for cell in free[::max(1, len(free) // 4)]:
             found += grid.nearest_reachable_unseen(known, (int(cell[0]), int(cell[1])), local_first_m=None) is not None
-            dist, _, _ = kept.clean_workspace((known.shape[0] + 2) * (known.shape[1] + 2))
-            assert np.isinf(dist).all()
+            assert np.isinf(_WORK.inf).all()  # the whole shared buffer, also beyond this map's cells
     assert found >= 10
+
+
+def test_field_at_and_the_kept_search_share_one_workspace_and_leave_it_clean() -> None:
+    """The two searches interleave on maps of two sizes; each must leave the shared all-inf array all inf
+    and the marks all 0, or the other reads stale distances."""
+    kept.forget_all()
+    rng = np.random.default_rng(11)
+    _, grown = growing_maps(2, 12)
+    small = [m[:80, :100].copy() for m in grown]  # another map size: the workspace is sliced
+    _, large = growing_maps(3, 20)
+    for known in large[4:] + small[4:] + large[4:]:
+        space = grid.configuration_space(known)
+        free = np.argwhere(space)
+        if len(free) < 2:
+            continue
+        picks = free[rng.choice(len(free), size=min(6, len(free)), replace=False)]
+        src = (int(picks[0, 0]), int(picks[0, 1]))
+        assert np.array_equal(grid.field_at(space, src, picks), grid.distance_field(space, src)[picks[:, 0], picks[:, 1]])
+        grid.nearest_reachable_unseen(known, src, local_first_m=None)
+        assert np.isinf(_WORK.inf).all() and not _WORK.marks.any()
 
 
 def test_unpack_bits_spreads_each_bit_to_a_byte_in_packbits_order() -> None:
