@@ -704,6 +704,9 @@ class MapSharing:
                 if carried[k] is None:
                     flat = stack[row].reshape(-1)
                     np.maximum(flat, dense, out=flat)
+            # The decoded map would live as long as the message (inboxes, queued deliveries): 360 KB on a
+            # 300-tile map, 10 MB of a 64-robot run's peak. A later delivery of it decodes again.
+            msg.__dict__.pop("_dense", None)
         return carried
 
 
