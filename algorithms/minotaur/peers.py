@@ -74,7 +74,7 @@ class Peers:
             return []
         if state.counts is not None and isinstance(doors, tuple):
             try:
-                fresh = state.advance(doors)
+                fresh = state.advance(doors, sender)
             except TypeError:            # an unhashable (malformed) entry: the sets below say what it means
                 pass
             else:
@@ -86,9 +86,9 @@ class Peers:
             entries = _SHARED.set_of(doors)
         except TypeError:                        # an unhashable (malformed) entry
             entries = frozenset(w for w in doors if valid_wire(w))
-            state.reset(doors, entries, counted=False)
+            state.reset(doors, entries, None)
         else:
-            state.reset(doors, entries, counted=True)
+            state.reset(doors, entries, _SHARED.counts_for(sender, doors))
         return [w for w in entries - seen if valid_wire(w)]
 
     def claimed(self, tick: int, max_age: int) -> list[Doorway]:
@@ -122,13 +122,16 @@ def _disc(k: int) -> np.ndarray:
     return disc
 
 
+_NO_COUNTS: dict = {}
+
+
 class _ListState:
     """A sender's last doorway list: the tuple, the number of times each entry occurs in it (None after a
     list with an unhashable entry), and its entries as a set when one was built (``set_of_doors``)."""
 
     def __init__(self) -> None:
         self.doors: tuple = ()
-        self.counts: dict | None = {}
+        self.counts: dict | None = _NO_COUNTS  # shared, never changed in place (see advance)
         self._set: frozenset | None = frozenset()
         self.previous_set: frozenset = frozenset()
 
@@ -139,38 +142,58 @@ class _ListState:
             self._set = _SHARED.set_of(self.doors)
         return self._set
 
-    def reset(self, doors: tuple, entries: frozenset, counted: bool) -> None:
+    def reset(self, doors: tuple, entries: frozenset, counts: dict | None) -> None:
+        """Take ``doors`` afresh: its set, and its counts (None when an entry is unhashable)."""
         self.doors, self._set = doors, entries
-        self.counts = _counts(doors) if counted else None
+        self.counts = counts
 
-    def advance(self, doors: tuple) -> list:
+    def advance(self, doors: tuple, sender: int) -> list:
         """Move to ``doors`` and return the entries it has that the last list had not (each once, in no
         particular order); ``previous_set`` is then the last list's set. Raises TypeError on an
-        unhashable entry, leaving the state as it was."""
-        last, counts = self.doors, self.counts
-        assert counts is not None
-        changed = _SHARED.changed(last, doors)
-        n = min(len(doors), len(last))
-        gone = [last[i] for i in changed] + list(last[n:])
-        came = [doors[i] for i in changed] + list(doors[n:])
-        for w in gone + came:
-            hash(w)                                # raise before changing anything
-        fresh = []
-        for w in came:
-            if w not in counts and w not in fresh:
-                fresh.append(w)
+        unhashable entry, leaving the state as it was.
+
+        The new entries depend only on the last list and this one (the counts are always the last list's),
+        the counts only on this one: every receiver that heard the same lists of ``sender`` shares them
+        (:class:`_Shared`), so the counts dicts are never changed in place. One per receiver and sender,
+        they grew with the team times the doorways (15 MB of a 64-robot run's 6,000 ticks)."""
+        last = self.doors
+        fresh = _SHARED.fresh_of(sender, last, doors)
+        counts = _SHARED.counts_of(sender, doors)
+        if fresh is None or counts is None:
+            built, fresh = _advance(last, self.counts, doors)
+            counts = _SHARED.keep(sender, last, doors, built if counts is None else counts, fresh)
         if len(fresh) > 1:
             self.previous_set = self.set_of_doors()
-        for w in gone:
-            k = counts[w] - 1
-            if k:
-                counts[w] = k
-            else:
-                del counts[w]
-        for w in came:
-            counts[w] = counts.get(w, 0) + 1
+        self.counts = counts
         self.doors, self._set = doors, None
         return fresh
+
+
+def _advance(last: tuple, counts: dict | None, doors: tuple) -> tuple[dict, list]:
+    """The counts of ``doors`` (a new dict, built from ``counts``, those of ``last``) and the entries of
+    ``doors`` that ``last`` had not, each once. Raises TypeError on an unhashable entry."""
+    assert counts is not None
+    n = min(len(doors), len(last))
+    # a sender's unchanged entries are the same objects (Doorway.wire is kept): identity first, in C
+    changed = [i for i in compress(range(n), map(is_not, doors, last)) if doors[i] != last[i]]
+    gone = [last[i] for i in changed] + list(last[n:])
+    came = [doors[i] for i in changed] + list(doors[n:])
+    for w in gone + came:
+        hash(w)                                # raise before building anything
+    fresh = []
+    for w in came:
+        if w not in counts and w not in fresh:
+            fresh.append(w)
+    out = dict(counts)
+    for w in gone:
+        k = out[w] - 1
+        if k:
+            out[w] = k
+        else:
+            del out[w]
+    for w in came:
+        out[w] = out.get(w, 0) + 1
+    return out, fresh
 
 
 class _Shared(threading.local):
@@ -179,22 +202,46 @@ class _Shared(threading.local):
     Entries hold the tuples they describe, so an id is never reused while its entry lives."""
 
     SIZE = 64
+    PER_SENDER = 4
+    """Lists kept per sender: the receivers that heard its every list share the newest; one that missed
+    some moves from an older list."""
 
     def __init__(self) -> None:
-        self.diffs: OrderedDict[tuple[int, int], tuple[tuple, tuple, list[int]]] = OrderedDict()
+        self.moves: dict[int, list[tuple[tuple, tuple, list]]] = {}   # sender -> (last, doors, fresh)
+        self.counted: dict[int, list[tuple[tuple, dict]]] = {}        # sender -> (doors, its counts)
         self.sets: OrderedDict[int, tuple[tuple, frozenset]] = OrderedDict()
 
-    def changed(self, last: tuple, doors: tuple) -> list[int]:
-        """Positions below both lengths whose entries differ (a sender's unchanged entries are the same
-        objects, Doorway.wire is kept, so identity is tested first, in C)."""
-        key = (id(last), id(doors))
-        hit = self.diffs.get(key)
-        if hit is not None and hit[0] is last and hit[1] is doors:
-            return hit[2]
-        n = min(len(doors), len(last))
-        out = [i for i in compress(range(n), map(is_not, doors, last)) if doors[i] != last[i]]
-        _put(self.diffs, key, (last, doors, out), self.SIZE)
-        return out
+    def fresh_of(self, sender: int, last: tuple, doors: tuple) -> list | None:
+        """:func:`_advance`'s new entries for this move of ``sender``'s list, if a receiver computed them."""
+        for a, b, fresh in self.moves.get(sender, ()):
+            if a is last and b is doors:
+                return fresh
+        return None
+
+    def counts_of(self, sender: int, doors: tuple) -> dict | None:
+        """The counts of ``sender``'s list ``doors``, if a receiver computed them (not to be changed)."""
+        for b, counts in self.counted.get(sender, ()):
+            if b is doors:
+                return counts
+        return None
+
+    def keep(self, sender: int, last: tuple, doors: tuple, counts: dict, fresh: list) -> dict:
+        """Remember a move's new entries and the counts of ``doors`` (returned, for the caller to hold)."""
+        moves = self.moves.setdefault(sender, [])
+        moves.insert(0, (last, doors, fresh))
+        del moves[self.PER_SENDER:]
+        return self.counts_for(sender, doors, counts)
+
+    def counts_for(self, sender: int, doors: tuple, built: dict | None = None) -> dict:
+        """The shared counts of ``sender``'s list ``doors``: those a receiver computed, else ``built`` (or
+        counted now), kept for the next. Raises TypeError on an unhashable entry."""
+        counts = self.counts_of(sender, doors)
+        if counts is None:
+            counts = _counts(doors) if built is None else built
+            counted = self.counted.setdefault(sender, [])
+            counted.insert(0, (doors, counts))
+            del counted[self.PER_SENDER:]
+        return counts
 
     def set_of(self, doors: tuple) -> frozenset:
         """``frozenset(doors)`` (raises TypeError on an unhashable entry)."""
