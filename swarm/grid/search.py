@@ -85,6 +85,16 @@ def _seed(cell: tuple[int, int], wp: int) -> np.ndarray:
     return np.array([(cell[0] + 1) * wp + cell[1] + 1], dtype=np.int64)
 
 
+_NO_CELLS = np.zeros(0, dtype=np.int64)
+_NO_METRES = np.zeros(0, dtype=np.float32)
+
+
+def _forget(dist: np.ndarray, touched: np.ndarray, nt: int) -> None:
+    """Set the ``touched[:nt]`` cells of the all-inf workspace ``dist`` back to inf (after a search that
+    listed them): a search that stops near its start then costs what it touched, not a whole-map fill."""
+    grid_read_metres(dist, _NO_CELLS, 0.0, touched, nt, _NO_METRES)
+
+
 def plan(space: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> np.ndarray | None:
     """Shortest 8-connected path from ``start`` to ``goal`` through ``space``: int64[N, 2] (row, col).
 
@@ -100,12 +110,16 @@ def plan(space: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> np
     if not (sp[s] and sp[g]):
         return None
     free, wp = _WORK.padded(sp)
-    dist, ring = _WORK.get(free.shape[0])
+    _, ring = _WORK.get(free.shape[0])
+    dist, touched, _ = _WORK.clean(free.shape[0])
     gi = (g[0] + 1) * wp + g[1] + 1
-    best, _, _ = grid_bucket_search(free, wp, _seed(s, wp), gi, _NO_TARGETS, np.inf, dist, ring, NO_TOUCHED)
-    if best < 0:
-        return None
-    path = grid_descend_path(free, wp, dist, best)
+    best, _, nt = grid_bucket_search(free, wp, _seed(s, wp), gi, _NO_TARGETS, np.inf, dist, ring, touched)
+    try:
+        if best < 0:
+            return None
+        path = grid_descend_path(free, wp, dist, best)
+    finally:
+        _forget(dist, touched, nt)
     if (int(path[0, 0]), int(path[0, 1])) != s:  # the descent always ends at the seed on a settled field
         raise RuntimeError(f"swarm.grid.plan: path read-back stopped at {path[0].tolist()}, not at {s}")
     return path
@@ -193,8 +207,10 @@ def nearest_reachable_in(space: np.ndarray, start: tuple[int, int], targets: np.
         return None
     free, wp = _WORK.padded(space, 0)
     tflat, _ = _WORK.padded(targets, 1)
-    dist, ring = _WORK.get(free.shape[0])
-    best, best_d, _ = grid_bucket_search(free, wp, _seed(start, wp), -1, tflat, np.inf, dist, ring, NO_TOUCHED)
+    _, ring = _WORK.get(free.shape[0])
+    dist, touched, _ = _WORK.clean(free.shape[0])
+    best, best_d, nt = grid_bucket_search(free, wp, _seed(start, wp), -1, tflat, np.inf, dist, ring, touched)
+    _forget(dist, touched, nt)
     if best < 0:
         return None
     return (int(best // wp - 1), int(best % wp - 1)), float(best_d * CELL_M)

@@ -11,7 +11,7 @@ import pytest
 
 from maps import generate
 from swarm import grid
-from swarm.api import FREE, SOLID, UNSEEN
+from swarm.api import CELL_M, FREE, SOLID, UNSEEN
 from swarm.grid import kept, memo
 from swarm.grid.cspace import _erosion_rows
 from swarm.grid.search import _WORK
@@ -280,9 +280,9 @@ def test_the_whole_map_search_leaves_its_workspace_clean() -> None:
     assert found >= 10
 
 
-def test_field_at_and_the_kept_search_share_one_workspace_and_leave_it_clean() -> None:
-    """The two searches interleave on maps of two sizes; each must leave the shared all-inf array all inf
-    and the marks all 0, or the other reads stale distances."""
+def test_the_searches_share_one_workspace_and_leave_it_clean() -> None:
+    """field_at, the kept target search, plan and nearest_reachable interleave on maps of two sizes; each
+    must leave the shared all-inf array all inf and the marks all 0, or the next reads stale distances."""
     kept.forget_all()
     rng = np.random.default_rng(11)
     _, grown = growing_maps(2, 12)
@@ -297,6 +297,17 @@ def test_field_at_and_the_kept_search_share_one_workspace_and_leave_it_clean() -
         src = (int(picks[0, 0]), int(picks[0, 1]))
         assert np.array_equal(grid.field_at(space, src, picks), grid.distance_field(space, src)[picks[:, 0], picks[:, 1]])
         grid.nearest_reachable_unseen(known, src, local_first_m=None)
+        goal = (int(picks[-1, 0]), int(picks[-1, 1]))
+        path = grid.plan(space, src, goal)
+        far = grid.distance_field(space, src)[goal]
+        assert (path is None) == np.isinf(far)
+        if path is not None:
+            steps = np.hypot(*np.diff(path, axis=0).T).sum() * CELL_M
+            assert steps == pytest.approx(far, abs=1e-4)
+        targets = np.zeros_like(space)
+        targets[goal] = True
+        found = grid.nearest_reachable(space, src, targets)
+        assert (found is None) == (path is None)
         assert np.isinf(_WORK.inf).all() and not _WORK.marks.any()
 
 
