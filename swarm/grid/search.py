@@ -49,9 +49,10 @@ class _Workspace(threading.local):
 
     def clean(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """An all-inf distance array of ``n`` cells, room for the cells a search touches, and an all-0 mark
-        array, for the searches that leave all three as they found them (:func:`field_at` and the kept
-        target search, :mod:`swarm.grid.kept`): one set per thread, 9 MB on a 300-tile map, grown for a
-        larger one and sliced for a smaller one (the unused rest keeps the invariants too)."""
+        array, for the searches that leave all three as they found them (:func:`plan`,
+        :func:`nearest_reachable`, :func:`field_at` and the kept target search of :mod:`swarm.grid.kept`):
+        one set per thread, 9 MB on a 300-tile map, grown for a larger one and sliced for a smaller one (the
+        unused rest keeps the invariants too)."""
         if self.inf.shape[0] < n:
             self.inf = np.full(n, np.inf)
             self.touched = np.empty(4 * n, dtype=np.int32)
