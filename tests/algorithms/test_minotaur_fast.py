@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 import random
+from collections import Counter
 
 import numpy as np
 from hypothesis import given, settings
@@ -155,18 +156,11 @@ def test_receivers_of_the_same_list_share_its_counts_unchanged(seed: int, steps:
         for peers in receivers:
             for s, state in peers._lists.items():
                 if state.counts is not None:
-                    assert state.counts == _counts_plain(state.doors)
+                    assert state.counts == Counter(state.doors)
                     if state.doors:  # (an empty list's counts are empty, shared or not)
                         holders.setdefault((s, id(state.doors)), []).append(state.counts)
         for dicts in holders.values():
             assert all(d is dicts[0] for d in dicts)
-
-
-def _counts_plain(doors: tuple) -> dict:
-    out: dict = {}
-    for w in doors:
-        out[w] = out.get(w, 0) + 1
-    return out
 
 
 @settings(max_examples=200, deadline=None)

@@ -14,7 +14,6 @@ from swarm import grid
 from swarm.api import CELL_M, FREE, SOLID, UNSEEN
 from swarm.grid import kept, memo
 from swarm.grid.cspace import _erosion_rows
-from swarm.grid.search import _WORK
 from swarm.grid.local import TARGET_FOUND, erosion_depth, window_target
 from swarm.grid.search import _WORK
 from swarm.grid.targets import default_view_reach_cells
@@ -295,11 +294,12 @@ def test_the_searches_share_one_workspace_and_leave_it_clean() -> None:
             continue
         picks = free[rng.choice(len(free), size=min(6, len(free)), replace=False)]
         src = (int(picks[0, 0]), int(picks[0, 1]))
-        assert np.array_equal(grid.field_at(space, src, picks), grid.distance_field(space, src)[picks[:, 0], picks[:, 1]])
+        field = grid.distance_field(space, src)
+        assert np.array_equal(grid.field_at(space, src, picks), field[picks[:, 0], picks[:, 1]])
         grid.nearest_reachable_unseen(known, src, local_first_m=None)
         goal = (int(picks[-1, 0]), int(picks[-1, 1]))
         path = grid.plan(space, src, goal)
-        far = grid.distance_field(space, src)[goal]
+        far = field[goal]
         assert (path is None) == np.isinf(far)
         if path is not None:
             steps = np.hypot(*np.diff(path, axis=0).T).sum() * CELL_M
