@@ -13,6 +13,12 @@ Prints, per algorithm, every pair, then ticks per CPU-second of each side (media
 speed-up (base CPU / this CPU, per pair) with its range, and whether the two checkouts gave the same
 digest in every run: an optimisation must not change a result. Run each side once first after editing a
 kernel (``--warm``): the first run of a checkout compiles its numba kernels.
+
+``--campaign SPEC --cell size=150 robots=16`` measures a campaign's own cells instead: every cell of SPEC
+whose labels match (for each algorithm asked, its cells), its first replicate's spec as the campaign runs
+it (map, spawn, radio and seeds included), one pair per cell. It prints each cell's speed-up and, per
+algorithm, the speed-up of the whole set (base CPU over this CPU, summed over the cells: what a campaign
+of those cells gains) and the median over cells.
 """
 
 from __future__ import annotations
@@ -58,6 +64,50 @@ def child(spec_json: str) -> None:
                       "digest": digest(s, result.timeseries, result.events)}))
 
 
+def campaign_cells(path: str, where: list[str], algorithm: str, replicate: int) -> list[tuple[str, dict]]:
+    """(labels, canonical run spec) of replicate ``replicate`` of each cell of the campaign at ``path`` whose
+    labels match every ``dim=label`` of ``where`` and whose algorithm is ``algorithm``."""
+    from swarm.campaign import load_campaign
+
+    spec = load_campaign(path, max_runs=None)
+    want = dict(w.split("=", 1) for w in where)
+    reps = spec.replicates
+    out = []
+    for pos in range(spec.run_count() // reps):
+        run_ = spec.run_at(pos * reps + replicate)
+        labels = {k: str(v) for k, v in run_.cell.items()}
+        if all(labels.get(k) == v for k, v in want.items()) and run_.canonical()["algorithm"]["name"] == algorithm:
+            out.append((" ".join(f"{k}={v}" for k, v in labels.items() if k not in want), run_.canonical()))
+    return out
+
+
+def campaign_mode(args: argparse.Namespace, base: Path) -> None:
+    """One interleaved pair per matching cell of ``args.campaign`` (see the module docstring)."""
+    for algorithm in args.algorithms:
+        cells = campaign_cells(args.campaign, args.cell, algorithm, args.replicate)
+        if not cells:
+            raise SystemExit(f"--cell: no cell of {args.campaign} matches {' '.join(args.cell)} for {algorithm}")
+        if args.warm:
+            run(base, cells[0][1])
+            run(HERE, cells[0][1])
+        cpu = {"base": 0.0, "this": 0.0}
+        ratios, same = [], True
+        for i, (labels, s) in enumerate(cells):
+            order = [("base", base), ("this", HERE)] if i % 2 == 0 else [("this", HERE), ("base", base)]
+            got = {name: run(where, s) for name, where in order}
+            b, t = got["base"], got["this"]
+            same &= b["digest"] == t["digest"]
+            cpu["base"] += b["cpu_s"]
+            cpu["this"] += t["cpu_s"]
+            ratios.append(b["cpu_s"] / t["cpu_s"])
+            print(f"{algorithm} {labels}: {b['ticks']} ticks; base {b['ticks'] / b['cpu_s']:.0f}, this "
+                  f"{t['ticks'] / t['cpu_s']:.0f} ticks/CPU-s, speed-up {ratios[-1]:.2f}x; digests "
+                  f"{'equal' if b['digest'] == t['digest'] else 'DIFFER'}", flush=True)
+        print(f"{algorithm}: {len(cells)} cells, CPU base {cpu['base']:.1f} s, this {cpu['this']:.1f} s: speed-up "
+              f"{cpu['base'] / cpu['this']:.2f}x over the set, per cell {span(ratios, '.2f')}x; results "
+              f"{'identical' if same else 'DIFFERENT'}", flush=True)
+
+
 def run(checkout: Path, spec_: dict) -> dict:
     """One run of ``spec_`` in a fresh process with ``checkout`` first on the path."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(checkout), os.environ.get("PYTHONPATH")])))
@@ -88,12 +138,21 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--max-ticks", type=int, default=36000)
     ap.add_argument("--variant", default="swarm", choices=("swarm", "maes"), help="for tnf and minotaur")
+    ap.add_argument("--campaign", default=None, metavar="SPEC", help="measure this campaign's cells (see above)")
+    ap.add_argument("--cell", nargs="*", default=[], metavar="DIM=LABEL", help="with --campaign: the cells to take")
+    ap.add_argument("--replicate", type=int, default=0, help="with --campaign: the replicate of each cell")
     args = ap.parse_args()
     base = args.base.resolve()
     if not (base / "swarm").is_dir():
         ap.error(f"base: {base} is not allowed; give a checkout of this project")
     if args.pairs < 1:
         ap.error(f"--pairs: {args.pairs} is not allowed; give a whole number >= 1")
+    bad = [w for w in args.cell if "=" not in w]
+    if bad:
+        ap.error(f"--cell: {bad[0]!r} is not allowed; give DIM=LABEL, e.g. size=150")
+    if args.campaign is not None:
+        campaign_mode(args, base)
+        return
     for algorithm in args.algorithms:
         s = spec(args, algorithm)
         if args.warm:
