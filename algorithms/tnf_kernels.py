@@ -268,10 +268,11 @@ def _view_labels(known, cells, owner, reach, slot, depth):  # pragma: no cover -
                     if n == cap:
                         cap *= 2
                         bigger = np.empty(cap, np.int64)
-                        bigger[:n] = out[:n]
-                        out = bigger
                         bl = np.empty(cap, np.int64)
-                        bl[:n] = lab[:n]
+                        for i in range(n):  # not slice copies, which link numba's shape-error formatting
+                            bigger[i] = out[i]
+                            bl[i] = lab[i]
+                        out = bigger
                         lab = bl
                     depth[q] = step
                     slot[q] = n

@@ -321,7 +321,9 @@ def _path_table(pts: np.ndarray, consts: np.ndarray) -> np.ndarray:  # pragma: n
         if not (math.isfinite(pts[i, 0]) and math.isfinite(pts[i, 1])):
             return np.empty((0, 5), dtype=np.float64)
     path = np.empty((m, 5), dtype=np.float64)
-    path[:, :2] = pts
+    for i in range(m):  # not path[:, :2] = pts: a slice copy links numba's shape-error formatting
+        path[i, 0] = pts[i, 0]
+        path[i, 1] = pts[i, 1]
     path[m - 1, 2] = 0.0
     for i in range(m - 2, -1, -1):
         path[i, 2] = path[i + 1, 2] + py_hypot(pts[i, 0] - pts[i + 1, 0], pts[i, 1] - pts[i + 1, 1])

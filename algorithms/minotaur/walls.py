@@ -125,7 +125,9 @@ def _push(out, n, r, c, dr, dc, ar, ac, kind):  # pragma: no cover - compiled
     """Column ``n`` of ``out`` (7 rows, grown when full) set to one candidate; returns ``out``."""
     if n == out.shape[1]:
         bigger = np.empty((7, 2 * n), np.int64)
-        bigger[:, :n] = out[:, :n]
+        for j in range(7):       # element loops: a slice copy would link numba's shape-error formatting
+            for i in range(n):
+                bigger[j, i] = out[j, i]
         out = bigger
     out[0, n], out[1, n], out[2, n], out[3, n] = r, c, dr, dc
     out[4, n], out[5, n], out[6, n] = ar, ac, kind

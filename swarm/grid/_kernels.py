@@ -313,7 +313,8 @@ def grid_descend_path(free: np.ndarray, wp: int, dist: np.ndarray,
         last = found
         if cap == buf.shape[0]:
             bigger = np.empty(2 * cap, dtype=np.int64)
-            bigger[:cap] = buf
+            for i in range(cap):  # not a slice copy, which links numba's shape-error formatting
+                bigger[i] = buf[i]
             buf = bigger
         buf[cap] = p
         cap += 1
