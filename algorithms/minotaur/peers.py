@@ -74,13 +74,13 @@ class Peers:
             return []
         if state.counts is not None and isinstance(doors, tuple):
             try:
-                fresh = state.advance(doors, sender)
+                fresh, before = state.advance(doors, sender)
             except TypeError:            # an unhashable (malformed) entry: the sets below say what it means
                 pass
             else:
-                if len(fresh) <= 1:
+                if before is None:
                     return [w for w in fresh if valid_wire(w)]
-                return [w for w in state.set_of_doors() - state.previous_set if valid_wire(w)]
+                return [w for w in state.set_of_doors() - before if valid_wire(w)]
         seen = state.set_of_doors()
         try:
             entries = _SHARED.set_of(doors)
@@ -129,11 +129,12 @@ class _ListState:
     """A sender's last doorway list: the tuple, the number of times each entry occurs in it (None after a
     list with an unhashable entry), and its entries as a set when one was built (``set_of_doors``)."""
 
+    __slots__ = ("doors", "counts", "_set")   # one per receiver and sender: 4,096 in a 64-robot team
+
     def __init__(self) -> None:
         self.doors: tuple = ()
         self.counts: dict | None = _NO_COUNTS  # shared, never changed in place (see advance)
         self._set: frozenset | None = frozenset()
-        self.previous_set: frozenset = frozenset()
 
     def set_of_doors(self) -> frozenset:
         """The entries of the last list as ``Peers._new_entries`` has always taken them: ``frozenset`` of
@@ -147,10 +148,11 @@ class _ListState:
         self.doors, self._set = doors, entries
         self.counts = counts
 
-    def advance(self, doors: tuple, sender: int) -> list:
+    def advance(self, doors: tuple, sender: int) -> tuple[list, frozenset | None]:
         """Move to ``doors`` and return the entries it has that the last list had not (each once, in no
-        particular order); ``previous_set`` is then the last list's set. Raises TypeError on an
-        unhashable entry, leaving the state as it was.
+        particular order) and, when there are two or more, the last list's set (their order is that of the
+        set difference; the set is not kept, so a receiver holds one set per sender, not two). Raises
+        TypeError on an unhashable entry, leaving the state as it was.
 
         The new entries depend only on the last list and this one (the counts are always the last list's),
         the counts only on this one: every receiver that heard the same lists of ``sender`` shares them
@@ -162,11 +164,10 @@ class _ListState:
         if fresh is None or counts is None:
             built, fresh = _advance(last, self.counts, doors)
             counts = _SHARED.keep(sender, last, doors, built if counts is None else counts, fresh)
-        if len(fresh) > 1:
-            self.previous_set = self.set_of_doors()
+        before = self.set_of_doors() if len(fresh) > 1 else None
         self.counts = counts
         self.doors, self._set = doors, None
-        return fresh
+        return fresh, before
 
 
 def _advance(last: tuple, counts: dict | None, doors: tuple) -> tuple[dict, list]:
