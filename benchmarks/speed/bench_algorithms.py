@@ -15,8 +15,9 @@ digest in every run: an optimisation must not change a result. Run each side onc
 kernel (``--warm``): the first run of a checkout compiles its numba kernels.
 
 ``--campaign SPEC --cell size=150 robots=16`` measures a campaign's own cells instead: every cell of SPEC
-whose labels match (for each algorithm asked, its cells), its first replicate's spec as the campaign runs
-it (map, spawn, radio and seeds included), one pair per cell. It prints each cell's speed-up and, per
+whose labels match (for each algorithm asked, its cells), one replicate's spec (``--replicate``, 0: the
+first) as the campaign runs it (map, spawn, radio and seeds included), one pair per cell (``--pairs`` is
+not used). It prints each cell's speed-up and, per
 algorithm, the speed-up of the whole set (base CPU over this CPU, summed over the cells: what a campaign
 of those cells gains) and the median over cells.
 """
