@@ -12,7 +12,10 @@ shared machine cost it little) and the digest of its results (``benchmarks/resul
 Prints, per algorithm, every pair, then ticks per CPU-second of each side (median and range), the median
 speed-up (base CPU / this CPU, per pair) with its range, and whether the two checkouts gave the same
 digest in every run: an optimisation must not change a result. Run each side once first after editing a
-kernel (``--warm``): the first run of a checkout compiles its numba kernels.
+kernel (``--warm``): the first run of a checkout compiles its numba kernels. A fresh process also loads
+the kernels it uses from numba's cache inside its run loop (0.1-0.3 s, 2-5 % of these runs), which a
+campaign worker pays once for all its runs: ``--warm-process`` times a second run in each process, after an
+untimed one, which is the pace of a worker's later runs.
 
 ``--campaign SPEC --cell size=150 robots=16`` measures a campaign's own cells instead: every cell of SPEC
 whose labels match (for each algorithm asked, its cells), one replicate's spec (``--replicate``, 0: the
@@ -49,13 +52,16 @@ def spec(args: argparse.Namespace, algorithm: str) -> dict:
             "stop": {"explored": 0.98, "max_ticks": args.max_ticks}}
 
 
-def child(spec_json: str) -> None:
-    """Run one spec in this process and print its ticks, run-loop CPU seconds and result digest as JSON."""
+def child(spec_json: str, warm_process: bool = False) -> None:
+    """Run one spec in this process and print its ticks, run-loop CPU seconds and result digest as JSON
+    (``warm_process``: of a second run, after an untimed one)."""
     sys.path.insert(0, str(HERE / "benchmarks"))
     from result_digests import digest  # noqa: E402 - the checkout's own, found on PYTHONPATH's swarm
 
     from swarm.simulation import Simulation
 
+    if warm_process:
+        Simulation(json.loads(spec_json)).run()
     sim = Simulation(json.loads(spec_json))
     t0 = time.process_time()
     result = sim.run()
@@ -109,11 +115,15 @@ def campaign_mode(args: argparse.Namespace, base: Path) -> None:
               f"{'identical' if same else 'DIFFERENT'}", flush=True)
 
 
+WARM_PROCESS: list[str] = []
+"""``["--warm-process"]`` with ``--warm-process`` (see the module docstring)."""
+
+
 def run(checkout: Path, spec_: dict) -> dict:
     """One run of ``spec_`` in a fresh process with ``checkout`` first on the path."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(checkout), os.environ.get("PYTHONPATH")])))
-    out = subprocess.run([sys.executable, __file__, "--child", json.dumps(spec_)], cwd=checkout, env=env,
-                         capture_output=True, text=True)
+    out = subprocess.run([sys.executable, __file__, "--child", json.dumps(spec_), *WARM_PROCESS], cwd=checkout,
+                         env=env, capture_output=True, text=True)
     if out.returncode != 0:
         sys.stderr.write(out.stderr)
         raise SystemExit(f"{checkout}: the run failed")
@@ -125,8 +135,8 @@ def span(values: list[float], fmt: str) -> str:
 
 
 def main() -> None:
-    if len(sys.argv) == 3 and sys.argv[1] == "--child":
-        child(sys.argv[2])
+    if len(sys.argv) in (3, 4) and sys.argv[1] == "--child":
+        child(sys.argv[2], warm_process=sys.argv[3:] == ["--warm-process"])
         return
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("base", type=Path, help="the other checkout (a git worktree of main, say)")
@@ -139,6 +149,8 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--max-ticks", type=int, default=36000)
     ap.add_argument("--variant", default="swarm", choices=("swarm", "maes"), help="for tnf and minotaur")
+    ap.add_argument("--warm-process", action="store_true",
+                    help="time a second run in each process, after an untimed one (a campaign worker's pace)")
     ap.add_argument("--campaign", default=None, metavar="SPEC", help="measure this campaign's cells (see above)")
     ap.add_argument("--cell", nargs="*", default=[], metavar="DIM=LABEL", help="with --campaign: the cells to take")
     ap.add_argument("--replicate", type=int, default=0, help="with --campaign: the replicate of each cell")
@@ -148,6 +160,8 @@ def main() -> None:
         ap.error(f"base: {base} is not allowed; give a checkout of this project")
     if args.pairs < 1:
         ap.error(f"--pairs: {args.pairs} is not allowed; give a whole number >= 1")
+    if args.warm_process:
+        WARM_PROCESS.append("--warm-process")
     bad = [w for w in args.cell if "=" not in w]
     if bad:
         ap.error(f"--cell: {bad[0]!r} is not allowed; give DIM=LABEL, e.g. size=150")
