@@ -476,6 +476,7 @@ class MapSharing:
         if not (due or any(self.full_requested) or any(self.requests)):  # most ticks
             return out
         pose_rows = poses.tolist()
+        payloads: dict[bytes, tuple[bytes, bytes, int]] = {}  # this tick's full maps (full_update)
         for i in range(self.n):
             for target in self.requests[i]:
                 out[i].append(MapRequest(sender=i, target=target))
@@ -493,7 +494,7 @@ class MapSharing:
                     self.last_shared[i] = packed_copy(known[i])
                     self._forget_writes(i)
                 self.seq[i] += 1
-                update = full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]))
+                update = full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), payloads)
                 update.__dict__["_since"] = since  # this process's note (see _take); never on the wire
                 out[i].append(update)
                 continue

@@ -298,11 +298,25 @@ def map_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[
     return delta_update(sender, seq, tick, known, pose, np.sort(np.asarray(changed, dtype=np.int64)))
 
 
-def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float]) -> MapUpdate:
-    """The full-map MapUpdate of ``known`` (``pose``: three Python floats)."""
-    return _compressed_update(_cellcodec.pack2(known.reshape(-1)).tobytes(), sender=sender, seq=seq, tick=tick,
-                              full=True, shape=(int(known.shape[0]), int(known.shape[1])),
-                              count=int(np.count_nonzero(known)), pose=pose)
+def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
+                payloads: dict[bytes, tuple[bytes, bytes, int]] | None = None) -> MapUpdate:
+    """The full-map MapUpdate of ``known`` (``pose``: three Python floats).
+
+    ``payloads`` (plain bytes -> (plain, payload, known cells)): the full maps of one sharing tick so far.
+    Robots whose maps have converged send byte-identical full maps in the same tick (a fifth to a quarter of
+    the full maps of the paper's 16-robot runs under the materials radio: docs/performance-history.md), and
+    zlib gives the same bytes for the same input, so one compression serves them all and their updates
+    hold one copy of the plain bytes."""
+    plain = _cellcodec.pack2(known.reshape(-1)).tobytes()
+    shared = None if payloads is None else payloads.get(plain)
+    if shared is None:
+        shared = (plain, zlib.compress(plain, MAP_ZLIB_LEVEL), int(np.count_nonzero(known)))
+        if payloads is not None:
+            payloads[plain] = shared
+    update = _new_update(payload=shared[1], sender=sender, seq=seq, tick=tick, full=True,
+                         shape=(int(known.shape[0]), int(known.shape[1])), count=shared[2], pose=pose)
+    update.__dict__["_plain"] = shared[0]
+    return update
 
 
 def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],

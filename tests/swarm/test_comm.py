@@ -518,3 +518,30 @@ def test_a_medium_noting_losses_lists_every_failed_delivery_and_changes_nothing(
     assert (causes["link"], causes["loss"], causes["bandwidth"]) == \
         (stats.dropped_link, stats.dropped_loss, stats.dropped_bandwidth)
     assert causes["link"] > 0 and (causes["loss"] > 0) == (loss > 0) and (causes["bandwidth"] > 0) == (bandwidth > 0)
+
+
+def test_identical_full_maps_of_one_tick_share_one_compression_and_keep_their_bytes():
+    """Robots whose maps converged send byte-identical full maps: one zlib call serves them (one copy of the
+    plain bytes), and every update still carries exactly what compressing its own map gives."""
+    import zlib
+
+    from swarm.messages import MAP_ZLIB_LEVEL, _cellcodec
+
+    rng = np.random.default_rng(5)
+    shape = (24, 31)
+    common = rng.integers(0, 3, shape).astype(np.uint8)
+    other = common.copy()
+    other[3, 4] = 2 if other[3, 4] != 2 else 1
+    known = np.stack([common, other, common.copy(), common.copy()])
+    sharing = MapSharing(4, shape, CommSpec(map_sharing="full", share_every=1))
+    out = sharing.outgoing(0, known, np.zeros((4, 3)))
+    full = [msgs[0] for msgs in out]
+    assert all(isinstance(m, MapUpdate) and m.full for m in full)
+    for i, m in enumerate(full):
+        plain = _cellcodec.pack2(known[i].reshape(-1)).tobytes()
+        assert m.payload == zlib.compress(plain, MAP_ZLIB_LEVEL) and m.count == int(np.count_nonzero(known[i]))
+        assert np.array_equal(decode(encode(m)).dense().reshape(shape), known[i])
+    assert full[0].payload == full[2].payload == full[3].payload != full[1].payload
+    assert full[0]._plain is full[2]._plain is full[3]._plain, "robots with the same map hold one plain copy"
+    later = sharing.outgoing(1, known, np.zeros((4, 3)))[0][0]
+    assert later.payload == full[0].payload and later._plain is not full[0]._plain, "shared within a tick only"
