@@ -218,7 +218,7 @@ def _space_and_pad(window, unseen_ok, row_offsets, half_widths):  # pragma: no c
     pad = np.zeros((h + 2, w + 2), np.uint8)
     space = np.empty((h, w), np.uint8)
     grid_configuration_space(window, unseen_ok, row_offsets, half_widths, space)
-    for r in range(h):  # element loops: a slice copy links numba's shape-error formatting (2 MB per kernel)
+    for r in range(h):  # not a slice copy, which links numba's shape-error formatting (docs/performance-history.md)
         for c in range(w):
             pad[r + 1, c + 1] = space[r, c]
     return space, pad
