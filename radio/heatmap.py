@@ -10,6 +10,7 @@ are dimmed, and the cells on the edge of the linked region (the sensitivity cont
 from __future__ import annotations
 
 import io
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -65,9 +66,13 @@ def rssi_field(model: LinkModel, tx: Point, *, tx_power_dbm: float | None = None
 
 
 def colour_ramp(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """uint8[..., 3] viridis-like colours for ``values`` scaled from ``lo`` (dark) to ``hi`` (bright)."""
-    span = hi - lo if hi > lo else 1.0
-    x = np.clip((np.nan_to_num(values, nan=lo, neginf=lo, posinf=hi) - lo) / span, 0.0, 1.0)
+    """uint8[..., 3] viridis-like colours for ``values`` scaled from ``lo`` (dark) to ``hi`` (bright).
+
+    Scaled in halves (exact: halving a float is), so that any finite ``lo`` and ``hi`` work: ``hi - lo`` of
+    ``--tx-power 1e308 --sensitivity -1e308`` would overflow to inf and make every position NaN."""
+    span = hi * 0.5 - lo * 0.5 if hi > lo else 0.5
+    with np.errstate(over="ignore"):  # a value far outside [lo, hi] goes to +-inf, then to the ramp's end
+        x = np.clip((np.nan_to_num(values, nan=lo, neginf=lo, posinf=hi) * 0.5 - lo * 0.5) / span, 0.0, 1.0)
     pos = x * (len(_RAMP) - 1)
     i = np.minimum(pos.astype(int), len(_RAMP) - 2)
     w = (pos - i)[..., None]
@@ -121,7 +126,8 @@ def _with_legend(image: Image.Image, lo: float, hi: float, field: RssiField, tit
     draw = ImageDraw.Draw(out)
     y = image.height + 6
     bar_w = max(60, min(300, image.width - 12))
-    ramp = colour_ramp(np.linspace(lo, hi, bar_w), lo, hi)
+    ramp = (colour_ramp(np.linspace(lo, hi, bar_w), lo, hi) if math.isfinite(hi - lo)
+            else colour_ramp(np.linspace(0.0, 1.0, bar_w), 0.0, 1.0))  # the same ramp, for ranges beyond floats
     out.paste(Image.fromarray(np.repeat(ramp[None, :, :], 10, axis=0), "RGB"), (6, y))
     draw.text((6, y + 12), f"{lo:.0f} dBm", fill=(0, 0, 0), font=font)
     hi_text = f"{hi:.0f} dBm"

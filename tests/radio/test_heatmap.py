@@ -59,3 +59,24 @@ def test_line_of_sight_field_and_trace():
     # LOS counts the wall but charges no dB for it
     (wall,) = model.trace((10.0, 20.25), (30.0, 20.25))
     assert wall.db == 0.0 and wall.charged == ("concrete",)
+
+
+@pytest.mark.parametrize("tx_power, sensitivity", [(1e308, -1e308), (-1e308, 1e308), (-1e308, -1e308)])
+def test_picture_of_a_field_whose_range_overflows_floats(tmp_path, tx_power, sensitivity):
+    """``--tx-power 1e308 --sensitivity -1e308`` made the colour range inf - (-inf) and every ramp position NaN
+    (an IndexError, found by tests/maps/test_fuzz_inputs.py); any finite setting now draws."""
+    import warnings
+
+    from radio.heatmap import colour_ramp
+
+    m = vertical_wall("concrete")
+    field = rssi_field(build_link_model(m, RadioConfig(tx_power_dbm=tx_power, sensitivity_dbm=sensitivity)),
+                       (10.0, 20.25))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no overflow warnings on the way either
+        image = render_heatmap(m, field)
+        ends = colour_ramp(np.array([-1e308, 0.0, 1e308]), -1e308, 1e308)
+    assert image.size[0] > 0
+    assert np.array_equal(ends[0], colour_ramp(np.array([0.0]), 0.0, 1.0)[0])   # the ramp's dark end
+    assert np.array_equal(ends[2], colour_ramp(np.array([1.0]), 0.0, 1.0)[0])   # its bright end
+    assert np.array_equal(ends[1], colour_ramp(np.array([0.5]), 0.0, 1.0)[0])   # the middle stays the middle
