@@ -23,6 +23,8 @@ from swarm.transport.auth import sign_act
 from swarm.transport.batch import ActBatchDecoder, ActBatchEncoder, ObsBatchDecoder
 from swarm.transport.wire import (WIRE_VERSION, ObsDecoder, WireError, decode_act, decode_reset, encode_act,
                                   encode_obs, encode_reset)
+from tests.swarm.transport.test_batch import valid_batch  # at import: its module's @given tests must not be
+                                                          # defined inside a running @given (nested_given)
 
 CASES = 300
 LIVE_PER_TICK = 6
@@ -55,7 +57,6 @@ def valid_obs() -> list:
 
 
 def valid_obs_batch() -> list:
-    from tests.swarm.transport.test_batch import valid_batch
     return valid_batch()[0]
 
 
