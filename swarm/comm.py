@@ -476,7 +476,7 @@ class MapSharing:
         if not (due or any(self.full_requested) or any(self.requests)):  # most ticks
             return out
         pose_rows = poses.tolist()
-        payloads: dict[bytes, tuple[bytes, bytes, int]] = {}  # this tick's full maps (full_update)
+        payloads: dict[bytes, tuple[bytes, bytes]] = {}  # this tick's full maps (full_update)
         for i in range(self.n):
             for target in self.requests[i]:
                 out[i].append(MapRequest(sender=i, target=target))

@@ -299,10 +299,10 @@ def map_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[
 
 
 def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
-                payloads: dict[bytes, tuple[bytes, bytes, int]] | None = None) -> MapUpdate:
+                payloads: dict[bytes, tuple[bytes, bytes]] | None = None) -> MapUpdate:
     """The full-map MapUpdate of ``known`` (``pose``: three Python floats).
 
-    ``payloads`` (plain bytes -> (plain, payload, known cells)): the full maps of one sharing tick so far.
+    ``payloads`` (plain bytes -> (plain, payload)): the full maps of one sharing tick so far.
     Robots whose maps have converged send byte-identical full maps in the same tick (a fifth to a quarter of
     the full maps of the paper's 16-robot runs under the materials radio: docs/performance-history.md), and
     zlib gives the same bytes for the same input, so one compression serves them all and their updates
@@ -310,13 +310,11 @@ def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple
     plain = _cellcodec.pack2(known.reshape(-1)).tobytes()
     shared = None if payloads is None else payloads.get(plain)
     if shared is None:
-        shared = (plain, zlib.compress(plain, MAP_ZLIB_LEVEL), int(np.count_nonzero(known)))
+        shared = (plain, zlib.compress(plain, MAP_ZLIB_LEVEL))
         if payloads is not None:
             payloads[plain] = shared
-    update = _new_update(payload=shared[1], sender=sender, seq=seq, tick=tick, full=True,
-                         shape=(int(known.shape[0]), int(known.shape[1])), count=shared[2], pose=pose)
-    update.__dict__["_plain"] = shared[0]
-    return update
+    return _update_of(*shared, sender=sender, seq=seq, tick=tick, full=True,
+                      shape=(int(known.shape[0]), int(known.shape[1])), count=int(np.count_nonzero(known)), pose=pose)
 
 
 def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
@@ -324,9 +322,9 @@ def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tupl
     """The delta MapUpdate of cells ``changed`` of ``known``: distinct ascending int64 flat indices, as
     :func:`swarm.knowledge.sync_changes` gives them, and ``pose`` three Python floats, so nothing is sorted
     or converted again (the map-sharing service builds one per robot per sharing tick)."""
-    return _compressed_update(_cellcodec.pack_delta(known.reshape(-1), changed).tobytes(), sender=sender, seq=seq,
-                              tick=tick, full=False, shape=(int(known.shape[0]), int(known.shape[1])),
-                              count=len(changed), pose=pose)
+    plain = _cellcodec.pack_delta(known.reshape(-1), changed).tobytes()
+    return _update_of(plain, zlib.compress(plain, MAP_ZLIB_LEVEL), sender=sender, seq=seq, tick=tick, full=False,
+                      shape=(int(known.shape[0]), int(known.shape[1])), count=len(changed), pose=pose)
 
 
 _new_update = frozen_builder(MapUpdate)
@@ -335,10 +333,10 @@ _BUILDERS: dict[type, Callable[..., Any]] = {MapUpdate: _new_update}
 the map updates every robot decodes every sharing tick, whose generated ``__init__`` only stores the fields."""
 
 
-def _compressed_update(plain: bytes, **fields: Any) -> MapUpdate:
-    """A MapUpdate whose payload is ``plain`` compressed, keeping ``plain`` for receivers in this process
+def _update_of(plain: bytes, payload: bytes, **fields: Any) -> MapUpdate:
+    """A MapUpdate of ``payload`` (``plain`` compressed), keeping ``plain`` for receivers in this process
     (:meth:`MapUpdate._raw`)."""
-    update = _new_update(payload=zlib.compress(plain, MAP_ZLIB_LEVEL), **fields)
+    update = _new_update(payload=payload, **fields)
     update.__dict__["_plain"] = plain
     return update
 
