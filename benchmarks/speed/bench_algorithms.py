@@ -83,8 +83,11 @@ def campaign_cells(path: str, where: list[str], algorithm: str, replicate: int) 
     for pos in range(spec.run_count() // reps):
         run_ = spec.run_at(pos * reps + replicate)
         labels = {k: str(v) for k, v in run_.cell.items()}
-        if all(labels.get(k) == v for k, v in want.items()) and run_.canonical()["algorithm"]["name"] == algorithm:
-            out.append((" ".join(f"{k}={v}" for k, v in labels.items() if k not in want), run_.canonical()))
+        if not all(labels.get(k) == v for k, v in want.items()):
+            continue
+        canonical = run_.canonical()
+        if canonical["algorithm"]["name"] == algorithm:
+            out.append((" ".join(f"{k}={v}" for k, v in labels.items() if k not in want), canonical))
     return out
 
 
@@ -100,9 +103,7 @@ def campaign_mode(args: argparse.Namespace, base: Path) -> None:
         cpu = {"base": 0.0, "this": 0.0}
         ratios, same = [], True
         for i, (labels, s) in enumerate(cells):
-            order = [("base", base), ("this", HERE)] if i % 2 == 0 else [("this", HERE), ("base", base)]
-            got = {name: run(where, s) for name, where in order}
-            b, t = got["base"], got["this"]
+            b, t = pair(base, s, i, args.warm_process)
             same &= b["digest"] == t["digest"]
             cpu["base"] += b["cpu_s"]
             cpu["this"] += t["cpu_s"]
@@ -115,19 +116,25 @@ def campaign_mode(args: argparse.Namespace, base: Path) -> None:
               f"{'identical' if same else 'DIFFERENT'}", flush=True)
 
 
-WARM_PROCESS: list[str] = []
-"""``["--warm-process"]`` with ``--warm-process`` (see the module docstring)."""
-
-
-def run(checkout: Path, spec_: dict) -> dict:
-    """One run of ``spec_`` in a fresh process with ``checkout`` first on the path."""
+def run(checkout: Path, spec_: dict, warm_process: bool = False) -> dict:
+    """One run of ``spec_`` in a fresh process with ``checkout`` first on the path (``warm_process``: timed
+    after an untimed one in that process)."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(filter(None, [str(checkout), os.environ.get("PYTHONPATH")])))
-    out = subprocess.run([sys.executable, __file__, "--child", json.dumps(spec_), *WARM_PROCESS], cwd=checkout,
+    flags = ["--warm-process"] if warm_process else []
+    out = subprocess.run([sys.executable, __file__, "--child", json.dumps(spec_), *flags], cwd=checkout,
                          env=env, capture_output=True, text=True)
     if out.returncode != 0:
         sys.stderr.write(out.stderr)
         raise SystemExit(f"{checkout}: the run failed")
     return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def pair(base: Path, spec_: dict, i: int, warm_process: bool) -> tuple[dict, dict]:
+    """Pair ``i``: ``spec_`` run on the base and on this checkout (which goes first alternates with ``i``);
+    their results, base first."""
+    order = [("base", base), ("this", HERE)] if i % 2 == 0 else [("this", HERE), ("base", base)]
+    got = {name: run(where, spec_, warm_process) for name, where in order}
+    return got["base"], got["this"]
 
 
 def span(values: list[float], fmt: str) -> str:
@@ -160,8 +167,6 @@ def main() -> None:
         ap.error(f"base: {base} is not allowed; give a checkout of this project")
     if args.pairs < 1:
         ap.error(f"--pairs: {args.pairs} is not allowed; give a whole number >= 1")
-    if args.warm_process:
-        WARM_PROCESS.append("--warm-process")
     bad = [w for w in args.cell if "=" not in w]
     if bad:
         ap.error(f"--cell: {bad[0]!r} is not allowed; give DIM=LABEL, e.g. size=150")
@@ -176,9 +181,7 @@ def main() -> None:
         rates: dict[str, list[float]] = {"base": [], "this": []}
         ratios, same = [], True
         for i in range(args.pairs):
-            order = [("base", base), ("this", HERE)] if i % 2 == 0 else [("this", HERE), ("base", base)]
-            got = {name: run(where, s) for name, where in order}
-            b, t = got["base"], got["this"]
+            b, t = pair(base, s, i, args.warm_process)
             same &= b["digest"] == t["digest"]
             rates["base"].append(b["ticks"] / b["cpu_s"])
             rates["this"].append(t["ticks"] / t["cpu_s"])
