@@ -42,10 +42,17 @@ class _Workspace(threading.local):
         self.marks = np.zeros(0, dtype=np.uint8)     # all 0 between calls
 
     def get(self, n: int) -> tuple[np.ndarray, np.ndarray]:
+        """A distance array of ``n`` cells (filled by the search) and the bucket ring for it."""
         if self.dist.shape[0] < n:
             self.dist = np.empty(n, dtype=np.float64)
+        return self.dist[:n], self.ring_for(n)
+
+    def ring_for(self, n: int) -> np.ndarray:
+        """The bucket ring for a search of ``n`` cells, for the searches on the all-inf array of
+        :meth:`clean`, which need no distance array of their own."""
+        if self.ring.shape[0] < 3 * n:
             self.ring = np.empty(3 * n, dtype=np.int32)
-        return self.dist[:n], self.ring
+        return self.ring
 
     def clean(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """An all-inf distance array of ``n`` cells, room for the cells a search touches, and an all-0 mark
@@ -111,7 +118,7 @@ def plan(space: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> np
     if not (sp[s] and sp[g]):
         return None
     free, wp = _WORK.padded(sp)
-    _, ring = _WORK.get(free.shape[0])
+    ring = _WORK.ring_for(free.shape[0])
     dist, touched, _ = _WORK.clean(free.shape[0])
     gi = (g[0] + 1) * wp + g[1] + 1
     best, _, nt = grid_bucket_search(free, wp, _seed(s, wp), gi, _NO_TARGETS, np.inf, dist, ring, touched)
@@ -172,7 +179,7 @@ def field_at(space: np.ndarray, sources: Any, cells: np.ndarray, max_dist_m: flo
         out.fill(np.inf)
         return out
     free, wp = _WORK.padded(sp)
-    _, ring = _WORK.get(free.shape[0])
+    ring = _WORK.ring_for(free.shape[0])
     dist, touched, marks = _WORK.clean(free.shape[0])
     flat = _flat(at, wp)
     marks[flat] = 1
@@ -208,7 +215,7 @@ def nearest_reachable_in(space: np.ndarray, start: tuple[int, int], targets: np.
         return None
     free, wp = _WORK.padded(space, 0)
     tflat, _ = _WORK.padded(targets, 1)
-    _, ring = _WORK.get(free.shape[0])
+    ring = _WORK.ring_for(free.shape[0])
     dist, touched, _ = _WORK.clean(free.shape[0])
     best, best_d, nt = grid_bucket_search(free, wp, _seed(start, wp), -1, tflat, np.inf, dist, ring, touched)
     _forget(dist, touched, nt)

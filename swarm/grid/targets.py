@@ -161,7 +161,7 @@ class _TargetSearch:
         (:mod:`swarm.grid.memo`)."""
         rows, widths = _erosion_rows(self.radius_m, self.margin_m)
         h, w = known.shape
-        _, ring = _WORK.get((h + 2) * (w + 2))
+        ring = _WORK.ring_for((h + 2) * (w + 2))
         dist, touched, _ = _WORK.clean((h + 2) * (w + 2))
         pad = kept.unpack_buffer((h + 2) * (w + 2))
         ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude)
