@@ -20,7 +20,7 @@ from typing import Any
 
 from result_digests import MAES_MOTION, digest
 
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 
 PAPER_RUN = {"motion": MAES_MOTION, "lidar": {"range_m": 7.0}}
 TNF = {"name": "tnf", "params": {"alpha": 1.0, "beta": 10.0}}

@@ -18,7 +18,7 @@ import hashlib
 import json
 from typing import Any
 
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 
 MAES_MOTION = {"max_speed": 3.0, "max_turn_rate": 4.0, "max_accel": 60.0, "max_turn_accel": 120.0, "substeps": 8}
 

@@ -35,10 +35,10 @@ import networkx as nx
 import numpy as np
 from scipy import ndimage
 
-from .errors import InvalidInput
-from .materials import DEFAULT_TABLE, DEFAULT_WALL_MATERIALS, check_known_material
+from swarm.base.errors import InvalidInput
+from swarm.base.params import check_float, check_int, to_mapping
+from .materials import DEFAULT_TABLE, DEFAULT_WALL_MATERIALS, check_known_material, check_weights
 from .model import CELL_M, CELLS_PER_TILE, Map
-from .params import check_float, check_int, check_weights, to_mapping
 from .raster import FOUR, tiles_to_cells
 
 DOOR_LABEL = -2

@@ -30,10 +30,10 @@ from typing import Any, Mapping
 import numpy as np
 from scipy import ndimage
 
-from .errors import InvalidInput
-from .materials import DEFAULT_TABLE, DEFAULT_WALL_MATERIALS
+from swarm.base.errors import InvalidInput
+from swarm.base.params import check_float, check_int
+from .materials import DEFAULT_TABLE, DEFAULT_WALL_MATERIALS, check_weights
 from .model import Map
-from .params import check_float, check_int, check_weights
 from .raster import FOUR, nearest_wall_material, reachable_free, smooth_patches, tiles_to_cells
 
 
@@ -103,7 +103,7 @@ def generate_cave(width: int, height: int, seed: int, params: CaveParams) -> Map
 
 
 def _params_dict(params: CaveParams) -> dict[str, Any]:
-    from .params import to_mapping
+    from swarm.base.params import to_mapping
 
     return to_mapping(params)
 

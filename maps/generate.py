@@ -4,11 +4,11 @@ from __future__ import annotations
 
 from typing import Any, Mapping
 
+from swarm.base.errors import InvalidInput
+from swarm.base.params import from_mapping
 from .building import BuildingParams, generate_building
 from .cave import CaveParams, generate_cave
-from .errors import InvalidInput
 from .model import Map
-from .params import from_mapping
 
 MIN_SIZE_TILES = 20
 MAX_SIZE_TILES = 2000

@@ -26,7 +26,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import InvalidInput, field_name, short_repr, shorten
+from swarm.base.errors import InvalidInput, field_name, short_repr, shorten
 from .materials import AIR, DEFAULT_TABLE, check_known_material, check_material_name
 from .model import CELL_M, CELLS_PER_TILE, Map, graph_from_json, graph_to_json
 

@@ -15,9 +15,13 @@ and refuses names that neither its built-in table nor the run's ``[radio.materia
 from __future__ import annotations
 
 import hashlib
+import math
 import re
+from collections.abc import Mapping
+from typing import Any
 
-from .errors import InvalidInput, shorten
+from swarm.base.errors import InvalidInput, field_name, shorten
+from swarm.base.params import check_float
 
 AIR = "air"
 DEFAULT_WALL_MATERIALS: tuple[str, ...] = ("concrete", "wood", "brick")
@@ -81,3 +85,19 @@ def check_table(table: tuple[str, ...]) -> tuple[str, ...]:
     if len(set(table)) != len(table):
         raise InvalidInput("materials", table, "unique names")
     return tuple(table)
+
+
+def check_weights(name: str, value: Any) -> tuple[tuple[str, float], ...]:
+    """A non-empty mapping known wall material -> non-negative weight with a positive, finite sum, as sorted
+    pairs (generators' ``materials`` tables)."""
+    if not isinstance(value, Mapping) or not value:
+        raise InvalidInput(name, value, "a non-empty table of material = weight")
+    pairs = []
+    for key, w in value.items():
+        check_known_material(key, field_name(name, key))
+        check_float(field_name(name, key), w, 0.0)
+        pairs.append((key, float(w)))
+    total = sum(w for _, w in pairs)
+    if not 0 < total < math.inf:
+        raise InvalidInput(name, dict(value), "weights with a positive, finite sum")
+    return tuple(sorted(pairs))

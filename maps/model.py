@@ -14,11 +14,12 @@ from typing import Any, Mapping
 import networkx as nx
 import numpy as np
 
-from .errors import InvalidInput
-from .materials import AIR, check_table
+from swarm.base.errors import InvalidInput
+from swarm.base.types import CELL_M  # the edge of one raster cell (0.5 m), shared with knowledge maps
 
-CELL_M = 0.5
-"""Edge length of one raster cell in metres."""
+from .materials import AIR, check_table
+from .rects import WallRect, merge_rectangles
+
 CELLS_PER_TILE = 2
 """One tile (1 m, the unit of map sizes) is 2 x 2 cells."""
 KINDS = ("cave", "building", "custom")
@@ -139,10 +140,8 @@ class Map:
             raise InvalidInput("material", name, " | ".join(self.materials)) from None
 
     @cached_property
-    def wall_rectangles(self) -> tuple["WallRect", ...]:
+    def wall_rectangles(self) -> tuple[WallRect, ...]:
         """Solid cells merged into few disjoint axis-aligned rectangles, each of one material."""
-        from .rects import merge_rectangles
-
         return merge_rectangles(self.material)
 
     # ---------------------------------------------------------------------------------- comparison
@@ -175,22 +174,6 @@ class Map:
         seed = f" seed {self.seed}" if self.seed is not None else ""
         return (f"{self.kind}{seed}: {self.width_m:g} x {self.height_m:g} m ({cols} x {rows} cells), "
                 f"{solid_share:.1f}% solid [{walls}]{extra}")
-
-
-@dataclass(frozen=True)
-class WallRect:
-    """A solid rectangle in cell units: rows ``[row0, row1)``, cols ``[col0, col1)``, one material id."""
-
-    row0: int
-    col0: int
-    row1: int
-    col1: int
-    material: int
-
-    @property
-    def bounds_m(self) -> tuple[float, float, float, float]:
-        """(x0, y0, x1, y1) in metres."""
-        return self.col0 * CELL_M, self.row0 * CELL_M, self.col1 * CELL_M, self.row1 * CELL_M
 
 
 def graph_to_json(graph: nx.MultiGraph | None) -> dict[str, Any] | None:

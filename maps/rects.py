@@ -7,9 +7,27 @@ physics sees walls exactly where the raster has them.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
-from .model import WallRect
+from swarm.base.types import CELL_M
+
+
+@dataclass(frozen=True)
+class WallRect:
+    """A solid rectangle in cell units: rows ``[row0, row1)``, cols ``[col0, col1)``, one material id."""
+
+    row0: int
+    col0: int
+    row1: int
+    col1: int
+    material: int
+
+    @property
+    def bounds_m(self) -> tuple[float, float, float, float]:
+        """(x0, y0, x1, y1) in metres."""
+        return self.col0 * CELL_M, self.row0 * CELL_M, self.col1 * CELL_M, self.row1 * CELL_M
 
 
 def merge_rectangles(material: np.ndarray) -> tuple[WallRect, ...]:

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from .errors import InvalidInput
+from swarm.base.errors import InvalidInput
 from .materials import colour_of
 from .model import Map
 

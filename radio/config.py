@@ -30,8 +30,8 @@ from typing import Any
 
 import numpy as np
 
-from maps.errors import InvalidInput, field_name
-from maps.params import OMIT_DEFAULT, check_choice, check_float, check_int, from_mapping, to_mapping
+from swarm.base.errors import InvalidInput, field_name
+from swarm.base.params import OMIT_DEFAULT, check_choice, check_float, check_int, from_mapping, to_mapping
 
 from .crossings import DEFAULT_GRAZE_TOLERANCE_M
 from .materials import Material, material_from_value
@@ -62,7 +62,7 @@ class RadioConfig:
       (see :mod:`radio.crossings`).
     - ``materials``: extra or overriding materials, name -> entry (see :func:`radio.materials.material_from_value`).
     - ``tx_power_overrides`` / ``sensitivity_overrides``: robot id -> dBm (finite). A run spec refuses ids
-      beyond its robot count (:class:`swarm.spec.RunSpec`); used directly, :meth:`tx_power_array` ignores them.
+      beyond its robot count (:class:`swarm.sim.spec.RunSpec`); used directly, :meth:`tx_power_array` ignores them.
     - ``shadowing_sigma_db``: log-normal shadowing's standard deviation (0 = none, the default; 3 dB is
       3GPP TR 38.901's indoor-office line-of-sight figure), spatially correlated over
       ``shadowing_corr_m`` metres (:mod:`radio.shadowing`). ``multiwall`` and ``maes`` only.

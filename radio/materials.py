@@ -33,9 +33,9 @@ from typing import Any
 
 import numpy as np
 
-from maps.errors import InvalidInput, shorten
 from maps.materials import AIR, check_material_name
-from maps.params import check_float
+from swarm.base.errors import InvalidInput, shorten
+from swarm.base.params import check_float
 
 TABLE_FREQUENCIES_GHZ: tuple[float, ...] = (1.3, 2.4, 5.2)
 """The frequencies of the Minotaur paper's Table 1; a bare list of dB values in a config refers to these."""

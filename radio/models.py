@@ -33,8 +33,8 @@ import networkx as nx
 import numpy as np
 from numba import njit
 
-from maps.errors import InvalidInput
 from maps.model import Map
+from swarm.base.errors import InvalidInput
 
 from .config import RadioConfig
 from .crossings import WallCrossing, WallRaster, _radio_clear_within, _radio_price_runs

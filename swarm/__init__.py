@@ -19,16 +19,16 @@ from importlib import import_module
 from typing import Any
 
 _EXPORTS = {
-    "run": ("swarm.python_api", "run"),
-    "resolve_spec": ("swarm.python_api", "resolve_spec"),
-    "Simulation": ("swarm.simulation", "Simulation"),
-    "RunSpec": ("swarm.spec", "RunSpec"),
-    "RunResult": ("swarm.result", "RunResult"),
+    "run": ("swarm.sim.python_api", "run"),
+    "resolve_spec": ("swarm.sim.python_api", "resolve_spec"),
+    "Simulation": ("swarm.sim.loop", "Simulation"),
+    "RunSpec": ("swarm.sim.spec", "RunSpec"),
+    "RunResult": ("swarm.results.result", "RunResult"),
     "Explorer": ("swarm.api", "Explorer"),
     "Observation": ("swarm.api", "Observation"),
     "Action": ("swarm.api", "Action"),
     "RobotInfo": ("swarm.api", "RobotInfo"),
-    "InvalidInput": ("swarm.api", "InvalidInput"),
+    "InvalidInput": ("swarm.base.errors", "InvalidInput"),
     "Map": ("maps", "Map"),
     "generate": ("maps", "generate"),
     "load_map": ("maps.io", "load_map"),

@@ -17,7 +17,7 @@ explorer through small runs and hand-made observations and raises :class:`Explor
     the class built without arguments.
 ``params``
     the parameters build; an unknown key and, for every field, a value of the wrong type are one-line
-    :class:`~maps.errors.InvalidInput` errors; the resolved parameters are JSON and build again unchanged.
+    :class:`~swarm.base.errors.InvalidInput` errors; the resolved parameters are JSON and build again unchanged.
 ``actions``
     a small in-process run (``ticks`` ticks on a ``size`` map with ``robots`` robots) in which every
     ``act`` returns a well-formed :class:`~swarm.api.Action` (``goal``/``velocity`` None or a pair of
@@ -55,11 +55,11 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from maps.errors import InvalidInput, one_line, short_repr, shorten
-from maps.params import annotation_allows, field_annotations
+from swarm.base.errors import InvalidInput, one_line, short_repr, shorten
+from swarm.base.params import annotation_allows, field_annotations
 
-from . import registry
-from .api import Action, NavStatus, NoParams, Observation, RobotInfo
+from swarm.api import Action, NavStatus, NoParams, Observation, RobotInfo
+from swarm.plugins import explorers as registry
 
 CHECKS = ("contract", "params", "actions", "determinism", "messages", "observation", "robustness", "transports")
 """Every check, in the order they run."""
@@ -286,8 +286,8 @@ class _Checker:
 
     # ---------------------------------------------------------------------------------------- runs ----
     def runs(self, cls: type, name: str, spec: Mapping[str, Any], transports: Sequence[str]) -> None:
-        from .simulation import Simulation
-        from .spec import RunSpec
+        from swarm.sim.loop import Simulation
+        from swarm.sim.spec import RunSpec
 
         run_spec = RunSpec.from_mapping(spec)  # a bad option is the caller's InvalidInput, before any run
         recorder = _SPIES[name].recorder
@@ -531,7 +531,7 @@ def _snapshot(obs: Any) -> dict[str, Any]:
 
 
 def _wire(msg: Any) -> Any:
-    from .messages import encode
+    from swarm.comm.messages import encode
 
     try:
         return encode(msg)
@@ -557,7 +557,7 @@ class _Replay:
     edge cases."""
 
     def __init__(self, cls: type, name: str, spec: Any, recorder: _Recorder) -> None:
-        from .spec import ROBOT_STREAM
+        from swarm.sim.spec import ROBOT_STREAM
 
         self.cls, self.name, self.spec, self.recorder = cls, name, spec, recorder
         self.agent = cls()
@@ -620,7 +620,7 @@ class _Replay:
     def _full_inbox(self, base: Observation) -> tuple[tuple[Any, ...], str]:
         """Hundreds of copies of every message type the run saw, sent by other robots, and of the
         runtime's map updates and requests; empty for a lone robot (nobody sends it anything)."""
-        from .messages import MapRequest, full_update
+        from swarm.comm.messages import MapRequest, full_update
 
         n = self.info.n_robots
         if n < 2:
@@ -652,7 +652,7 @@ def _as_sender(msg: Any, sender: int) -> Any:
 
 # ------------------------------------------------------------------------------------- messages ----
 def _check_messages(sent: list[tuple[int, int, Any]], result: Any) -> str:
-    from .messages import MAX_MESSAGE_BYTES, decode, encode, registered
+    from swarm.comm.messages import MAX_MESSAGE_BYTES, decode, encode, registered
 
     types = registered()
     kinds: dict[str, int] = {}

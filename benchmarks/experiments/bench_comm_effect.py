@@ -7,7 +7,7 @@
 """
 import sys, time, itertools, statistics
 from multiprocessing import Pool
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 
 COMMS = {
     "global": {"radio": {"model": "global"}},

@@ -37,8 +37,8 @@ from algorithms.minotaur.doorways import MATCH_M
 from algorithms.minotaur.params import MinotaurParams
 from maps import generate
 from swarm.api import FREE, SOLID
-from swarm.simulation import Simulation
-from swarm.spec import derive_seed
+from swarm.sim.loop import Simulation
+from swarm.sim.spec import derive_seed
 
 Door = tuple[float, float, int]
 MAES_MOTION = {"max_speed": 3.0, "max_turn_rate": 4.0, "max_accel": 60.0, "max_turn_accel": 120.0, "substeps": 8}

@@ -22,8 +22,8 @@ import numpy as np
 
 from swarm import grid
 from swarm.cli.options import parse_params
-from swarm.simulation import Simulation
-from swarm.spec import derive_seed
+from swarm.sim.loop import Simulation
+from swarm.sim.spec import derive_seed
 
 
 def spec(size: int, robots: int, seed: int, algorithm: str = "xboa", params: dict | None = None,

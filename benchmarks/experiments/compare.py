@@ -16,8 +16,8 @@ import statistics
 import time
 from multiprocessing import Pool
 
-from swarm.simulation import Simulation
-from swarm.spec import derive_seed
+from swarm.sim.loop import Simulation
+from swarm.sim.spec import derive_seed
 
 
 def run_one(cell: tuple) -> tuple:

@@ -19,8 +19,8 @@ from __future__ import annotations
 import argparse
 from collections import Counter
 
-from swarm.simulation import Simulation
-from swarm.spec import derive_seed
+from swarm.sim.loop import Simulation
+from swarm.sim.spec import derive_seed
 
 MAES_MOTION = {"max_speed": 3.0, "max_turn_rate": 4.0, "max_accel": 60.0, "max_turn_accel": 120.0, "substeps": 8}
 

@@ -27,7 +27,7 @@ from workload import add_workload_arguments, workload_spec, wrap
 import algorithms
 import radio
 import swarm
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 
 SKIP = ("__main__", ".cli", ".viewer")  # command-line entry points and the browser viewer: not kernels
 

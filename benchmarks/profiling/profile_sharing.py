@@ -16,23 +16,24 @@ from typing import Any
 
 from workload import add_workload_arguments, workload_spec, wrap
 
-import swarm.comm as comm
-import swarm.messages as messages
-from swarm.simulation import Simulation
+import swarm.comm.medium as medium
+import swarm.comm.messages as messages
+import swarm.comm.sharing as sharing
+from swarm.sim.loop import Simulation
 
 TIMED: list[tuple[Any, str, str]] = [
-    (comm, "sync_box_unchecked", "changed cells for a delta (sync_box)"),
-    (comm, "sync_changes", "  the same after a full map (sync_changes)"),
-    (comm, "delta_update", "build a delta (pack + zlib)"),
-    (comm, "full_update", "build a full map (pack + zlib)"),
+    (sharing, "sync_box_packed", "changed cells for a delta (sync_box_packed)"),
+    (sharing, "sync_changes_packed", "  the same after a full map (sync_changes_packed)"),
+    (sharing, "delta_update", "build a delta (pack + zlib)"),
+    (sharing, "full_update", "build a full map (pack + zlib)"),
     (messages.zlib, "compress", "  of which zlib.compress"),
-    (comm.Medium, "envelope", "encode an envelope"),
-    (comm.Medium, "deliver", "deliver a tick's envelopes"),
+    (medium.Medium, "envelope", "encode an envelope"),
+    (medium.Medium, "deliver", "deliver a tick's envelopes"),
     (messages.zlib, "decompress", "zlib.decompress (updates that came as bytes)"),
-    (comm.MapUpdate, "cells", "a delta's cells (decoded on the first call)"),
-    (comm.MapUpdate, "dense", "a full map's cells (decoded on the first call)"),
-    (comm, "merge_cells_many", "merge a delta into all its receivers"),
-    (comm, "merge_cells_many_counted", "  the same, counting free cells (the runtime's)"),
+    (messages.MapUpdate, "cells", "a delta's cells (decoded on the first call)"),
+    (messages.MapUpdate, "dense", "a full map's cells (decoded on the first call)"),
+    (sharing, "merge_cells_many", "merge a delta into all its receivers"),
+    (sharing, "merge_cells_many_counted", "  the same, counting free cells (the runtime's)"),
 ]
 
 

@@ -58,7 +58,7 @@ def child(spec_json: str, warm_process: bool = False) -> None:
     sys.path.insert(0, str(HERE / "benchmarks"))
     from result_digests import digest  # noqa: E402 - the checkout's own, found on PYTHONPATH's swarm
 
-    from swarm.simulation import Simulation
+    from swarm.sim.loop import Simulation
 
     if warm_process:
         Simulation(json.loads(spec_json)).run()

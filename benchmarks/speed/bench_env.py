@@ -25,7 +25,7 @@ import time
 import numpy as np
 
 import swarm.env as senv
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 from swarm.transport import make_host
 
 

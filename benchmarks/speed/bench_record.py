@@ -24,7 +24,7 @@ import msgpack
 
 from swarm.record import Recorder, load_recording
 from swarm.record.container import BLOCK, iter_chunks
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 from swarm.viewer import build_html
 
 

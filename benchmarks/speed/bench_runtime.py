@@ -39,7 +39,7 @@ from contextlib import contextmanager
 
 from numba.core import event
 
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 
 
 def workload(args: argparse.Namespace, seed: int) -> dict:
@@ -49,7 +49,7 @@ def workload(args: argparse.Namespace, seed: int) -> dict:
             "stop": {"max_ticks": args.max_ticks}, "transport": args.transport}
     if args.set:
         from swarm.cli.options import parse_params
-        from swarm.spec_input import merge
+        from swarm.sim.spec_input import merge
 
         spec = merge(spec, parse_params(tuple(args.set), "--set"))
     return spec

@@ -27,12 +27,12 @@ import sys
 import time
 
 PHASES = (("swarm.transport.inprocess:InProcessHost.act", "algorithms (host.act)"),
-          ("swarm.simulation:Simulation._receive", "map merges (_receive)"),
-          ("swarm.simulation:Simulation._send", "updates + delivery (_send)"),
-          ("swarm.simulation:Simulation._commands", "navigation (_commands)"),
-          ("swarm.simulation:World.step", "physics (world.step)"),
-          ("swarm.simulation:Lidar.scan", "lidar (scan)"),
-          ("swarm.simulation:Simulation._record", "metrics (_record)"))
+          ("swarm.sim.loop:Simulation._receive", "map merges (_receive)"),
+          ("swarm.sim.loop:Simulation._send", "updates + delivery (_send)"),
+          ("swarm.sim.loop:Simulation._commands", "navigation (_commands)"),
+          ("swarm.sim.loop:World.step", "physics (world.step)"),
+          ("swarm.sim.loop:Lidar.scan", "lidar (scan)"),
+          ("swarm.sim.loop:Simulation._record", "metrics (_record)"))
 
 
 def spec(args: argparse.Namespace, robots: int) -> dict:
@@ -62,7 +62,7 @@ def time_phases(totals: dict[str, float]) -> None:
 
 
 def scaling(args: argparse.Namespace) -> None:
-    from swarm.simulation import Simulation
+    from swarm.sim.loop import Simulation
 
     totals: dict[str, float] = {}
     if args.phases:
@@ -105,7 +105,7 @@ def rss_parts() -> dict[str, int]:
 
 
 def memory_child(args: argparse.Namespace) -> None:
-    from swarm.simulation import Simulation
+    from swarm.sim.loop import Simulation
 
     imported = rss_parts()["VmRSS"]
     own = [0]

@@ -17,8 +17,8 @@ import time
 import numpy as np
 
 from maps import generate
-from swarm.knowledge import ExplorationTracker, empty_knowledge
-from swarm.sensing import Lidar, LidarParams, warm_up
+from swarm.knowledge.maps import ExplorationTracker, empty_knowledge
+from swarm.world.sensing import Lidar, LidarParams, warm_up
 
 
 def random_poses(free: np.ndarray, n: int, rng: np.random.Generator) -> np.ndarray:

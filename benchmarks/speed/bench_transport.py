@@ -25,7 +25,7 @@ import argparse
 import statistics
 import time
 
-from swarm.simulation import Simulation, TransportOptions
+from swarm.sim.loop import Simulation, TransportOptions
 from swarm.transport import PhaseTimes
 
 SHOWN = ("host: inputs", "host: batch", "host: changed cells", "host: neighbours", "host: obs encode",

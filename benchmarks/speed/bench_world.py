@@ -19,8 +19,8 @@ import numpy as np
 
 from maps import generate
 from maps.raster import robot_space
-from swarm.motion import Follower, MotionParams
-from swarm.world import World
+from swarm.world.motion import Follower, MotionParams
+from swarm.world.physics import World
 
 
 def spawn_poses(free: np.ndarray, count: int, rng: np.random.Generator, spacing: float = 0.7) -> np.ndarray:

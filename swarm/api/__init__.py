@@ -20,20 +20,24 @@ Register it under the ``swarm.algorithms`` entry-point group (``mine = "mypkg.ex
 pass ``"mypkg.explorer:MyExplorer"`` as the algorithm name; ``swarm algorithms check mine`` checks it.
 docs/plugins.md is the guide.
 
-What is here: the types (:mod:`swarm.api.types`: :class:`Observation`, :class:`Action`, :class:`RobotInfo`,
-:class:`NavStatus`, the cell constants and conversions), the parameter validators and
+What is here: the types (:class:`Observation`, :class:`Action`, :class:`RobotInfo`, :class:`NavStatus`, the
+cell constants and conversions, defined in :mod:`swarm.base.types`), the parameter validators and
 :class:`InvalidInput` (:mod:`swarm.api.params`), the grid helpers (:mod:`swarm.api.grid`: configuration
 space, plans, distance fields, frontiers, the nearest reachable unseen cell) and the message codec
 (:mod:`swarm.api.messages`: :func:`message` to declare a message type, :class:`MessageError`). Nothing
 outside ``swarm.api`` is part of the contract; ``algorithms/`` imports nothing else from swarm.
+
+A facade over lower packages: may import ``swarm.base``, ``swarm.grid``, ``swarm.comm``; nothing below it
+imports ``swarm.api``, so what plugins see can grow without tangling the runtime.
 """
 
 from __future__ import annotations
 
+from swarm.base.types import (CELL_M, FREE, ROBOT_RADIUS_M, SOLID, UNSEEN, Action, Explorer, NavStatus, Neighbour,
+                              Neighbours, NoParams, Observation, Pose, RobotInfo, cell_centre, cell_of, frozen_builder)
+
 from .params import (OMIT_DEFAULT, InvalidInput, check_bool, check_choice, check_float, check_int, from_mapping,
                      to_mapping)
-from .types import (CELL_M, FREE, ROBOT_RADIUS_M, SOLID, UNSEEN, Action, Explorer, NavStatus, Neighbour, Neighbours,
-                    NoParams, Observation, Pose, RobotInfo, cell_centre, cell_of, frozen_builder)
 
 __all__ = [
     "Action", "CELL_M", "Explorer", "FREE", "InvalidInput", "OMIT_DEFAULT", "NavStatus", "Neighbour", "Neighbours", "NoParams",

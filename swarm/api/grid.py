@@ -7,11 +7,11 @@ navigator's. Cells are ``(row, col)`` with row 0 at the bottom; metres are ``(x,
 
 from __future__ import annotations
 
-from ..grid import (DEFAULT_MARGIN_M, FrontierCluster, any_angle_length_m, cells_to_metres, configuration_space,
+from swarm.grid import (DEFAULT_MARGIN_M, FrontierCluster, any_angle_length_m, cells_to_metres, configuration_space,
                     distance_field, field_at, frontier_clusters, frontier_mask, grid_length_m, inflation_offsets,
                     nearest_in, nearest_reachable, nearest_reachable_unseen, passable, path_length_m, plan,
                     segment_clear, simplify, steps_length, view_cells)
-from ..grid.targets import default_view_reach_cells
+from swarm.grid.targets import default_view_reach_cells
 
 __all__ = [
     "DEFAULT_MARGIN_M", "FrontierCluster", "any_angle_length_m", "cells_to_metres", "configuration_space",

@@ -10,8 +10,8 @@ every earlier run's key (campaign folders resume).
 
 from __future__ import annotations
 
-from maps.errors import InvalidInput
-from maps.params import OMIT_DEFAULT, check_bool, check_choice, check_float, check_int, from_mapping, to_mapping
+from swarm.base.errors import InvalidInput
+from swarm.base.params import OMIT_DEFAULT, check_bool, check_choice, check_float, check_int, from_mapping, to_mapping
 
 __all__ = ["InvalidInput", "OMIT_DEFAULT", "check_bool", "check_choice", "check_float", "check_int", "from_mapping",
            "to_mapping"]

@@ -10,7 +10,7 @@
 The same code paths as ``swarm campaign run`` (the spec is read and validated by
 :func:`~swarm.campaign.spec.load_campaign`, executors come from :func:`~swarm.campaign.executors.make_executor`,
 results go through :func:`~swarm.campaign.runner.run_campaign`), so a bad spec, folder, worker count or
-Dask address is the same one-line :class:`~maps.errors.InvalidInput`; docs/python-api.md is the guide.
+Dask address is the same one-line :class:`~swarm.base.errors.InvalidInput`; docs/python-api.md is the guide.
 """
 
 from __future__ import annotations
@@ -22,9 +22,9 @@ from typing import Any, Mapping
 
 import pandas as pd
 
-from maps.errors import InvalidInput, shorten
+from swarm.base.errors import InvalidInput, shorten
 
-from ..schema import RUNS
+from swarm.results.schema import RUNS
 from .executors import DaskExecutor
 from .limits import MAX_RUNS
 from .spec import CampaignSpec, load_campaign, parse_campaign
@@ -102,7 +102,7 @@ def run(spec: Any, out: str | os.PathLike[str], *, workers: int | None = None, d
     settings) or a live ``distributed.Client`` or cluster object (e.g. dask-jobqueue's ``SLURMCluster``,
     whose own security then applies); ``inline``: in this process; ``shard``:
     ``"i/N"``; ``retry_failed``: run failed runs again; ``flush_runs``: runs per Parquet part. Re-running
-    resumes, and every executor gives the same rows (but ``swarm.schema.NONDETERMINISTIC_COLUMNS``).
+    resumes, and every executor gives the same rows (but ``swarm.results.schema.NONDETERMINISTIC_COLUMNS``).
     """
     from .executors import check_dask_address, make_executor
     from .runner import parse_shard, run_campaign
@@ -172,7 +172,7 @@ def load(folder: str | os.PathLike[str]) -> pd.DataFrame:
     """Every committed run of a results folder, one row each (the latest row of a retried run), in the
     campaign's run order: the grid cell (``map``, ``size``, ``robots``, ``spawn``, ``algorithm``, ``radio``,
     ``comm``), seeds, ``status``, the summary metrics (``ticks``, ``explored``, ``t50`` ... ``t99`` ticks to
-    each explored fraction, messages, ...) and ``spec_json``; :data:`swarm.schema.RUNS` lists them."""
+    each explored fraction, messages, ...) and ``spec_json``; :data:`swarm.results.schema.RUNS` lists them."""
     table = _store(folder).runs_table()
     if table is None:
         return pd.DataFrame({name: pd.Series(dtype=object) for name in (*RUNS, "part")})
@@ -182,7 +182,7 @@ def load(folder: str | os.PathLike[str]) -> pd.DataFrame:
 def load_timeseries(folder: str | os.PathLike[str], keys: Any = None, labels: bool = True) -> pd.DataFrame:
     """The time series of the runs of a results folder (those of ``keys`` only, if given): one row per
     recorded tick with the run's ``key``, ``tick``, ``explored``, ``coverage`` and the comm metrics
-    (:data:`swarm.schema.TIMESERIES`); ``labels`` joins each run's grid cell (:data:`LABELS`), so
+    (:data:`swarm.results.schema.TIMESERIES`); ``labels`` joins each run's grid cell (:data:`LABELS`), so
     ``df.groupby(["algorithm", "tick"]).explored.mean()`` is a curve."""
     store = _store(folder)
     table = store.timeseries_table(keys)

@@ -36,9 +36,9 @@ from typing import Any
 
 import numpy as np
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
-from ..spec import derive_seed
+from swarm.sim.spec import derive_seed
 from .spec import DIMENSIONS, CampaignSpec
 
 COST_DIMS = ("map", "size", "robots", "algorithm", "transport")

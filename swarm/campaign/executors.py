@@ -19,7 +19,7 @@ from collections.abc import Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Protocol
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 from .limits import DASK_CONNECT_TIMEOUT_S
 
@@ -32,7 +32,7 @@ def execute(task: Task) -> dict[str, Any]:
     Besides the run's result: its wall and CPU time, the part of it spent in numba's compiler (compiling or
     loading cached kernels: a worker's first runs) and the functions it compiled, and its start and end on the machine's monotonic clock
     (``started``/``ended``: the gaps between a worker's runs are the pool's overhead, see :mod:`.estimate`)."""
-    from ..jit import JitWatch
+    from swarm.util.jit import JitWatch
 
     key, spec = task
     started = time.monotonic()
@@ -40,7 +40,7 @@ def execute(task: Task) -> dict[str, Any]:
     c0 = time.process_time()
     watch = JitWatch()
     try:
-        from ..simulation import Simulation
+        from swarm.sim.loop import Simulation
 
         with watch:
             result = Simulation(spec).run()
@@ -108,7 +108,7 @@ def _worker_start(parent: int | None = None) -> None:
     watch the campaign process (``parent``), and go when it goes."""
     if parent is not None:
         threading.Thread(target=_exit_when_orphaned, args=(parent,), name="swarm-orphan-watch", daemon=True).start()
-    from .. import simulation  # noqa: F401
+    from swarm.sim import loop  # noqa: F401
 
 
 class PoolExecutor:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import stat
 from pathlib import Path
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 MAX_BYTES = 16 * 2**20
 """A file larger than this is refused before it is read (a spec is a few KB; /dev/zero is endless)."""

@@ -10,13 +10,13 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 from .executors import Executor, make_executor
 from .spec import CampaignSpec, Run, parse_campaign
-from ..schema import (COMM_ROBOT_SERIES, COMM_SERIES_COLUMNS, NONDETERMINISTIC_COLUMNS, TIMESERIES_COLUMNS,
+from swarm.results.schema import (COMM_ROBOT_SERIES, COMM_SERIES_COLUMNS, NONDETERMINISTIC_COLUMNS, TIMESERIES_COLUMNS,
                       comm_columns, summary_columns)
-from ..source import version_label
+from swarm.util.source import version_label
 from .store import ResultsStore
 from .writers import Writer, live_writers
 
@@ -131,7 +131,7 @@ def timeseries_rows(key: str, ts: dict[str, list[Any]] | None,
 
 
 def robot_rows(key: str, comm: dict[str, Any] | None, every: int) -> list[dict[str, Any]]:
-    """The long per-robot table of a run (key, tick, robot, :data:`swarm.schema.COMM_ROBOT_SERIES`): rows at
+    """The long per-robot table of a run (key, tick, robot, :data:`swarm.results.schema.COMM_ROBOT_SERIES`): rows at
     ticks that are multiples of ``every`` and the run's last row; none when ``every`` is 0."""
     if not comm or not every or "robots" not in comm:
         return []
@@ -149,11 +149,11 @@ def robot_rows(key: str, comm: dict[str, Any] | None, every: int) -> list[dict[s
 
 class Progress:
     """Campaign progress on stderr: a tqdm bar with a smoothed ETA on a terminal, else a plain line every
-    ``every_s`` seconds (:class:`swarm.progress.Bar`). ``initial``: runs done before it started (the
+    ``every_s`` seconds (:class:`swarm.util.progress.Bar`). ``initial``: runs done before it started (the
     warm-up runs), counted but not in the rate, so compile time does not inflate the ETA."""
 
     def __init__(self, total: int, stream: Any = None, every_s: float = 30.0, initial: int = 0) -> None:
-        from ..progress import Bar
+        from swarm.util.progress import Bar
 
         self.total = total
         self.failed = 0
@@ -295,8 +295,8 @@ def _warm_up(spec: CampaignSpec, indices: list[int], tasks: Callable[[Iterable[i
              take: Callable[[dict[str, Any]], None], progress: bool, log: Callable[[str], None] | None,
              outcome: Outcome) -> None:
     """Execute the warm-up runs here, showing numba compiling (see :mod:`.warmup`)."""
-    from ..jit import JitWatch
-    from ..progress import CompileProgress
+    from swarm.util.jit import JitWatch
+    from swarm.util.progress import CompileProgress
     from .executors import execute
 
     n = len(indices)

@@ -43,14 +43,14 @@ radio = "global"
 ```
 
 Seeds (docs/maes.md section 10.1 says what not to copy): a run's map seed, spawn seed and master
-seed derive from (campaign seed, map kind, size, replicate) only, through :func:`swarm.spec.derive_seed`.
+seed derive from (campaign seed, map kind, size, replicate) only, through :func:`swarm.sim.spec.derive_seed`.
 Every algorithm, robot count and comm model therefore meets the same worlds and starting points (paired
 comparisons), and nothing depends on the order runs execute in. Each run is keyed by the hash of its
-canonical spec (:attr:`swarm.spec.RunSpec.key`).
+canonical spec (:attr:`swarm.sim.spec.RunSpec.key`).
 
 **Axes.** Any radio or comm parameter can be a grid dimension of its own, named ``radio.<parameter>`` or
 ``comm.<parameter>`` (a field of :class:`radio.RadioConfig` other than ``model``, or of
-:class:`swarm.comm.CommSpec`), with plain values (numbers, strings, booleans) labelled by their text. In
+:class:`swarm.comm.medium.CommSpec`), with plain values (numbers, strings, booleans) labelled by their text. In
 ``[grid]`` either quote the name (``"radio.sensitivity_dbm" = [...]``, beside ``radio = [...]``) or write
 the ``radio`` / ``comm`` entry as a table of lists (``radio.sensitivity_dbm = [...]``, ``comm.loss =
 [...]``), in which ``radio.model`` lists the radio dimension (default ``["multiwall"]``). An axis value
@@ -79,9 +79,9 @@ from functools import cached_property, lru_cache
 from pathlib import Path
 from typing import Any
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
-from ..spec import RunSpec, derive_seed
+from swarm.sim.spec import RunSpec, derive_seed
 from . import cells as cellgrid
 from .files import read_user_file
 from .limits import MAX_RUNS
@@ -112,7 +112,7 @@ class Option:
 @dataclass(frozen=True)
 class Run:
     """One run of a campaign: where it sits in the grid (``cell`` labels), its replicate, its seeds and its
-    canonical spec JSON (what :attr:`swarm.spec.RunSpec.key` hashes). The :class:`RunSpec` is built on first
+    canonical spec JSON (what :attr:`swarm.sim.spec.RunSpec.key` hashes). The :class:`RunSpec` is built on first
     use: a campaign lists its runs by key without building 54,000 of them."""
 
     index: int
@@ -135,7 +135,7 @@ class Run:
 
 
 def run_key(spec_json: str) -> str:
-    """:attr:`swarm.spec.RunSpec.key` of a canonical spec JSON, without building the spec."""
+    """:attr:`swarm.sim.spec.RunSpec.key` of a canonical spec JSON, without building the spec."""
     return hashlib.sha256(spec_json.encode()).hexdigest()[:16]
 
 
@@ -152,7 +152,7 @@ class _Template:
 
     Replicates of a cell differ only in ``seed``, ``map.seed`` and ``robots.spawn_seed`` (see
     :meth:`CampaignSpec.run_for`), all validated as integers in 0..2**63-1 and all drawn by
-    :func:`swarm.spec.derive_seed`, which yields exactly that range. So one validated spec per cell is the
+    :func:`swarm.sim.spec.derive_seed`, which yields exactly that range. So one validated spec per cell is the
     validation of every replicate, and a replicate's JSON is the cell's with its seeds written in.
     """
 
@@ -577,8 +577,8 @@ def is_axis(dim: str) -> bool:
 def axis_fields(section: str) -> tuple[str, ...]:
     """The parameters of a section that may be axes: every field of its dataclass (radio: but ``model``,
     the radio dimension itself)."""
-    from ..comm import CommSpec
     from radio import RadioConfig
+    from swarm.comm.medium import CommSpec
 
     cls = RadioConfig if section == "radio" else CommSpec
     return tuple(f.name for f in dataclasses.fields(cls)  # tables (materials, overrides) are not plain values
@@ -629,9 +629,9 @@ def _flatten_rule(rule: Mapping[str, Any], grid: Mapping[str, Any], where: str) 
 def _parse_axis(axis: str, value: Any, where: str, radio: tuple[Option, ...] | None) -> Option:
     """One value of a radio or comm parameter axis, checked alone (comm) or with one of the grid's radio
     entries (a radio parameter may depend on the model); combinations are checked per cell."""
-    from ..comm import CommSpec
-    from maps.params import from_mapping
     from radio import config_from_mapping
+    from swarm.base.params import from_mapping
+    from swarm.comm.medium import CommSpec
 
     section, name = axis.split(".", 1)
     if name not in axis_fields(section):
@@ -663,9 +663,9 @@ def _parse_axis(axis: str, value: Any, where: str, radio: tuple[Option, ...] | N
 def _parse_option(dim: str, value: Any, where: str, radio: tuple[Option, ...] | None = None) -> Option:
     """Turn one grid entry into an Option, validating it in isolation so errors name its key (``radio``:
     the grid's radio entries, against which a radio parameter axis is checked)."""
-    from ..comm import CommSpec
-    from ..spec import MapSpec, RobotsSpec
-    from maps.params import from_mapping
+    from swarm.base.params import from_mapping
+    from swarm.comm.medium import CommSpec
+    from swarm.sim.spec import MapSpec, RobotsSpec
 
     if is_axis(dim):
         return _parse_axis(dim, value, where, radio)

@@ -32,9 +32,9 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
-from ..schema import THRESHOLD_COLUMNS, robots_table, runs_table, timeseries_table  # noqa: F401  (re-export)
+from swarm.results.schema import THRESHOLD_COLUMNS, robots_table, runs_table, timeseries_table  # noqa: F401  (re-export)
 from .identity import difference
 from .text import clip
 

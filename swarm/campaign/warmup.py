@@ -5,7 +5,7 @@ kernels on its first runs: about a minute each, in silence, with a first ETA of 
 first executes a few of the campaign's own runs here, chosen so that every algorithm, radio model, map
 kind, map size, transport, lidar mode, map-sharing mode and planner of the campaign (and a lone robot and
 a team, where the campaign has them) is met at least once, cheapest cells first, while
-:class:`swarm.progress.CompileProgress` shows numba compiling. The workers then load the compiled kernels
+:class:`swarm.util.progress.CompileProgress` shows numba compiling. The workers then load the compiled kernels
 from the cache. The warm-up runs are ordinary runs of the campaign: their rows are committed like any
 other, nothing is computed twice.
 

@@ -44,7 +44,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 from .store import ResultsStore
 

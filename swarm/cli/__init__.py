@@ -13,19 +13,11 @@ import threading
 
 import click
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
-CONTEXT = {"help_option_names": ["-h", "--help"], "max_content_width": 100}
+from .group import cli
 
-
-@click.group(context_settings=CONTEXT, no_args_is_help=True)
-@click.version_option(package_name="swarm-sim", prog_name="swarm")
-def cli() -> None:
-    """swarm: multi-robot exploration under realistic radio.
-
-    Generate maps, run exploration with Minotaur, TNF, Greed or xBOA over a material-aware radio, and run
-    whole campaigns of them.
-    """
+__all__ = ["cli", "main"]
 
 
 def _register() -> None:

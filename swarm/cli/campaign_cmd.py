@@ -7,10 +7,10 @@ from typing import Any
 
 import click
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
-from ..campaign.limits import DASK_CONNECT_TIMEOUT_S, MAX_RUNS
-from . import cli
+from swarm.campaign.limits import DASK_CONNECT_TIMEOUT_S, MAX_RUNS
+from .group import cli
 
 QUICK_OUTPUT = Path("swarm-results") / "quick"
 
@@ -64,9 +64,9 @@ def run_cmd(spec_path: Path | None, output: Path | None, workers: int | None, da
     """
     import time
 
-    from ..campaign import load_campaign, run_campaign
-    from ..campaign.executors import check_dask_address
-    from ..campaign.runner import parse_shard
+    from swarm.campaign import load_campaign, run_campaign
+    from swarm.campaign.executors import check_dask_address
+    from swarm.campaign.runner import parse_shard
 
     t_command = time.monotonic()
     quick = spec_path is None
@@ -103,7 +103,7 @@ def _note(text: str) -> None:
     """An information line on stdout (above a live bar on a terminal, without breaking it)."""
     import sys
 
-    from ..progress import note
+    from swarm.util.progress import note
 
     note(text, sys.stdout)
 
@@ -112,8 +112,8 @@ def _start_executor(workers: int | None, dask: str | None, inline: bool, quiet: 
     """The executor, a Dask cluster's start-up shown with its clock (on a terminal) and its time said."""
     import time
 
-    from ..campaign import make_executor
-    from ..progress import Bar
+    from swarm.campaign import make_executor
+    from swarm.util.progress import Bar
 
     if dask is None:
         return make_executor(workers=workers, dask=dask, inline=inline)
@@ -131,7 +131,7 @@ def _report(folder: Path, report_dir: Path, quiet: bool = False, force: bool = F
             **options: Any) -> tuple[Path, bool]:
     """The report of ``folder`` in ``report_dir``, built unless up to date, with its progress on stderr; a
     file-system error (an unwritable -o, a full disk) is one line."""
-    from ..campaign.report.fingerprint import update_report
+    from swarm.campaign.report.fingerprint import update_report
 
     progress = None if quiet else _ReportBar()
     try:
@@ -152,7 +152,7 @@ class _ReportBar:
         self.bar: Any = None
 
     def stage(self, name: str) -> None:
-        from ..progress import Bar
+        from swarm.util.progress import Bar
 
         if self.bar is None:
             self.bar = Bar(None, f"report: {name}", unit="file", live=True)
@@ -196,9 +196,9 @@ def estimate_cmd(spec_path: Path, per_cell: int, workers: int | None, by: str | 
     """
     import json
 
-    from ..campaign import load_campaign
-    from ..campaign.estimate import estimate, report_lines
-    from ..campaign.runner import parse_shard
+    from swarm.campaign import load_campaign
+    from swarm.campaign.estimate import estimate, report_lines
+    from swarm.campaign.runner import parse_shard
     from .checks import check_output_path, write_failed
 
     shard_t = parse_shard(shard)
@@ -225,7 +225,7 @@ def estimate_cmd(spec_path: Path, per_cell: int, workers: int | None, by: str | 
 @click.argument("folder", metavar="DIR", type=click.Path(exists=True, file_okay=False, path_type=Path))
 def status_cmd(folder: Path) -> None:
     """Done, failed and pending runs of a results folder, and the processes writing it now."""
-    from ..campaign import status
+    from swarm.campaign import status
 
     s = status(folder)
     click.echo(f"{s['campaign']}: {s['done']} done, {s['failed']} failed, {s['pending']} pending "
@@ -259,7 +259,7 @@ def report_cmd(folder: Path, output: Path | None, target: float, maes_csv: bool,
 
     A report that is up to date (built from the same results with the same options by the same swarm) is
     left as it is; --force rebuilds it."""
-    from ..campaign.report.build import check_target
+    from swarm.campaign.report.build import check_target
 
     check_target(target)
     readme, built = _report(folder, output or folder / "report", quiet=quiet, force=force, target=target,

@@ -1,7 +1,7 @@
 """Checks the commands run on their flags before any work starts: finite numbers, writable output paths.
 
 A flag that cannot be honoured must fail before a run is computed, not after (a result that cannot be
-written is a run wasted), and with the one-line error of :class:`~maps.errors.InvalidInput`.
+written is a run wasted), and with the one-line error of :class:`~swarm.base.errors.InvalidInput`.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from typing import Any
 
 import click
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 
 class FiniteSeconds(click.ParamType):

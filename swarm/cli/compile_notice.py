@@ -3,7 +3,7 @@
 numba compiles each kernel on its first call and caches it on disk, so the first command after an install
 (or after a kernel is edited) spends about a minute compiling before it starts its real work. On a
 terminal this prints one line when the first compilation starts and then a live counter of functions
-compiled with its clock (:class:`swarm.progress.CompileProgress`); output that is not a terminal (pipes,
+compiled with its clock (:class:`swarm.util.progress.CompileProgress`); output that is not a terminal (pipes,
 logs, tests) gets nothing, so it stays exactly the command's results.
 """
 
@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import TextIO
 
-from ..progress import COMPILE_NOTE, CompileProgress
+from swarm.util.progress import COMPILE_NOTE, CompileProgress
 
 NOTE = COMPILE_NOTE
 

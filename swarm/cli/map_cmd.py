@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from . import cli
+from .group import cli
 from .options import Choice, IntRange, parse_params
 from .options import Path as PathType
 
@@ -39,7 +39,7 @@ def generate_cmd(kind: str, size: str, seed: int, params: tuple[str, ...], outpu
     from maps.render import check_scale, save_png
 
     from maps import parse_size
-    from maps.errors import InvalidInput
+    from swarm.base.errors import InvalidInput
 
     try:
         parse_size(size)
@@ -106,10 +106,10 @@ def show_cmd(path: Path, output: Path | None, legend: Path | None, scale: int | 
 def import_cmd(path: Path, legend: Path | None, output: Path, png: Path | None, material: str | None, border: int,
                border_material: str) -> None:
     """Import a floor plan: an image with a legend, a MAES ASCII PGM or an xBOA 0/1 CSV."""
-    from maps.errors import InvalidInput
     from maps.io import load_map, save_npz
     from maps.materials import check_known_material
     from maps.render import save_png
+    from swarm.base.errors import InvalidInput
 
     if path.suffix.lower() == ".npz":
         for flag, value, unset in (("--material", material, None), ("--border", border, 0),

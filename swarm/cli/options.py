@@ -12,7 +12,7 @@ from typing import Any
 
 import click
 
-from maps.errors import MAX_VALUE_CHARS, InvalidInput, short_repr, shorten
+from swarm.base.errors import MAX_VALUE_CHARS, InvalidInput, short_repr, shorten
 
 MAX_MESSAGE_WORD = MAX_VALUE_CHARS
 _LONG_WORD = re.compile(r"\S{%d,}" % (MAX_MESSAGE_WORD + 1))

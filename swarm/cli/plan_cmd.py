@@ -7,7 +7,7 @@ from typing import Any
 
 import click
 
-from . import cli
+from .group import cli
 from .options import POINT, parse_params
 
 SNAP_CELLS = 4          # as the runtime's navigator: a start or goal too near a wall moves at most 2 m
@@ -47,11 +47,12 @@ def plan_cmd(path: Path, src: tuple[float, float], dst: tuple[float, float], pla
 
     import numpy as np
 
-    from maps.errors import InvalidInput
     from maps.io import load_map
-    from swarm import grid, planners
-    from swarm.api import FREE, SOLID
-    from swarm.jit import JitWatch
+    from swarm import grid
+    from swarm.base.errors import InvalidInput
+    from swarm.base.types import FREE, SOLID
+    from swarm.plugins import planners
+    from swarm.util.jit import JitWatch
 
     from .compile_notice import compile_notice
 
@@ -95,8 +96,8 @@ def _fmt(p: tuple[float, float]) -> str:
 def _cell(truth: Any, space: Any, flag: str, point: tuple[float, float], need_m: float
           ) -> tuple[tuple[int, int], str | None]:
     """The planning cell of a point; bad points raise InvalidInput naming the flag."""
-    from maps.errors import InvalidInput
     from swarm import grid
+    from swarm.base.errors import InvalidInput
 
     if not truth.contains(*point):
         raise InvalidInput(flag, _fmt(point), f"a point inside the map: 0 <= x < {truth.width_m:g}, "

@@ -7,7 +7,7 @@ from typing import Any, Callable
 
 import click
 
-from . import cli
+from .group import cli
 from .options import FLOAT, POINT, Choice, IntRange, parse_params
 from .options import Path as PathType
 
@@ -48,9 +48,9 @@ def _load(path: Path, config_path: Path | None, params: tuple[str, ...], flags: 
     """The map and its link model from the flags (flags override --param, which overrides --config)."""
     from collections.abc import Mapping
 
-    from maps.errors import InvalidInput
     from maps.io import MAX_LEGEND_BYTES, load_map, parse_toml, read_file_bytes
     from radio import build_link_model, config_from_mapping
+    from swarm.base.errors import InvalidInput
 
     data: dict[str, Any] = {}
     if config_path is not None:
@@ -81,7 +81,7 @@ def _load(path: Path, config_path: Path | None, params: tuple[str, ...], flags: 
 
 
 def _check_inside(truth: Any, flag: str, point: tuple[float, float]) -> None:
-    from maps.errors import InvalidInput
+    from swarm.base.errors import InvalidInput
 
     if not truth.contains(*point):
         raise InvalidInput(flag, f"{point[0]:g},{point[1]:g}",

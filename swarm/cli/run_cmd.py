@@ -9,18 +9,18 @@ from typing import Any
 
 import click
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
-from . import cli
+from swarm.sim.spec_input import flag_overrides, load_spec_file, merge
+from .group import cli
 from .checks import FiniteSeconds, check_output_path, write_failed
 from .options import parse_params
-from ..spec_input import flag_overrides, load_spec_file, merge
 
 
 def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tuple[str, ...],
                        algorithm_params: tuple[str, ...], map_params: tuple[str, ...]) -> dict[str, Any]:
     """The run spec as a mapping: the ``--spec`` file, then flags that were given, then ``--set``
-    (:mod:`swarm.spec_input` reads the file and the flags as :func:`swarm.run` reads its arguments)."""
+    (:mod:`swarm.sim.spec_input` reads the file and the flags as :func:`swarm.run` reads its arguments)."""
     data: dict[str, Any] = load_spec_file(spec_file) if spec_file else {}
     over = flag_overrides(flags)
     if algorithm_params:
@@ -83,8 +83,8 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
     stderr shows the run's progress (tick, explored share, speed, and numba compiling on a first run).
     """
 
-    from ..simulation import Simulation
-    from ..spec import RunSpec
+    from swarm.sim.loop import Simulation
+    from swarm.sim.spec import RunSpec
     from .run_progress import RunProgress
 
     flags = {"map": map_, "size": size, "map_seed": map_seed, "robots": robots, "spawn": spawn,
@@ -109,7 +109,7 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
         sim = Simulation(spec, transport=options)
         recorder = None
         if gif is not None or mp4 is not None:
-            from ..animation import GifRecorder
+            from swarm.record.animation import GifRecorder
 
             recorder = GifRecorder(sim.truth)
             sim.observers = (recorder,)
@@ -117,7 +117,7 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
             sim.observers = (*sim.observers, progress)
         run_recorder = None
         if record_out is not None:
-            from ..record import Recorder
+            from swarm.record import Recorder
 
             run_recorder = Recorder.attach(sim)
         result = sim.run()
@@ -139,8 +139,8 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
 def _check_transport_flags(spec, listen: tuple[str, ...], remote: tuple[int, ...], run_id: str | None,
                            token_file: Path | None) -> None:
     """The transport flags are well formed and fit the spec (nothing opened or written yet)."""
-    from ..transport.auth import check_run_id
-    from ..transport.sessions import check_endpoint
+    from swarm.transport.auth import check_run_id
+    from swarm.transport.sessions import check_endpoint
 
     for endpoint in listen:
         check_endpoint(endpoint, "--listen")
@@ -161,9 +161,9 @@ def _check_transport_flags(spec, listen: tuple[str, ...], remote: tuple[int, ...
 def _transport_options(spec, listen: tuple[str, ...], remote: tuple[int, ...], timeout: float,
                        run_id: str | None, token_file: Path | None):
     """How the run reaches its remote agents: their secret (read or created) and the commands to start them."""
-    from ..simulation import TransportOptions
-    from ..transport.auth import TOKEN_ENV, runtime_secret
-    from ..transport.zenoh_host import new_run_id
+    from swarm.sim.loop import TransportOptions
+    from swarm.transport.auth import TOKEN_ENV, runtime_secret
+    from swarm.transport.zenoh_host import new_run_id
 
     secret = runtime_secret(token_file) if listen else None
     if remote:
@@ -195,16 +195,16 @@ def _transport_options(spec, listen: tuple[str, ...], remote: tuple[int, ...], t
 def agent_cmd(connect: str, run_id: str, robot: int, algorithm: str | None, timeout: float, token: str | None,
               token_file: Path | None) -> None:
     """Run one robot's algorithm in this process against 'swarm run --transport zenoh --listen ... --remote ID'."""
-    from ..transport.auth import TOKEN_ENV, agent_token, check_run_id, parse_token, read_token_file
-    from ..transport.remote import run_agent
-    from ..transport.sessions import check_endpoint
+    from swarm.transport.auth import TOKEN_ENV, agent_token, check_run_id, parse_token, read_token_file
+    from swarm.transport.remote import run_agent
+    from swarm.transport.sessions import check_endpoint
 
     check_endpoint(connect, "--connect")
     check_run_id(run_id, "--run")
     if token is not None and token_file is not None:
         raise InvalidInput("--token", "<hidden>", "either --token or --token-file, not both")
     if algorithm is not None:
-        from .. import registry
+        from swarm.plugins import explorers as registry
 
         registry.load(algorithm)
     if token is not None:
@@ -232,7 +232,7 @@ def algorithms_cmd(ctx: click.Context) -> None:
     checks one against the plugin contract)."""
     if ctx.invoked_subcommand is not None:
         return
-    from .. import registry
+    from swarm.plugins import explorers as registry
 
     for name, target in registry.available().items():
         click.echo(f"{name}  ({target})")
@@ -264,7 +264,7 @@ def algorithms_check_cmd(name: str, algorithm_params: tuple[str, ...], map_kind:
                          ticks: int, seed: int, only: tuple[str, ...]) -> None:
     """Check algorithm NAME (registered, or package.module:Class) against the plugin contract: print each
     check passed and exit 0, or the one failure and exit 1 (docs/plugins.md lists the checks)."""
-    from ..testing import ExplorerCheckError, check_explorer
+    from swarm.testing import ExplorerCheckError, check_explorer
     from .compile_notice import compile_notice
 
     params = parse_params(algorithm_params) if algorithm_params else None

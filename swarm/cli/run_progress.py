@@ -13,8 +13,8 @@ import threading
 import time
 from typing import Any, TextIO
 
-from ..jit import JitWatch
-from ..progress import COMPILE_NOTE, bar_width, clock, is_terminal, note
+from swarm.util.jit import JitWatch
+from swarm.util.progress import COMPILE_NOTE, bar_width, clock, is_terminal, note
 
 PERMILLE = 1000
 

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from . import cli
+from .group import cli
 
 
 def open_in_browser(path: Path) -> str | None:
@@ -42,9 +42,9 @@ def view_cmd(recording: Path, output: Path | None, no_open: bool) -> None:
     The page holds the recording and the viewer script: it needs no server and no network, so it can be
     mailed or archived as one file.
     """
-    from maps.errors import InvalidInput
+    from swarm.base.errors import InvalidInput
 
-    from ..viewer import write_html
+    from swarm.viewer import write_html
 
     out = output if output is not None else recording.with_suffix(".html")
     if out.resolve() == recording.resolve():

@@ -11,11 +11,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
-from ..api import check_bool, check_choice, check_float, check_int
-from ..spec import RunSpec
-from ..spec_input import resolve
+from swarm.api import check_bool, check_choice, check_float, check_int
+from swarm.sim.spec import RunSpec
+from swarm.sim.spec_input import resolve
 
 ENV_DEFAULTS: dict[str, Any] = {"map": {"kind": "building", "size": 30}, "robots": {"count": 4},
                                 "stop": {"max_ticks": 3000, "explored": 0.95}}

@@ -1,8 +1,8 @@
 """One run driven step by step for learning: the engine under both environments (no Gymnasium needed).
 
-The run is an ordinary :class:`~swarm.simulation.Simulation` (pymunk world, lidar, radio-gated messaging
+The run is an ordinary :class:`~swarm.sim.loop.Simulation` (pymunk world, lidar, radio-gated messaging
 and map sharing, knowledge maps) advanced with the same ``sense`` / ``observe`` / ``apply`` steps its
-:meth:`~swarm.simulation.Simulation.run` loop uses, so a tick here is a tick there. Learning robots take
+:meth:`~swarm.sim.loop.Simulation.run` loop uses, so a tick here is a tick there. Learning robots take
 their action from the caller; every other robot (and a learner that delegates) runs the spec's explorer
 exactly as the in-process transport would run it. With every robot scripted, stepping reproduces
 :func:`swarm.run` of the same spec bit for bit (tested).
@@ -19,15 +19,15 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
-from ..api import Action, cell_centre
-from ..messages import MapUpdate
-from ..motion import TICK_S
-from ..result import RunResult
-from ..simulation import Simulation
-from ..spec import RunSpec
-from ..transport.inprocess import InProcessHost, check_action, observations
+from swarm.api import Action, cell_centre
+from swarm.comm.messages import MapUpdate
+from swarm.results.result import RunResult
+from swarm.sim.loop import Simulation
+from swarm.sim.spec import RunSpec
+from swarm.transport.inprocess import InProcessHost, check_action, observations
+from swarm.world.motion import TICK_S
 from ._kernels import NAV_FAILED, NAV_MOVING, _env_after, _env_before, _env_features
 from .config import SECTORS, EnvConfig
 

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 from pettingzoo import ParallelEnv
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 from .config import EnvConfig, Reward, env_spec, episode_seed
 from .core import ExplorationCore

@@ -7,9 +7,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
-from ..api import check_int
+from swarm.api import check_int
 from .config import EnvConfig, Reward, env_spec
 from .core import ExplorationCore
 from .spaces import action_space, observation_space, render_rgb

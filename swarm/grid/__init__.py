@@ -3,7 +3,7 @@ frontiers and the nearest reachable unseen cell. Pure functions on numpy arrays;
 
 Conventions (see :mod:`swarm.api`): knowledge maps are ``uint8[H, W]`` with UNSEEN=0 < FREE=1 < SOLID=2;
 cells are (row, col) with row 0 at the bottom; ``known[row, col]`` covers x in [col*0.5, (col+1)*0.5),
-y in [row*0.5, (row+1)*0.5); metres are (x, y). Bad input raises :class:`maps.errors.InvalidInput`.
+y in [row*0.5, (row+1)*0.5); metres are (x, y). Bad input raises :class:`swarm.base.errors.InvalidInput`.
 
 Typical use (the runtime's navigator)::
 

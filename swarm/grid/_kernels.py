@@ -24,7 +24,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..api import CELL_M
+from swarm.base.types import CELL_M
 
 SQRT2 = 1.4142135623730951
 EPS = 1e-9

@@ -2,7 +2,7 @@
 
 Every public function in :mod:`swarm.grid` is called with arrays built by the runtime or by an algorithm;
 a wrong shape or an out-of-map cell is a programming error that should fail loudly with the field, the
-value and what is allowed (:class:`maps.errors.InvalidInput`) rather than as an IndexError deep inside a
+value and what is allowed (:class:`swarm.base.errors.InvalidInput`) rather than as an IndexError deep inside a
 numba kernel.
 """
 
@@ -14,9 +14,9 @@ from typing import Any
 
 import numpy as np
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
-from ..api import SOLID
+from swarm.base.types import SOLID
 
 
 _VOUCHED: weakref.WeakValueDictionary[int, np.ndarray] = weakref.WeakValueDictionary()

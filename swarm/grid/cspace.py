@@ -33,7 +33,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..api import CELL_M, FREE, ROBOT_RADIUS_M, SOLID
+from swarm.base.types import CELL_M, FREE, ROBOT_RADIUS_M, SOLID
 from ._kernels import grid_configuration_space, grid_snap
 from ._validate import check_cell, check_count, check_known, check_length, check_space
 

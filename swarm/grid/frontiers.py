@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import ndimage
 
-from ..api import CELL_M
+from swarm.base.types import CELL_M
 from ._kernels import grid_frontier_mask
 from ._validate import check_count, check_known
 

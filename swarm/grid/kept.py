@@ -6,7 +6,7 @@ scratch they are about a third of a search, yet a robot's map changes little bet
 searches: only a few percent of its rows differ (figures: docs/performance-history.md).
 
 So each map keeps :class:`KeptInputs`: a 2-bit copy of the map the arrays describe
-(:mod:`swarm.packed_maps`), its configuration space and its targets (view cells in the space), both a bit
+(:mod:`swarm.knowledge.packed`), its configuration space and its targets (view cells in the space), both a bit
 per cell of the padded grid the search reads; a search unpacks the space into this thread's padded byte
 grid (~15 us on a 600 x 600 map), so a kept map costs 180 KB instead of 1.4 MB (64 robots on a 300-tile
 map: 12 MB instead of 89; docs/performance-history.md). :func:`refresh` compares the map with the copy
@@ -33,7 +33,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..packed_maps import CHUNK_WORDS, copy_cell_if_changed, differing_words, packed_size, sync_chunk
+from swarm.knowledge.packed import CHUNK_WORDS, copy_cell_if_changed, differing_words, packed_size, sync_chunk
 from ._kernels import grid_configuration_space, grid_view_cells
 from .local import NO_TARGET, mark_targets, search_targets
 

@@ -36,7 +36,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit
 
-from ..api import CELL_M
+from swarm.base.types import CELL_M
 from ._kernels import (grid_bucket_search, grid_configuration_space, grid_descend_path, grid_shortcut, grid_snap,
                        grid_view_cells)
 from .cspace import _erosion_rows

@@ -27,7 +27,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from ..packed_maps import same_as_packed
+from swarm.knowledge.packed import same_as_packed
 
 MAX_ENTRIES = 128
 """Searches remembered per thread: one or two per robot of a team of up to 64 (see

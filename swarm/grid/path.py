@@ -12,9 +12,9 @@ from typing import Any
 
 import numpy as np
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
-from ..api import CELL_M
+from swarm.base.types import CELL_M
 from ._kernels import PATH_GAP, PATH_OUTSIDE, grid_path_problem, grid_segment_clear, grid_shortcut
 from ._validate import check_cell, check_space
 

@@ -22,7 +22,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..api import CELL_M
+from swarm.base.types import CELL_M
 from ._validate import check_cell, check_space
 from .search import plan
 

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from ..api import CELL_M
+from swarm.base.types import CELL_M
 from ._kernels import (NO_TOUCHED, grid_bucket_search, grid_bucket_settle, grid_descend_path, grid_field_metres,
                        grid_read_metres)
 from ._validate import check_cell, check_cells, check_length, check_same_shape, check_space

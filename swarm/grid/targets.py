@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from ..api import CELL_M, ROBOT_RADIUS_M
+from swarm.base.types import CELL_M, ROBOT_RADIUS_M
 from . import kept, memo
 from ._kernels import grid_view_cells
 from ._validate import check_cell, check_count, check_known, check_length, check_same_shape, check_space

@@ -22,7 +22,7 @@ from typing import Any
 import msgpack
 import numpy as np
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 MAGIC = b"\x89SWR\r\n\x1a\n"
 """PNG-style: a high byte catches 7-bit transfers, CR LF and the EOF byte catch text-mode mangling."""

@@ -2,7 +2,7 @@
 
 Everything is checked on load (magic, every chunk's CRC, decompression, field types, array lengths,
 every index against the map and robot count, tick continuity, a final ``TAIL`` chunk), so a corrupt or
-truncated file raises :class:`maps.errors.InvalidInput` here, never half-way through a replay.
+truncated file raises :class:`swarm.base.errors.InvalidInput` here, never half-way through a replay.
 
 Reconstruction replays the per-tick deltas from tick 0 with whole-array numpy operations; a state for one
 tick of a 16-robot, 11 000-tick run takes tens of milliseconds, fine for tests and analysis (the browser
@@ -22,8 +22,8 @@ from typing import Any
 import msgpack
 import numpy as np
 
-from maps.errors import InvalidInput
 from maps.model import Map
+from swarm.base.errors import InvalidInput
 
 from .container import BLOCK, FORMAT_NAME, HEAD, READABLE_VERSIONS, TAIL, bad, iter_chunks, unpack_array
 from .kernels import RSSI_NAN, RSSI_NEG_INF, RSSI_POS_INF
@@ -42,7 +42,7 @@ class MessageRecord:
     """One transmission: sent at ``tick`` by ``transmitter`` (the ``sender`` itself, or a robot relaying
     the ``sender``'s ``seq``-th message), ``size`` bytes on the wire, delivered next tick to ``receivers``;
     ``rssi_dbm[k]`` is what ``receivers[k]`` received (quantised). ``lost`` lists ``(robot, cause)`` for the
-    other robots it failed to reach, ``cause`` one of :data:`swarm.comm.LOSS_CAUSES` (empty in a version 1
+    other robots it failed to reach, ``cause`` one of :data:`swarm.comm.medium.LOSS_CAUSES` (empty in a version 1
     file)."""
 
     tick: int
@@ -413,7 +413,7 @@ class Recording:
         poses with the run's own map and radio spec: RSSI to the last bit, unlike the quantised stream."""
         from radio import build_link_model, config_from_mapping
 
-        from ..spec import run_map_seed
+        from swarm.sim.spec import run_map_seed
 
         field_seed = run_map_seed(self.spec["seed"], self.spec["map"].get("seed"))  # the shadowing field's, as the run's
         model = build_link_model(self.truth, config_from_mapping(self.spec.get("radio", {})), field_seed=field_seed)

@@ -22,8 +22,8 @@ per-tick work does not depend on how much the robots did:
   an action is stored only when its packed form differs from the robot's previous one. A tick's messages
   are written at the next tick (or at :meth:`Recorder.finish`): with ``comm.link_at = "receive"`` the
   medium judges them only then. Their failed deliveries come from the medium itself, which lists them per
-  envelope once the recorder sets :attr:`swarm.comm.Medium.note_losses` (off, it does no work for them).
-- communication, as the run's own bookkeeping has it (:mod:`swarm.metrics`): the tick's groups
+  envelope once the recorder sets :attr:`swarm.comm.medium.Medium.note_losses` (off, it does no work for them).
+- communication, as the run's own bookkeeping has it (:mod:`swarm.results.metrics`): the tick's groups
   (``LinkState.groups()``), who merged whose map when (``InfoAges.merged_at``, changed entries only), who
   received a message this tick (the medium's ``last_contact``) and the team's known free cells (the
   missing share's denominator, ``CommMetrics.team_free``). With these and the knowledge maps a reader
@@ -51,17 +51,17 @@ from typing import TYPE_CHECKING, Any
 import msgpack
 import numpy as np
 
-from maps.errors import InvalidInput
 from maps.io import atomic_write_bytes, map_to_bytes
 from maps.materials import colour_of
+from swarm.base.errors import InvalidInput
 
-from ..comm import LOSS_CAUSES
-from ..source import package_version
+from swarm.comm.medium import LOSS_CAUSES
+from swarm.util.source import package_version
 from .container import BLOCK, FORMAT_NAME, FORMAT_VERSION, HEAD, MAGIC, TAIL, encode_chunk, pack_array
 from .kernels import RSSI_NAN, _record_changes, _record_links, changed_cells, quantise_rssi
 
 if TYPE_CHECKING:
-    from ..simulation import Simulation, TickView
+    from swarm.sim.loop import Simulation, TickView
 
 MAX_DEBUG_BYTES = 256 * 1024
 """An action whose packed form exceeds this keeps its goal/velocity but its debug is replaced by a note."""
@@ -181,7 +181,7 @@ class _Block:
 
 
 class Recorder:
-    """Observer of one :class:`~swarm.simulation.Simulation` that records it (module docstring)."""
+    """Observer of one :class:`~swarm.sim.loop.Simulation` that records it (module docstring)."""
 
     def __init__(self, sim: Simulation, block_ticks: int = 256, rssi_quantum_db: float = 0.25,
                  rssi_update_db: float = 1.0) -> None:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Sequence
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 from .auth import RunSecret
 from .base import AgentHost, HostStats, TickBatch

@@ -11,10 +11,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .. import registry
-from ..api import Observation, frozen_builder
-from ..grid._validate import vouch_known
-from ..messages import MessageError, decode
+from swarm.base.types import Observation, frozen_builder
+from swarm.comm.messages import MessageError, decode
+from swarm.grid._validate import vouch_known
+from swarm.plugins import explorers as registry
 from .inprocess import check_action
 from .timing import PhaseTimes, timed
 from .wire import ObsDecoder, ResetPacket, encode_act

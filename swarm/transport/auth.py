@@ -28,7 +28,7 @@ import tempfile
 from dataclasses import dataclass
 from pathlib import Path
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 SECRET_BYTES = 32
 RUN_SECRET_PREFIX = "swarm-run-secret:"

@@ -14,7 +14,7 @@ from typing import Any, Callable, Protocol, Sequence
 
 import numpy as np
 
-from ..api import Action, NavStatus, Pose
+from swarm.base.types import Action, NavStatus, Pose
 from .wire import ResetPacket
 
 

@@ -26,10 +26,10 @@ from typing import Any, NamedTuple, Sequence
 import numpy as np
 from numba import njit
 
-from .._cellcodec import get_u32, put_raw_cells
-from ..api import Action, NavStatus, frozen_builder
-from ..messages import MessageError, decode, encode
-from ..neighbours import _bearing
+from swarm.base.types import Action, NavStatus, frozen_builder
+from swarm.comm.messages import MessageError, decode, encode
+from swarm.knowledge.cellcodec import get_u32, put_raw_cells
+from .bearings import _bearing
 from .packing import OBS_STATE_DTYPE
 from .wire import (COLLIDED, HAS_GOAL, NAV_STATES, NEIGHBOUR, NEIGHBOUR_DTYPE, OBS_STATE, WIRE_VERSION, WireError,
                    _NAV_INDEX, _pack, _unpack)

@@ -19,9 +19,9 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .. import registry
-from ..api import NavStatus, Observation, Pose, frozen_builder
-from ..grid._validate import vouch_known
+from swarm.base.types import NavStatus, Observation, Pose, frozen_builder
+from swarm.grid._validate import vouch_known
+from swarm.plugins import explorers as registry
 from .agent import InboxDecoder
 from .batch import ActBatchEncoder, ObsBatch, ObsBatchDecoder, apply_cells
 from .inprocess import check_action

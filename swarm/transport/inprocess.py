@@ -11,10 +11,10 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from .. import registry
-from ..api import Action, Neighbours, Observation, frozen_builder
-from ..neighbours import bearings
+from swarm.base.types import Action, Neighbours, Observation, frozen_builder
+from swarm.plugins import explorers as registry
 from .base import HostStats, TickBatch
+from .bearings import bearings
 from .timing import PhaseTimes, timed
 from .wire import ResetPacket
 

@@ -19,9 +19,9 @@ from typing import Sequence
 import numpy as np
 from numba import njit
 
-from .._cellcodec import put_raw_cells
-from ..api import NavStatus, Pose
-from ..neighbours import _bearing
+from swarm.base.types import NavStatus, Pose
+from swarm.knowledge.cellcodec import put_raw_cells
+from .bearings import _bearing
 from .wire import (COLLIDED, HAS_GOAL, NEIGHBOUR, NEIGHBOUR_DTYPE, OBS_STATE, RAW_CELLS_BELOW, WIRE_VERSION,
                    _NAV_INDEX, _pack, encode_obs)
 

@@ -14,7 +14,7 @@ from typing import Callable
 
 import zenoh
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 from .agent import AgentRunner
 from .auth import RobotToken, sign_act

@@ -4,7 +4,7 @@ Every session is a peer with multicast scouting off and only the endpoints it is
 (docs/measurements.md A1, A5), so parallel runs never meet. A runtime that listens requires zenoh's
 usrpwd authentication and applies an access-control policy (:mod:`swarm.transport.auth`); an agent
 connects with its robot's user and password. A bad endpoint or one that cannot be opened is an
-:class:`~maps.errors.InvalidInput` naming the flag, never a zenoh traceback.
+:class:`~swarm.base.errors.InvalidInput` naming the flag, never a zenoh traceback.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from typing import Any, Sequence
 
 import zenoh
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 IP_PROTOCOLS = ("tcp", "udp", "tls", "quic", "ws")
 PROTOCOLS = (*IP_PROTOCOLS, "unixsock-stream")

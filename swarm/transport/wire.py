@@ -7,7 +7,7 @@ Three packets, each a msgpack array whose first two items are the packet kind an
 * ``obs`` (runtime -> agent, ``.../obs``): one tick's observation. Pose, navigation status and counters
   travel as one binary struct (:data:`OBS_STATE`), neighbours as binary records (:data:`NEIGHBOUR`), the
   knowledge map as the cells changed since the previous observation (flat indices as uint32 gaps + uint8
-  values, zlib-compressed when large), the inbox as the messages' own wire bytes (:mod:`swarm.messages`).
+  values, zlib-compressed when large), the inbox as the messages' own wire bytes (:mod:`swarm.comm.messages`).
 * ``act`` (agent -> runtime, ``.../act``): the decision for that tick, messages as wire bytes.
 
 Decoding checks types and sizes and raises :class:`WireError`; the runtime drops and counts bad packets.
@@ -25,9 +25,9 @@ import msgpack
 import numpy as np
 from numba import njit
 
-from .._cellcodec import get_u32
-from ..api import Action, NavStatus, Neighbour, Neighbours, Pose, RobotInfo, frozen_builder
-from ..messages import MessageError, decode, encode, gaps_u32
+from swarm.base.types import Action, NavStatus, Neighbour, Neighbours, Pose, RobotInfo, frozen_builder
+from swarm.comm.messages import MessageError, decode, encode, gaps_u32
+from swarm.knowledge.cellcodec import get_u32
 
 WIRE_VERSION = 2
 MAX_PACKET_BYTES = 8 * 1024 * 1024

@@ -41,7 +41,7 @@ from typing import Callable, Sequence
 import numpy as np
 import zenoh
 
-from ..api import Action
+from swarm.base.types import Action
 from .auth import Credentials, RunSecret, access_control, check_run_id, verify_act
 from .base import HostStats, TickBatch
 from .batch import ActBatchDecoder, BatchEncoder

@@ -17,9 +17,9 @@ from typing import Any
 
 from maps.io import atomic_write_bytes
 
-from ..animation import ROBOT_COLOURS, SEEN_FREE, UNSEEN_FREE
-from ..record import Recording
-from ..record.reader import read_bytes
+from swarm.record import Recording
+from swarm.record.animation import ROBOT_COLOURS, SEEN_FREE, UNSEEN_FREE
+from swarm.record.reader import read_bytes
 
 OTHERS_FREE = (226, 229, 236)
 """In a robot's view: free cells some other robot has seen but this one has not."""

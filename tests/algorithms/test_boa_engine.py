@@ -10,7 +10,7 @@ import pytest
 from algorithms.boa import FAMILY, VARIANTS, BOAParams, Optimizer, minimize
 from algorithms.boa.engine import draw_cuts, draw_partners
 from algorithms.boa.operators import apply_bounds, convex_lens_opposite, crossover
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 SHIFT = 1.234
 ALL = tuple(VARIANTS)            # the seven + xABOA

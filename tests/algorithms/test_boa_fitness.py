@@ -14,7 +14,7 @@ from algorithms.boa import minimize
 from algorithms.boa.beams import NORTH, Lidar, heading_index, visible_cells
 from algorithms.boa.fitness import Belief, ExplorationProblem
 from algorithms.boa.gridworld import load_xboa_csv, paper_map_path, synthetic_house
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 HOUSE = paper_map_path("house")
 needs_house = pytest.mark.skipif(HOUSE is None, reason="the paper's map-house.csv is not available "

@@ -14,7 +14,7 @@ from algorithms.boa.pathplan_levy import (LevyPlannerParams, clearance, penalty,
                                           polyline_lengths)
 from algorithms.boa.shortest import (any_angle_length, astar, astar_length, path_free, path_length, segment_free)
 from maps import generate
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 SQ2 = math.sqrt(2.0)
 

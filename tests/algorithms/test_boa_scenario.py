@@ -12,7 +12,7 @@ from algorithms.boa.decision import DecisionParams, decide
 from algorithms.boa.fitness import Belief
 from algorithms.boa.gridworld import load_xboa_csv, paper_map_path, scan, synthetic_house
 from algorithms.boa.scenario import PaperSetup, run_mission
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
 HOUSE = paper_map_path("house")
 

@@ -8,7 +8,7 @@ import dataclasses
 
 import pytest
 
-from swarm import registry
+from swarm.plugins import explorers as registry
 from swarm.testing import CHECKS, check_explorer
 
 BUILT_INS = {

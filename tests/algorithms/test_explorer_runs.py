@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 
 EXPLORERS = ["greed", "tnf"]
 

@@ -15,7 +15,7 @@ from algorithms.greed import Greed, GreedParams
 from algorithms.recovery import Exclusions, unseen_near
 from maps import InvalidInput
 from swarm.api import FREE, SOLID, UNSEEN, NavStatus, Observation, Pose, RobotInfo, cell_centre, cell_of
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 
 IDLE = NavStatus()
 

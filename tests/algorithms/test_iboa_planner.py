@@ -10,8 +10,8 @@ from scipy.ndimage import label
 from maps import generate
 from swarm import grid
 from swarm.api import FREE, SOLID
-from swarm.planners import get_planner
-from swarm.simulation import Simulation
+from swarm.plugins.planners import get_planner
+from swarm.sim.loop import Simulation
 
 from algorithms.boa.planner_plugin import IBOAPlanner, IBOAPlannerSettings, supercover_walk
 

@@ -9,7 +9,7 @@ import pytest
 from algorithms.minotaur.auction import Auctions, winners
 from algorithms.minotaur.doorways import Doorway
 from algorithms.minotaur.messages import AuctionResult, Bid, DoorwayFound
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 from tests.algorithms.test_minotaur_doorways import as_map, blank, gap, wall
 
 DOOR_X = (16.0, 17.0)          # the dividing wall; the door is y in [5, 7)

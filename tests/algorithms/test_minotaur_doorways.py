@@ -15,7 +15,7 @@ from algorithms.minotaur.doorways import Doorway, DoorwayBook
 from maps import Map
 from maps.materials import DEFAULT_TABLE
 from swarm.api import FREE, SOLID, UNSEEN
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 
 CELL = 0.5
 

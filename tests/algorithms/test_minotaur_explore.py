@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 
 # MAES's robots (3 m/s, as in the paper's campaign) where one robot alone on 100 x 100 would need most of
 # the tick limit at our default 1 m/s; examples/minotaur-paper-small.toml runs every cell of the paper.

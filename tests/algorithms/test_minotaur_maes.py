@@ -15,7 +15,7 @@ from algorithms.minotaur.doorways import Doorway
 from algorithms.minotaur.explorer import Minotaur
 from algorithms.minotaur.params import MinotaurParams
 from swarm.api import FREE, SOLID, UNSEEN, InvalidInput, NavStatus, Observation, Pose, RobotInfo
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 from swarm.testing import check_explorer
 
 from .test_minotaur_doorways import as_map, blank, gap, hallway, known_of, wall, wall_with_door

@@ -17,11 +17,11 @@ from algorithms.minotaur.messages import (
     DoorwayList,
     Heading,
 )
-from maps.errors import InvalidInput
 from swarm import grid
 from swarm.api import FREE, SOLID, UNSEEN
-from swarm.messages import decode, encode
-from swarm.simulation import Simulation
+from swarm.base.errors import InvalidInput
+from swarm.comm.messages import decode, encode
+from swarm.sim.loop import Simulation
 from tests.algorithms.test_minotaur_doorways import (
     blank,
     wall_with_door,
@@ -203,7 +203,7 @@ def test_malformed_messages_are_ignored_not_fatal() -> None:
 
 @pytest.mark.parametrize("msg", BAD_MESSAGES[4:])   # (a list for a pair comes back as a tuple)
 def test_malformed_messages_are_refused_by_the_codec(msg: object) -> None:
-    from swarm.messages import MessageError
+    from swarm.comm.messages import MessageError
 
     with pytest.raises(MessageError):
         decode(encode(msg))

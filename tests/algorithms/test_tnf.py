@@ -15,8 +15,8 @@ from algorithms.tnf_utility import G_KNOWN, G_UNSEEN, distance_term, frontiers, 
 from maps import InvalidInput, Map
 from swarm import grid
 from swarm.api import FREE, SOLID, UNSEEN, NavStatus, Observation, Pose, RobotInfo, cell_centre
-from swarm.messages import MessageError, decode, encode
-from swarm.simulation import Simulation
+from swarm.comm.messages import MessageError, decode, encode
+from swarm.sim.loop import Simulation
 
 G0 = 5.0 * math.exp(-12.5)      # G(0): MAES's Gaussian far from its mean
 

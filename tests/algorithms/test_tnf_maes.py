@@ -15,7 +15,7 @@ from algorithms.tnf import TNF, Destination, TNFParams
 from algorithms.tnf_utility import MAES_CELL_WEIGHT, frontiers, maes_distance_term, score_frontiers
 from maps import InvalidInput
 from swarm.api import FREE, SOLID, UNSEEN, NavStatus, Neighbour, Observation, Pose, RobotInfo, cell_centre
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 from swarm.testing import check_explorer
 
 G0 = 5.0 * math.exp(-12.5)      # G(0), a known cell's share of MAES's Gaussian

@@ -9,10 +9,10 @@ import numpy as np
 import pytest
 
 from maps import InvalidInput
-from swarm import registry
 from swarm.api import FREE, SOLID, UNSEEN, NavStatus, Observation, Pose, RobotInfo, cell_centre
-from swarm.messages import MessageError, decode, encode
-from swarm.simulation import Simulation
+from swarm.comm.messages import MessageError, decode, encode
+from swarm.plugins import explorers as registry
+from swarm.sim.loop import Simulation
 
 from algorithms.xboa import VARIANT_NAMES, XBOA, TargetAnnouncement, XBOAParams, coarsen
 

@@ -334,7 +334,7 @@ def test_invalid_input_is_always_one_short_line():
     for exc in (InvalidInput(huge, huge, huge), InvalidInput("f\u2028g\x0bh\x1c", "v\nw", "a\fb\x85c\r"),
                 InvalidInput("f", 10**5000, "any"), InvalidInput("f", {"k": huge}, "any")):
         one_line(str(exc))
-    from maps.errors import short_repr
+    from swarm.base.errors import short_repr
 
     assert short_repr(10**5000).startswith("<an integer of")
     assert str(InvalidInput("size", 10, "an integer >= 20")) == "size: got 10; allowed: an integer >= 20"

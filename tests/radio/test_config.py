@@ -8,8 +8,8 @@ import tomllib
 
 import pytest
 
-from maps.errors import InvalidInput
 from radio import RadioConfig, config_from_mapping
+from swarm.base.errors import InvalidInput
 
 
 def test_defaults_are_the_papers():

@@ -10,7 +10,7 @@ from maps import InvalidInput
 from maps.io import save_npz
 from radio import RadioConfig
 from swarm.cli import main
-from swarm.spec import RunSpec
+from swarm.sim.spec import RunSpec
 
 from .plans import vertical_wall
 

@@ -6,8 +6,8 @@ import math
 
 import pytest
 
-from maps.errors import InvalidInput
 from radio.materials import DEFAULT_MATERIALS, Material, material_from_value, resolve_table
+from swarm.base.errors import InvalidInput
 
 
 @pytest.mark.parametrize("name, expected", [

@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 
 from maps import generate
-from maps.errors import InvalidInput
 from radio import RadioConfig, build_link_model
 from radio.models import LinkState
+from swarm.base.errors import InvalidInput
 
 from .plans import Plan, open_floor, vertical_wall
 

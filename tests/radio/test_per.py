@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from maps.errors import InvalidInput
 from radio import RadioConfig
 from radio.per import PacketErrorCurve
+from swarm.base.errors import InvalidInput
 
 MARGINS = np.linspace(-15.0, 15.0, 301)
 LENGTHS = (20, 100, 1000, 4096, 20000)

@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 from maps import Map, generate
-from maps.errors import InvalidInput
 from radio import RadioConfig, build_link_model
 from radio.shadowing import ShadowingField
+from swarm.base.errors import InvalidInput
 
 
 def open_box(width_m: float = 60.0, height_m: float = 40.0) -> Map:

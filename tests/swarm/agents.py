@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from swarm.api import Action
-from swarm.messages import message
+from swarm.comm.messages import message
 
 
 @message("test.ping")

@@ -1,5 +1,5 @@
 """swarm.testing.check_explorer rejects broken explorers with a one-line reason naming the problem and
-passes the plugin template; typed parameters (maps.params.from_mapping, registry.build_params), the
+passes the plugin template; typed parameters (swarm.base.params.from_mapping, registry.build_params), the
 ``swarm algorithms check`` command and ``registry.distribution``."""
 
 from __future__ import annotations
@@ -13,15 +13,15 @@ from typing import TYPE_CHECKING, Any, Mapping
 import numpy as np
 import pytest
 
-from maps.params import from_mapping
-from swarm import registry
 from swarm.api import FREE, Action, InvalidInput, NoParams, Observation, cell_centre, cell_of, grid
 from swarm.api.messages import message
+from swarm.base.params import from_mapping
 from swarm.cli import main
+from swarm.plugins import explorers as registry
 from swarm.testing import CHECKS, ExplorerCheckError, check_explorer
 
 if TYPE_CHECKING:
-    from swarm.simulation import Simulation  # noqa: F401  (an annotation that does not resolve at run time)
+    from swarm.sim.loop import Simulation  # noqa: F401  (an annotation that does not resolve at run time)
 
 TEMPLATE = Path(__file__).resolve().parents[2] / "examples" / "plugin"
 FAST = dict(ticks=30)   # the broken explorers fail early; a short run keeps the test quick

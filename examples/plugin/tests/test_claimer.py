@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from swarm.api import InvalidInput
-from swarm.simulation import Simulation
+from swarm import Simulation
 from swarm.testing import check_explorer
 
 from swarm_example_explorer import Claimer, ClaimerParams

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ...schema import DROP_CAUSES
+from swarm.results.schema import DROP_CAUSES
 from . import effects
 from .tables import Table, header, p_value
 

@@ -16,9 +16,9 @@ from typing import Any
 
 import pandas as pd
 
-from maps.errors import InvalidInput
+from swarm.base.errors import InvalidInput
 
-from ...schema import COMM_RUN_COLUMNS, RUNS, THRESHOLD_COLUMNS
+from swarm.results.schema import COMM_RUN_COLUMNS, RUNS, THRESHOLD_COLUMNS
 from ..spec import CampaignSpec, campaign_from_mapping, is_axis
 from ..store import ResultsStore
 
@@ -30,7 +30,7 @@ ALWAYS_SHOWN = ("map", "size", "robots", "spawn", "algorithm", "radio")
 RUN_COLUMNS = ("key", *DIMS, "replicate", "map_kind", "radio_model", "map_seed", "status", "error", "stop_reason",
                "ticks", "max_ticks", "explored_target", "explored", "coverage", *THRESHOLD_COLUMNS.values(), "part",
                "msgs_sent", "bytes_sent", "msgs_delivered", "bytes_delivered", "msgs_dropped", *COMM_RUN_COLUMNS)
-"""The runs-table columns the report reads (:data:`swarm.schema.RUNS`, plus the store's ``part``); results of
+"""The runs-table columns the report reads (:data:`swarm.results.schema.RUNS`, plus the store's ``part``); results of
 older versions lack the communication columns (they read as missing)."""
 assert set(RUN_COLUMNS) <= {*RUNS, "part"}
 

@@ -11,8 +11,8 @@ import re
 from collections.abc import Callable
 from pathlib import Path
 
-from maps.errors import InvalidInput
 from maps.io import atomic_write_bytes
+from swarm.base.errors import InvalidInput
 
 MANIFEST = "files.txt"
 _HEADER = "# files written by `swarm campaign report` (the next report deletes those it no longer writes)\n"

@@ -4,12 +4,9 @@ were computed (so a reader can trust or dispute them without reading this code).
 from __future__ import annotations
 
 import math
-from typing import TYPE_CHECKING
 
 from . import comm, effects, tables
-
-if TYPE_CHECKING:
-    from .build import PairedSection, Report
+from .contents import PairedSection, Report
 
 INLINE_ROWS = 300
 """Tables longer than this are linked, not inlined (a 54,000-run campaign has ~1,600 summary rows)."""

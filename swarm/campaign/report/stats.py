@@ -27,7 +27,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats as sps
 
-from ...schema import THRESHOLD_COLUMNS
+from swarm.results.schema import THRESHOLD_COLUMNS
 
 EXPECTED_RANK = {"global": 0, "multiwall": 1, "maes": 1, "los": 2}
 """Radio models from most to least permissive: the ordering of mean times the paper reports."""

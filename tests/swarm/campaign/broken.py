@@ -2,7 +2,7 @@
 
 from dataclasses import dataclass
 
-from maps.params import check_int
+from swarm.base.params import check_int
 
 
 @dataclass(frozen=True)

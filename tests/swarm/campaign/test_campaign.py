@@ -92,7 +92,7 @@ def test_keys_are_stable_across_processes_and_key_order():
 
 def test_paired_worlds():
     """Every algorithm and comm model meets the same map and start poses per (kind, size, replicate)."""
-    from swarm.simulation import Simulation
+    from swarm.sim.loop import Simulation
 
     runs = tiny().runs()
     groups: dict = {}

@@ -124,7 +124,7 @@ def test_campaign_progress_bar_on_a_terminal_plain_lines_otherwise(tmp_path):
 
 def test_the_eta_ignores_the_time_before_the_first_result(monkeypatch):
     """A pool's start-up (or a compile) before the first result does not set the pace of the rest."""
-    from swarm import progress
+    from swarm.util import progress
 
     now = [0.0]
     monkeypatch.setattr(progress.time, "monotonic", lambda: now[0])
@@ -194,7 +194,7 @@ def test_warm_up_covers_every_feature_once_and_a_valid_stamp_skips_it(tmp_path):
     assert {f for f in plan.needed if f.startswith("algorithm=")} == {"algorithm=frontier", "algorithm=greed"}
     assert len(plan.indices) <= 3 and all(spec.run_at(i).replicate == 0 for i in plan.indices)
     assert all(spec.run_at(i).cell["size"] == "20" for i in plan.indices)
-    from swarm.simulation import Simulation
+    from swarm.sim.loop import Simulation
 
     Simulation({"map": {"size": 20}, "stop": {"max_ticks": 5}}).run()  # kernels of this process in the cache
     assert warmup.record(stamp, plan.needed)

@@ -141,7 +141,7 @@ def test_fuzzed_run_flags_end_in_a_spec_or_a_one_line_error(flags, data, capsys)
     if code == 0:  # a TOML run spec that reads back to itself
         import tomllib
 
-        from swarm.spec import RunSpec
+        from swarm.sim.spec import RunSpec
 
         assert not err and RunSpec.from_mapping(tomllib.loads(out)).to_toml() == out
     else:

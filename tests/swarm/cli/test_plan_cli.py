@@ -106,7 +106,7 @@ def test_unreachable_goal_is_bad_input(tmp_path, capsys):
 def test_numba_compiling_is_reported_apart_from_the_planning_time(map_file, capsys, monkeypatch):
     """A first call's compile (35 s after an install) is not planning time: the planner's time excludes
     what numba spent inside it, and a line says what numba cost."""
-    from swarm.jit import JitWatch
+    from swarm.util.jit import JitWatch
 
     real = JitWatch.__exit__
 

@@ -13,9 +13,9 @@ import pytest
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from maps.errors import InvalidInput
 from swarm import grid
 from swarm.api import FREE, ROBOT_RADIUS_M, SOLID, UNSEEN
+from swarm.base.errors import InvalidInput
 from swarm.grid import kept
 from swarm.grid.cspace import DEFAULT_MARGIN_M
 from swarm.grid.targets import LOCAL_FIRST_M, default_view_reach_cells

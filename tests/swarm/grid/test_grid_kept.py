@@ -17,7 +17,7 @@ from swarm.grid.cspace import _erosion_rows
 from swarm.grid.local import TARGET_FOUND, erosion_depth, window_target
 from swarm.grid.search import _WORK
 from swarm.grid.targets import default_view_reach_cells
-from swarm.packed_maps import unpacked
+from swarm.knowledge.packed import unpacked
 
 
 def padded_grid(bits: np.ndarray, shape: tuple[int, int]) -> np.ndarray:

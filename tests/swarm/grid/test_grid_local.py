@@ -12,7 +12,7 @@ from swarm import grid
 from swarm.api import FREE, SOLID, UNSEEN
 from swarm.grid import memo
 from swarm.grid.local import PLAN_WINDOW_CELLS, erosion_depth, plan_local_first
-from swarm.navigation import SNAP_RADIUS_CELLS
+from swarm.navigation.navigator import SNAP_RADIUS_CELLS
 
 
 def whole_map_plan(known: np.ndarray, start: tuple[int, int], goal: tuple[int, int], radius: float, margin: float,

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from swarm.record import Recorder, load_recording
 from swarm.record.container import BLOCK, HEAD, MAGIC, TAIL, encode_chunk, iter_chunks
 from swarm.record.reader import Recording
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 
 SPEC = {"seed": 2, "map": {"kind": "building", "size": 30}, "robots": {"count": 4},
         "algorithm": {"name": "tests.swarm.viewer.agents:DebugExplorer"}, "stop": {"max_ticks": 700},

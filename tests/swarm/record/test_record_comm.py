@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from maps import InvalidInput
-from swarm.comm import LOSS_CAUSES
+from swarm.comm.medium import LOSS_CAUSES
 from swarm.record import Recorder, load_recording
 from swarm.record.reader import Recording
-from swarm.simulation import Simulation
+from swarm.sim.loop import Simulation
 
 from .test_record import rebuild
 

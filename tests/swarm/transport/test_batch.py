@@ -14,10 +14,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from swarm.api import Action, NavStatus, Neighbours, Pose, RobotInfo
-from swarm.comm import Envelope
-from swarm.messages import Heartbeat, MapRequest, encode
-from swarm.neighbours import bearings
+from swarm.comm.medium import Envelope
+from swarm.comm.messages import Heartbeat, MapRequest, encode
 from swarm.transport.agent import AgentRunner
+from swarm.transport.bearings import bearings
 from swarm.transport.batch import (ACT_FIXED, ActBatchDecoder, ActBatchEncoder, BatchEncoder, ObsBatchDecoder,
                                    decode_obs_batch, encode_act_batch)
 from swarm.transport.group import AgentGroup
@@ -252,7 +252,7 @@ def test_local_agents_that_refuse_their_batch_fail_and_the_run_goes_on(monkeypat
     """A batch the group cannot take (here: our encoder made to corrupt tick 40's) marks the local robots
     failed at that tick, as a remote agent that stops answering is; the run ends normally."""
     import swarm.transport.zenoh_host as zh
-    from swarm.simulation import Simulation
+    from swarm.sim.loop import Simulation
 
     class Corrupting(zh.BatchEncoder):
         def __call__(self, tick, *args):

@@ -17,8 +17,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from swarm.api import Action
-from swarm.comm import CommSpec, MapSharing, Medium
-from swarm.messages import Heartbeat, MapRequest, MessageError, decode, delta_update, encode, full_update, registered
+from swarm.comm.medium import CommSpec, Medium
+from swarm.comm.sharing import MapSharing
+from swarm.comm.messages import Heartbeat, MapRequest, MessageError, decode, delta_update, encode, full_update, registered
 from swarm.transport.auth import sign_act
 from swarm.transport.batch import ActBatchDecoder, ActBatchEncoder, ObsBatchDecoder
 from swarm.transport.wire import (WIRE_VERSION, ObsDecoder, WireError, decode_act, decode_reset, encode_act,
@@ -167,8 +168,8 @@ def test_any_object_an_algorithm_returns_is_sent_or_dropped(sender, fields, kind
 def test_a_live_run_survives_an_agent_spraying_hostile_packets():
     """A remote agent that, every tick, puts random bytes, mutated acts (signed and unsigned) and acts
     carrying mutated messages around its honest reply: the run ends as a clean one does."""
+    from swarm.sim.loop import Simulation
     from tests.swarm.transport.test_trust import SPEC, Agent, remote_run, same_run
-    from swarm.simulation import Simulation
 
     rng = np.random.default_rng(31)
     templates = valid_messages()

@@ -19,10 +19,10 @@ import pytest
 import zenoh
 
 from swarm.api import Action
-from swarm.simulation import Simulation, TransportOptions
-from swarm.transport.wire import WIRE_VERSION, decode_obs, encode_act
+from swarm.sim.loop import Simulation, TransportOptions
 from swarm.transport.auth import RunSecret, sign_act
 from swarm.transport.sessions import session_config
+from swarm.transport.wire import WIRE_VERSION, decode_obs, encode_act
 
 pytestmark = pytest.mark.timeout(240)
 

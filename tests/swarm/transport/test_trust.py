@@ -21,8 +21,8 @@ import pytest
 import zenoh
 
 from swarm.api import Action
-from swarm.messages import Heartbeat, encode, full_update
-from swarm.simulation import Simulation, TransportOptions
+from swarm.comm.messages import Heartbeat, encode, full_update
+from swarm.sim.loop import Simulation, TransportOptions
 from swarm.transport.agent import AgentRunner
 from swarm.transport.auth import RunSecret, RobotToken, sign_act
 from swarm.transport.sessions import session_config
@@ -273,7 +273,7 @@ def test_a_signed_reply_for_another_robot_key_is_refused():
 
 @pytest.mark.parametrize("run_id", ["*", "**", "$*", "a/b", "a?b", "a#b", "a b", "", "x" * 101])
 def test_run_ids_with_key_expression_syntax_are_refused(run_id):
-    from maps.errors import InvalidInput
+    from swarm.base.errors import InvalidInput
     from swarm.transport.zenoh_host import ZenohHost
 
     with pytest.raises(InvalidInput, match="run id"):

@@ -12,12 +12,12 @@ import numpy as np
 import pytest
 
 from swarm.api import Action, NavStatus, Neighbour, Neighbours, Observation, Pose, RobotInfo, frozen_builder
-from swarm.messages import Heartbeat, encode
+from swarm.comm.messages import Heartbeat, encode
 from swarm.transport.agent import AgentRunner, InboxDecoder
 from swarm.transport.wire import (NAV_STATES, NEIGHBOUR, OBS_STATE, RAW_CELLS_BELOW, WIRE_VERSION, ObsDecoder,
                                   ResetPacket, WireError, decode_act, decode_obs, encode_act, encode_obs,
                                   pack_neighbours)
-from swarm.neighbours import bearings
+from swarm.transport.bearings import bearings
 from swarm.transport.packing import ObsEncoder
 
 MAP_CELLS = 40 * 40
@@ -266,7 +266,7 @@ def test_malformed_act_raises_wire_error(change):
 
 
 def test_messages_that_do_not_decode_are_dropped_one_by_one_and_counted():
-    from swarm.messages import Heartbeat, encode
+    from swarm.comm.messages import Heartbeat, encode
 
     good = encode(Heartbeat(sender=2, tick=1, x=1.0, y=2.0, theta=0.5))
     bad = [b"\x93\xa3bad", b"", encode(Heartbeat(sender=2, tick=1, x=float("nan"), y=2.0, theta=0.5)),

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from swarm.simulation import Simulation, TransportOptions
+from swarm.sim.loop import Simulation, TransportOptions
 from swarm.transport.auth import RunSecret
 
 DOC = Path(__file__).resolve().parents[3] / "docs" / "wire-format.md"

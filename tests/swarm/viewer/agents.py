@@ -9,7 +9,7 @@ import numpy as np
 
 from swarm import grid
 from swarm.api import Action, cell_centre, cell_of
-from swarm.messages import message
+from swarm.comm.messages import message
 
 
 @message("test.viewer.note")

@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 
 from maps.materials import colour_of
-from swarm.animation import ROBOT_COLOURS
 from swarm.record import Recorder, load_recording
-from swarm.simulation import Simulation
+from swarm.record.animation import ROBOT_COLOURS
+from swarm.sim.loop import Simulation
 from swarm.viewer import write_html
 
 CHROMIUM = os.environ.get("SWARM_CHROMIUM", "/usr/bin/chromium")

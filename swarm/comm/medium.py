@@ -1,0 +1,445 @@
+"""The radio medium as the runtime sees it: broadcasts judged by the radio, lost, throttled and delivered.
+
+**Medium.** Messages a robot broadcasts during tick t are encoded (their size is a metric), judged by the
+radio's link matrix computed from positions at send time, optionally thinned by seeded packet loss and a
+per-link byte budget, and appear in each receiver's inbox at tick t+1, ordered by (sender, sequence). A
+robot never receives its own broadcast. (MAES judges links at receive time; we use send time, as a real
+radio does, docs/design.md section 4.) Two options make the channel more than a fixed threshold: packet
+errors drawn from each pair's margin (``radio.per``, :mod:`radio.per`) and multi-hop relaying
+(``comm.relay = "flood"``): each robot forwards every message it hears for the first time, one tick per
+hop, and a receiver gets the original message once (docs/radio.md, "Relaying").
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Sequence
+
+import numpy as np
+from numba import njit
+
+from swarm.base.params import OMIT_DEFAULT, check_choice, check_float, check_int
+from swarm.results.schema import DROP_CAUSES
+
+from .messages import MAX_MESSAGE_BYTES, MapUpdate, MessageError, encode
+
+if TYPE_CHECKING:
+    from radio.per import PacketErrorCurve
+
+SHARING_MODES = ("delta", "full", "off", "maes", "maes_heartbeat", "maes_sync")
+LINK_TIMES = ("send", "receive")
+RELAY_MODES = ("none", "flood")
+LOSS_CAUSES = ("link", "loss", "bandwidth", "packet_error")
+"""Why one delivery failed, as :attr:`Envelope.lost` codes (indices) give it when an observer asks for them
+(:attr:`Medium.note_losses`): no link (or a failed receiver), ``comm.loss``, the byte budget, a packet error
+on a link above the sensitivity. The drop counts fold ``packet_error`` into ``dropped_loss`` (and a packet
+error below the sensitivity is ``link``, as there), docs/comm-metrics.md."""
+_LINK, _LOSS, _BANDWIDTH, _PACKET_ERROR = range(len(LOSS_CAUSES))
+
+
+@dataclass(frozen=True)
+class CommSpec:
+    """The ``[comm]`` section of a run spec.
+
+    ``map_sharing``: ``delta`` (default), ``full`` or ``off``, or for MAES parity ``maes_heartbeat`` /
+    ``maes_sync`` (MAES's own merges, :mod:`swarm.comm.maes_merge`) or ``maes`` (the merge MAES's version of the
+    run's algorithm does, at its period: see :func:`swarm.comm.maes_merge.resolve`); ``share_every`` ticks
+    (MAES heartbeats every 10, MAES's TNF syncs every 20). ``loss``: probability that a message is lost on each link
+    (seeded, independent per message and receiver). ``bandwidth``: bytes per tick each link carries
+    (0 = unlimited); what exceeds it is dropped in send order. ``neighbour_range_m``: robots within this
+    range and in line of sight appear in ``Observation.neighbours`` (0 = the lidar range). ``link_at``:
+    judge a message's link from the positions when it is sent (``send``, default, as a radio does) or when
+    it is read a tick later (``receive``, as MAES does, docs/maes.md section 6.1). ``relay``: ``none``
+    (default, as MAES: messages reach direct neighbours only) or ``flood``: every robot forwards each message
+    it receives for the first time, one tick per hop, over at most ``relay_hops`` hops from the sender
+    (the sender's own broadcast is hop 1, so ``relay_hops = 1`` relays nothing). ``relay_hops`` is allowed
+    and unused with ``relay = "none"`` (a sweep may include both). Both are left out of the canonical form
+    while at their defaults (run keys unchanged).
+    """
+
+    map_sharing: str = "delta"
+    share_every: int = 10
+    loss: float = 0.0
+    bandwidth: int = 0
+    neighbour_range_m: float = 0.0
+    link_at: str = field(default="send", metadata={OMIT_DEFAULT: True})
+    relay: str = field(default="none", metadata={OMIT_DEFAULT: True})
+    relay_hops: int = field(default=4, metadata={OMIT_DEFAULT: True})
+
+    def __post_init__(self) -> None:
+        check_choice("comm.map_sharing", self.map_sharing, SHARING_MODES)
+        check_choice("comm.link_at", self.link_at, LINK_TIMES)
+        check_choice("comm.relay", self.relay, RELAY_MODES)
+        check_int("comm.relay_hops", self.relay_hops, 1, 1000)
+        check_int("comm.share_every", self.share_every, 1, 1_000_000)
+        check_float("comm.loss", self.loss, 0.0, 1.0)
+        check_int("comm.bandwidth", self.bandwidth, 0)
+        check_float("comm.neighbour_range_m", self.neighbour_range_m, 0.0)
+
+
+@dataclass
+class Envelope:
+    """One encoded message in flight; after delivery, ``delivered_to`` lists the robots that got it. A relayed
+    copy (``comm.relay = "flood"``) keeps the original's ``sender``, ``seq``, ``data`` and ``message``; ``hop``
+    counts transmissions from the sender (1: the sender's own) and ``via`` is the robot that transmits the
+    copy (-1: the sender itself); ``delivered_to`` lists only robots for which it was the first copy. ``lost``
+    is None unless the medium notes losses (:attr:`Medium.note_losses`, for the recorder): then it lists
+    ``(receiver, cause)`` for every other robot this transmission failed to reach, ``cause`` an index into
+    :data:`LOSS_CAUSES` (a relayed copy that reached a robot already holding the message is not lost)."""
+
+    sender: int
+    seq: int
+    data: bytes
+    message: Any
+    delivered_to: list[int] = field(default_factory=list)
+    hop: int = 1
+    via: int = -1
+    lost: list[tuple[int, int]] | None = None
+
+    @property
+    def transmitter(self) -> int:
+        """The robot whose radio sends this copy (whose links judge it)."""
+        return self.sender if self.via < 0 else self.via
+
+
+@dataclass
+class CommStats:
+    """What the medium counted over a run; ``malformed``: messages an algorithm (or its remote agent) tried
+    to send that were dropped before the radio (see :meth:`Medium.envelope`), ``malformed_by_robot`` per
+    sender."""
+
+    sent: int = 0
+    bytes_sent: int = 0
+    delivered: int = 0
+    bytes_delivered: int = 0
+    dropped_link: int = 0
+    dropped_loss: int = 0
+    dropped_bandwidth: int = 0
+    malformed: int = 0
+    map_bytes_sent: int = 0
+    last_contact: list[int] = field(default_factory=list)
+    malformed_by_robot: list[int] = field(default_factory=list)
+    relaying: bool = False
+    relayed: int = 0
+    bytes_relayed: int = 0
+    duplicates: int = 0
+
+    def as_dict(self) -> dict[str, Any]:
+        """The counts as ``summary["messages"]``; ``relayed``, ``bytes_relayed`` and ``duplicates`` only when
+        relaying (so runs without it keep their results bit for bit)."""
+        out = {"sent": self.sent, "bytes_sent": self.bytes_sent, "delivered": self.delivered,
+               "bytes_delivered": self.bytes_delivered, "dropped_link": self.dropped_link,
+               "dropped_loss": self.dropped_loss, "dropped_bandwidth": self.dropped_bandwidth,
+               "malformed": self.malformed, "malformed_by_robot": list(self.malformed_by_robot),
+               "map_bytes_sent": self.map_bytes_sent, "last_contact": list(self.last_contact)}
+        if self.relaying:
+            out.update(relayed=self.relayed, bytes_relayed=self.bytes_relayed, duplicates=self.duplicates)
+        return out
+
+    @property
+    def dropped(self) -> int:
+        """Messages dropped on the way, all causes (:data:`swarm.results.schema.DROP_CAUSES`)."""
+        return sum(getattr(self, cause) for cause in DROP_CAUSES)
+
+    def count_malformed(self, robot: int, n: int = 1) -> None:
+        self.malformed += n
+        self.malformed_by_robot[robot] += n
+
+
+class Medium:
+    """Carries envelopes from outboxes at tick t to inboxes at tick t+1 through the link matrix.
+
+    Counting, per transmission (a broadcast or a relayed copy, each in ``sent`` and ``bytes_sent``), every
+    other robot is exactly one of: ``delivered`` (its first copy of the message: into its inbox),
+    ``duplicates`` (relaying: it had the message already, or got it from another copy this tick),
+    ``dropped_link`` (out of reach: below the sensitivity, or lost to packet errors there),
+    ``dropped_loss`` (within reach but lost: ``comm.loss``, or packet errors at or above the sensitivity),
+    ``dropped_bandwidth``. So ``(n - 1) * sent = delivered + duplicates + dropped``.
+    """
+
+    def __init__(self, n: int, spec: CommSpec, rng: np.random.Generator,
+                 map_shape: tuple[int, int] | None = None, packet_errors: PacketErrorCurve | None = None,
+                 error_rng: np.random.Generator | None = None) -> None:
+        """``map_shape``: the knowledge maps' shape, which every MapUpdate an algorithm sends must have.
+        ``packet_errors``: the radio's PER curve (None: off), drawn from ``error_rng`` (the run's channel
+        stream); ``rng`` draws ``comm.loss``."""
+        self.n = n
+        self.spec = spec
+        self.rng = rng
+        self.map_shape = tuple(map_shape) if map_shape is not None else None
+        self.relaying = spec.relay == "flood"
+        self.stats = CommStats(last_contact=[-1] * n, malformed_by_robot=[0] * n, relaying=self.relaying)
+        self.dropped: list[tuple[int, str]] = []  # (sender, reason) of messages dropped since last read
+        self.note_losses = False
+        """Set by an observer that wants each envelope's failed deliveries (:attr:`Envelope.lost`); off, the
+        medium does no work for them (the draws and counts are the same either way)."""
+        self._seq = [0] * n
+        self.packet_errors = packet_errors
+        if packet_errors is not None and error_rng is None:
+            raise ValueError("packet errors need their generator (error_rng)")
+        self.error_rng = error_rng
+        self._others = [np.array([i for i in range(n) if i != j], dtype=np.int64) for j in range(n)]
+        # Relaying: the robots holding each message still spreading ((sender, seq) -> ids), the copies each
+        # robot forwards next tick, and the messages those copies carry.
+        self._holders: dict[tuple[int, int], set[int]] = {}
+        self._pending: list[list[Envelope]] = [[] for _ in range(n)]
+        self._pending_keys: set[tuple[int, int]] = set()
+
+    def envelope(self, sender: int, msg: Any) -> Envelope | None:
+        """Encode a message an algorithm (or its remote agent) sends from ``sender``; None when it is
+        malformed, counted and noted in :attr:`dropped`: its ``sender`` is not the robot (a forgery), it is
+        not a registered message or does not encode, it is larger than a message may be, or it is a map
+        update of another map's shape or with a corrupt payload (it would fail every receiver's merge)."""
+        problem = _outgoing_problem(sender, msg, self.map_shape)
+        data = b""
+        if problem is None:
+            try:
+                data = encode(msg)
+            except (MessageError, TypeError, ValueError, OverflowError) as exc:
+                problem = f"does not encode ({type(exc).__name__})"
+            else:
+                if len(data) > MAX_MESSAGE_BYTES:
+                    problem = f"{len(data)} bytes, more than {MAX_MESSAGE_BYTES}"
+        if problem is not None:
+            self.stats.count_malformed(sender)
+            self.dropped.append((sender, problem))
+            return None
+        self._seq[sender] += 1
+        return Envelope(sender, self._seq[sender], data, msg)
+
+    def service_envelope(self, sender: int, msg: Any) -> Envelope:
+        """Encode a message of the runtime's own map-sharing service (built here: not checked again)."""
+        data = encode(msg)
+        self._seq[sender] += 1
+        return Envelope(sender, self._seq[sender], data, msg)
+
+    def deliver(self, tick: int, outboxes: Sequence[Sequence[Envelope]], link: np.ndarray,
+                margin: np.ndarray | None = None) -> list[list[Envelope]]:
+        """Inboxes for tick+1. ``link[i, j]``: a message transmitted by j reaches i (judged at send time);
+        ``margin[i, j]``: that pair's margin in dB (-inf: cannot receive), needed with packet errors. Only the
+        columns of robots with something in their outbox are read."""
+        if self.packet_errors is not None or self.relaying:
+            return self._deliver_channel(tick, outboxes, link, margin)
+        n = self.n
+        stats = self.stats
+        inboxes: list[list[Envelope]] = [[] for _ in range(n)]
+        budget = np.full((n, n), self.spec.bandwidth, dtype=np.int64) if self.spec.bandwidth else None
+        note = self.note_losses
+        lost = None
+        for j in range(n):
+            if not outboxes[j]:
+                continue
+            in_reach = np.flatnonzero(link[:, j])
+            others = [i for i in in_reach.tolist() if i != j]  # every receiver when nothing is lost
+            unreached = [(i, _LINK) for i in np.flatnonzero(~link[:, j]).tolist() if i != j] if note else []
+            for env in outboxes[j]:
+                size = len(env.data)
+                stats.sent += 1
+                stats.bytes_sent += size
+                if isinstance(env.message, MapUpdate):
+                    stats.map_bytes_sent += size
+                receivers = in_reach
+                stats.dropped_link += (n - 1) - len(receivers)
+                if note:
+                    lost = env.lost = list(unreached)
+                targets = others
+                if self.spec.loss > 0.0 and len(receivers):
+                    keep = self.rng.random(len(receivers)) >= self.spec.loss
+                    stats.dropped_loss += int((~keep).sum())
+                    targets = [i for i in receivers[keep].tolist() if i != j]
+                    if lost is not None:
+                        lost.extend((i, _LOSS) for i in receivers[~keep].tolist())
+                if budget is not None:
+                    targets = self._within_budget(budget, targets, j, size, lost)
+                for i in targets:
+                    inboxes[i].append(env)
+                    stats.last_contact[i] = tick + 1
+                env.delivered_to.extend(targets)
+                stats.delivered += len(targets)
+                stats.bytes_delivered += size * len(targets)
+        return inboxes
+
+    def _deliver_channel(self, tick: int, outboxes: Sequence[Sequence[Envelope]], link: np.ndarray,
+                         margin: np.ndarray | None) -> list[list[Envelope]]:
+        """:meth:`deliver` with packet errors or relaying (the plain loop above is the fast path without):
+        per transmission, the link or the packet-error draws, then ``comm.loss``, the byte budget, and the
+        first-copy filter that feeds the next hop; inboxes sorted by (sender, sequence)."""
+        n = self.n
+        stats = self.stats
+        inboxes: list[list[Envelope]] = [[] for _ in range(n)]
+        budget = np.full((n, n), self.spec.bandwidth, dtype=np.int64) if self.spec.bandwidth else None
+        log_keep = None
+        if self.packet_errors is not None:
+            if margin is None:
+                raise ValueError("packet errors need the pairs' margins")
+            log_keep = self.packet_errors.log_keep(margin)
+        touched: set[tuple[int, int]] = set()
+        note = self.note_losses
+        lost = None
+        for j in range(n):
+            if not outboxes[j]:
+                continue
+            others = self._others[j]
+            linked = link[others, j]
+            keep_j = log_keep[others, j] if log_keep is not None else None
+            for env in outboxes[j]:
+                if note:
+                    lost = env.lost = []
+                size = len(env.data)
+                stats.sent += 1
+                stats.bytes_sent += size
+                if isinstance(env.message, MapUpdate):
+                    stats.map_bytes_sent += size
+                if env.hop > 1:
+                    stats.relayed += 1
+                    stats.bytes_relayed += size
+                if keep_j is None:
+                    reach = others[linked]
+                    stats.dropped_link += (n - 1) - len(reach)
+                    if lost is not None:
+                        lost.extend((i, _LINK) for i in others[~linked].tolist())
+                else:
+                    reach = self._survive_errors(others, linked, keep_j, size, lost)
+                if self.spec.loss > 0.0 and len(reach):
+                    keep = self.rng.random(len(reach)) >= self.spec.loss
+                    stats.dropped_loss += int((~keep).sum())
+                    if lost is not None:
+                        lost.extend((i, _LOSS) for i in reach[~keep].tolist())
+                    reach = reach[keep]
+                targets = reach.tolist()
+                if budget is not None:
+                    targets = self._within_budget(budget, targets, j, size, lost)
+                if self.relaying:
+                    targets = self._first_copies(env, targets)
+                    touched.add((env.sender, env.seq))
+                for i in targets:
+                    inboxes[i].append(env)
+                    stats.last_contact[i] = tick + 1
+                env.delivered_to.extend(targets)
+                stats.delivered += len(targets)
+                stats.bytes_delivered += size * len(targets)
+        if self.relaying:
+            for key in touched - self._pending_keys:  # the flood of these messages is over
+                del self._holders[key]
+            for box in inboxes:
+                box.sort(key=_inbox_order)
+        return inboxes
+
+    def _survive_errors(self, others: np.ndarray, linked: np.ndarray, log_keep: np.ndarray, size: int,
+                        lost: list[tuple[int, int]] | None = None) -> np.ndarray:
+        """The robots of ``others`` that receive a ``size``-byte transmission despite packet errors: one
+        uniform draw per robot, kept when it is at least the robot's PER (``-expm1(8 size log_keep)``, as
+        :meth:`radio.per.PacketErrorCurve.per`: 1 without signal, 0 far above the sensitivity). The lost are
+        counted as ``dropped_link`` below the sensitivity (not ``linked``), else as ``dropped_loss``, and
+        listed in ``lost`` (when given) as ``link`` or ``packet_error``."""
+        assert self.error_rng is not None
+        kept = np.empty(len(others), dtype=np.bool_)
+        below, above = _kept_despite_errors(self.error_rng.random(len(others)), log_keep, 8.0 * size, linked, kept)
+        self.stats.dropped_link += below
+        self.stats.dropped_loss += above
+        if lost is not None and below + above:
+            failed = np.flatnonzero(~kept)
+            lost.extend(zip(others[failed].tolist(), np.where(linked[failed], _PACKET_ERROR, _LINK).tolist()))
+        return others[kept]
+
+    def _first_copies(self, env: Envelope, targets: list[int]) -> list[int]:
+        """Relaying: the robots of ``targets`` that get ``env``'s message for the first time (the others are
+        counted as duplicates); each queues a copy to forward next tick unless the hop limit is reached."""
+        key = (env.sender, env.seq)
+        holders = self._holders.get(key)
+        if holders is None:
+            holders = self._holders[key] = {env.sender}
+        new = [i for i in targets if i not in holders]
+        self.stats.duplicates += len(targets) - len(new)
+        holders.update(new)
+        if new and env.hop < self.spec.relay_hops:
+            for i in new:
+                self._pending[i].append(Envelope(env.sender, env.seq, env.data, env.message, hop=env.hop + 1, via=i))
+            self._pending_keys.add(key)
+        return new
+
+    def add_relays(self, outboxes: list[list[Envelope]], failed: np.ndarray) -> None:
+        """Relaying: append to each robot's outbox, after its own messages, the copies it forwards this tick
+        (of the messages it received first this tick); a robot that failed forwards nothing."""
+        if not self._pending_keys:
+            return
+        flags = failed.tolist()
+        kept: set[tuple[int, int]] = set()
+        for i, copies in enumerate(self._pending):
+            if not copies:
+                continue
+            if not flags[i]:
+                outboxes[i].extend(copies)
+                kept.update((c.sender, c.seq) for c in copies)
+            self._pending[i] = []
+        for key in self._pending_keys - kept:
+            self._holders.pop(key, None)
+        self._pending_keys = set()
+
+    def deliveries(self, outboxes: Sequence[Sequence[Envelope]]) -> list[tuple[Any, list[int]]]:
+        """A tick's delivered messages with the robots each reached, in inbox order (sender, then sequence):
+        what :meth:`MapSharing.receive_tick` takes. Relayed copies of one message are one entry."""
+        out = [(env.message, env.delivered_to) for box in outboxes for env in box if env.delivered_to]
+        if not self.relaying:
+            return out
+        merged: dict[tuple[int, int], tuple[Any, list[int]]] = {}
+        for box in outboxes:
+            for env in box:
+                if env.delivered_to:
+                    merged.setdefault((env.sender, env.seq), (env.message, []))[1].extend(env.delivered_to)
+        return [(msg, sorted(ids)) for _, (msg, ids) in sorted(merged.items(), key=lambda item: item[0])]
+
+    def _within_budget(self, budget: np.ndarray, targets: list[int], sender: int, size: int,
+                       lost: list[tuple[int, int]] | None = None) -> list[int]:
+        """The receivers whose link from ``sender`` still carries ``size`` bytes this tick (charged); the
+        others count as dropped for bandwidth (and are listed in ``lost``, when given)."""
+        kept = []
+        for i in targets:
+            if budget[i, sender] < size:
+                self.stats.dropped_bandwidth += 1
+                if lost is not None:
+                    lost.append((i, _BANDWIDTH))
+                continue
+            budget[i, sender] -= size
+            kept.append(i)
+        return kept
+
+
+@njit(cache=True)
+def _kept_despite_errors(u, log_keep, bits, linked, kept):  # pragma: no cover - compiled
+    """``kept[k]``: the draw ``u[k]`` is at least the PER ``-expm1(bits * log_keep[k])``; returns how many were
+    lost (below the sensitivity: not ``linked``, at or above it)."""
+    below = 0
+    above = 0
+    for k in range(u.shape[0]):
+        ok = u[k] >= -math.expm1(bits * log_keep[k])
+        kept[k] = ok
+        if not ok:
+            if linked[k]:
+                above += 1
+            else:
+                below += 1
+    return below, above
+
+
+def _inbox_order(env: Envelope) -> tuple[int, int]:
+    return env.sender, env.seq
+
+
+def _outgoing_problem(sender: int, msg: Any, shape: tuple[int, int] | None) -> str | None:
+    """Why a message an algorithm sends from ``sender`` cannot go on the radio, or None."""
+    claimed = getattr(msg, "sender", None)
+    if isinstance(claimed, bool) or not isinstance(claimed, (int, np.integer)) or claimed != sender:
+        return f"claims sender {str(claimed)[:20]}"
+    if isinstance(msg, MapUpdate):
+        try:
+            msg.validate()
+            if shape is not None and msg.shape != shape:
+                return f"map update of shape {msg.shape}, the maps are {shape}"
+            msg.dense() if msg.full else msg.cells()  # decoded once; receivers reuse it
+        except MessageError as exc:
+            return str(exc)[:100]
+        except Exception as exc:  # a hand-built update with fields of the wrong types
+            return f"map update with bad fields ({type(exc).__name__})"
+    return None

@@ -1,0 +1,338 @@
+"""The map-sharing service: each robot's map updates, built and merged.
+
+**Map sharing** is a runtime service configured per run (``comm.map_sharing``), so every algorithm shares
+maps the same way and comparisons are fair: every ``share_every`` ticks each robot broadcasts a
+:class:`~swarm.comm.messages.MapUpdate` with the cells changed since its previous update (``delta``) or its
+whole map (``full``). Receivers merge updates into their own map (elementwise max) before they act. A
+receiver that notices a gap in a sender's sequence numbers asks for its full map
+(:class:`~swarm.comm.messages.MapRequest`); the sender broadcasts it next tick, so deltas converge to what full
+maps would give even over lossy links. A delta's cells are found by comparing the robot's map with a copy
+of what its last update said, only where something was written since (its lidar windows, merged cells)
+when the runtime reports its scans (``lidar_reach``), else over the whole map: the same cells either way.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Sequence
+
+import numpy as np
+from numba import njit
+
+from swarm.base.types import CELL_M
+from swarm.knowledge.maps import check_writable_map, merge_cells_many, merge_cells_many_changed, merge_cells_many_counted
+from swarm.knowledge.packed import packed_copy, packed_size, sync_box_packed, sync_changes_packed
+from swarm.results.metrics import FreeCounts, InfoAges
+
+from .medium import CommSpec
+from .messages import MapRequest, MapUpdate, MessageError, delta_update, full_update
+
+
+class MapSharing:
+    """The map-sharing service: builds each robot's MapUpdates and merges the ones it receives."""
+
+    def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None,
+                 monotone: bool = False, ages: InfoAges | None = None, free: FreeCounts | None = None) -> None:
+        """``ages``: told of every update sent and of every merge that leaves a receiver holding the sender's
+        whole map; ``free``: told how the merges change each map's count of FREE cells (age of information,
+        docs/comm-metrics.md).
+
+        ``lidar_reach``: the owner's promise that apart from this service's merges only a lidar writes into
+        the maps, within ``lidar_reach`` cells (rows and columns) of each robot's cell, and that it reports
+        every scan with :meth:`scanned` from the start. A delta then compares only the places written since the robot's
+        last update (:func:`swarm.knowledge.maps.sync_box`), not both whole maps: the same cells. Without it
+        (None) every delta compares the whole maps. ``monotone``: the owner's promise that no cell of a map
+        ever decreases (the ternary lidar; a log-odds lidar may turn SOLID back to FREE), which lets a
+        broadcast full map reach most receivers as a delta (:meth:`_merge_full`)."""
+        self.n = n
+        self.spec = spec
+        self.enabled = spec.map_sharing in ("delta", "full") and n > 1  # the maes modes: swarm.comm.maes_merge
+        # Each robot's map as of its last update, 2 bits a cell (swarm.knowledge.packed): deltas are the cells
+        # that differ from it
+        self.last_shared = (np.zeros((n, packed_size(shape[0] * shape[1])), dtype=np.uint8)
+                            if spec.map_sharing == "delta" else None)
+        self.seq = [0] * n
+        self.seen_seq = [[0] * n for _ in range(n)]          # [receiver][sender] last seq merged
+        self._complete = [[True] * n for _ in range(n)]      # [receiver][sender] merged each of its updates so far
+        self.whole = [[True] * n for _ in range(n)]          # [receiver][sender] holds all the sender's updates
+        self.monotone = monotone
+        self.ages = ages
+        self.free = free
+        self._merges: list[tuple[np.ndarray, int, int]] = []  # this tick's (receivers, sender, sent tick): ages
+        self._raised = np.zeros(0, dtype=np.int64)  # scratch: the cells a delta raised, receiver after receiver
+        self.full_requested = [False] * n
+        self.requests: list[list[int]] = [[] for _ in range(n)]  # targets each robot will ask next tick
+        self.lidar_reach = lidar_reach if self.enabled and self.last_shared is not None else None
+        # Since each robot's last update: the box of rows and columns its lidar may have written
+        # (r0, r1, c0, c1; empty while r0 >= r1) and the cells merges raised (arrays).
+        self._boxes = np.zeros((n, 4), dtype=np.int64)
+        self._merged: list[list[np.ndarray]] = [[] for _ in range(n)]
+        self._whole = [False] * n  # a full map was merged: compare the whole maps
+
+    def scanned(self, poses: np.ndarray) -> None:
+        """The lidar scanned from ``poses`` (``float64[R, 3]``) this tick: widen each robot's box of places to
+        compare by its lidar window (nothing to do unless constructed with ``lidar_reach``)."""
+        if self.lidar_reach is not None:
+            _grow_boxes(self._boxes, np.ascontiguousarray(poses, dtype=np.float64), self.lidar_reach, CELL_M)
+
+    def outgoing(self, tick: int, known: np.ndarray, poses: np.ndarray) -> list[list[Any]]:
+        """Service messages each robot broadcasts this tick (updates due, full maps asked for, requests)."""
+        out: list[list[Any]] = [[] for _ in range(self.n)]
+        if not self.enabled:
+            return out
+        due = tick % self.spec.share_every == 0
+        if not (due or any(self.full_requested) or any(self.requests)):  # most ticks
+            return out
+        pose_rows = poses.tolist()
+        payloads: dict[bytes, tuple[bytes, bytes]] = {}  # this tick's full maps (full_update)
+        for i in range(self.n):
+            for target in self.requests[i]:
+                out[i].append(MapRequest(sender=i, target=target))
+            self.requests[i] = []
+            full = self.spec.map_sharing == "full" or self.full_requested[i]
+            if not (due or self.full_requested[i]):
+                continue
+            self.full_requested[i] = False
+            if full:
+                since = None
+                if self.last_shared is not None and self.monotone:  # the cells since the previous update: _merge_full
+                    changed = self._changed_since_update(i, known[i])  # last_shared[i] becomes known[i]
+                    since = (self.seq[i], changed, known[i].reshape(-1)[changed])
+                elif self.last_shared is not None:
+                    self.last_shared[i] = packed_copy(known[i])
+                    self._forget_writes(i)
+                self.seq[i] += 1
+                update = full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), payloads)
+                update.__dict__["_since"] = since  # this process's note (see _take); never on the wire
+                out[i].append(update)
+                continue
+            assert self.last_shared is not None
+            changed = self._changed_since_update(i, known[i])  # ascending, as delta_update wants them
+            if len(changed):
+                self.seq[i] += 1
+                update = delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed)
+                update.__dict__["_since"] = None  # built here (see _take): never on the wire
+                out[i].append(update)
+        if self.ages is not None:
+            self.ages.sent(tick)
+        return out
+
+    def _changed_since_update(self, i: int, known: np.ndarray) -> np.ndarray:
+        """Robot i's cells that differ from its last update, copied into ``last_shared[i]``."""
+        assert self.last_shared is not None
+        if self.lidar_reach is None or self._whole[i]:
+            self._forget_writes(i)
+            return sync_changes_packed(known, self.last_shared[i])
+        merged = self._merged[i]
+        extra = merged[0] if len(merged) == 1 else np.concatenate(merged) if merged else _NO_CELLS
+        changed = sync_box_packed(known, self.last_shared[i], self._boxes[i], extra)
+        self._forget_writes(i)
+        return changed
+
+    def _forget_writes(self, i: int) -> None:
+        """Robot i's map equals its last update: nothing written since."""
+        self._boxes[i] = _EMPTY_BOX
+        self._merged[i] = []
+        self._whole[i] = False
+
+    def receive(self, receiver: int, messages: Sequence[Any], known: np.ndarray,
+                tick: int = 0) -> list[np.ndarray | None]:
+        """Handle one receiver's service messages of a tick: merge every MapUpdate and note MapRequests
+        addressed to it. Returns, per merged update, the flat indices it carried (None for a full map: any
+        cell may have changed). Other messages are left to the algorithm. ``tick``: now (for :attr:`ages`)."""
+        for msg in messages:
+            if isinstance(msg, MapUpdate) and msg.shape != known.shape:
+                raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape}")
+        if any(isinstance(msg, MapUpdate) for msg in messages):
+            check_writable_map(known)
+        touched: list[np.ndarray | None] = []
+        stack, rows = known[np.newaxis], np.zeros(1, dtype=np.int64)
+        robot = np.array([receiver], dtype=np.int64)
+        for msg in messages:
+            self._take(msg, [receiver], stack, rows, [touched], robot)
+        if self.ages is not None:
+            self.ages.merged(self._merges, tick)
+        self._merges = []
+        return touched
+
+    def receive_tick(self, deliveries: Sequence[tuple[Any, Sequence[int]]], known: np.ndarray,
+                     live: np.ndarray, cells: bool = True, tick: int = 0) -> list[list[np.ndarray | None]]:
+        """:meth:`receive` for every robot at once: ``deliveries`` are a tick's messages with the robots each
+        reached, in the order the inboxes list them (sender, then sequence), and ``known`` the maps
+        (``uint8[R, H, W]``); robots not ``live`` are left alone. The same effect and the same lists as
+        calling :meth:`receive` per robot with its inbox, but each map update is merged into all its
+        receivers in one compiled call (a long many-robot run merges a great many). ``cells=False``: the lists
+        stay empty (the in-process runtime does not read them). ``tick``: now (for :attr:`ages`)."""
+        check_writable_map(known)
+        touched: list[list[np.ndarray | None]] = [[] for _ in range(self.n)]
+        flags = live.tolist()
+        for msg, receivers in deliveries:
+            if not isinstance(msg, (MapUpdate, MapRequest)):
+                continue
+            ids = [r for r in receivers if flags[r]]
+            if not ids:
+                continue
+            if isinstance(msg, MapUpdate) and msg.shape != known.shape[1:]:
+                raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape[1:]}")
+            lists = [touched[r] for r in ids] if cells else None
+            rows = np.array(ids, dtype=np.int64)
+            self._take(msg, ids, known, rows, lists, rows)
+        if self.ages is not None:
+            self.ages.merged(self._merges, tick)
+        self._merges = []
+        return touched
+
+    def _take(self, msg: Any, ids: list[int], stack: np.ndarray, rows: np.ndarray,
+              lists: list[list[np.ndarray | None]] | None, robots: np.ndarray) -> None:
+        """One service message reaching robots ``ids`` (``robots``: the same as an array), whose maps are
+        ``stack[rows]`` (checked): merge a
+        MapUpdate into each, note what it wrote for their next deltas, append the cells it carried (None for
+        a full map) to ``lists[k]`` for robot ``ids[k]`` (unless None) and book its sequence number; or note
+        a MapRequest addressed to one of them. Notes for :attr:`ages` which of them now hold the sender's
+        whole map: all after a full map; after a delta, those that merged every earlier update of the sender
+        since their last full map of it (a gap leaves a receiver partial until the full map it asks for)."""
+        if isinstance(msg, MapRequest):
+            if msg.target in ids:
+                self.full_requested[msg.target] = True
+            return
+        if not isinstance(msg, MapUpdate):
+            return
+        tracking = self.lidar_reach is not None
+        sender, seq = msg.sender, msg.seq
+        ours = "_since" in msg.__dict__  # built by this service, not sent by an algorithm
+        whole: list[int] = []  # the receivers that now hold the sender's whole map (for ages)
+        everyone = len(ids)
+        if msg.full:
+            carried = self._merge_full(msg, ids, stack, rows)
+            if self.free is not None:
+                self.free.dirty[robots] = True  # counted afresh when next read
+        else:
+            idx, values = msg.cells()  # int64 and uint8, in range: checked when decoded
+            if ours and tracking:  # the common case: merged and its receivers' books kept in one tight loop
+                ids, at, whole = self._take_delta(ids, stack, rows, robots, idx, values, sender, seq, lists)
+                lists = None if lists is None else [lists[k] for k in at]
+            elif self.free is not None:
+                merge_cells_many_counted(stack, rows, idx, values, robots, self.free.freed)
+            else:
+                merge_cells_many(stack, rows, idx, values)
+            carried = [idx] * len(ids)
+        delta_gap = not msg.full and self.spec.map_sharing == "delta"
+        if lists is not None:
+            for cells, into in zip(carried, lists):
+                into.append(cells)
+        for r, cells in zip(ids, carried):
+            if tracking:
+                if cells is None:
+                    self._whole[r] = True  # any cell may have changed: the next delta compares all
+                else:
+                    self._merged[r].append(cells)
+            seen = self.seen_seq[r]
+            last = seen[sender]
+            if delta_gap and seq != last + 1 and sender not in self.requests[r]:
+                self.requests[r].append(sender)
+            if not ours or msg.full or seq != last + 1:  # an update an algorithm sent counts as a gap
+                self._complete[r][sender] = ours and msg.full
+            holds = self.whole[r]
+            if msg.full:
+                holds[sender] = True
+                whole.append(r)
+            elif seq == last + 1:
+                if holds[sender]:
+                    whole.append(r)
+            elif seq > last:
+                holds[sender] = False  # a gap: partial until the full map it asks for
+            seen[sender] = seq if msg.full else max(last, seq)
+        if whole:  # (the order of the receivers does not matter: swarm.results.metrics.InfoAges.merged)
+            self._merges.append((robots if len(whole) == everyone else np.array(whole, dtype=np.int64), sender,
+                                 msg.tick))
+
+    def _take_delta(self, ids: list[int], stack: np.ndarray, rows: np.ndarray, robots: np.ndarray,
+                    idx: np.ndarray, values: np.ndarray, sender: int, seq: int,
+                    lists: list[list[np.ndarray | None]] | None) -> tuple[list[int], list[int], list[int]]:
+        """Merge this service's delta ``seq`` from ``sender`` (cells ``idx``) into robots ``ids`` (``robots``
+        as an array; maps ``stack[rows]``), counting their FREE cells for :attr:`free`, and keep the books of
+        every receiver that had merged the sender's previous update: the cells the merge raised in its map
+        are listed for its next delta (and in ``lists``) and the update becomes its last merged one; nothing
+        else changes. Returns the other receivers and their positions in ``ids`` (a gap or an old update:
+        :meth:`_take`'s general rules), and the receivers booked here that now hold the sender's whole map
+        (for :attr:`ages`). Each delta reaches up to n - 1 robots, so this runs n^2 times a sharing tick: it
+        keeps to what that case needs, and lists only what changed (robots that share maps mostly know what
+        they hear already), which the receivers' next deltas then compare (docs/performance-history.md)."""
+        need = len(ids) * len(idx)
+        if self._raised.shape[0] < need:
+            self._raised = np.empty(2 * need, dtype=np.int64)
+        ends = np.empty(len(ids), dtype=np.int64)
+        merge_cells_many_changed(stack, rows, idx, values, self._raised, ends,
+                                 robots, None if self.free is None else self.free.freed)
+        raised = self._raised
+        merged, seen_seq, holds = self._merged, self.seen_seq, self.whole
+        gapped: list[int] = []
+        rest: list[int] = []
+        whole: list[int] = []
+        before, start = seq - 1, 0
+        for k, (r, end) in enumerate(zip(ids, ends.tolist())):
+            seen = seen_seq[r]
+            if seen[sender] == before:
+                seen[sender] = seq
+                if holds[r][sender]:
+                    whole.append(r)
+                if end > start:
+                    cells = raised[start:end].copy()
+                    merged[r].append(cells)
+                    if lists is not None:
+                        lists[k].append(cells)
+            else:
+                gapped.append(k)
+                rest.append(r)
+            start = end
+        return rest, gapped, whole
+
+    def _merge_full(self, msg: MapUpdate, ids: list[int], stack: np.ndarray,
+                    rows: np.ndarray) -> list[np.ndarray | None]:
+        """Merge a full map into robots ``ids`` (maps ``stack[rows]``); per receiver, the cells the merge may
+        have changed (None: any). A full map this service built in delta mode on monotone maps notes the cells
+        where it differs from its sender's previous update (``outgoing``). A receiver that merged every update
+        of the sender up to that one already holds at least the previous update everywhere (merges take
+        maxima and no cell decreases), so taking just those cells gives the same map: a broadcast full map
+        then costs its receivers a delta's work instead of the whole map's each, which grew with the square of
+        the team (docs/performance-history.md)."""
+        since = msg.__dict__.get("_since")
+        quick: list[int] = []
+        if since is not None:
+            prev, cells, values = since
+            sender = msg.sender
+            quick = [k for k, r in enumerate(ids) if self._complete[r][sender] and self.seen_seq[r][sender] == prev]
+        carried: list[np.ndarray | None] = [None] * len(ids)
+        if quick:
+            merge_cells_many(stack, rows[quick], cells, values)
+            for k in quick:
+                carried[k] = cells
+        if len(quick) < len(ids):
+            dense = msg.dense()
+            for k, row in enumerate(rows.tolist()):
+                if carried[k] is None:
+                    flat = stack[row].reshape(-1)
+                    np.maximum(flat, dense, out=flat)
+            # The decoded map would live as long as the message (inboxes, queued deliveries): 360 KB on a
+            # 300-tile map, 10 MB of a 64-robot run's peak. A later delivery of it decodes again.
+            msg.__dict__.pop("_dense", None)
+        return carried
+
+
+_NO_CELLS = np.zeros(0, dtype=np.int64)
+_EMPTY_BOX = np.array([0, 0, 0, 0], dtype=np.int64)
+
+
+@njit(cache=True)
+def _grow_boxes(boxes: np.ndarray, poses: np.ndarray, reach: int, cell: float) -> None:  # pragma: no cover
+    """Widen each robot's box (r0, r1, c0, c1) by the window of ``reach`` cells around its cell; the cell is
+    truncated as the runtime's other lidar windows take it (``int(y / cell)``)."""
+    for k in range(poses.shape[0]):
+        r = np.int64(poses[k, 1] / cell)
+        c = np.int64(poses[k, 0] / cell)
+        if boxes[k, 0] >= boxes[k, 1]:  # empty: start from this window
+            boxes[k, 0], boxes[k, 1], boxes[k, 2], boxes[k, 3] = r - reach, r + reach + 1, c - reach, c + reach + 1
+        else:
+            boxes[k, 0] = min(boxes[k, 0], r - reach)
+            boxes[k, 1] = max(boxes[k, 1], r + reach + 1)
+            boxes[k, 2] = min(boxes[k, 2], c - reach)
+            boxes[k, 3] = max(boxes[k, 3], c + reach + 1)

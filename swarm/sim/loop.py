@@ -1,0 +1,551 @@
+"""The simulation loop: ``Simulation(spec).run() -> RunResult``.
+
+One logic tick (0.1 s, docs/design.md section 4):
+
+1. ``world.step``: pymunk moves the robots under last tick's commands (sub-stepped), reports collisions;
+2. ``lidar.scan``: every robot's lidar writes what it sees into its own knowledge map; truth tracker;
+3. the radio picture for this tick's positions (distances, walls, RSSI, links, groups), evaluated when
+   first used (sending, metrics, an observer): a pure function of the positions. Neighbours (robots in
+   sensing range and line of sight) walk only the pairs within range (``LinkModel.in_sight``);
+4. inboxes: messages sent last tick arrive; map updates are merged into the receiver's map;
+5. the transport hands each live robot its observation and gets its action (goal or velocity, messages);
+6. this tick's broadcasts (and, with ``comm.relay = "flood"``, the copies robots forward) are judged by
+   this tick's links and queued for next tick;
+7. navigation turns goals into (v, omega) commands on each robot's own map (every moving robot's step in
+   one compiled call, :class:`swarm.navigation.navigator.NavigationFleet`);
+8. metrics: explored thresholds every tick, a time-series row every ``record_every`` ticks, and with it a
+   row of communication metrics (``RunResult.comm``, docs/comm-metrics.md).
+
+Everything random comes from :func:`swarm.sim.spec.seed_streams`; nothing reads the clock except the
+``*_time_s`` fields, so the same spec gives the same result bit for bit, whatever the transport.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from maps import CELL_M, Map, generate
+from radio import build_link_model
+
+from swarm.base.types import Action, Pose, RobotInfo
+from swarm.comm.maes_merge import MaesMerge
+from swarm.comm.maes_merge import resolve as resolve_maes_merge
+from swarm.comm.medium import Envelope, Medium
+from swarm.comm.sharing import MapSharing
+from swarm.grid._validate import vouch_known
+from swarm.knowledge.maps import sync_boxes_flat, sync_changes
+from swarm.navigation.navigator import NavigationFleet
+from swarm.plugins import explorers as registry
+from swarm.results.metrics import CommMetrics, FreeCounts, InfoAges, Metrics
+from swarm.results.result import RunResult
+from swarm.transport import AgentHost, PhaseTimes, TickBatch, make_host
+from swarm.transport.auth import RunSecret
+from swarm.transport.base import ACT_COUNTS
+from swarm.transport.wire import ResetPacket
+from swarm.world.physics import World
+from swarm.world.sensing import ExplorationTracker, Lidar
+from swarm.world.spawn import spawn
+from .spec import ROBOT_STREAM, RunSpec, planner_rng, seed_streams
+
+MAX_DROP_EVENTS = 100
+"""Malformed messages get an event each up to this many per run (a flooding agent must not grow the result)."""
+_pose = tuple.__new__  # _pose(Pose, row) is Pose(*row) without NamedTuple's argument handling (16 a tick)
+
+
+def build_map(spec: RunSpec, map_seed: int) -> Map:
+    """The run's ground truth: generated from (kind, size, seed, params) or read from a file."""
+    if spec.map.kind == "file":
+        from maps.io import load_map
+
+        return load_map(Path(spec.map.path))
+    return generate(spec.map.kind, spec.map.size if isinstance(spec.map.size, int) else tuple(spec.map.size),
+                    map_seed, spec.map.params)
+
+
+@dataclass(frozen=True)
+class TransportOptions:
+    """How to reach agents in other processes (not part of the spec: they never change a result)."""
+
+    listen: tuple[str, ...] = ()
+    remote: tuple[int, ...] = ()
+    timeout_s: float = 10.0
+    run_id: str | None = None
+    times: PhaseTimes | None = field(default=None, compare=False)  # benchmarks: where the ticks go
+    secret: RunSecret | None = field(default=None, repr=False)  # remote agents' tokens derive from it (a fresh one if None)
+    share_maps: bool = True  # zenoh: local agents read the runtime's maps in place (False: ship them the changes)
+
+
+@dataclass
+class TickView:
+    """What per-tick observers (GIF renderer, recorder) get after each tick's decisions. ``links`` reads
+    like the tick's :class:`radio.LinkState` (its attributes and ``groups()``), evaluated on first use."""
+
+    tick: int
+    poses: np.ndarray
+    known: np.ndarray
+    tracker: ExplorationTracker
+    actions: list[Action | None] = field(default_factory=list)
+    links: Any = None
+    sent: list[list[Envelope]] = field(default_factory=list)
+
+
+@dataclass(eq=False)
+class LoopState:
+    """Where a run stands inside its loop: the counters carried from tick to tick and, between
+    :meth:`Simulation.sense` and :meth:`Simulation.apply`, what the current tick sensed."""
+
+    commands: np.ndarray                    # float64[R, 2]: last tick's (v, omega), applied by the next move
+    was_colliding: np.ndarray               # bool[R]: in contact at the last tick
+    tick: int = 0
+    collisions: int = 0                     # contacts begun so far
+    stalled_for: int = 0
+    stop_reason: str = ""
+    poses: Any = None                       # float64[R, 3] of this tick (the world's array: moved in place)
+    collided: Any = None                    # bool[R]: in contact now
+    began: Any = None                       # bool[R]: contacts that began this tick
+    active: Any = None                      # bool[R]: robots not failed
+    links: Any = None                       # the tick's radio picture (evaluated on first use)
+    inboxes: list = field(default_factory=list)
+    merged: list = field(default_factory=list)
+    pose_tuples: list = field(default_factory=list)
+
+
+class Simulation:
+    """One run. Construct from a :class:`RunSpec` or a mapping; :meth:`run` once."""
+
+    def __init__(self, spec: RunSpec | Mapping[str, Any], truth: Map | None = None,
+                 observers: Sequence[Callable[[TickView], None]] = (), start_poses: np.ndarray | None = None,
+                 transport: TransportOptions | None = None) -> None:
+        """``truth`` replaces the spec's map and ``start_poses`` (float64[R, 3]) its spawn: for hand-made
+        test fixtures; a run's identity (``spec.key``) does not cover them."""
+        t0 = time.perf_counter()
+        self.spec = RunSpec.from_mapping(spec) if not isinstance(spec, RunSpec) else spec
+        self.streams = seed_streams(self.spec)
+        self.truth = truth if truth is not None else build_map(self.spec, self.streams.map_seed)
+        n = self.spec.robots.count
+        self.motion = self.spec.motion
+        self.lidar_params = self.spec.lidar
+        self.start_poses = (np.array(start_poses, dtype=np.float64) if start_poses is not None
+                            else spawn(self.truth, self.spec.robots.spawn, n, self.streams.spawn))
+        self.world = World(self.truth, self.start_poses, self.motion)
+        self.lidar = Lidar(self.truth, self.lidar_params)
+        self.tracker = ExplorationTracker(self.truth)
+        self.known = np.zeros((n, *self.truth.shape), dtype=np.uint8)
+        self._views = [self._read_only(i) for i in range(n)]
+        self.fleet = NavigationFleet(self.spec.navigation, self.motion,
+                                     [planner_rng(self.spec.seed, i) for i in range(n)])
+        self.navigators = self.fleet.navigators
+        self.links = build_link_model(self.truth, self.spec.radio, field_seed=self.streams.map_seed)
+        self.comm = self.spec.comm
+        self.medium = Medium(n, self.comm, self.streams.radio, map_shape=self.truth.shape,
+                             packet_errors=self.links.packet_errors, error_rng=self.streams.channel)
+        self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
+        self.ages = InfoAges(n)  # who last merged whose map, when (age of information)
+        self.free = FreeCounts(n, exact=self.lidar_params.mode == "ternary")  # each map's FREE cells
+        self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach,  # told of every scan
+                                  monotone=self.lidar_params.mode == "ternary", ages=self.ages, free=self.free)
+        merge = resolve_maes_merge(self.comm.map_sharing, self.comm.share_every, registry.load(self.spec.algorithm.name))
+        self.maes_merge = MaesMerge(n, *merge, ages=self.ages) if merge is not None else None
+        self._in_flight: list[list[Envelope]] | None = None  # link_at = "receive": last tick's outboxes
+        self.inboxes: list[list[Envelope]] = [[] for _ in range(n)]
+        self._deliveries: list[tuple[Any, list[int]]] = []  # last tick's messages and who got each, in inbox order
+        self.neighbour_range = self.comm.neighbour_range_m or self.lidar_params.range_m
+        self.transport = transport or TransportOptions()
+        self.observers = tuple(observers)
+        self.metrics = Metrics(self.spec.record_every)
+        self.comm_metrics = CommMetrics(n, self.free)
+        self.events: list[dict[str, Any]] = []
+        self.failed = np.zeros(n, dtype=bool)
+        self._drop_events = 0
+        self._mirror: np.ndarray | None = None
+        self.setup_time_s = time.perf_counter() - t0
+
+    def _read_only(self, i: int) -> np.ndarray:
+        """Robot i's map as its algorithm sees it: read-only, and vouched for (values 0..2 by construction),
+        so the grid helpers the algorithm calls on it every few ticks do not rescan it."""
+        view = self.known[i].view()
+        view.flags.writeable = False
+        return vouch_known(view)
+
+    def robot_info(self, i: int) -> RobotInfo:
+        return RobotInfo(id=i, n_robots=self.spec.robots.count, map_shape=self.truth.shape,
+                         radius=self.motion.radius, lidar_range=self.lidar_params.range_m,
+                         max_speed=self.motion.max_speed, max_turn_rate=self.motion.max_turn_rate)
+
+    def resets(self) -> list[ResetPacket]:
+        """What each agent starts from; its generator is ``SeedSequence(seed, spawn_key=(3, i))``, the same
+        stream :func:`swarm.sim.spec.seed_streams` gives, whichever side of a transport builds it."""
+        return [ResetPacket(robot=self.robot_info(i), algorithm=self.spec.algorithm.name,
+                            params=dict(self.spec.algorithm.params), seed_entropy=self.spec.seed,
+                            seed_spawn_key=(ROBOT_STREAM, i)) for i in range(self.spec.robots.count)]
+
+    # ------------------------------------------------------------------------------------------ run ----
+    def run(self) -> RunResult:
+        opts = self.transport
+        host = make_host(self.spec.transport, self.spec.key, listen=opts.listen, remote=opts.remote,
+                         timeout_s=opts.timeout_s, run_id=opts.run_id, times=opts.times, secret=opts.secret,
+                         share_maps=opts.share_maps)
+        if opts.times is not None:
+            self._time_phases(opts.times)
+        try:
+            host.start(self.resets())
+            if host.mirrors:
+                self._mirror = np.zeros_like(self.known)
+            return self._loop(host)
+        finally:
+            host.close()
+
+    def _time_phases(self, times: PhaseTimes) -> None:
+        """Time the steps that build observations for the transport into ``times``: instance attributes
+        that shadow the methods, so an unmeasured run calls the methods directly."""
+        for name, phase in (("_batch", "host: batch"), ("_changed_cells", "host: changed cells"),
+                            ("_sight", "host: neighbours")):
+            setattr(self, name, times.wrap(phase, getattr(self, name)))
+
+    def _loop(self, host: AgentHost) -> RunResult:
+        t0 = time.perf_counter()
+        state = self.start_state()
+        while not self.sense(state):
+            actions = host.act(self.observe(state))
+            self._note_failures(state.tick, host)
+            self.apply(state, actions)
+        return self._result(state.tick, state.stop_reason, state.collisions, time.perf_counter() - t0, host)
+
+    # The loop's body in three steps, so that a stepping driver (:mod:`swarm.env`) runs exactly the ticks
+    # :meth:`run` runs: ``sense`` (steps 1-4 and 8), ``observe`` (the batch for step 5), ``apply`` (6-7).
+    def start_state(self) -> LoopState:
+        """The state before tick 0 (no command yet)."""
+        n = self.spec.robots.count
+        return LoopState(commands=np.zeros((n, 2), dtype=np.float64), was_colliding=np.zeros(n, dtype=bool))
+
+    def sense(self, state: LoopState) -> bool:
+        """Steps 1-4 and 8 of tick ``state.tick``: move (after tick 0), scan, receive, metrics; True when the
+        run stops here (``state.stop_reason`` says why; the tick is recorded, nobody acts)."""
+        self.move_and_scan(state)
+        return self.communicate(state)
+
+    def move_and_scan(self, state: LoopState) -> None:
+        """Steps 1-2: the world moves under last tick's commands (not before tick 0), the lidars write the
+        knowledge maps; contacts begun this tick are counted (``state.began`` per robot)."""
+        if state.tick > 0:
+            self.world.step(state.commands)
+        poses = self.world.poses
+        collided = self.world.collided.copy()
+        began = collided > state.was_colliding  # contacts that began this tick
+        state.collisions += int(np.count_nonzero(began))
+        state.began = began
+        state.was_colliding = collided
+        active = ~self.failed
+        self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker, measure=False,
+                        freed=self.free.freed)
+        self.sharing.scanned(poses)
+        self.tracker.update_coverage(poses[:, :2], active=active)
+        state.poses, state.collided, state.active = poses, collided, active
+
+    def communicate(self, state: LoopState) -> bool:
+        """Steps 3-4 and 8: the tick's radio picture, inboxes and merges, thresholds, the stop test and the
+        time-series row; True when the run stops at this tick."""
+        spec = self.spec
+        tick = state.tick
+        links = _TickLinks(self.links, state.poses[:, :2])
+        state.links = links
+        state.inboxes, state.merged = self._receive(tick, links)
+        explored = self.tracker.explored
+        self.metrics.check_thresholds(tick, explored)
+        stop_reason = ""
+        if explored >= spec.stop.explored:
+            stop_reason = "explored"
+        elif tick >= spec.stop.max_ticks:
+            stop_reason = "max_ticks"
+        elif state.stalled_for >= spec.stop.stall_ticks:
+            stop_reason = "stalled"
+        elif np.count_nonzero(state.active) == 0:  # (ndarray.any() costs ~1 us on 16 flags, this 0.3)
+            stop_reason = "all_failed"
+        if stop_reason or self.metrics.due(tick):
+            self._record(tick, explored, state.collisions, links)
+        state.stop_reason = stop_reason
+        return bool(stop_reason)
+
+    def observe(self, state: LoopState) -> TickBatch:
+        """Step 5's input: the tick's observations for a host."""
+        state.pose_tuples = [_pose(Pose, row) for row in state.poses.tolist()]  # shared by observations and navigation
+        return self._batch(state.tick, state.poses, state.pose_tuples, state.collided, state.inboxes, state.merged)
+
+    def apply(self, state: LoopState, actions: list[Action | None]) -> None:
+        """Steps 6-7 of tick ``state.tick`` for the robots' ``actions`` (None: no action), then on to the
+        next tick: send, navigate, stall count, observers."""
+        poses = state.poses
+        sent = self._send(state.tick, poses, actions, state.links)
+        commands = self._commands(actions, poses, state.pose_tuples)
+        moving = np.count_nonzero(commands) > 0 or any(nav.state in ("moving", "planning") for nav, action
+                                                       in zip(self.navigators, actions) if action is not None)
+        state.stalled_for = 0 if moving else state.stalled_for + 1
+        for observer in self.observers:
+            observer(TickView(state.tick, poses, self.known, self.tracker, actions, state.links, sent))
+        state.commands = commands
+        state.tick += 1
+
+    def _commands(self, actions: list[Action | None], poses: np.ndarray, pose_tuples: list[Pose]) -> np.ndarray:
+        """The tick's (v, omega) per robot: an action's velocity, else its navigator's command toward the
+        goal the action set (all navigators at once, :class:`NavigationFleet`); (0, 0) without an action."""
+        commands = np.zeros((len(actions), 2), dtype=np.float64)
+        steered: list[int] = []
+        for i, action in enumerate(actions):
+            if action is None:
+                continue
+            nav = self.navigators[i]
+            if action.clear_goal:
+                nav.set_goal(None)
+            if action.goal is not None:
+                nav.set_goal(action.goal)
+            if action.velocity is not None:
+                v, w = action.velocity
+                commands[i] = v, w
+            else:
+                steered.append(i)
+        self.fleet.command(steered, poses, pose_tuples, self.known, commands)
+        return commands
+
+    # ---------------------------------------------------------------------------------- messaging ----
+    def _receive(self, tick: int, links: Any) -> tuple[list[list[Envelope]], list[list[np.ndarray | None]]]:
+        """This tick's inboxes (sent last tick); map updates are merged into the receivers' maps, each into
+        all its receivers at once (:meth:`MapSharing.receive_tick`), or MAES's merges done. The merged cells
+        per robot are listed only for a host with mirrors, which ships them (None: the whole map may have
+        changed). With ``comm.link_at = "receive"`` last tick's broadcasts are judged now, by this tick's
+        links."""
+        if self._in_flight is not None:
+            self._deliver(tick - 1, self._in_flight, links)
+            self._in_flight = None
+        inboxes, self.inboxes = self.inboxes, [[] for _ in range(self.spec.robots.count)]
+        deliveries, self._deliveries = self._deliveries, []
+        if not deliveries:  # most ticks
+            return inboxes, [[] for _ in inboxes]
+        merged = self.sharing.receive_tick(deliveries, self.known, ~self.failed, cells=self._mirror is not None,
+                                           tick=tick)
+        if self.maes_merge is not None:
+            for robot in sorted(self.maes_merge.receive(deliveries, self.known, ~self.failed, tick)):
+                merged[robot].append(None)
+                self.free.dirty[robot] = True
+        return inboxes, merged
+
+    def _send(self, tick: int, poses: np.ndarray, actions: list[Action | None], links: Any) -> list[list[Envelope]]:
+        """Collect this tick's broadcasts (map sharing + algorithms) and deliver them for next tick."""
+        service = self.sharing.outgoing(tick, self.known, poses)
+        if self.maes_merge is not None:
+            service = self.maes_merge.outgoing(tick, lambda: self._sight(poses)[1])
+        outboxes: list[list[Envelope]] = []
+        for i, action in enumerate(actions):
+            if self.failed[i]:
+                outboxes.append([])
+                continue
+            extra = action.messages if action is not None else ()
+            if not service[i] and not extra:  # most ticks: nothing to send
+                outboxes.append([])
+                continue
+            box = [self.medium.service_envelope(i, m) for m in service[i]]
+            for m in extra:
+                env = self.medium.envelope(i, m)
+                if env is not None:
+                    box.append(env)
+            outboxes.append(box)
+        if self.medium.dropped:
+            self._note_drops(tick)
+        if self.medium.relaying:
+            self.medium.add_relays(outboxes, self.failed)
+        if any(outboxes):
+            if self.comm.link_at == "send":
+                self._deliver(tick, outboxes, links)
+            else:
+                self._in_flight = outboxes
+        return outboxes
+
+    def _deliver(self, tick: int, outboxes: list[list[Envelope]], links: Any) -> None:
+        """Judge the broadcasts of ``tick`` by ``links`` (the positions of send or of receipt) into next tick's
+        inboxes; failed robots receive nothing. With packet errors the medium also reads the pairs' margins."""
+        senders = [i for i, out in enumerate(outboxes) if out]
+        margin = None
+        if self.medium.packet_errors is None:
+            link = links.senders_link(senders)
+        else:
+            link, margin = links.senders_margin(senders)
+        if np.count_nonzero(self.failed):
+            link = link & ~self.failed[:, None]
+            if margin is not None:
+                margin = np.where(self.failed[:, None], -np.inf, margin)
+        self.inboxes = self.medium.deliver(tick, outboxes, link, margin)
+        self._deliveries = self.medium.deliveries(outboxes)
+
+    # ------------------------------------------------------------------------------- observations ----
+    def _sight(self, poses: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``(distance, near)``: the radio's pair distances and who is within ``neighbour_range`` with no wall
+        crossed, walking only the pairs in range (the tick's all-pairs radio picture is not needed)."""
+        return self.links.in_sight(poses[:, :2], self.neighbour_range)
+
+    def _batch(self, tick: int, poses: np.ndarray, pose_tuples: list[Pose], collided: np.ndarray,
+               inboxes: list[list[Envelope]], merged: list[list[np.ndarray | None]]) -> TickBatch:
+        """The tick's observations as arrays, for any host: neighbours (and, for a host with mirrors, the
+        knowledge cells changed since each robot's last observation) are computed when first read."""
+        live = ~self.failed
+        navs = [nav.status() if ok else None for nav, ok in zip(self.navigators, live.tolist())]
+        at = poses.copy()  # the world moves these in place next tick; a late read must see this tick's
+        changed = None
+        if self._mirror is not None:
+            cast = self.lidar.cast.copy()  # whose lidar may have written this tick (the next scan overwrites it)
+            changed = lambda: self._changed_cells(at, cast, merged)  # noqa: E731
+        return TickBatch(tick, live, poses, pose_tuples, collided, self.world.distance, self.world.rotation, navs,
+                         self.known, self._views, inboxes, lambda: self._sight(at), changed)
+
+    def _changed_cells(self, poses: np.ndarray, cast: np.ndarray,
+                       merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:
+        """``(cells, ends)``: per robot, flat indices (ascending) of its knowledge cells changed since its last
+        observation, robot i's at ``cells[ends[i-1]:ends[i]]`` (none for failed robots): the lidar only writes
+        within range of the robots it ``cast`` this tick, delta merges report their cells, so only those
+        places are compared, all robots in one compiled call; after a full-map merge the whole map is."""
+        assert self._mirror is not None
+        windowed = ~self.failed
+        full = []
+        if any(merged):  # most ticks no map update arrives
+            full = [i for i, cells in enumerate(merged) if cells and any(m is None for m in cells) and windowed[i]]
+            windowed[full] = False
+        centres = (poses[:, 1::-1] / CELL_M).astype(np.int64)  # (row, col); truncation, as int() did
+        boxes = np.column_stack((centres[:, 0] - self._reach, centres[:, 0] + self._reach + 1,
+                                 centres[:, 1] - self._reach, centres[:, 1] + self._reach + 1))
+        boxes[~cast, 1] = boxes[~cast, 0]  # a robot its lidar did not cast wrote nothing: an empty window
+        cells, ends = sync_boxes_flat(self.known, self._mirror, boxes, merged, windowed)
+        if not full:
+            return cells, ends
+        bounds = ends.tolist()
+        pieces = [cells[start:end] for start, end in zip([0, *bounds[:-1]], bounds)]
+        for i in full:
+            pieces[i] = sync_changes(self.known[i], self._mirror[i])
+        return np.concatenate(pieces), np.cumsum([len(piece) for piece in pieces], dtype=np.int64)
+
+    def _note_drops(self, tick: int) -> None:
+        """Events for the messages the medium dropped as malformed this tick (the first
+        ``MAX_DROP_EVENTS`` of a run; all of them are counted in ``summary.messages``)."""
+        room = MAX_DROP_EVENTS - self._drop_events
+        for robot, reason in self.medium.dropped[:max(room, 0)]:
+            self.events.append({"tick": tick, "robot": robot, "event": "message_dropped", "reason": reason})
+        self._drop_events += min(len(self.medium.dropped), max(room, 0))
+        self.medium.dropped.clear()
+
+    def _note_failures(self, tick: int, host: AgentHost) -> None:
+        for i, (at, reason) in sorted(host.stats.failures.items()):
+            if not self.failed[i]:
+                self.failed[i] = True
+                self.world.disable(i)
+                self.navigators[i].set_goal(None)
+                self.events.append({"tick": at, "robot": i, "event": "agent_failed", "reason": reason})
+
+    # ------------------------------------------------------------------------------------ results ----
+    def _record(self, tick: int, explored: float, collisions: int, links: Any) -> None:
+        stats = self.medium.stats
+        n = self.spec.robots.count
+        groups = links.groups() if n > 1 else [frozenset({0})]
+        self.metrics.record(tick, explored=explored, coverage=self.tracker.coverage,
+                            distance_m=float(self.world.distance.sum()), collisions=collisions,
+                            msgs_sent=stats.sent, bytes_sent=stats.bytes_sent, msgs_delivered=stats.delivered,
+                            bytes_delivered=stats.bytes_delivered,
+                            msgs_dropped=stats.dropped,
+                            comm_groups=len(groups), biggest_group=max(len(g) for g in groups) / n,
+                            all_connected=len(groups) == 1,
+                            mean_pair_distance_m=float(links.distance.mean()) if n > 1 else 0.0)
+        self.comm_metrics.record(tick, stats, self.known, self.tracker.seen_free_cells, groups, self.ages)
+
+    def _message_counts(self, host: AgentHost) -> dict[str, Any]:
+        """The medium's counts, with the messages a remote agent sent that did not decode counted as malformed
+        like those the medium dropped."""
+        counts = self.medium.stats.as_dict()
+        undecodable = host.stats.per_robot("bad_messages", self.spec.robots.count)
+        counts["malformed"] += sum(undecodable)
+        counts["malformed_by_robot"] = [a + b for a, b in zip(counts["malformed_by_robot"], undecodable)]
+        return counts
+
+    def _result(self, tick: int, stop_reason: str, collisions: int, wall: float, host: AgentHost) -> RunResult:
+        n = self.spec.robots.count
+        summary = {
+            "ticks": tick,
+            "stop_reason": stop_reason,
+            "explored": float(self.tracker.explored),
+            "coverage": float(self.tracker.coverage),
+            "ticks_to": dict(self.metrics.ticks_to),
+            "distance_m": [float(d) for d in self.world.distance],
+            "collisions": collisions,
+            "plans": [nav.plans for nav in self.navigators],
+            "messages": self._message_counts(host),
+            "acts": {kind: host.stats.per_robot(kind, n) for kind in ACT_COUNTS},
+            "failed_robots": [int(i) for i in np.flatnonzero(self.failed)],
+            "final_poses": [[float(v) for v in p] for p in self.world.poses],
+            "map_seed": int(self.streams.map_seed) if self.spec.map.kind != "file" else None,
+            "wall_time_s": wall,
+            "setup_time_s": self.setup_time_s,
+        }
+        return RunResult(spec=self.spec.canonical(), key=self.spec.key, summary=summary,
+                         timeseries=self.metrics.series, events=self.events, provenance=provenance(self.spec),
+                         comm=self.comm_metrics.result())
+
+
+def provenance(spec: RunSpec) -> dict[str, Any]:
+    """What computes runs of ``spec``: this swarm's version, its commit when it runs from a git checkout
+    (:mod:`swarm.util.source`), and the algorithm's distribution and version."""
+    from swarm.plugins.explorers import distribution
+    from swarm.util.source import package_version, source_commit
+
+    dist = distribution(spec.algorithm.name)
+    return {"swarm": package_version(), "source": source_commit(),
+            "algorithm": {"name": spec.algorithm.name, "distribution": dist and dist[0], "version": dist and dist[1]}}
+
+
+def run(spec: RunSpec | Mapping[str, Any]) -> RunResult:
+    """Convenience: ``Simulation(spec).run()``."""
+    return Simulation(spec).run()
+
+
+__all__ = ["LoopState", "Simulation", "TickView", "TransportOptions", "build_map", "run"]
+
+
+class _TickLinks:
+    """The tick's :class:`radio.LinkState`, evaluated on first use. On most ticks nobody sends, no metrics
+    are recorded (13 % of the benchmark's ticks carry messages), so the all-pairs radio walk is skipped
+    (neighbours use the cheaper in-range walk); it is a pure function of the positions, kept here, so evaluating
+    later gives the same state. Delivery alone needs only the senders' columns (:meth:`senders_link`)."""
+
+    __slots__ = ("_model", "_xy", "_state")
+
+    def __init__(self, model: Any, xy: np.ndarray) -> None:
+        self._model = model
+        self._xy = np.array(xy, dtype=np.float64)
+        self._state: Any = None
+
+    def state(self) -> Any:
+        if self._state is None:
+            self._state = self._model.evaluate(self._xy)
+        return self._state
+
+    def senders_link(self, senders: list[int]) -> np.ndarray:
+        """A (R, R) link matrix whose columns ``senders`` are the tick's (who hears each sender), for
+        :meth:`swarm.comm.medium.Medium.deliver`, which reads no other column. Unless the whole state is already
+        known, only the pairs with a sender are walked (:meth:`radio.LinkModel.link_columns`): off the
+        recording ticks only a robot or two send (a map request, a full map)."""
+        if self._state is not None:
+            return self._state.link
+        link = np.zeros((len(self._xy), len(self._xy)), dtype=np.bool_)
+        link[:, senders] = self._model.link_columns(self._xy, senders)
+        return link
+
+    def senders_margin(self, senders: list[int]) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`senders_link` and the same columns of the margins (RSSI minus the receiver's sensitivity,
+        dB; NaN elsewhere), for packet errors."""
+        r = len(self._xy)
+        link = np.zeros((r, r), dtype=np.bool_)
+        margin = np.full((r, r), np.nan)
+        link[:, senders], margin[:, senders] = self._model.margin_columns(self._xy, senders)
+        return link, margin
+
+    def __getattr__(self, name: str) -> Any:  # only for names not in __slots__: the LinkState's fields
+        return getattr(self.state(), name)

@@ -1,0 +1,82 @@
+"""Starting poses: ``together`` (packed around one random point, MAES ``SpawnRobotsTogether``) or ``random``
+(spread uniformly). Both use only cells of the largest region a robot can drive in, keep robots
+``SPACING_M`` apart, and are a pure function of (map, mode, count, rng)."""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+from scipy import ndimage
+
+from maps import CELL_M, Map
+from maps.raster import FOUR, robot_space
+from swarm.base.errors import InvalidInput
+
+SPACING_M = 0.7
+"""Centre-to-centre distance between spawned robots: two 0.3 m radii plus 0.1 m."""
+
+
+def drivable_region(truth: Map) -> np.ndarray:
+    """Cells where a robot's centre fits, restricted to the largest 4-connected region."""
+    space = robot_space(truth.free)
+    labels, n = ndimage.label(space, structure=FOUR)
+    if n == 0:
+        raise InvalidInput("map", truth.summary(), "a map with room for a 0.6 m robot")
+    sizes = np.bincount(labels.ravel())
+    sizes[0] = 0
+    return labels == int(sizes.argmax())
+
+
+def spawn(truth: Map, mode: str, count: int, rng: np.random.Generator) -> np.ndarray:
+    """``float64[count, 3]`` poses (x, y, heading)."""
+    region = drivable_region(truth)
+    cells = np.argwhere(region)
+    if mode == "together":
+        start = tuple(cells[int(rng.integers(len(cells)))])
+        order = _bfs_order(region, start)
+    elif mode == "random":
+        order = cells[rng.permutation(len(cells))]
+    else:
+        raise InvalidInput("robots.spawn", mode, "'together' | 'random'")
+    chosen = _spaced(order, count)
+    if len(chosen) < count:
+        raise InvalidInput("robots.count", count,
+                           f"at most {len(chosen)} robots fit in this map's drivable space ({SPACING_M} m apart)")
+    xy = (np.asarray(chosen, dtype=np.float64)[:, ::-1] + 0.5) * CELL_M
+    headings = rng.uniform(-np.pi, np.pi, size=count)
+    return np.column_stack([xy, headings])
+
+
+def _bfs_order(region: np.ndarray, start: tuple[int, int]):
+    """Cells of ``region`` in breadth-first order from ``start`` (4-neighbours), lazily."""
+    h, w = region.shape
+    seen = np.zeros_like(region)
+    seen[start] = True
+    queue = deque([start])
+    while queue:
+        r, c = queue.popleft()
+        yield (r, c)
+        for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+            nr, nc = r + dr, c + dc
+            if 0 <= nr < h and 0 <= nc < w and region[nr, nc] and not seen[nr, nc]:
+                seen[nr, nc] = True
+                queue.append((nr, nc))
+
+
+def _spaced(order, count: int) -> list[tuple[int, int]]:
+    """Greedily take cells in ``order`` whose centres are at least SPACING_M from those already taken."""
+    min_cells2 = (SPACING_M / 0.5) ** 2
+    taken: list[tuple[int, int]] = []
+    arr = np.empty((count, 2), dtype=np.float64)
+    for cell in order:
+        r, c = int(cell[0]), int(cell[1])
+        if taken:
+            d2 = (arr[:len(taken), 0] - r) ** 2 + (arr[:len(taken), 1] - c) ** 2
+            if d2.min() < min_cells2:
+                continue
+        arr[len(taken)] = (r, c)
+        taken.append((r, c))
+        if len(taken) == count:
+            break
+    return taken
