@@ -3,7 +3,8 @@ resumable folder of Parquet parts; see :mod:`swarm.campaign.spec` for the spec f
 ``run(spec, out, workers=..., dask=...)``, ``load(dir)`` (runs, a DataFrame), ``load_timeseries(dir)``
 (:mod:`.api`).
 
-Names are imported on first use, so ``swarm --help`` (which reads :mod:`.limits`) loads no pyarrow."""
+Names are imported on first use, so ``swarm --help`` (which reads :mod:`.limits`) loads no pyarrow. May import:
+``swarm.sim`` and every package below it."""
 
 from __future__ import annotations
 

@@ -4,6 +4,7 @@ Built on click: nested subcommands, ``--help`` everywhere, typed options. :func:
 funnel for errors: a bad flag, value or input file prints one line ``swarm: error: ...`` naming the flag
 or field, the value and what is allowed, and exits with status 2, without a traceback.
 Subcommand modules import heavy dependencies inside their functions so ``swarm --help`` stays fast.
+The top of the runtime: may import any package of swarm, maps and radio.
 """
 
 from __future__ import annotations

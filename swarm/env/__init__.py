@@ -11,7 +11,8 @@ learning robot among scripted teammates. Needs the ``rl`` extra (``pip install '
     penv = swarm.env.parallel_env(robots=8, size=50)     # PettingZoo
 
 Observations, actions, rewards and seeding: docs/python-api.md ("Learning"). The engine under both is
-:class:`~swarm.env.core.ExplorationCore`, which needs neither library.
+:class:`~swarm.env.core.ExplorationCore`, which needs neither library. May import: ``swarm.sim``, ``swarm.api``
+and every package below them.
 """
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
 """Grid helpers for navigation and exploration: configuration space, shortest paths, distance fields,
 frontiers and the nearest reachable unseen cell. Pure functions on numpy arrays; no runtime imports.
+May import: ``swarm.base``, ``swarm.knowledge`` (the 2-bit copies its kept inputs compare against).
 
 Conventions (see :mod:`swarm.api`): knowledge maps are ``uint8[H, W]`` with UNSEEN=0 < FREE=1 < SOLID=2;
 cells are (row, col) with row 0 at the bottom; ``known[row, col]`` covers x in [col*0.5, (col+1)*0.5),

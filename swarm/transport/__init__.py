@@ -1,4 +1,8 @@
-"""Transports between the runtime and the agents: in-process calls or zenoh sessions (see base.py)."""
+"""Transports between the runtime and the agents: in-process calls or zenoh sessions (see base.py).
+
+Where algorithms run: the hosts (in-process, zenoh), remote agents and their authentication, the wire format
+of observations and actions, neighbour bearings. May import: ``swarm.base``, ``swarm.knowledge``, ``swarm.grid``,
+``swarm.comm``, ``swarm.plugins``."""
 
 from __future__ import annotations
 
