@@ -65,7 +65,7 @@ Key = tuple[int, tuple[int, int], float, float, bool, int]
 class _Kept(threading.local):
     def __init__(self) -> None:
         self.entries: OrderedDict[Key, KeptInputs] = OrderedDict()
-        self.far: set[Key] = set()  # kept maps whose last target search went past its window (went_far)
+        self.budgets: OrderedDict[Key, int] = OrderedDict()  # the window that decided each map's last search
         self.shape: tuple[int, int] | None = None  # the size of every kept map (one size at a time)
         self.pad = np.zeros(0, dtype=np.uint8)         # the searched map's space, unpacked (see unpack_buffer)
 
@@ -93,7 +93,7 @@ def inputs_for(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: b
         _KEPT.shape = (h, w)
         entry = entries[key] = _new_inputs(h, w)
         while len(entries) > MAX_ENTRIES:
-            _KEPT.far.discard(entries.popitem(last=False)[0])
+            entries.popitem(last=False)
     entries.move_to_end(key)
     return entry
 
@@ -103,19 +103,27 @@ def key_of(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: bool,
     return known.__array_interface__["data"][0], known.shape, radius_m, margin_m, unseen_ok, reach
 
 
-def went_far(key: Key) -> bool:
-    """Whether the last target search on this kept map found its target only past the local window (or
-    none): a hint for :func:`swarm.grid.nearest_reachable_unseen`, which then skips the window, because
-    the next search most likely goes far too. A hint only: both stages give the same answer."""
-    return key in _KEPT.far
+WHOLE_MAP = -1
+"""A :func:`last_budget` hint: the map's last target search ended on the whole map."""
+MAX_HINTS = 1 << 14
+"""Maps whose last search's window is remembered (a few dozen bytes each; the oldest is forgotten first)."""
 
 
-def note_far(key: Key, far: bool) -> None:
-    """Record for :func:`went_far` how the search on a kept map (one with an entry) ended."""
-    if far and key in _KEPT.entries:
-        _KEPT.far.add(key)
-    else:
-        _KEPT.far.discard(key)
+def last_budget(key: Key) -> int | None:
+    """The budget (cells) of the window that decided the last target search on this map, ``WHOLE_MAP`` when
+    that search ended on the whole map, None when there is no hint: where
+    :func:`swarm.grid.nearest_reachable_unseen` starts the next one, since a robot's nearest unknown moves
+    little between two of its searches. A hint only: every window gives the whole-map answer or none."""
+    return _KEPT.budgets.get(key)
+
+
+def note_budget(key: Key, budget: int) -> None:
+    """Record for :func:`last_budget` which window (or ``WHOLE_MAP``) decided the search on this map."""
+    budgets = _KEPT.budgets
+    budgets[key] = budget
+    budgets.move_to_end(key)
+    while len(budgets) > MAX_HINTS:
+        budgets.popitem(last=False)
 
 
 def _new_inputs(h: int, w: int) -> KeptInputs:
@@ -137,7 +145,7 @@ def unpack_buffer(n: int) -> np.ndarray:
 def forget_all() -> None:
     """Drop every kept entry of this thread, and the hints about them."""
     _KEPT.entries.clear()
-    _KEPT.far.clear()
+    _KEPT.budgets.clear()
     _KEPT.shape = None
 
 

@@ -43,8 +43,11 @@ from .cspace import _erosion_rows
 from .search import _WORK
 
 PLAN_WINDOW_CELLS = 40
-"""Half-width of the local planning window (20 m): plans up to 34 cells (17 m) stay local for the
-default robot."""
+"""Half-width of the first local planning window (20 m): plans up to 34 cells (17 m) stay local for the
+default robot. Each further window is twice as wide."""
+LARGER_WINDOW_SHARE = 0.25
+"""Windows after the first are tried while they cover at most this share of the map (beyond, the whole-map
+plan costs about as much)."""
 
 _NO_TARGETS = np.zeros(0, dtype=np.uint8)
 
@@ -67,8 +70,10 @@ def window_bounds(cell: tuple[int, int], half: int, shape: tuple[int, int]) -> t
 def plan_local_first(known: np.ndarray, start: tuple[int, int], goal: tuple[int, int], radius_m: float,
                      margin_m: float, unseen_traversable: bool, snap: int,
                      half_cells: int = PLAN_WINDOW_CELLS) -> tuple[np.ndarray, bool] | None:
-    """The whole-map plan from cell ``start`` to cell ``goal`` if the window decides it exactly (see the
-    module docstring), else None.
+    """The whole-map plan from cell ``start`` to cell ``goal`` if a window decides it exactly (see the
+    module docstring), else None. The window of half-width ``half_cells`` is tried first, then windows
+    twice as wide while they cover at most ``LARGER_WINDOW_SHARE`` of the map, so a plan costs about the
+    area within its length, not the map's.
 
     ``known`` is a checked uint8 map; ``start`` and ``goal`` are cells in it, snapped into the
     configuration space within ``snap`` cells as the navigator does (:func:`swarm.grid.nearest_in`).
@@ -77,19 +82,23 @@ def plan_local_first(known: np.ndarray, start: tuple[int, int], goal: tuple[int,
     configuration space.
     """
     depth = erosion_depth(radius_m, margin_m)
-    budget = half_cells - depth - snap - 1  # the longest path (cells) whose search stays in the equal region
-    if budget < 0 or max(abs(goal[0] - start[0]), abs(goal[1] - start[1])) > budget + 1:
-        return None
-    r0, r1, c0, c1 = window_bounds(start, half_cells, known.shape)
-    if (r1 - r0) * (c1 - c0) >= known.size:
-        return None  # the window is the whole map: nothing to save
     rows, widths = _erosion_rows(radius_m, margin_m)
-    dist, ring = _WORK.get((r1 - r0 + 2) * (c1 - c0 + 2))
-    waypoints, goal_fits = _window_plan(known, r0, r1, c0, c1, bool(unseen_traversable), rows, widths,
-                                        start[0], start[1], goal[0], goal[1], snap, float(budget), dist, ring)
-    if waypoints.shape[0] == 0:
-        return None
-    return waypoints, goal_fits
+    reach = max(abs(goal[0] - start[0]), abs(goal[1] - start[1]))
+    half = half_cells
+    while True:
+        budget = half - depth - snap - 1  # the longest path (cells) whose search stays in the equal region
+        r0, r1, c0, c1 = window_bounds(start, half, known.shape)
+        area = (r1 - r0) * (c1 - c0)
+        if area >= known.size or (half > half_cells and area > LARGER_WINDOW_SHARE * known.size):
+            return None  # the whole map is searched next: nothing to save
+        if budget >= 0 and reach <= budget + 1:
+            dist, ring = _WORK.get((r1 - r0 + 2) * (c1 - c0 + 2))
+            waypoints, goal_fits = _window_plan(known, r0, r1, c0, c1, bool(unseen_traversable), rows, widths,
+                                                start[0], start[1], goal[0], goal[1], snap, float(budget), dist,
+                                                ring)
+            if waypoints.shape[0] > 0:
+                return waypoints, goal_fits
+        half *= 2
 
 
 @njit(cache=True)

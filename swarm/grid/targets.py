@@ -57,6 +57,11 @@ def default_view_reach_cells(radius_m: float, margin_m: float) -> int:
 LOCAL_FIRST_M = 15.0
 """Search first on a window that decides every target up to this path length (metres; see
 :func:`nearest_reachable_unseen`)."""
+WINDOW_GROWTH = 2
+"""Each further window decides searches this many times longer than the one before."""
+WHOLE_MAP_SHARE = 0.25
+"""A window larger than this share of the map is not tried: the whole-map search, on inputs kept from the
+map's last search, costs about as much."""
 
 
 def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m: float = ROBOT_RADIUS_M,
@@ -78,12 +83,14 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
     ``local_first_m`` (from the snapped start): its half-width adds :func:`window_margin` and the snap
     radius, so every cell such a search reads, and every target it could find, is what the whole map
     holds there (the window's edge erodes the space and hides frontiers whose unknown neighbour lies
-    past it). A target found there within that length is the global answer, bit for bit, so the
-    whole-map search runs only when the nearest unknown is far.
-    When the last search on the same map buffer ended past the window, the window is skipped: the next
-    one most likely does too (97 % of the time on the 16-robot benchmark), and a window that finds
-    nothing is wasted work. Either way the answer is the whole-map answer. ``local_first_m=None``
-    searches the whole map at once.
+    past it). A target found there within that length is the global answer, bit for bit. Otherwise the
+    next window decides searches ``WINDOW_GROWTH`` times longer, and so on while a window covers at most
+    ``WHOLE_MAP_SHARE`` of the map; only then does the whole-map search run. A search therefore costs
+    about the area within its answer's distance, not the map's (a swarm on a large map searches mostly
+    within tens of metres). Each map remembers the window that decided its last search and starts one
+    below it, or at the whole map when that is where the last one ended (97 % of the time the next one
+    does too on the 16-robot benchmark). Either way the answer is the whole-map answer.
+    ``local_first_m=None`` searches the whole map at once.
     """
     k = np.ascontiguousarray(check_known(known), dtype=np.uint8)  # values checked: 0..2 fit any dtype
     s = check_cell(start, k.shape, "start")
@@ -103,22 +110,52 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
     local = check_length(local_first_m, "local_first_m", allow_none=True)
     search = _TargetSearch(radius, margin, bool(unseen_traversable), reach, snap)
     keep = k is known
-    key = None  # the kept map whose window hint this search reads and updates
+    key = None  # the kept map whose hint this search reads and updates
     if local is not None:
-        budget = int(local / CELL_M)  # the longest search (cells) the window decides
-        half = budget + window_margin(radius, margin, reach) + snap + 1
-        r0, r1, c0, c1 = window_bounds(s, half, k.shape)
-        if (r1 - r0) * (c1 - c0) < k.size:
-            key = kept.key_of(k, radius, margin, search.unseen_traversable, reach) if keep else None
-            if key is None or not kept.went_far(key):
-                found = search.run_window(k, (r0, r1, c0, c1), s, _NO_EXCLUDE if ex is None else ex[r0:r1, c0:c1],
-                                          budget)
-                if found is not None:
-                    return found
+        budget = int(local / CELL_M)  # the longest search (cells) the first window decides
+        grow = window_margin(radius, margin, reach) + snap + 1
+        key = kept.key_of(k, radius, margin, search.unseen_traversable, reach) if keep else None
+        last = kept.last_budget(key) if key is not None else None
+        if last == kept.WHOLE_MAP:
+            budget = -1  # the last search went to the whole map: the next most likely does too
+        elif last is not None:
+            budget = max(budget, last // WINDOW_GROWTH)  # one window below the last one that decided
+        first = budget
+        while budget >= 0:
+            r0, r1, c0, c1 = window_bounds(s, budget + grow, k.shape)
+            if not _worth_trying((r1 - r0) * (c1 - c0), k.size, budget == first):
+                break
+            found = search.run_window(k, (r0, r1, c0, c1), s, _NO_EXCLUDE if ex is None else ex[r0:r1, c0:c1],
+                                      budget)
+            if found is not None:
+                if key is not None:
+                    kept.note_budget(key, budget)
+                return found
+            budget *= WINDOW_GROWTH
     found = search.run(k, s, ex, keep=keep, key=key)
-    if key is not None:
-        kept.note_far(key, found is None or found[1] > local)
+    if key is not None and local is not None:
+        kept.note_budget(key, _deciding_budget(found, int(local / CELL_M), grow, s, k.shape))
     return found
+
+
+def _deciding_budget(found: tuple[tuple[int, int], float] | None, budget: int, grow: int, start: tuple[int, int],
+                     shape: tuple[int, int]) -> int:
+    """The budget of the first window that would have decided a whole-map search's answer ``found`` (its
+    distance bounds the search's), or ``kept.WHOLE_MAP`` when no window small enough to try would have."""
+    if found is None:
+        return kept.WHOLE_MAP
+    cells = found[1] / CELL_M
+    first = budget
+    while budget < cells:
+        budget *= WINDOW_GROWTH
+    r0, r1, c0, c1 = window_bounds(start, budget + grow, shape)
+    return budget if _worth_trying((r1 - r0) * (c1 - c0), shape[0] * shape[1], budget == first) else kept.WHOLE_MAP
+
+
+def _worth_trying(area: int, size: int, first: bool) -> bool:
+    """Whether a window of ``area`` cells is searched before the whole map of ``size``: the first window
+    whenever it is smaller, a larger one up to ``WHOLE_MAP_SHARE`` of the map."""
+    return area < size if first else area <= WHOLE_MAP_SHARE * size
 
 
 def window_margin(radius_m: float, margin_m: float, reach: int) -> int:

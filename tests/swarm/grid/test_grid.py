@@ -14,7 +14,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
 from swarm import grid
-from swarm.api import FREE, ROBOT_RADIUS_M, SOLID, UNSEEN
+from swarm.api import CELL_M, FREE, ROBOT_RADIUS_M, SOLID, UNSEEN
 from swarm.base.errors import InvalidInput
 from swarm.grid import kept
 from swarm.grid.cspace import DEFAULT_MARGIN_M
@@ -749,7 +749,7 @@ def test_a_target_just_past_the_local_window_is_not_missed():
     assert checked >= 500  # most answers lie within the window's length: the window decided them
 
 
-def test_a_map_whose_last_search_went_far_skips_the_window_and_still_gets_the_whole_map_answer():
+def test_a_map_remembers_the_window_that_decided_its_last_search_and_still_gets_the_whole_map_answer():
     kept.forget_all()
     known = np.full((100, 120), FREE, np.uint8)
     known[:, 110:] = UNSEEN
@@ -760,5 +760,26 @@ def test_a_map_whose_last_search_went_far_skips_the_window_and_still_gets_the_wh
     for start in starts:
         got = grid.nearest_reachable_unseen(known, start)
         assert got == grid.nearest_reachable_unseen(known, start, local_first_m=None)
-        hints.append(kept.went_far(key))
-    assert hints == [True, False, False, True, False]
+        hints.append(kept.last_budget(key))
+    first = int(LOCAL_FIRST_M / CELL_M)
+    assert hints == [kept.WHOLE_MAP, first, first, kept.WHOLE_MAP, first]
+
+
+@pytest.mark.parametrize("level", [1, 2, 3])
+def test_a_target_just_past_a_larger_window_is_not_missed(level):
+    """The larger windows of a search on a large map (each decides searches twice as long as the one before)
+    must not settle for a target when a nearer one is hidden by their edge either: unknown beyond a column
+    about one window's budget east of the start, and a lone unknown cell at about the same distance."""
+    budget = int(LOCAL_FIRST_M / CELL_M) * 2 ** level
+    checked = 0
+    for d in range(budget - 3, budget + 6, 2):
+        for dr, dc in [(-d + 1, -d + 2), (d - 2, -d + 1), (0, -d), (d, 0), (-d, -2)]:
+            known = np.full((1200, 1200), FREE, np.uint8)
+            start = (600, 500)
+            known[:, start[1] + d:] = UNSEEN
+            known[start[0] + dr, start[1] + dc] = UNSEEN
+            kept.forget_all()  # no hint from an earlier map in this buffer: every window is tried
+            whole = grid.nearest_reachable_unseen(known, start, local_first_m=None)
+            assert grid.nearest_reachable_unseen(known, start) == whole, (d, dr, dc)
+            checked += whole is not None
+    assert checked == 25

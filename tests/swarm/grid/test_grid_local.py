@@ -80,6 +80,24 @@ def test_a_path_that_leaves_the_window_goes_to_the_whole_map() -> None:
     assert local[0].tobytes() == whole[0].tobytes()
 
 
+def test_a_larger_window_decides_a_longer_path_exactly() -> None:
+    """On a large map a path too long for the first window is decided by a wider one (each twice as wide),
+    bit for bit the whole map's; one too long for any window small enough to try is left to the whole map."""
+    known = np.full((600, 600), FREE, dtype=np.uint8)
+    known[300, 200:400] = SOLID
+    start, goal = (295, 300), (305, 300)
+    for gap, decided in ((270, True), (330, True), (230, False)):
+        wall = known.copy()
+        wall[300, gap:gap + 4] = FREE
+        local = plan_local_first(wall, start, goal, 0.3, 0.05, False, SNAP_RADIUS_CELLS)
+        whole = whole_map_plan(wall, start, goal, 0.3, 0.05, False)
+        assert whole is not None
+        assert (local is not None) == decided, gap
+        if decided:
+            assert local[0].tobytes() == whole[0].tobytes() and local[1] == whole[1]
+            assert grid.path_length_m(whole[0]) > PLAN_WINDOW_CELLS * 0.5  # longer than the first window decides
+
+
 def test_a_window_covering_the_whole_map_is_left_to_the_whole_map_plan() -> None:
     known = np.full((30, 30), FREE, dtype=np.uint8)
     assert plan_local_first(known, (5, 5), (20, 20), 0.3, 0.05, False, SNAP_RADIUS_CELLS) is None
