@@ -1,0 +1,192 @@
+"""Swarm scale: ``python benchmarks/speed/bench_scale.py [--robots 16 64 256 1000] [--ticks 300] [--cave]``.
+
+For each robot count, one run in a fresh process: building maps sized to keep the density of the 16-robot,
+150-tile case (``--density``), robots spawned together, the frontier explorer (``--algorithm``), the full
+stack (lidar, own maps, multiwall radio, delta map sharing, metrics). Each row prints simulated ticks per
+second of the run loop (CPU time of the process, so other load on the machine counts less), microseconds
+per robot-tick, peak RSS and the loop's biggest costs (each step's share of the loop's CPU time).
+
+A row is ``R`` (robots; the map sized for the density) or ``R@S`` (robots on an S-tile map: ``1000@600``);
+``--cave`` adds a cave row for every count. ``--ticks T`` runs T ticks; ``--explored F`` runs until a
+fraction F of the map is explored (capped by ``--max-ticks``). Each child first runs a tiny warm-up (8
+robots, 20 ticks) so that the timed run does not pay numba's kernel loads; a row whose kernels had to be
+compiled says so (run the script once more). Pin to one core for reference figures: ``taskset -c 0``.
+
+``--json FILE`` writes every row's figures. The issue-47 figures:
+
+    python benchmarks/speed/bench_scale.py --robots 16 64 256 1000 --ticks 300 --cave
+    python benchmarks/speed/bench_scale.py --robots 1000@600 --ticks 1000 --algorithm greed
+    python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 20000
+    python benchmarks/speed/bench_scale.py --robots 10000@2000 --ticks 200
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+REFERENCE = (16, 150)
+"""The density every unsized row keeps: 16 robots on a 150-tile map."""
+
+PHASES = (("swarm.transport.inprocess:InProcessHost.act", "algorithms"),
+          ("swarm.sim.loop:Simulation._receive", "map merges"),
+          ("swarm.sim.loop:Simulation._send", "updates + delivery"),
+          ("swarm.sim.loop:Simulation._commands", "navigation"),
+          ("swarm.sim.loop:World.step", "physics"),
+          ("swarm.sim.loop:Lidar.scan", "lidar"),
+          ("swarm.sim.loop:ExplorationTracker.update_coverage", "coverage"),
+          ("swarm.sim.loop:Simulation._record", "metrics"),
+          ("swarm.sim.loop:Simulation.observe", "observations"))
+"""The loop's steps timed in each row (module:Owner.method as the loop module sees it, label)."""
+
+
+def sized(robots: int, density: float) -> int:
+    """The map size (tiles per side) that holds ``robots`` at ``density`` robots per square tile."""
+    return max(20, int(round(math.sqrt(robots / density))))
+
+
+def parse_row(text: str, density: float) -> tuple[int, int]:
+    robots, _, size = text.partition("@")
+    try:
+        r = int(robots)
+        s = int(size) if size else sized(r, density)
+    except ValueError:
+        raise SystemExit(f"bench_scale.py: error: row {text!r}: give R or R@S (robots, map tiles)") from None
+    if r < 1 or s < 20:
+        raise SystemExit(f"bench_scale.py: error: row {text!r}: robots >= 1 and a map of >= 20 tiles")
+    return r, s
+
+
+def time_phases(totals: dict[str, float]) -> None:
+    """Wrap each of PHASES so that its CPU time adds up in ``totals`` (nested calls count in both)."""
+    import importlib
+
+    for path, label in PHASES:
+        module, qual = path.split(":")
+        owner_name, method = qual.split(".")
+        owner = getattr(importlib.import_module(module), owner_name)
+        fn = getattr(owner, method)
+
+        def timed(*a, _fn=fn, _label=label, **k):
+            t0 = time.process_time()
+            try:
+                return _fn(*a, **k)
+            finally:
+                totals[_label] = totals.get(_label, 0.0) + time.process_time() - t0
+
+        setattr(owner, method, timed)
+
+
+def child(args: argparse.Namespace) -> None:
+    from numba.core import event
+
+    from swarm.sim.loop import Simulation
+
+    compiled = [0]
+
+    class Compiles(event.Listener):
+        def on_start(self, ev):  # noqa: D401 - numba's listener interface
+            compiled[0] += 1
+
+        def on_end(self, ev):
+            pass
+
+    event.register("numba:compile", Compiles())
+    Simulation({"seed": args.seed + 1, "map": {"kind": args.kind, "size": 30}, "robots": {"count": 8},
+                "algorithm": {"name": args.algorithm}, "stop": {"max_ticks": 20}}).run()
+    totals: dict[str, float] = {}
+    time_phases(totals)
+    stop = {"max_ticks": args.ticks} if args.explored is None else {"explored": args.explored,
+                                                                     "max_ticks": args.max_ticks}
+    t0 = time.process_time()
+    sim = Simulation({"seed": args.seed, "map": {"kind": args.kind, "size": args.size},
+                      "robots": {"count": args.robots, "spawn": "together"}, "algorithm": {"name": args.algorithm},
+                      "stop": stop})
+    setup_cpu = time.process_time() - t0
+    totals.clear()
+    t1 = time.process_time()
+    wall0 = time.perf_counter()
+    result = sim.run()
+    cpu = time.process_time() - t1
+    wall = time.perf_counter() - wall0
+    s = result.summary
+    print(json.dumps({"robots": args.robots, "size": args.size, "kind": args.kind, "algorithm": args.algorithm,
+                      "ticks": s["ticks"], "explored": s["explored"], "stop_reason": s["stop_reason"],
+                      "cpu_s": cpu, "wall_s": wall, "setup_cpu_s": setup_cpu,
+                      "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                      "phases": totals, "compiled": compiled[0]}))
+
+
+def run_row(args: argparse.Namespace, robots: int, size: int, kind: str) -> dict | None:
+    argv = [sys.executable, __file__, "--child", "--kind", kind, "--robots-n", str(robots), "--size", str(size),
+            "--algorithm", args.algorithm, "--seed", str(args.seed), "--ticks", str(args.ticks),
+            "--max-ticks", str(args.max_ticks)]
+    if args.explored is not None:
+        argv += ["--explored", str(args.explored)]
+    proc = subprocess.run(argv, capture_output=True, text=True)
+    if proc.returncode != 0:
+        tail = proc.stderr.strip().splitlines()[-1:] or [f"exit status {proc.returncode}"]
+        print(f"{robots:>6} {kind} {size}: failed ({tail[0][:120]})", flush=True)
+        return None
+    return json.loads(proc.stdout.strip().splitlines()[-1])
+
+
+def show(row: dict, top: int) -> None:
+    ticks, robots, cpu = row["ticks"], row["robots"], row["cpu_s"]
+    rate = ticks / cpu if cpu > 0 else float("inf")
+    per = 1e6 * cpu / max(ticks * robots, 1)
+    costs = sorted(row["phases"].items(), key=lambda kv: -kv[1])[:top]
+    shares = ", ".join(f"{label} {100 * sec / cpu:.0f}%" for label, sec in costs if cpu > 0)
+    note = " (compiled kernels: run again)" if row["compiled"] else ""
+    print(f"{robots:>6} {row['kind']:>8} {row['size']:>5} {ticks:>6} {rate:>9.1f} {per:>9.1f} "
+          f"{row['peak_rss_mb']:>8.0f} {100 * row['explored']:>6.1f}%  {shares}{note}", flush=True)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--robots", nargs="+", default=["16", "64", "256", "1000"],
+                    help="rows: R (map sized for the density) or R@S (robots on an S-tile map)")
+    ap.add_argument("--density", type=float, default=REFERENCE[0] / REFERENCE[1] ** 2,
+                    help="robots per square tile of an unsized row (default: 16 on 150 tiles)")
+    ap.add_argument("--kind", default="building", choices=["building", "cave"])
+    ap.add_argument("--cave", action="store_true", help="add a cave row for every count")
+    ap.add_argument("--algorithm", default="frontier")
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--ticks", type=int, default=300)
+    ap.add_argument("--explored", type=float, default=None, help="run to this explored fraction instead")
+    ap.add_argument("--max-ticks", type=int, default=20_000, help="the cap of an --explored run")
+    ap.add_argument("--top", type=int, default=4, help="how many of the loop's costs to show")
+    ap.add_argument("--json", type=Path, default=None, help="write every row's figures here")
+    ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--robots-n", type=int, default=16, help=argparse.SUPPRESS)
+    ap.add_argument("--size", type=int, default=150, help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        args.robots = args.robots_n
+        child(args)
+        return
+    if args.ticks < 1 or args.max_ticks < 1 or args.density <= 0:
+        ap.error("--ticks and --max-ticks must be >= 1 and --density > 0")
+    rows = [parse_row(text, args.density) for text in args.robots]
+    kinds = [args.kind] + (["cave"] if args.cave and args.kind != "cave" else [])
+    print(f"{'robots':>6} {'map':>8} {'tiles':>5} {'ticks':>6} {'ticks/s':>9} {'us/r-t':>9} {'RSS MB':>8} "
+          f"{'explored':>7}  biggest costs (share of the loop's CPU)", flush=True)
+    out = []
+    for kind in kinds:
+        for robots, size in rows:
+            row = run_row(args, robots, size, kind)
+            if row is not None:
+                show(row, args.top)
+                out.append(row)
+    if args.json is not None:
+        args.json.write_text(json.dumps(out, indent=1))
+
+
+if __name__ == "__main__":
+    main()
