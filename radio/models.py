@@ -88,9 +88,9 @@ class LinkState:
             raise InvalidInput("connectivity", connectivity, "'strong' | 'weak'")
         cached = self._groups.get(connectivity)
         if cached is None:
-            # Components from the reachability closure of the sender -> receiver links: the partition
-            # networkx gives (tested); for swarm-sized groups a compiled closure takes microseconds where
-            # building a scipy sparse matrix took ~400 us, and this runs every recorded tick.
+            # Components of the sender -> receiver links in one compiled pass (Tarjan): the partition
+            # networkx gives (tested); building a scipy sparse matrix took ~400 us for 16 robots, and this
+            # runs every recorded tick.
             adjacency = self.link.T | self.link if connectivity == "weak" else self.link.T
             labels = _component_labels(np.ascontiguousarray(adjacency, dtype=np.bool_)).tolist()
             members: list[list[int]] = [[] for _ in range(max(labels, default=-1) + 1)]
@@ -460,23 +460,71 @@ def build_link_model(truth: Map, config: RadioConfig | None = None, field_seed: 
 @njit(cache=True)
 def _component_labels(adjacency: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
     """Strongly connected components of the directed graph ``adjacency[a, b]`` (an edge a -> b), labelled
-    0, 1, ... in the order of their smallest member: the reachability closure (Warshall, O(n^3), fine for
-    the robot counts of a run), then each unlabelled robot with every robot it reaches and is reached by."""
+    0, 1, ... in the order of their smallest member. Tarjan's algorithm without recursion: every edge is
+    looked at once, so a dense matrix costs n^2 reads (the reachability closure it replaces cost n^3: 8 %
+    of a 1,000-robot run)."""
     n = adjacency.shape[0]
-    reach = adjacency.copy()
-    for i in range(n):
-        reach[i, i] = True
-    for k in range(n):
-        for i in range(n):
-            if reach[i, k]:
-                for j in range(n):
-                    reach[i, j] |= reach[k, j]
+    index = np.full(n, -1, np.int64)
+    low = np.zeros(n, np.int64)
+    on_stack = np.zeros(n, np.bool_)
+    stack = np.empty(n, np.int64)
+    call = np.empty(n, np.int64)      # the DFS path
+    cursor = np.zeros(n, np.int64)    # the next neighbour to look at, per vertex on the path
+    comp = np.full(n, -1, np.int64)
+    top = 0
+    counter = 0
+    found = 0
+    for root in range(n):
+        if index[root] >= 0:
+            continue
+        depth = 0
+        call[0] = root
+        index[root] = low[root] = counter
+        counter += 1
+        stack[top] = root
+        top += 1
+        on_stack[root] = True
+        while depth >= 0:
+            v = call[depth]
+            w = cursor[v]
+            row = adjacency[v]
+            while w < n and not (row[w] and (index[w] < 0 or on_stack[w])):
+                w += 1
+            if w < n:
+                cursor[v] = w + 1
+                if index[w] < 0:
+                    index[w] = low[w] = counter
+                    counter += 1
+                    stack[top] = w
+                    top += 1
+                    on_stack[w] = True
+                    depth += 1
+                    call[depth] = w
+                elif index[w] < low[v]:
+                    low[v] = index[w]
+                continue
+            cursor[v] = n
+            if low[v] == index[v]:  # v roots a component: pop it
+                while True:
+                    top -= 1
+                    u = stack[top]
+                    on_stack[u] = False
+                    comp[u] = found
+                    if u == v:
+                        break
+                found += 1
+            depth -= 1
+            if depth >= 0:
+                parent = call[depth]
+                if low[v] < low[parent]:
+                    low[parent] = low[v]
     labels = np.full(n, -1, np.int64)
+    relabel = np.full(found, -1, np.int64)
     count = 0
-    for i in range(n):
-        if labels[i] < 0:
-            for j in range(i, n):
-                if reach[i, j] and reach[j, i]:
-                    labels[j] = count
+    for i in range(n):  # components in the order of their smallest member
+        c = comp[i]
+        if relabel[c] < 0:
+            relabel[c] = count
             count += 1
+        labels[i] = relabel[c]
     return labels
