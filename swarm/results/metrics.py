@@ -66,23 +66,32 @@ class InfoAges:
     """
 
     KEEP_TICKS = 64
-    """Snapshots kept, one per tick (deliveries take a tick, relayed ones a few; older ones are forgotten)."""
+    """Snapshots kept for this many ticks (deliveries take a tick, relayed ones a few; older ones are forgotten)."""
 
     def __init__(self, n: int) -> None:
         self.n = n
-        self.merged_at = np.zeros((n, n), dtype=np.int64)
+        self.merged_at = np.zeros((n, n), dtype=np.int32)  # ticks (< 2^31: stop.max_ticks is at most 10^7)
         self.merges = 0
-        # merged_at when each of the last KEEP_TICKS ticks' updates were sent, by tick % KEEP_TICKS
-        self._ring = np.zeros((self.KEEP_TICKS, n, n), dtype=np.int64)
-        self._ring_tick = np.full(self.KEEP_TICKS, -1, dtype=np.int64)
+        # merged_at as of each tick within the last KEEP_TICKS at which updates were sent: a slot each, taken
+        # as needed (robots sharing every 10 ticks fill 7, not 64: 8 MB each for 1,000 robots)
+        self._ring = np.zeros((0, n, n), dtype=np.int32)
+        self._ring_tick = np.zeros(0, dtype=np.int64)
 
     def sent(self, tick: int) -> None:
         """Robots broadcast their maps at ``tick``: note what each map holds of the others, for whoever
         merges them (once per tick, whoever sends)."""
-        slot = tick % self.KEEP_TICKS
-        if self._ring_tick[slot] != tick:
-            self._ring[slot] = self.merged_at
-            self._ring_tick[slot] = tick
+        if np.any(self._ring_tick == tick):
+            return
+        stale = np.flatnonzero(self._ring_tick <= tick - self.KEEP_TICKS)
+        if stale.size:
+            slot = int(stale[0])
+        else:
+            slot = self._ring.shape[0]
+            grown = np.zeros((slot + 1, self.n, self.n), dtype=np.int32)
+            grown[:slot] = self._ring
+            self._ring, self._ring_tick = grown, np.append(self._ring_tick, -1)
+        self._ring[slot] = self.merged_at
+        self._ring_tick[slot] = tick
 
     def merged(self, merges: list[tuple[np.ndarray, int, int]], tick: int) -> None:
         """A tick's merges, each ``(receivers, sender, sent)`` (``receivers``: int64 robot ids): they merged
@@ -95,7 +104,7 @@ class InfoAges:
         ends = np.cumsum([len(m[0]) for m in merges])
         _merge_ages(self.merged_at, self._ring, self._ring_tick, receivers, ends,
                     np.array([m[1] for m in merges], dtype=np.int64), np.array([m[2] for m in merges], dtype=np.int64),
-                    tick)
+                    tick, self.KEEP_TICKS)
         self.merges += len(receivers)
 
     def group(self, members: list[int], tick: int) -> None:
@@ -117,23 +126,27 @@ class InfoAges:
 
 @njit(cache=True)
 def _merge_ages(merged_at: np.ndarray, ring: np.ndarray, ring_tick: np.ndarray, receivers: np.ndarray,
-                ends: np.ndarray, senders: np.ndarray, sent: np.ndarray, tick: int) -> None:  # pragma: no cover
+                ends: np.ndarray, senders: np.ndarray, sent: np.ndarray, tick: int, keep: int) -> None:  # pragma: no cover
     """:meth:`InfoAges.merged`: update j reached ``receivers[ends[j-1]:ends[j]]``; each receiver's row rises
-    to the sender's row of the snapshot of tick ``sent[j]`` (if still in the ring) and its entry for the
-    sender becomes ``tick``. Snapshots are of earlier ticks, so the order of the updates does not matter."""
+    to the sender's row of the snapshot of tick ``sent[j]`` (if still kept) and its entry for the sender
+    becomes ``tick``. Snapshots are of earlier ticks, so the order of the updates does not matter. The row
+    maximum is branch-free, so it runs as vector instructions (each delta of a swarm reaches hundreds)."""
     n = merged_at.shape[0]
     start = 0
     for j in range(ends.shape[0]):
         s = senders[j]
-        slot = sent[j] % ring.shape[0]
-        known = ring_tick[slot] == sent[j]
+        slot = -1
+        if sent[j] > tick - keep:  # an older update counts only for its sender's own entry
+            for k in range(ring_tick.shape[0]):
+                if ring_tick[k] == sent[j]:
+                    slot = k
         for k in range(start, ends[j]):
             r = receivers[k]
-            if known:
+            if slot >= 0:
+                row = merged_at[r]
+                snap = ring[slot, s]
                 for x in range(n):
-                    v = ring[slot, s, x]
-                    if v > merged_at[r, x]:
-                        merged_at[r, x] = v
+                    row[x] = max(row[x], snap[x])
             merged_at[r, s] = tick
         start = ends[j]
 

@@ -84,6 +84,24 @@ def test_age_comes_through_a_relaying_robots_map():
     assert ages.ages(6).tolist() == [(0 + 1) / 2, (6 + 1) / 2, 6.0]
 
 
+def test_an_update_merged_keep_ticks_after_it_was_sent_counts_only_for_its_sender():
+    """Snapshots are kept for KEEP_TICKS ticks, one per tick at which updates were sent (not one per tick of
+    the window): an update relayed for longer brings its sender's own entry, not what its map held."""
+    keep = InfoAges.KEEP_TICKS
+    ages = InfoAges(3)
+    ages.merged([(np.array([1]), 2, 0)], tick=1)          # robot 1 holds robot 2's map as of tick 1
+    for tick in range(2, 3 * keep, 10):
+        ages.sent(tick)                                   # updates go out every 10 ticks
+    assert len(ages._ring) <= keep // 10 + 1, "a slot per sending tick of the window"
+    now = 2 * keep + 3
+    recent = max(t for t in range(2, now, 10))            # the last sending tick before now
+    old = max(t for t in range(2, now - keep, 10))        # one more than keep ticks before now
+    ages.merged([(np.array([0]), 1, recent)], tick=now)   # robot 2 comes inside robot 1's map
+    assert ages.merged_at[0].tolist() == [0, now, 1]
+    ages.merged([(np.array([2]), 1, old)], tick=now)      # too old: the sender's own entry only
+    assert ages.merged_at[2].tolist() == [0, now, 0]
+
+
 def test_a_gap_in_deltas_stops_counting_merges_until_the_full_map():
     """A delta after a lost one leaves the receiver without the sender's whole map: no merge counted (age
     keeps growing) until the full map it asks for arrives."""
