@@ -19,19 +19,28 @@ import numpy as np
 from numba import njit
 
 from swarm.base.types import CELL_M
-from swarm.knowledge.maps import check_writable_map, merge_cells_many, merge_cells_many_changed, merge_cells_many_counted
-from swarm.knowledge.packed import packed_copy, packed_size, sync_box_packed, sync_changes_packed
+from swarm.knowledge.maps import (check_writable_map, mark_tiles, merge_cells_many, merge_cells_many_changed,
+                                  merge_cells_many_counted, merge_delta_booked_kernel as _merge_delta_booked)
+from swarm.knowledge.packed import packed_copy, packed_size, sync_box_tiles_packed, sync_changes_packed
+from swarm.knowledge.planes import KnowledgePlanes, book_receivers, merge_into_many, note_cells, note_map
 from swarm.results.metrics import FreeCounts, InfoAges
+from swarm.util.memory import lazy_zeros
 
 from .medium import CommSpec
 from .messages import MapRequest, MapUpdate, MessageError, delta_update, full_update
+
+
+TILE = 32
+"""Merges note the places they changed in a robot's map as tiles of TILE x TILE cells, which its next delta
+compares with its last update."""
 
 
 class MapSharing:
     """The map-sharing service: builds each robot's MapUpdates and merges the ones it receives."""
 
     def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None,
-                 monotone: bool = False, ages: InfoAges | None = None, free: FreeCounts | None = None) -> None:
+                 monotone: bool = False, ages: InfoAges | None = None, free: FreeCounts | None = None,
+                 planes: KnowledgePlanes | None = None) -> None:
         """``ages``: told of every update sent and of every merge that leaves a receiver holding the sender's
         whole map; ``free``: told how the merges change each map's count of FREE cells (age of information,
         docs/comm-metrics.md).
@@ -42,18 +51,24 @@ class MapSharing:
         last update (:func:`swarm.knowledge.maps.sync_box`), not both whole maps: the same cells. Without it
         (None) every delta compares the whole maps. ``monotone``: the owner's promise that no cell of a map
         ever decreases (the ternary lidar; a log-odds lidar may turn SOLID back to FREE), which lets a
-        broadcast full map reach most receivers as a delta (:meth:`_merge_full`)."""
+        broadcast full map reach most receivers as a delta (:meth:`_merge_full`). ``planes``: the maps'
+        knowledge planes (:mod:`swarm.knowledge.planes`), which every merge then goes through: an update
+        costs a few words a cell for all its receivers, and writes only the maps it raises."""
         self.n = n
+        self.planes = planes
         self.spec = spec
         self.enabled = spec.map_sharing in ("delta", "full") and n > 1  # the maes modes: swarm.comm.maes_merge
         # Each robot's map as of its last update, 2 bits a cell (swarm.knowledge.packed): deltas are the cells
         # that differ from it
-        self.last_shared = (np.zeros((n, packed_size(shape[0] * shape[1])), dtype=np.uint8)
+        self.last_shared = (lazy_zeros((n, packed_size(shape[0] * shape[1])), np.uint8)
                             if spec.map_sharing == "delta" else None)
         self.seq = [0] * n
-        self.seen_seq = [[0] * n for _ in range(n)]          # [receiver][sender] last seq merged
-        self._complete = [[True] * n for _ in range(n)]      # [receiver][sender] merged each of its updates so far
-        self.whole = [[True] * n for _ in range(n)]          # [receiver][sender] holds all the sender's updates
+        # [receiver, sender]: the last update merged; merged each of the sender's updates so far; holds all of
+        # them (arrays, so that a delta's receivers are booked in the compiled merge: a swarm's sharing round
+        # books n^2 of them)
+        self.seen_seq = np.zeros((n, n), dtype=np.int32)
+        self._complete = np.ones((n, n), dtype=np.bool_)
+        self.whole = np.ones((n, n), dtype=np.bool_)
         self.monotone = monotone
         self.ages = ages
         self.free = free
@@ -63,10 +78,14 @@ class MapSharing:
         self.requests: list[list[int]] = [[] for _ in range(n)]  # targets each robot will ask next tick
         self.lidar_reach = lidar_reach if self.enabled and self.last_shared is not None else None
         # Since each robot's last update: the box of rows and columns its lidar may have written
-        # (r0, r1, c0, c1; empty while r0 >= r1) and the cells merges raised (arrays).
+        # (r0, r1, c0, c1; empty while r0 >= r1) and the tiles of TILE x TILE cells in which merges raised
+        # cells (a byte each; a list of the cells themselves held a swarm's whole relayed news per robot)
         self._boxes = np.zeros((n, 4), dtype=np.int64)
-        self._merged: list[list[np.ndarray]] = [[] for _ in range(n)]
+        tiles = (-(-shape[0] // TILE), -(-shape[1] // TILE))
+        self._dirty = lazy_zeros((n, *tiles), np.uint8) if self.lidar_reach is not None else None
         self._whole = [False] * n  # a full map was merged: compare the whole maps
+        self._rest = np.empty(n, dtype=np.int64)   # scratch of the compiled delta merge: receivers it did not book
+        self._held = np.empty(n, dtype=np.int64)   # and those it booked that hold the sender's whole map
 
     def scanned(self, poses: np.ndarray) -> None:
         """The lidar scanned from ``poses`` (``float64[R, 3]``) this tick: widen each robot's box of places to
@@ -122,16 +141,16 @@ class MapSharing:
         if self.lidar_reach is None or self._whole[i]:
             self._forget_writes(i)
             return sync_changes_packed(known, self.last_shared[i])
-        merged = self._merged[i]
-        extra = merged[0] if len(merged) == 1 else np.concatenate(merged) if merged else _NO_CELLS
-        changed = sync_box_packed(known, self.last_shared[i], self._boxes[i], extra)
+        assert self._dirty is not None
+        changed = sync_box_tiles_packed(known, self.last_shared[i], self._boxes[i], self._dirty[i], TILE)
         self._forget_writes(i)
         return changed
 
     def _forget_writes(self, i: int) -> None:
         """Robot i's map equals its last update: nothing written since."""
         self._boxes[i] = _EMPTY_BOX
-        self._merged[i] = []
+        if self._dirty is not None:
+            self._dirty[i] = 0
         self._whole[i] = False
 
     def receive(self, receiver: int, messages: Sequence[Any], known: np.ndarray,
@@ -149,6 +168,8 @@ class MapSharing:
         robot = np.array([receiver], dtype=np.int64)
         for msg in messages:
             self._take(msg, [receiver], stack, rows, [touched], robot)
+        if self.planes is not None:  # merged map by map here: bring the receiver's bits up to date
+            note_map(self.planes.free, self.planes.solid, known.reshape(-1), receiver)
         if self.ages is not None:
             self.ages.merged(self._merges, tick)
         self._merges = []
@@ -210,6 +231,9 @@ class MapSharing:
             if ours and tracking:  # the common case: merged and its receivers' books kept in one tight loop
                 ids, at, whole = self._take_delta(ids, stack, rows, robots, idx, values, sender, seq, lists)
                 lists = None if lists is None else [lists[k] for k in at]
+            elif self._planes_for(stack) is not None:
+                merge_into_many(stack, self.planes.free, self.planes.solid, self.planes.mask(robots), idx, values,
+                                _NO_CELLS if self.free is None else self.free.freed, _NO_DIRTY, TILE)
             elif self.free is not None:
                 merge_cells_many_counted(stack, rows, idx, values, robots, self.free.freed)
             else:
@@ -223,24 +247,22 @@ class MapSharing:
             if tracking:
                 if cells is None:
                     self._whole[r] = True  # any cell may have changed: the next delta compares all
-                else:
-                    self._merged[r].append(cells)
-            seen = self.seen_seq[r]
-            last = seen[sender]
+                elif len(cells):
+                    mark_tiles(self._dirty[r], cells, stack.shape[-1], TILE)
+            last = int(self.seen_seq[r, sender])
             if delta_gap and seq != last + 1 and sender not in self.requests[r]:
                 self.requests[r].append(sender)
             if not ours or msg.full or seq != last + 1:  # an update an algorithm sent counts as a gap
-                self._complete[r][sender] = ours and msg.full
-            holds = self.whole[r]
+                self._complete[r, sender] = ours and msg.full
             if msg.full:
-                holds[sender] = True
+                self.whole[r, sender] = True
                 whole.append(r)
             elif seq == last + 1:
-                if holds[sender]:
+                if self.whole[r, sender]:
                     whole.append(r)
             elif seq > last:
-                holds[sender] = False  # a gap: partial until the full map it asks for
-            seen[sender] = seq if msg.full else max(last, seq)
+                self.whole[r, sender] = False  # a gap: partial until the full map it asks for
+            self.seen_seq[r, sender] = seq if msg.full else max(last, seq)
         if whole:  # (the order of the receivers does not matter: swarm.results.metrics.InfoAges.merged)
             self._merges.append((robots if len(whole) == everyone else np.array(whole, dtype=np.int64), sender,
                                  msg.tick))
@@ -249,14 +271,29 @@ class MapSharing:
                     idx: np.ndarray, values: np.ndarray, sender: int, seq: int,
                     lists: list[list[np.ndarray | None]] | None) -> tuple[list[int], list[int], list[int]]:
         """Merge this service's delta ``seq`` from ``sender`` (cells ``idx``) into robots ``ids`` (``robots``
-        as an array; maps ``stack[rows]``), counting their FREE cells for :attr:`free`, and keep the books of
-        every receiver that had merged the sender's previous update: the cells the merge raised in its map
-        are listed for its next delta (and in ``lists``) and the update becomes its last merged one; nothing
-        else changes. Returns the other receivers and their positions in ``ids`` (a gap or an old update:
-        :meth:`_take`'s general rules), and the receivers booked here that now hold the sender's whole map
-        (for :attr:`ages`). Each delta reaches up to n - 1 robots, so this runs n^2 times a sharing tick: it
-        keeps to what that case needs, and lists only what changed (robots that share maps mostly know what
-        they hear already), which the receivers' next deltas then compare (docs/performance-history.md)."""
+        as an array; maps ``stack[rows]``), counting their FREE cells for :attr:`free`, noting the tiles where
+        it raised cells for their next deltas, and keep the books of every receiver that had merged the
+        sender's previous update: the update becomes its last merged one (and the cells it raised are listed
+        in ``lists``, for a host with mirrors); nothing else changes. Returns the other receivers and their
+        positions in ``ids`` (a gap or an old update: :meth:`_take`'s general rules), and the receivers booked
+        here that now hold the sender's whole map (for :attr:`ages`). Each delta reaches up to n - 1 robots,
+        so this runs n^2 times a sharing round: merge and books are one compiled call
+        (docs/performance-history.md)."""
+        assert self._dirty is not None
+        freed = self.free.freed if self.free is not None else _NO_CELLS
+        planes = self._planes_for(stack)
+        if lists is None:
+            if planes is not None:
+                merge_into_many(stack, planes.free, planes.solid, planes.mask(robots), idx, values, freed,
+                                self._dirty, TILE)
+                n_rest, n_held = book_receivers(robots, self.seen_seq, self.whole, sender, seq, self._rest,
+                                                self._held)
+            else:
+                n_rest, n_held = _merge_delta_booked(stack, rows, robots, idx, values, freed, self.seen_seq,
+                                                     self.whole, sender, seq, self._dirty, TILE, self._rest,
+                                                     self._held)
+            gapped = self._rest[:n_rest].tolist()
+            return [ids[k] for k in gapped], gapped, self._held[:n_held].tolist()
         need = len(ids) * len(idx)
         if self._raised.shape[0] < need:
             self._raised = np.empty(2 * need, dtype=np.int64)
@@ -264,27 +301,31 @@ class MapSharing:
         merge_cells_many_changed(stack, rows, idx, values, self._raised, ends,
                                  robots, None if self.free is None else self.free.freed)
         raised = self._raised
-        merged, seen_seq, holds = self._merged, self.seen_seq, self.whole
         gapped: list[int] = []
         rest: list[int] = []
         whole: list[int] = []
         before, start = seq - 1, 0
         for k, (r, end) in enumerate(zip(ids, ends.tolist())):
-            seen = seen_seq[r]
-            if seen[sender] == before:
-                seen[sender] = seq
-                if holds[r][sender]:
+            if end > start:
+                cells = raised[start:end].copy()
+                mark_tiles(self._dirty[r], cells, stack.shape[-1], TILE)
+                if planes is not None:
+                    note_cells(planes.free, planes.solid, stack[r].reshape(-1), r, cells)
+            if self.seen_seq[r, sender] == before:
+                self.seen_seq[r, sender] = seq
+                if self.whole[r, sender]:
                     whole.append(r)
                 if end > start:
-                    cells = raised[start:end].copy()
-                    merged[r].append(cells)
-                    if lists is not None:
-                        lists[k].append(cells)
+                    lists[k].append(cells)
             else:
                 gapped.append(k)
                 rest.append(r)
             start = end
         return rest, gapped, whole
+
+    def _planes_for(self, stack: np.ndarray) -> KnowledgePlanes | None:
+        """The planes, when the merge is into the maps they mirror (every robot's: :meth:`receive_tick`)."""
+        return self.planes if self.planes is not None and stack.shape[0] == self.n else None
 
     def _merge_full(self, msg: MapUpdate, ids: list[int], stack: np.ndarray,
                     rows: np.ndarray) -> list[np.ndarray | None]:
@@ -300,10 +341,15 @@ class MapSharing:
         if since is not None:
             prev, cells, values = since
             sender = msg.sender
-            quick = [k for k, r in enumerate(ids) if self._complete[r][sender] and self.seen_seq[r][sender] == prev]
+            quick = [k for k, r in enumerate(ids) if self._complete[r, sender] and self.seen_seq[r, sender] == prev]
         carried: list[np.ndarray | None] = [None] * len(ids)
+        planes = self._planes_for(stack)
         if quick:
-            merge_cells_many(stack, rows[quick], cells, values)
+            if planes is not None:
+                merge_into_many(stack, planes.free, planes.solid, planes.mask(rows[quick]), cells, values, _NO_CELLS,
+                                _NO_DIRTY, TILE)
+            else:
+                merge_cells_many(stack, rows[quick], cells, values)
             for k in quick:
                 carried[k] = cells
         if len(quick) < len(ids):
@@ -312,6 +358,8 @@ class MapSharing:
                 if carried[k] is None:
                     flat = stack[row].reshape(-1)
                     np.maximum(flat, dense, out=flat)
+                    if planes is not None:
+                        note_map(planes.free, planes.solid, flat, row)
             # The decoded map would live as long as the message (inboxes, queued deliveries): 360 KB on a
             # 300-tile map, 10 MB of a 64-robot run's peak. A later delivery of it decodes again.
             msg.__dict__.pop("_dense", None)
@@ -319,6 +367,7 @@ class MapSharing:
 
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)
+_NO_DIRTY = np.zeros((0, 1, 1), dtype=np.uint8)
 _EMPTY_BOX = np.array([0, 0, 0, 0], dtype=np.int64)
 
 

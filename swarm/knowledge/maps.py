@@ -573,3 +573,55 @@ class ExplorationTracker:
                                f"0 <= y < {self.truth.height_m:g} m)")
         self.covered_cells += new
         return new
+
+
+# ------------------------------------------------------------------------- map sharing's merge ----
+@njit(cache=True)
+def mark_tiles(dirty: np.ndarray, cells: np.ndarray, width: int, tile: int) -> None:  # pragma: no cover
+    """Mark in ``dirty`` (uint8[ceil(H / tile), ceil(W / tile)]) the tiles of ``tile`` x ``tile`` cells that hold
+    the flat ``cells`` of a map ``width`` cells wide."""
+    for j in range(cells.shape[0]):
+        i = cells[j]
+        dirty[(i // width) // tile, (i % width) // tile] = 1
+
+
+@njit(cache=True)
+def merge_delta_booked_kernel(stack: np.ndarray, rows: np.ndarray, robots: np.ndarray, idx: np.ndarray,
+                              values: np.ndarray, freed: np.ndarray, seen_seq: np.ndarray, holds: np.ndarray,
+                              sender: int, seq: int, dirty: np.ndarray, tile: int, rest: np.ndarray,
+                              held: np.ndarray) -> tuple[int, int]:  # pragma: no cover - compiled
+    """A map-sharing delta (cells ``idx``, ``values``) from ``sender`` merged into each map ``stack[rows[k]]``
+    of robot ``robots[k]``, with the books of :meth:`swarm.comm.sharing.MapSharing._take_delta` kept in the
+    same pass: ``freed[robot]`` counts the FREE cells gained less those lost (unless ``freed`` is empty),
+    ``dirty[robot]`` marks the tiles in which the merge raised cells, and a robot whose last merged update
+    of the sender (``seen_seq[robot, sender]``) was ``seq - 1`` is booked at ``seq``. Returns how many
+    positions ``k`` were not booked (listed in ``rest``) and how many booked robots hold the sender's whole
+    map (``holds[robot, sender]``, listed in ``held``)."""
+    width = stack.shape[2]
+    counting = freed.shape[0] > 0
+    n_rest = 0
+    n_held = 0
+    for k in range(rows.shape[0]):
+        r = robots[k]
+        flat = stack[rows[k]].reshape(-1)
+        marks = dirty[r]
+        change = 0
+        for j in range(idx.shape[0]):
+            i = idx[j]
+            v = values[j]
+            old = flat[i]
+            if v > old:
+                change += (v == FREE) - (old == FREE)
+                flat[i] = v
+                marks[(i // width) // tile, (i % width) // tile] = 1
+        if counting:
+            freed[r] += change
+        if seen_seq[r, sender] == seq - 1:
+            seen_seq[r, sender] = seq
+            if holds[r, sender]:
+                held[n_held] = r
+                n_held += 1
+        else:
+            rest[n_rest] = k
+            n_rest += 1
+    return n_rest, n_held

@@ -21,7 +21,7 @@ from numba import njit
 from .cellcodec import pack2
 
 __all__ = ["CHUNK_WORDS", "copy_cell_if_changed", "differing_words", "pack8", "packed_copy", "packed_size",
-           "same_as_packed", "sync_box_packed", "sync_changes_packed", "sync_chunk", "unpacked"]
+           "same_as_packed", "sync_box_packed", "sync_box_tiles_packed", "sync_changes_packed", "sync_chunk", "unpacked"]
 
 _M1 = np.uint64(0x000F000F000F000F)
 _M2 = np.uint64(0x000000FF000000FF)
@@ -189,3 +189,87 @@ def same_as_packed(current: np.ndarray, prev: np.ndarray) -> bool:
     if prev.shape[0] != packed_size(current.size):
         return False
     return bool(_same_kernel(np.ascontiguousarray(current).reshape(-1), prev))
+
+
+def sync_box_tiles_packed(current: np.ndarray, prev: np.ndarray, box: np.ndarray, dirty: np.ndarray,
+                          tile: int) -> np.ndarray:
+    """:func:`sync_box_packed` over the cells of ``box`` and of the tiles marked in ``dirty``
+    (uint8[ceil(H / tile), ceil(W / tile)], ``tile`` x ``tile`` cells each): the changed cells there,
+    ascending, written into ``prev``. The cost follows the box and the marked tiles, not the map."""
+    return _sync_box_tiles_kernel(current, prev, box, dirty, tile)
+
+
+@njit(cache=True)
+def _sync_box_tiles_kernel(current: np.ndarray, prev: np.ndarray, box: np.ndarray, dirty: np.ndarray,
+                           tile: int) -> np.ndarray:  # pragma: no cover - compiled
+    h, w = current.shape
+    cur = current.reshape(-1)
+    words = cur.shape[0] // 8
+    cur64, prev16 = cur[:8 * words].view(np.uint64), prev[:2 * words].view(np.uint16)
+    r0, r1, c0, c1 = max(box[0], 0), min(box[1], h), max(box[2], 0), min(box[3], w)
+    has_box = r1 > r0 and c1 > c0
+    tr_n, tc_n = dirty.shape
+    marked = 0
+    for tr in range(tr_n):
+        for tc in range(tc_n):
+            marked += dirty[tr, tc] != 0
+    cap = marked * tile * tile + (max(r1 - r0, 0) * max(c1 - c0, 0) if has_box else 0)
+    out = np.empty(cap, dtype=np.int64)
+    m = 0
+    plain_a = np.empty(tc_n + 1, np.int64)  # a tile row's column intervals, without and with the box's
+    plain_b = np.empty(tc_n + 1, np.int64)
+    boxed_a = np.empty(tc_n + 2, np.int64)
+    boxed_b = np.empty(tc_n + 2, np.int64)
+    work_a = np.empty(tc_n + 2, np.int64)
+    work_b = np.empty(tc_n + 2, np.int64)
+    for tr in range(tr_n):
+        ra, rb = tr * tile, min((tr + 1) * tile, h)
+        n_plain = 0
+        tc = 0
+        while tc < tc_n:
+            if dirty[tr, tc]:
+                a = tc
+                while tc < tc_n and dirty[tr, tc]:
+                    tc += 1
+                plain_a[n_plain] = a * tile
+                plain_b[n_plain] = min(tc * tile, w)
+                n_plain += 1
+            else:
+                tc += 1
+        in_box = has_box and ra < r1 and r0 < rb
+        if n_plain == 0 and not in_box:
+            continue
+        n_boxed = 0
+        if in_box:  # the box's columns put in order among the sorted, disjoint tile intervals, then merged
+            n = 0
+            inserted = False
+            for j in range(n_plain):
+                if not inserted and c0 < plain_a[j]:
+                    work_a[n], work_b[n] = c0, c1
+                    n += 1
+                    inserted = True
+                work_a[n], work_b[n] = plain_a[j], plain_b[j]
+                n += 1
+            if not inserted:
+                work_a[n], work_b[n] = c0, c1
+                n += 1
+            for j in range(n):
+                a, b = work_a[j], work_b[j]
+                if n_boxed and a <= boxed_b[n_boxed - 1]:
+                    boxed_b[n_boxed - 1] = max(boxed_b[n_boxed - 1], b)
+                else:
+                    boxed_a[n_boxed], boxed_b[n_boxed] = a, b
+                    n_boxed += 1
+        for r in range(ra, rb):
+            boxed = in_box and r0 <= r < r1
+            n_iv = n_boxed if boxed else n_plain
+            for j in range(n_iv):
+                a = (boxed_a[j] if boxed else plain_a[j]) + r * w
+                b = (boxed_b[j] if boxed else plain_b[j]) + r * w
+                if _same_words2(cur64, prev16, a, b):
+                    continue
+                for i in range(a, b):
+                    if copy_cell_if_changed(cur, prev, i):
+                        out[m] = i
+                        m += 1
+    return out[:m].copy()

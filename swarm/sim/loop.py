@@ -39,6 +39,8 @@ from swarm.comm.medium import Envelope, Medium
 from swarm.comm.sharing import MapSharing
 from swarm.grid._validate import vouch_known
 from swarm.knowledge.maps import sync_boxes_flat, sync_changes
+from swarm.knowledge.planes import KnowledgePlanes
+from swarm.knowledge.planes import wanted as planes_wanted
 from swarm.navigation.navigator import NavigationFleet
 from swarm.plugins import explorers as registry
 from swarm.results.metrics import CommMetrics, FreeCounts, InfoAges, Metrics
@@ -47,6 +49,7 @@ from swarm.transport import AgentHost, PhaseTimes, TickBatch, make_host
 from swarm.transport.auth import RunSecret
 from swarm.transport.base import ACT_COUNTS
 from swarm.transport.wire import ResetPacket
+from swarm.util.memory import lazy_zeros
 from swarm.world.physics import World
 from swarm.world.sensing import ExplorationTracker, Lidar
 from swarm.world.spawn import spawn
@@ -135,7 +138,7 @@ class Simulation:
         self.world = World(self.truth, self.start_poses, self.motion)
         self.lidar = Lidar(self.truth, self.lidar_params)
         self.tracker = ExplorationTracker(self.truth)
-        self.known = np.zeros((n, *self.truth.shape), dtype=np.uint8)
+        self.known = lazy_zeros((n, *self.truth.shape), np.uint8)  # memory where the maps hold something
         self._views = [self._read_only(i) for i in range(n)]
         self.fleet = NavigationFleet(self.spec.navigation, self.motion,
                                      [planner_rng(self.spec.seed, i) for i in range(n)])
@@ -147,9 +150,13 @@ class Simulation:
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         self.ages = InfoAges(n)  # who last merged whose map, when (age of information)
         self.free = FreeCounts(n, exact=self.lidar_params.mode == "ternary")  # each map's FREE cells
-        self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach,  # told of every scan
-                                  monotone=self.lidar_params.mode == "ternary", ages=self.ages, free=self.free)
         merge = resolve_maes_merge(self.comm.map_sharing, self.comm.share_every, registry.load(self.spec.algorithm.name))
+        monotone = self.lidar_params.mode == "ternary"
+        self.planes = (KnowledgePlanes(n, self.truth.shape[0] * self.truth.shape[1])  # who knows which cell
+                       if planes_wanted(n, monotone, merge is None and self.comm.map_sharing in ("delta", "full"))
+                       else None)
+        self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach,  # told of every scan
+                                  monotone=monotone, ages=self.ages, free=self.free, planes=self.planes)
         self.maes_merge = MaesMerge(n, *merge, ages=self.ages) if merge is not None else None
         self._in_flight: list[list[Envelope]] | None = None  # link_at = "receive": last tick's outboxes
         self.inboxes: list[list[Envelope]] = [[] for _ in range(n)]
@@ -242,7 +249,7 @@ class Simulation:
         state.was_colliding = collided
         active = ~self.failed
         self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker, measure=False,
-                        freed=self.free.freed)
+                        freed=self.free.freed, planes=self.planes)
         self.sharing.scanned(poses)
         self.tracker.update_coverage(poses[:, :2], active=active)
         state.poses, state.collided, state.active = poses, collided, active

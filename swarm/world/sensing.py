@@ -63,10 +63,12 @@ from scipy import ndimage
 from maps import Map
 from swarm.base.errors import InvalidInput
 from swarm.base.params import check_choice, check_float, check_int
-
 from swarm.base.types import CELL_M, FREE, SOLID
 from swarm.knowledge.maps import ExplorationTracker, LogOddsGrid, active_flags
+from swarm.knowledge.planes import KnowledgePlanes, no_planes, note_raise
 from swarm.util.jitops import opaque, select
+
+_NO_PLANE = no_planes()[0]
 
 __all__ = ["MODES", "ExplorationTracker", "Lidar", "LidarParams", "auto_rays", "ray_angles", "warm_up"]
 
@@ -213,12 +215,15 @@ def _lidar_advance(t_x: float, t_y: float, d_x: float, d_y: float) -> tuple[bool
 @njit(cache=True, inline="always")
 def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_base: int, write_known: bool,
                         seen: np.ndarray, x: float, y: float, dx: float, dy: float, range_m: float,
-                        cell: float) -> tuple[float, int, int]:
+                        cell: float, p_free: np.ndarray, p_solid: np.ndarray, robot: int) -> tuple[float, int, int]:
     """Walk one ray by the exact rule (module docstring). ``solid``, ``seen`` and ``known`` are flat views
     of the rasters, ``cols`` wide (``known`` of all robots: this robot's map starts at ``known_base``).
     Marks ``seen`` (and the robot's map with a maximum when ``write_known``); returns (entry distance of
     the first solid cell or inf, newly seen free cells, cells of the robot's map it turned FREE). Needs a solid outer edge, which :class:`maps.Map`
-    guarantees, to stay on the raster; indices are unsigned, so no negative-index code is compiled."""
+    guarantees, to stay on the raster; indices are unsigned, so no negative-index code is compiled. With
+    planes (``p_free`` not empty, :mod:`swarm.knowledge.planes`) every cell it raises in robot ``robot``'s
+    map is noted there too."""
+    planes = p_free.shape[0] > 0
     row, col, step_r, step_c, t_x, t_y, d_x, d_y = _lidar_ray_start(x, y, dx, dy, cell)
     r2 = range_m * range_m
     t_entry = 0.0
@@ -232,6 +237,8 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
         at = np.uint64(k)
         if solid[at]:
             if write_known:
+                if planes and known[np.uint64(known_base + k)] != SOLID:
+                    note_raise(p_free, p_solid, k, robot, SOLID)
                 known[np.uint64(known_base + k)] = SOLID
             seen[at] = True
             return t_entry, new, fresh
@@ -245,6 +252,8 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
             if write_known and known[np.uint64(known_base + k)] < FREE:
                 known[np.uint64(known_base + k)] = FREE
                 fresh += 1
+                if planes:
+                    note_raise(p_free, p_solid, k, robot, FREE)
             if not seen[at]:
                 seen[at] = True
                 new += 1
@@ -261,7 +270,7 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
 def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarray, cos_a: np.ndarray,
                           sin_a: np.ndarray, range_m: float, cell: float, known: np.ndarray,
                           seen: np.ndarray, ranges: np.ndarray, required: np.ndarray, half_widths: np.ndarray,
-                          cast: np.ndarray, fresh: np.ndarray) -> int:
+                          cast: np.ndarray, fresh: np.ndarray, p_free: np.ndarray, p_solid: np.ndarray) -> int:
     """One tick of the ternary lidar for every robot and ray. Returns the number of newly seen free
     cells, or ``-(r + 1)`` (nothing written) if robot r's pose is invalid. With a ``required`` raster
     (:func:`_required_raster`; empty: cast every robot) a robot whose scan would write nothing
@@ -295,7 +304,7 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
             dx = ch * cos_a[i] - sh * sin_a[i]
             dy = sh * cos_a[i] + ch * sin_a[i]
             t_hit, n_new, n_fresh = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, True,
-                                                        seen_flat, x, y, dx, dy, range_m, cell)
+                                                        seen_flat, x, y, dx, dy, range_m, cell, p_free, p_solid, r)
             new += n_new
             fresh[r] += n_fresh
             ranges[r, i] = t_hit
@@ -410,7 +419,7 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
             dx = ch * cos_a[i] - sh * sin_a[i]
             dy = sh * cos_a[i] + ch * sin_a[i]
             t_hit, n_new, _ = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, False, seen_flat,
-                                                  x, y, dx, dy, range_m, cell)
+                                                  x, y, dx, dy, range_m, cell, _NO_PLANE, _NO_PLANE, r)
             new += n_new
             z = t_hit
             if noisy and t_hit <= range_m:
@@ -507,7 +516,8 @@ class Lidar:
 
     def scan(self, poses: np.ndarray, known: np.ndarray, rng: np.random.Generator | None = None,
              active: np.ndarray | None = None, tracker: ExplorationTracker | None = None, *,
-             measure: bool = True, freed: np.ndarray | None = None) -> np.ndarray | None:
+             measure: bool = True, freed: np.ndarray | None = None,
+             planes: KnowledgePlanes | None = None) -> np.ndarray | None:
         """Cast every active robot's rays from ``poses`` (``float64[R, 3]``: x, y, theta) and write what
         they observe into ``known`` (``uint8[R, H, W]``, C-contiguous, modified in place) and into the
         tracker (``tracker`` if given, else :attr:`tracker`). Returns the measured ranges
@@ -523,7 +533,10 @@ class Lidar:
 
         ``freed`` (``int64[R]``, ternary mode): ``freed[r]`` grows by the cells of robot r's map this scan
         turned from UNSEEN to FREE, so a caller can keep each map's count of free cells without reading the
-        maps (:class:`swarm.results.metrics.FreeCounts`)."""
+        maps (:class:`swarm.results.metrics.FreeCounts`).
+
+        ``planes`` (ternary mode): the knowledge planes of ``known`` (:mod:`swarm.knowledge.planes`), which the
+        scan keeps up to date with every cell it raises."""
         trk = self.tracker if tracker is None else self._check_tracker(tracker)
         pose = np.ascontiguousarray(poses, dtype=np.float64)
         if pose.ndim != 2 or pose.shape[1] != 3:
@@ -544,10 +557,13 @@ class Lidar:
                 if self._required.shape[0] == 0:
                     self._required = _required_raster(self.truth.solid)
                 required = self._required
+            p_free, p_solid = no_planes() if planes is None else (planes.free, planes.solid)
             new = _lidar_ternary_kernel(self._solid, pose, act, self._cos, self._sin, p.range_m, CELL_M,
                                         known, trk.seen_buffer, ranges, required, self._half_widths, self._cast,
-                                        self._freed if freed is None else freed)
+                                        self._freed if freed is None else freed, p_free, p_solid)
         else:
+            if planes is not None:
+                raise InvalidInput("planes", "given", "none: a log-odds lidar may lower cells, which planes cannot mirror")
             if p.noisy:
                 if not isinstance(rng, np.random.Generator):
                     raise InvalidInput("rng", rng, "a numpy.random.Generator (the lidar is noisy)")
