@@ -124,31 +124,145 @@ class InfoAges:
         return tick - off / (n - 1)
 
 
+TOP = 8
+"""A merge round's snapshot rows are reduced column by column to their TOP largest values (with the rows
+they come from) when a receiver merged all but fewer than TOP of the round's senders (see :func:`_merge_ages`)."""
+
+
 @njit(cache=True)
 def _merge_ages(merged_at: np.ndarray, ring: np.ndarray, ring_tick: np.ndarray, receivers: np.ndarray,
                 ends: np.ndarray, senders: np.ndarray, sent: np.ndarray, tick: int, keep: int) -> None:  # pragma: no cover
     """:meth:`InfoAges.merged`: update j reached ``receivers[ends[j-1]:ends[j]]``; each receiver's row rises
     to the sender's row of the snapshot of tick ``sent[j]`` (if still kept) and its entry for the sender
-    becomes ``tick``. Snapshots are of earlier ticks, so the order of the updates does not matter. The row
-    maximum is branch-free, so it runs as vector instructions (each delta of a swarm reaches hundreds)."""
+    becomes ``tick``. Snapshots are of earlier ticks, so the order of the updates does not matter.
+
+    Per receiver and snapshot, the row rises to the column maxima of the rows of the senders it merged.
+    A swarm's sharing round has n senders reaching n - 1 receivers each: row by row that is n^3 work. So a
+    receiver that merged all but a few (fewer than :data:`TOP`) of the senders of a snapshot reads, per
+    column, the largest values of all its senders' rows and takes the first whose row it did not merge
+    (the same maximum); one that merged few rows takes them one by one. Either way n^2 a round."""
     n = merged_at.shape[0]
-    start = 0
-    for j in range(ends.shape[0]):
-        s = senders[j]
-        slot = -1
+    m = ends.shape[0]
+    slots = ring_tick.shape[0]
+    slot = np.full(m, -1, np.int64)
+    for j in range(m):
         if sent[j] > tick - keep:  # an older update counts only for its sender's own entry
-            for k in range(ring_tick.shape[0]):
+            for k in range(slots):
                 if ring_tick[k] == sent[j]:
-                    slot = k
-        for k in range(start, ends[j]):
+                    slot[j] = k
+    # the merges of each receiver, and the senders of each snapshot (as sets)
+    per = np.zeros(n + 1, np.int64)
+    begin = 0
+    for j in range(m):
+        for k in range(begin, ends[j]):
+            per[receivers[k] + 1] += 1
+        begin = ends[j]
+    for r in range(n):
+        per[r + 1] += per[r]
+    fill = per[:n].copy()
+    merge_of = np.empty(per[n], np.int64)
+    begin = 0
+    for j in range(m):
+        for k in range(begin, ends[j]):
             r = receivers[k]
-            if slot >= 0:
-                row = merged_at[r]
-                snap = ring[slot, s]
+            merge_of[fill[r]] = j
+            fill[r] += 1
+        begin = ends[j]
+    in_slot = np.zeros((slots, n), np.bool_)
+    slot_senders = np.zeros(slots, np.int64)
+    for j in range(m):
+        if slot[j] >= 0 and not in_slot[slot[j], senders[j]]:
+            in_slot[slot[j], senders[j]] = True
+            slot_senders[slot[j]] += 1
+    top_value = np.empty((slots, TOP, n), np.int32)
+    top_row = np.empty((slots, TOP, n), np.int64)
+    top_ready = np.zeros(slots, np.bool_)
+    mine = np.zeros(n, np.bool_)
+    excluded = np.zeros(n, np.bool_)
+    done = np.zeros(slots, np.bool_)  # the snapshots the current receiver's row has taken
+    row_max = np.empty(n, merged_at.dtype)
+    for r in range(n):
+        a, b = per[r], per[r + 1]
+        if a == b:
+            continue
+        row = merged_at[r]
+        for q in range(a, b):  # each snapshot this receiver merged from, once
+            j0 = merge_of[q]
+            sigma = slot[j0]
+            if sigma < 0:
+                continue
+            if done[sigma]:
+                continue
+            done[sigma] = True
+            count = 0
+            for q2 in range(q, b):
+                j = merge_of[q2]
+                if slot[j] == sigma and not mine[senders[j]]:
+                    mine[senders[j]] = True
+                    count += 1
+            missing = slot_senders[sigma] - count
+            if count <= TOP or missing >= TOP:  # few rows merged: take them one by one
+                for q2 in range(q, b):
+                    j = merge_of[q2]
+                    if slot[j] == sigma and mine[senders[j]]:
+                        snap = ring[sigma, senders[j]]
+                        for x in range(n):
+                            row[x] = max(row[x], snap[x])
+                        mine[senders[j]] = False  # each sender's row once
+            else:  # nearly every row: the largest values of all of them, skipping the rows not merged
+                if not top_ready[sigma]:
+                    _column_tops(ring[sigma], in_slot[sigma], top_value[sigma], top_row[sigma])
+                    top_ready[sigma] = True
+                for s in range(n):
+                    if in_slot[sigma, s] and not mine[s]:
+                        excluded[s] = True
+                tv, tr = top_value[sigma], top_row[sigma]
                 for x in range(n):
-                    row[x] = max(row[x], snap[x])
-            merged_at[r, s] = tick
-        start = ends[j]
+                    best = row[x]
+                    for t in range(TOP):
+                        s = tr[t, x]
+                        if s < 0:
+                            break
+                        if not excluded[s]:
+                            best = max(best, tv[t, x])
+                            break
+                    row_max[x] = best
+                for x in range(n):
+                    row[x] = row_max[x]
+                for s in range(n):
+                    excluded[s] = False
+            for q2 in range(q, b):
+                mine[senders[merge_of[q2]]] = False
+        for q in range(a, b):
+            merged_at[r, senders[merge_of[q]]] = tick
+            if slot[merge_of[q]] >= 0:
+                done[slot[merge_of[q]]] = False
+
+
+@njit(cache=True)
+def _column_tops(snap: np.ndarray, rows: np.ndarray, value: np.ndarray, which: np.ndarray) -> None:  # pragma: no cover
+    """Per column x of ``snap`` (over the rows flagged in ``rows``): the TOP largest values, largest first, and
+    their rows (-1 past the last row)."""
+    n = snap.shape[1]
+    depth = value.shape[0]
+    for t in range(depth):
+        for x in range(n):
+            which[t, x] = -1
+    for s in range(snap.shape[0]):
+        if not rows[s]:
+            continue
+        line = snap[s]
+        for x in range(n):
+            v = line[x]
+            if which[depth - 1, x] >= 0 and v <= value[depth - 1, x]:
+                continue
+            t = depth - 1
+            while t > 0 and (which[t - 1, x] < 0 or value[t - 1, x] < v):
+                value[t, x] = value[t - 1, x]
+                which[t, x] = which[t - 1, x]
+                t -= 1
+            value[t, x] = v
+            which[t, x] = s
 
 
 # --------------------------------------------------------------------------------- free cells ----

@@ -189,3 +189,38 @@ def test_the_kept_free_counts_equal_counting_the_maps(comm, lidar):
     r = sim.run()
     assert r.comm["summary"]["map_merges"] > 0
     assert sim.free.read(sim.known).tolist() == (sim.known == 1).sum(axis=(1, 2)).tolist()
+
+
+def test_the_merge_of_a_round_equals_merging_row_by_row():
+    """InfoAges.merged takes, per receiver and snapshot, the column maxima of the senders' rows it merged
+    (the largest values of all of them when it merged nearly all): the same rows as merging update by
+    update, on random rounds with several snapshots, an expired one and receivers that merged few or
+    nearly all senders."""
+    from swarm.results.metrics import _merge_ages
+
+    def by_rows(merged_at, ring, ring_tick, receivers, ends, senders, sent, tick, keep):
+        start = 0
+        for j in range(len(ends)):
+            slot = [k for k in range(len(ring_tick)) if ring_tick[k] == sent[j] and sent[j] > tick - keep]
+            for r in receivers[start:ends[j]]:
+                if slot:
+                    merged_at[r] = np.maximum(merged_at[r], ring[slot[0], senders[j]])
+                merged_at[r, senders[j]] = tick
+            start = ends[j]
+
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        n, slots = int(rng.integers(1, 40)), int(rng.integers(1, 4))
+        ring = rng.integers(0, 100, (slots, n, n)).astype(np.int32)
+        ring_tick = rng.choice(np.arange(90, 110), slots, replace=False).astype(np.int64)
+        m = int(rng.integers(0, 3 * n + 1))
+        senders = rng.integers(0, n, m).astype(np.int64)
+        sent = rng.choice(np.concatenate([ring_tick, [5, 111]]), m).astype(np.int64)
+        reached = [np.flatnonzero((rng.random(n) < rng.random()) & (np.arange(n) != s)) for s in senders]
+        receivers = np.concatenate(reached).astype(np.int64) if m else np.zeros(0, np.int64)
+        ends = np.cumsum([len(x) for x in reached]).astype(np.int64) if m else np.zeros(0, np.int64)
+        start = rng.integers(0, 100, (n, n)).astype(np.int32)
+        a, b = start.copy(), start.copy()
+        _merge_ages(a, ring, ring_tick, receivers, ends, senders, sent, 120, 64)
+        by_rows(b, ring, ring_tick, receivers, ends, senders, sent, 120, 64)
+        assert np.array_equal(a, b)
