@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Sequence
+from collections.abc import Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numba import njit
@@ -80,7 +81,7 @@ class CommSpec:
 
 @dataclass
 class Envelope:
-    """One encoded message in flight; after delivery, ``delivered_to`` lists the robots that got it. A relayed
+    """One encoded message in flight; after delivery, ``delivered_to`` (int64) lists the robots that got it. A relayed
     copy (``comm.relay = "flood"``) keeps the original's ``sender``, ``seq``, ``data`` and ``message``; ``hop``
     counts transmissions from the sender (1: the sender's own) and ``via`` is the robot that transmits the
     copy (-1: the sender itself); ``delivered_to`` lists only robots for which it was the first copy. ``lost``
@@ -92,7 +93,7 @@ class Envelope:
     seq: int
     data: bytes
     message: Any
-    delivered_to: list[int] = field(default_factory=list)
+    delivered_to: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     hop: int = 1
     via: int = -1
     lost: list[tuple[int, int]] | None = None
@@ -118,7 +119,8 @@ class CommStats:
     dropped_bandwidth: int = 0
     malformed: int = 0
     map_bytes_sent: int = 0
-    last_contact: list[int] = field(default_factory=list)
+    contact: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    """Per robot: the tick after the last one at which a message reached it (-1: never); see :attr:`last_contact`."""
     malformed_by_robot: list[int] = field(default_factory=list)
     relaying: bool = False
     relayed: int = 0
@@ -132,10 +134,15 @@ class CommStats:
                "bytes_delivered": self.bytes_delivered, "dropped_link": self.dropped_link,
                "dropped_loss": self.dropped_loss, "dropped_bandwidth": self.dropped_bandwidth,
                "malformed": self.malformed, "malformed_by_robot": list(self.malformed_by_robot),
-               "map_bytes_sent": self.map_bytes_sent, "last_contact": list(self.last_contact)}
+               "map_bytes_sent": self.map_bytes_sent, "last_contact": self.last_contact}
         if self.relaying:
             out.update(relayed=self.relayed, bytes_relayed=self.bytes_relayed, duplicates=self.duplicates)
         return out
+
+    @property
+    def last_contact(self) -> list[int]:
+        """Per robot: the tick after the last one at which a message reached it, -1 if none has (a list)."""
+        return self.contact.tolist()
 
     @property
     def dropped(self) -> int:
@@ -169,7 +176,8 @@ class Medium:
         self.rng = rng
         self.map_shape = tuple(map_shape) if map_shape is not None else None
         self.relaying = spec.relay == "flood"
-        self.stats = CommStats(last_contact=[-1] * n, malformed_by_robot=[0] * n, relaying=self.relaying)
+        self.stats = CommStats(contact=np.full(n, -1, dtype=np.int64), malformed_by_robot=[0] * n,
+                               relaying=self.relaying)
         self.dropped: list[tuple[int, str]] = []  # (sender, reason) of messages dropped since last read
         self.note_losses = False
         """Set by an observer that wants each envelope's failed deliveries (:attr:`Envelope.lost`); off, the
@@ -179,7 +187,7 @@ class Medium:
         if packet_errors is not None and error_rng is None:
             raise ValueError("packet errors need their generator (error_rng)")
         self.error_rng = error_rng
-        self._others = [np.array([i for i in range(n) if i != j], dtype=np.int64) for j in range(n)]
+        self._every = np.arange(n, dtype=np.int64)
         # Relaying: the robots holding each message still spreading ((sender, seq) -> ids), the copies each
         # robot forwards next tick, and the messages those copies carry.
         self._holders: dict[tuple[int, int], set[int]] = {}
@@ -223,15 +231,16 @@ class Medium:
             return self._deliver_channel(tick, outboxes, link, margin)
         n = self.n
         stats = self.stats
-        inboxes: list[list[Envelope]] = [[] for _ in range(n)]
         budget = np.full((n, n), self.spec.bandwidth, dtype=np.int64) if self.spec.bandwidth else None
         note = self.note_losses
         lost = None
+        delivered: list[Envelope] = []
+        reached: list[np.ndarray] = []
         for j in range(n):
             if not outboxes[j]:
                 continue
             in_reach = np.flatnonzero(link[:, j])
-            others = [i for i in in_reach.tolist() if i != j]  # every receiver when nothing is lost
+            others = in_reach[in_reach != j]  # every receiver when nothing is lost
             unreached = [(i, _LINK) for i in np.flatnonzero(~link[:, j]).tolist() if i != j] if note else []
             for env in outboxes[j]:
                 size = len(env.data)
@@ -247,18 +256,19 @@ class Medium:
                 if self.spec.loss > 0.0 and len(receivers):
                     keep = self.rng.random(len(receivers)) >= self.spec.loss
                     stats.dropped_loss += int((~keep).sum())
-                    targets = [i for i in receivers[keep].tolist() if i != j]
+                    targets = receivers[keep]
+                    targets = targets[targets != j]
                     if lost is not None:
                         lost.extend((i, _LOSS) for i in receivers[~keep].tolist())
                 if budget is not None:
-                    targets = self._within_budget(budget, targets, j, size, lost)
-                for i in targets:
-                    inboxes[i].append(env)
-                    stats.last_contact[i] = tick + 1
-                env.delivered_to.extend(targets)
+                    targets = np.array(self._within_budget(budget, targets.tolist(), j, size, lost), dtype=np.int64)
+                stats.contact[targets] = tick + 1
+                env.delivered_to = targets
                 stats.delivered += len(targets)
                 stats.bytes_delivered += size * len(targets)
-        return inboxes
+                delivered.append(env)
+                reached.append(targets)
+        return Inboxes(n, delivered, reached)
 
     def _deliver_channel(self, tick: int, outboxes: Sequence[Sequence[Envelope]], link: np.ndarray,
                          margin: np.ndarray | None) -> list[list[Envelope]]:
@@ -280,7 +290,7 @@ class Medium:
         for j in range(n):
             if not outboxes[j]:
                 continue
-            others = self._others[j]
+            others = np.delete(self._every, j)  # every other robot
             linked = link[others, j]
             keep_j = log_keep[others, j] if log_keep is not None else None
             for env in outboxes[j]:
@@ -315,8 +325,8 @@ class Medium:
                     touched.add((env.sender, env.seq))
                 for i in targets:
                     inboxes[i].append(env)
-                    stats.last_contact[i] = tick + 1
-                env.delivered_to.extend(targets)
+                    stats.contact[i] = tick + 1
+                env.delivered_to = np.array(targets, dtype=np.int64)
                 stats.delivered += len(targets)
                 stats.bytes_delivered += size * len(targets)
         if self.relaying:
@@ -324,7 +334,7 @@ class Medium:
                 del self._holders[key]
             for box in inboxes:
                 box.sort(key=_inbox_order)
-        return inboxes
+        return Inboxes.from_lists(inboxes)
 
     def _survive_errors(self, others: np.ndarray, linked: np.ndarray, log_keep: np.ndarray, size: int,
                         lost: list[tuple[int, int]] | None = None) -> np.ndarray:
@@ -380,13 +390,13 @@ class Medium:
     def deliveries(self, outboxes: Sequence[Sequence[Envelope]]) -> list[tuple[Any, list[int]]]:
         """A tick's delivered messages with the robots each reached, in inbox order (sender, then sequence):
         what :meth:`MapSharing.receive_tick` takes. Relayed copies of one message are one entry."""
-        out = [(env.message, env.delivered_to) for box in outboxes for env in box if env.delivered_to]
+        out = [(env.message, env.delivered_to) for box in outboxes for env in box if len(env.delivered_to)]
         if not self.relaying:
             return out
         merged: dict[tuple[int, int], tuple[Any, list[int]]] = {}
         for box in outboxes:
             for env in box:
-                if env.delivered_to:
+                if len(env.delivered_to):
                     merged.setdefault((env.sender, env.seq), (env.message, []))[1].extend(env.delivered_to)
         return [(msg, sorted(ids)) for _, (msg, ids) in sorted(merged.items(), key=lambda item: item[0])]
 
@@ -405,6 +415,127 @@ class Medium:
             kept.append(i)
         return kept
 
+
+
+class Inboxes(Sequence):
+    """The envelopes delivered to every robot in one tick: ``inboxes[i]`` is robot i's, in inbox order
+    (sender, then sequence), a read-only :class:`Inbox`.
+
+    Held as the tick's delivered envelopes and, per robot, the positions of its own among them (one
+    compiled pass): a swarm's sharing tick delivers about a million (envelope, receiver) pairs, which
+    per-robot lists cost a million appends to build and the observations as many again to read."""
+
+    __slots__ = ("envelopes", "_starts", "_order", "_objects")
+
+    def __init__(self, n: int, envelopes: list[Envelope], receivers: list[np.ndarray]) -> None:
+        """``receivers[k]``: the robots ``envelopes[k]`` reached (int64); the envelopes in inbox order."""
+        self.envelopes = envelopes
+        self._starts = np.zeros(n + 1, dtype=np.int64)
+        if receivers:
+            flat = np.concatenate(receivers) if len(receivers) > 1 else receivers[0]
+            lengths = np.array([len(r) for r in receivers], dtype=np.int64)
+        else:
+            flat, lengths = _NO_ROBOTS, _NO_ROBOTS
+        self._order = np.empty(len(flat), dtype=np.int64)
+        _index_inboxes(lengths, flat.astype(np.int64, copy=False), self._starts, self._order)
+        self._objects: np.ndarray | None = None
+
+    @classmethod
+    def from_lists(cls, inboxes: Sequence[Sequence[Envelope]]) -> "Inboxes":
+        """The same inboxes as per-robot lists (envelopes shared by several robots once)."""
+        index: dict[int, int] = {}
+        envelopes: list[Envelope] = []
+        reached: list[list[int]] = []
+        for robot, inbox in enumerate(inboxes):
+            for env in inbox:
+                k = index.get(id(env))
+                if k is None:
+                    k = index[id(env)] = len(envelopes)
+                    envelopes.append(env)
+                    reached.append([])
+                reached[k].append(robot)
+        order = sorted(range(len(envelopes)), key=lambda k: (envelopes[k].sender, envelopes[k].seq))
+        return cls(len(inboxes), [envelopes[k] for k in order],
+                   [np.array(reached[k], dtype=np.int64) for k in order])
+
+    @classmethod
+    def empty(cls, n: int) -> "Inboxes":
+        return cls(n, [], [])
+
+    def __len__(self) -> int:
+        return self._starts.shape[0] - 1
+
+    def __getitem__(self, robot: int) -> "Inbox":  # type: ignore[override]
+        if not -len(self) <= robot < len(self):
+            raise IndexError(robot)
+        robot %= len(self)
+        return Inbox(self, int(self._starts[robot]), int(self._starts[robot + 1]))
+
+    def __bool__(self) -> bool:
+        return bool(self._order.shape[0])
+
+    def messages(self, robot: int) -> tuple[Any, ...]:
+        """Robot ``robot``'s messages in inbox order (what its observation carries)."""
+        a, b = int(self._starts[robot]), int(self._starts[robot + 1])
+        if a == b:
+            return ()
+        if self._objects is None:
+            self._objects = np.empty(len(self.envelopes), dtype=object)
+            self._objects[:] = [env.message for env in self.envelopes]
+        return tuple(self._objects[self._order[a:b]].tolist())
+
+
+class Inbox(Sequence):
+    """One robot's envelopes of a tick, in inbox order (a view into :class:`Inboxes`)."""
+
+    __slots__ = ("_all", "_a", "_b")
+
+    def __init__(self, inboxes: Inboxes, a: int, b: int) -> None:
+        self._all, self._a, self._b = inboxes, a, b
+
+    def __len__(self) -> int:
+        return self._b - self._a
+
+    def __getitem__(self, k: Any) -> Any:
+        positions = self._all._order[self._a:self._b]
+        if isinstance(k, slice):
+            return [self._all.envelopes[j] for j in positions[k].tolist()]
+        return self._all.envelopes[int(positions[k])]
+
+    def __iter__(self) -> Any:
+        envelopes = self._all.envelopes
+        return (envelopes[j] for j in self._all._order[self._a:self._b].tolist())
+
+    def __eq__(self, other: object) -> bool:
+        return isinstance(other, Sequence) and list(self) == list(other)
+
+    __hash__ = None  # type: ignore[assignment]
+
+    def __repr__(self) -> str:
+        return f"Inbox({list(self)!r})"
+
+
+_NO_ROBOTS = np.zeros(0, dtype=np.int64)
+
+
+@njit(cache=True)
+def _index_inboxes(lengths: np.ndarray, flat: np.ndarray, starts: np.ndarray,
+                   order: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Envelope k reached robots ``flat[sum(lengths[:k]):...]``: per robot, the positions of its envelopes
+    (ascending) at ``order[starts[r]:starts[r + 1]]``. A counting sort."""
+    n = starts.shape[0] - 1
+    for j in range(flat.shape[0]):
+        starts[flat[j] + 1] += 1
+    for r in range(n):
+        starts[r + 1] += starts[r]
+    fill = starts[:n].copy()
+    j = 0
+    for k in range(lengths.shape[0]):
+        for _ in range(lengths[k]):
+            r = flat[j]
+            order[fill[r]] = k
+            fill[r] += 1
+            j += 1
 
 @njit(cache=True)
 def _kept_despite_errors(u, log_keep, bits, linked, kept):  # pragma: no cover - compiled

@@ -185,17 +185,19 @@ class MapSharing:
         stay empty (the in-process runtime does not read them). ``tick``: now (for :attr:`ages`)."""
         check_writable_map(known)
         touched: list[list[np.ndarray | None]] = [[] for _ in range(self.n)]
-        flags = live.tolist()
+        everyone_live = bool(live.all())
         for msg, receivers in deliveries:
             if not isinstance(msg, (MapUpdate, MapRequest)):
                 continue
-            ids = [r for r in receivers if flags[r]]
-            if not ids:
+            rows = np.asarray(receivers, dtype=np.int64)
+            if not everyone_live:
+                rows = rows[live[rows]]
+            if not len(rows):
                 continue
             if isinstance(msg, MapUpdate) and msg.shape != known.shape[1:]:
                 raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape[1:]}")
+            ids = rows.tolist()
             lists = [touched[r] for r in ids] if cells else None
-            rows = np.array(ids, dtype=np.int64)
             self._take(msg, ids, known, rows, lists, rows)
         if self.ages is not None:
             self.ages.merged(self._merges, tick)

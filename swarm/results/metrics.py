@@ -326,7 +326,7 @@ class CommMetrics:
         n = self.n  # (16-robot rows are short: plain lists and builtins beat numpy calls here)
         missing = self._missing(known, seen_free)
         age = ages.ages(tick).tolist()
-        contact = [tick - max(t, 0) for t in stats.last_contact] if n > 1 else [0] * n  # a lone robot hears no one
+        contact = (tick - np.maximum(stats.contact, 0)).tolist() if n > 1 else [0] * n  # a lone robot hears no one
         group = [0] * n
         for k, members in enumerate(sorted(groups, key=min)):
             for robot in members:

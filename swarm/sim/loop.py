@@ -35,7 +35,7 @@ from radio import build_link_model
 from swarm.base.types import Action, Pose, RobotInfo
 from swarm.comm.maes_merge import MaesMerge
 from swarm.comm.maes_merge import resolve as resolve_maes_merge
-from swarm.comm.medium import Envelope, Medium
+from swarm.comm.medium import Envelope, Inboxes, Medium
 from swarm.comm.sharing import MapSharing
 from swarm.grid._validate import vouch_known
 from swarm.knowledge.maps import sync_boxes_flat, sync_changes
@@ -159,7 +159,7 @@ class Simulation:
                                   monotone=monotone, ages=self.ages, free=self.free, planes=self.planes)
         self.maes_merge = MaesMerge(n, *merge, ages=self.ages) if merge is not None else None
         self._in_flight: list[list[Envelope]] | None = None  # link_at = "receive": last tick's outboxes
-        self.inboxes: list[list[Envelope]] = [[] for _ in range(n)]
+        self.inboxes = Inboxes.empty(n)
         self._deliveries: list[tuple[Any, list[int]]] = []  # last tick's messages and who got each, in inbox order
         self.neighbour_range = self.comm.neighbour_range_m or self.lidar_params.range_m
         self.transport = transport or TransportOptions()
@@ -319,7 +319,7 @@ class Simulation:
         return commands
 
     # ---------------------------------------------------------------------------------- messaging ----
-    def _receive(self, tick: int, links: Any) -> tuple[list[list[Envelope]], list[list[np.ndarray | None]]]:
+    def _receive(self, tick: int, links: Any) -> tuple[Inboxes, list[list[np.ndarray | None]]]:
         """This tick's inboxes (sent last tick); map updates are merged into the receivers' maps, each into
         all its receivers at once (:meth:`MapSharing.receive_tick`), or MAES's merges done. The merged cells
         per robot are listed only for a host with mirrors, which ships them (None: the whole map may have
@@ -328,7 +328,7 @@ class Simulation:
         if self._in_flight is not None:
             self._deliver(tick - 1, self._in_flight, links)
             self._in_flight = None
-        inboxes, self.inboxes = self.inboxes, [[] for _ in range(self.spec.robots.count)]
+        inboxes, self.inboxes = self.inboxes, Inboxes.empty(self.spec.robots.count)
         deliveries, self._deliveries = self._deliveries, []
         if not deliveries:  # most ticks
             return inboxes, [[] for _ in inboxes]

@@ -12,6 +12,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from swarm.base.types import Action, Neighbours, Observation, frozen_builder
+from swarm.comm.medium import Inboxes
 from swarm.plugins import explorers as registry
 from .base import HostStats, TickBatch
 from .bearings import bearings
@@ -56,14 +57,17 @@ def observations(batch: TickBatch) -> list[Observation | None]:
     hit = batch.collided.tolist()
     live = batch.live.tolist()
     out: list[Observation | None] = []
-    tick, views, navs = batch.tick, batch.views, batch.navs
+    tick, views, navs, inboxes = batch.tick, batch.views, batch.navs, batch.inboxes
+    messages = inboxes.messages if isinstance(inboxes, Inboxes) else None
     for i, pose in enumerate(batch.pose_tuples):
         if not live[i]:
             out.append(None)
             continue
-        inbox = batch.inboxes[i]
-        out.append(_observation(tick=tick, robot_id=i, pose=pose, known=views[i],
-                                inbox=tuple([env.message for env in inbox]) if inbox else (),
+        if messages is not None:
+            inbox = messages(i)
+        else:
+            inbox = tuple([env.message for env in inboxes[i]]) if inboxes[i] else ()
+        out.append(_observation(tick=tick, robot_id=i, pose=pose, known=views[i], inbox=inbox,
                                 neighbours=neighbours[i], collided=hit[i], nav=navs[i],
                                 distance_travelled=distance[i], energy_used=energy[i]))
     return out

@@ -394,10 +394,10 @@ def _deliver_reference(medium: Medium, tick: int, outboxes, link: np.ndarray):
                         continue
                     budget[i, j] -= size
                 inboxes[i].append(env)
-                env.delivered_to.append(i)
+                env.delivered_to = np.append(env.delivered_to, i)
                 stats.delivered += 1
                 stats.bytes_delivered += size
-                stats.last_contact[i] = tick + 1
+                stats.contact[i] = tick + 1
     return inboxes
 
 
@@ -417,7 +417,8 @@ def test_medium_delivers_as_the_receiver_by_receiver_reference(loss, bandwidth):
         got = fast.deliver(tick, boxes_fast, link)
         want = _deliver_reference(slow, tick, boxes_slow, link)
         assert [[(e.sender, e.seq) for e in inbox] for inbox in got] == [[(e.sender, e.seq) for e in inbox] for inbox in want]
-        assert [[e.delivered_to for e in row] for row in boxes_fast] == [[e.delivered_to for e in row] for row in boxes_slow]
+        assert [[list(e.delivered_to) for e in row] for row in boxes_fast] == \
+            [[list(e.delivered_to) for e in row] for row in boxes_slow]
         assert fast.stats.as_dict() == slow.stats.as_dict()
     assert fast.stats.delivered > 0 and (fast.stats.dropped_bandwidth > 0) == (bandwidth > 0)
 
@@ -506,12 +507,12 @@ def test_a_medium_noting_losses_lists_every_failed_delivery_and_changes_nothing(
         assert [[(e.sender, e.seq, e.hop) for e in inbox] for inbox in got] == \
             [[(e.sender, e.seq, e.hop) for e in inbox] for inbox in want]
         for env, other in zip((e for row in boxes[0] for e in row), (e for row in boxes[1] for e in row)):
-            assert other.lost is None and env.delivered_to == other.delivered_to
+            assert other.lost is None and list(env.delivered_to) == list(other.delivered_to)
             missed = [robot for robot, _ in env.lost]
             assert len(set(missed)) == len(missed) and not set(missed) & set(env.delivered_to)
             assert env.transmitter not in missed
             if relay == "none":
-                assert sorted(missed + env.delivered_to) == [i for i in range(n) if i != env.transmitter]
+                assert sorted(missed + env.delivered_to.tolist()) == [i for i in range(n) if i != env.transmitter]
             for robot, cause in env.lost:
                 assert link[robot, env.transmitter] == (LOSS_CAUSES[cause] != "link")
                 causes[LOSS_CAUSES[cause]] += 1
