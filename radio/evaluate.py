@@ -9,11 +9,13 @@ so every path gives the same numbers.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
-from .crossings import _radio_all_pairs, _radio_pairs_with
-from .pathloss import _radio_link_budget
+from .crossings import _distance, _radio_all_pairs, _radio_pair, _radio_pairs_with, _run_buffers
+from .pathloss import LOS, MAES, MIN_DISTANCE_M, MULTIWALL, _radio_link_budget
 
 
 @njit(cache=True)
@@ -83,3 +85,51 @@ def _radio_link_columns(blocks, xy, params, cross_db, metre_db, per_metre, code,
                 rssi_out[i, k] = rssi[i, 0] if i != j else np.nan
                 distance_out[i, k] = distance[i, k]
     return -1
+
+
+@njit(cache=True)
+def _radio_link_all(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, link):  # pragma: no cover
+    """:func:`_radio_evaluate`'s ``link`` alone: each pair walked once (from its lower index, the same walk),
+    eqs. 1-2 as :func:`radio.pathloss._radio_link_budget` computes them, both directions; none of the
+    float planes or the material counts (n^2 x 61 bytes: 6 GB for 10,000 robots). Returns the first bad
+    row (nothing filled) or -1."""
+    bad = _radio_first_outside(xy, params[WIDTH], params[HEIGHT])
+    if bad >= 0:
+        return bad
+    n = xy.shape[0]
+    run_start, run_end, run_len = _run_buffers(blocks, cross_db.shape[0])
+    counts = np.zeros((1, 1, cross_db.shape[0]), np.int32)
+    alpha, beta, freq_term, max_range = params[ALPHA], params[BETA], params[FREQ_TERM], params[MAX_RANGE]
+    for i in range(n):
+        link[i, i] = False
+        for j in range(i + 1, n):
+            d, walls, w = _radio_pair(blocks, params[CELL], xy, i, j, params[TOL], cross_db, metre_db, per_metre,
+                                      run_start, run_end, run_len, counts, 0, 0)
+            if code == MULTIWALL:
+                pl = 10.0 * alpha * math.log10(max(d, MIN_DISTANCE_M)) + beta + freq_term
+                link[i, j] = tx[j] - pl - w >= sens[i]
+                link[j, i] = tx[i] - pl - w >= sens[j]
+            elif code == MAES:
+                link[i, j] = tx[j] - w >= sens[i]
+                link[j, i] = tx[i] - w >= sens[j]
+            elif code == LOS:
+                ok = walls == 0 and d <= max_range
+                link[i, j] = ok
+                link[j, i] = ok
+            else:
+                link[i, j] = True
+                link[j, i] = True
+    return -1
+
+
+@njit(cache=True)
+def _radio_distances(xy, distance):  # pragma: no cover
+    """The all-pairs distance matrix exactly as :func:`_radio_evaluate` fills it (each pair from its lower
+    index), without the walls."""
+    n = xy.shape[0]
+    for i in range(n):
+        distance[i, i] = 0.0
+        for j in range(i + 1, n):
+            d = _distance(xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1])
+            distance[i, j] = d
+            distance[j, i] = d

@@ -38,7 +38,8 @@ from swarm.base.errors import InvalidInput
 
 from .config import RadioConfig
 from .crossings import WallCrossing, WallRaster, _radio_clear_within, _radio_price_runs
-from .evaluate import CHARGED, DISTANCE, PATH_LOSS, RSSI, _radio_evaluate, _radio_first_outside, _radio_link_columns
+from .evaluate import (CHARGED, DISTANCE, PATH_LOSS, RSSI, _radio_distances, _radio_evaluate, _radio_first_outside,
+                       _radio_link_all, _radio_link_columns)
 from .materials import resolve_table
 from .pathloss import GLOBAL, LOS, MAES, MULTIWALL, _radio_link_budget
 from .per import PacketErrorCurve
@@ -88,16 +89,7 @@ class LinkState:
             raise InvalidInput("connectivity", connectivity, "'strong' | 'weak'")
         cached = self._groups.get(connectivity)
         if cached is None:
-            # Components of the sender -> receiver links in one compiled pass (Tarjan): the partition
-            # networkx gives (tested); building a scipy sparse matrix took ~400 us for 16 robots, and this
-            # runs every recorded tick.
-            adjacency = self.link.T | self.link if connectivity == "weak" else self.link.T
-            labels = _component_labels(np.ascontiguousarray(adjacency, dtype=np.bool_)).tolist()
-            members: list[list[int]] = [[] for _ in range(max(labels, default=-1) + 1)]
-            for robot, label in enumerate(labels):  # one pass (a numpy pass per group cost ~3 us each)
-                members[label].append(robot)
-            cached = [frozenset(group) for group in members]
-            self._groups[connectivity] = cached
+            cached = self._groups[connectivity] = groups_of(self.link, connectivity)
         return list(cached)
 
     @cached_property
@@ -115,6 +107,20 @@ class LinkState:
     def all_connected(self) -> bool:
         """Every robot can reach every other (one strong group); MAES's "all connected" statistic."""
         return len(self.groups()) <= 1
+
+
+def groups_of(link: np.ndarray, connectivity: str = "strong") -> list[frozenset[int]]:
+    """The communication groups of a link matrix (``link[i, j]``: j's message reaches i), sorted by their
+    smallest member: :meth:`LinkState.groups`."""
+    # Components of the sender -> receiver links in one compiled pass (Tarjan): the partition networkx
+    # gives (tested); building a scipy sparse matrix took ~400 us for 16 robots, and this runs every
+    # recorded tick.
+    adjacency = link.T | link if connectivity == "weak" else link.T
+    labels = _component_labels(np.ascontiguousarray(adjacency, dtype=np.bool_)).tolist()
+    members: list[list[int]] = [[] for _ in range(max(labels, default=-1) + 1)]
+    for robot, label in enumerate(labels):  # one pass (a numpy pass per group cost ~3 us each)
+        members[label].append(robot)
+    return [frozenset(group) for group in members]
 
 
 @dataclass(frozen=True)
@@ -272,6 +278,33 @@ class LinkModel:
         if bad >= 0:
             raise self._outside("positions", xy[bad])
         return link
+
+    def link_matrix(self, positions: np.ndarray) -> np.ndarray:
+        """:meth:`evaluate`'s ``link`` alone (bool[R, R]), bit for bit: each pair walked once, none of the
+        other matrices built (they take 61 bytes a pair: 6 GB for 10,000 robots). What delivery to every
+        robot and the groups need. With shadowing the whole state is evaluated (its draws are per pair)."""
+        xy = np.ascontiguousarray(positions, dtype=np.float64)
+        if xy.ndim != 2 or xy.shape[1] != 2:
+            raise InvalidInput("positions", xy.shape, "an array of shape (R, 2): x, y in metres")
+        r = xy.shape[0]
+        tx, sens = self._radio_arrays(r)
+        if self.shadowing is not None or (self._last_state is not None
+                                          and self._last_key == xy.tobytes() + tx.tobytes() + sens.tobytes()):
+            return self.evaluate(xy).link
+        link = np.empty((r, r), dtype=np.bool_)
+        bad = _radio_link_all(self.raster.blocks, xy, self._params, self.cross_db, self.metre_db, self.per_metre,
+                              self.code, tx, sens, link)
+        if bad >= 0:
+            raise self._outside("positions", xy[bad])
+        return link
+
+    @staticmethod
+    def distances(positions: np.ndarray) -> np.ndarray:
+        """:meth:`evaluate`'s ``distance`` matrix (float64[R, R]), bit for bit, without walking any wall."""
+        xy = np.ascontiguousarray(positions, dtype=np.float64)
+        out = np.empty((xy.shape[0], xy.shape[0]))
+        _radio_distances(xy, out)
+        return out
 
     def margin_columns(self, positions: np.ndarray, senders: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
         """``(link, margin)`` for the columns ``senders``: :meth:`link_columns` and each pair's margin, RSSI

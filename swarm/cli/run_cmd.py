@@ -11,6 +11,7 @@ import click
 
 from swarm.base.errors import InvalidInput
 
+from swarm.sim.spec import MAX_ROBOTS
 from swarm.sim.spec_input import flag_overrides, load_spec_file, merge
 from .group import cli
 from .checks import FiniteSeconds, check_output_path, write_failed
@@ -41,7 +42,7 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
 @click.option("--size", default=None, metavar="N|WxH", help="Map size in tiles (1 m). [default: 50]")
 @click.option("--map-seed", type=click.IntRange(0, 2**63 - 1), default=None, help="Map seed (default: from --seed).")
 @click.option("--map-param", "map_params", multiple=True, metavar="KEY=VALUE", help="Generator parameter.")
-@click.option("--robots", type=click.IntRange(1, 1000), default=None, help="Number of robots. [default: 4]")
+@click.option("--robots", type=click.IntRange(1, MAX_ROBOTS), default=None, help="Number of robots. [default: 4]")
 @click.option("--spawn", type=click.Choice(["together", "random"]), default=None, help="[default: together]")
 @click.option("--algorithm", default=None, help="Algorithm name (see 'swarm algorithms') or module:Class.")
 @click.option("--param", "algorithm_params", multiple=True, metavar="KEY=VALUE", help="Algorithm parameter.")
@@ -254,7 +255,7 @@ _CHECK_NAMES = ("contract", "params", "actions", "determinism", "messages", "obs
 @click.option("--param", "algorithm_params", multiple=True, metavar="KEY=VALUE", help="Algorithm parameter.")
 @click.option("--map", "map_kind", type=click.Choice(["building", "cave"]), default="building", show_default=True)
 @click.option("--size", type=click.IntRange(1, 10_000), default=20, show_default=True, help="Map size in tiles (1 m).")
-@click.option("--robots", type=click.IntRange(1, 1000), default=2, show_default=True)
+@click.option("--robots", type=click.IntRange(1, MAX_ROBOTS), default=2, show_default=True)
 @click.option("--ticks", type=click.IntRange(1, 1_000_000), default=60, show_default=True,
               help="Length of the check's runs.")
 @click.option("--seed", type=click.IntRange(0, 2**63 - 1), default=0, show_default=True)

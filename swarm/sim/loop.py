@@ -31,6 +31,7 @@ import numpy as np
 
 from maps import CELL_M, Map, generate
 from radio import build_link_model
+from radio.models import groups_of
 
 from swarm.base.types import Action, Pose, RobotInfo
 from swarm.comm.maes_merge import MaesMerge
@@ -453,6 +454,8 @@ class Simulation:
     def _record(self, tick: int, explored: float, collisions: int, links: Any) -> None:
         stats = self.medium.stats
         n = self.spec.robots.count
+        if self.observers:
+            links.state()  # observers read the whole radio picture: evaluate it once, for the groups too
         groups = links.groups() if n > 1 else [frozenset({0})]
         self.metrics.record(tick, explored=explored, coverage=self.tracker.coverage,
                             distance_m=float(self.world.distance.sum()), collisions=collisions,
@@ -461,7 +464,7 @@ class Simulation:
                             msgs_dropped=stats.dropped,
                             comm_groups=len(groups), biggest_group=max(len(g) for g in groups) / n,
                             all_connected=len(groups) == 1,
-                            mean_pair_distance_m=float(links.distance.mean()) if n > 1 else 0.0)
+                            mean_pair_distance_m=links.mean_distance() if n > 1 else 0.0)
         self.comm_metrics.record(tick, stats, self.known, self.tracker.seen_free_cells, groups, self.ages)
 
     def _message_counts(self, host: AgentHost) -> dict[str, Any]:
@@ -522,25 +525,46 @@ class _TickLinks:
     (neighbours use the cheaper in-range walk); it is a pure function of the positions, kept here, so evaluating
     later gives the same state. Delivery alone needs only the senders' columns (:meth:`senders_link`)."""
 
-    __slots__ = ("_model", "_xy", "_state")
+    __slots__ = ("_model", "_xy", "_state", "_link")
 
     def __init__(self, model: Any, xy: np.ndarray) -> None:
         self._model = model
         self._xy = np.array(xy, dtype=np.float64)
         self._state: Any = None
+        self._link: np.ndarray | None = None
 
     def state(self) -> Any:
         if self._state is None:
             self._state = self._model.evaluate(self._xy)
         return self._state
 
+    def link_matrix(self) -> np.ndarray:
+        """The tick's all-pairs link matrix, from the state if evaluated, else alone
+        (:meth:`radio.LinkModel.link_matrix`: the same bits, none of the other matrices)."""
+        if self._state is not None:
+            return self._state.link
+        if self._link is None:
+            self._link = self._model.link_matrix(self._xy)
+        return self._link
+
+    def groups(self) -> list[frozenset[int]]:
+        """The tick's communication groups (:meth:`radio.LinkState.groups`)."""
+        if self._state is not None:
+            return self._state.groups()
+        return groups_of(self.link_matrix())
+
+    def mean_distance(self) -> float:
+        """The mean of the tick's all-pairs distance matrix (:attr:`radio.LinkState.distance`)."""
+        distance = self._state.distance if self._state is not None else self._model.distances(self._xy)
+        return float(distance.mean())
+
     def senders_link(self, senders: list[int]) -> np.ndarray:
         """A (R, R) link matrix whose columns ``senders`` are the tick's (who hears each sender), for
         :meth:`swarm.comm.medium.Medium.deliver`, which reads no other column. Unless the whole state is already
         known, only the pairs with a sender are walked (:meth:`radio.LinkModel.link_columns`): off the
         recording ticks only a robot or two send (a map request, a full map)."""
-        if self._state is not None:
-            return self._state.link
+        if self._state is not None or self._link is not None or 2 * len(senders) > len(self._xy):
+            return self.link_matrix()  # many senders: each pair walked once, not once per sender in it
         link = np.zeros((len(self._xy), len(self._xy)), dtype=np.bool_)
         link[:, senders] = self._model.link_columns(self._xy, senders)
         return link

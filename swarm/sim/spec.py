@@ -30,6 +30,8 @@ SPAWN_MODES = ("together", "random")
 TRANSPORTS = ("inprocess", "zenoh")
 MAP_KINDS = ("building", "cave", "file")
 SPEC_VERSION = 1
+MAX_ROBOTS = 10_000
+"""The largest team a run takes (benchmarks/speed/bench_scale.py runs it on a 2,000-tile building)."""
 
 
 @dataclass(frozen=True)
@@ -72,7 +74,7 @@ class RobotsSpec:
     spawn_seed: int | None = None
 
     def __post_init__(self) -> None:
-        check_int("robots.count", self.count, 1, 1000)
+        check_int("robots.count", self.count, 1, MAX_ROBOTS)
         check_choice("robots.spawn", self.spawn, SPAWN_MODES)
         if self.spawn_seed is not None:
             check_int("robots.spawn_seed", self.spawn_seed, 0, 2**63 - 1)

@@ -309,3 +309,22 @@ def test_link_columns_reject_bad_senders_and_positions():
         model.link_columns(xy, [2])
     with pytest.raises(InvalidInput, match="positions"):
         model.link_columns(np.array([[5.0, 5.0], [-1.0, 3.0]]), [0])
+
+
+@pytest.mark.parametrize("config", [{}, {"model": "los", "max_range_m": 20.0}, {"model": "maes"}, {"model": "global"},
+                                    {"tx_power_overrides": {"3": 5.0}, "sensitivity_overrides": {"7": -70.0}},
+                                    {"shadowing_sigma_db": 4.0}])
+def test_the_link_matrix_alone_is_the_states(config):
+    """LinkModel.link_matrix (each pair walked once, no float planes) and LinkModel.distances give the bits
+    of evaluate()'s link and distance, asymmetric radios and shadowing included."""
+    from maps import generate
+    from radio import build_link_model, config_from_mapping
+    from swarm.world.spawn import spawn
+
+    truth = generate("building", 60, 3)
+    for seed in range(4):
+        xy = spawn(truth, "random", 25, np.random.default_rng(seed))[:, :2]
+        alone = build_link_model(truth, config_from_mapping(config), field_seed=1).link_matrix(xy)
+        state = build_link_model(truth, config_from_mapping(config), field_seed=1).evaluate(xy)
+        assert alone.dtype == bool and np.array_equal(alone, state.link)
+        assert np.array_equal(build_link_model(truth).distances(xy), state.distance)

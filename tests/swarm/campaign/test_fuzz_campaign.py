@@ -133,7 +133,7 @@ PLAUSIBLE = {  # mostly valid values per grid dimension, a few wrong ones
     "map": ["building", "cave", {"kind": "building", "label": "b"}, {"kind": "cave", "params": {}},
             "maze", {"kind": "file"}, {"kind": "building", "size": 20}],
     "size": [20, 25, 40, "20x30", [20, 30], 5, -1, 0.5, "big"],
-    "robots": [1, 2, 3, 0, 1001, True, "2"],
+    "robots": [1, 2, 3, 0, 10_001, True, "2"],
     "spawn": ["together", "random", "apart"],
     "algorithm": ["greed", "frontier", "tnf", "minotaur", {"name": "frontier", "label": "f2"},
                   {"name": "tnf", "params": {"alpha": 2.0}}, {"name": "greed", "params": {"nope": 1}}, "nope"],

@@ -139,6 +139,15 @@ def test_bad_specs_fail_before_running(spec, field):
     assert field in info.value.field
 
 
+def test_a_run_takes_up_to_ten_thousand_robots():
+    from swarm.sim.spec import MAX_ROBOTS
+
+    assert MAX_ROBOTS == 10_000
+    assert RunSpec.from_mapping({"robots": {"count": MAX_ROBOTS}}).robots.count == MAX_ROBOTS
+    with pytest.raises(InvalidInput, match="robots.count: got 10001; allowed: an integer in 1..10000"):
+        RunSpec.from_mapping({"robots": {"count": MAX_ROBOTS + 1}})
+
+
 def test_more_robots_than_space():
     with pytest.raises(InvalidInput, match="robots.count"):
         Simulation({"map": {"kind": "building", "size": 20}, "robots": {"count": 1000}})
