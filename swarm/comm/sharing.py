@@ -356,12 +356,16 @@ class MapSharing:
                 carried[k] = cells
         if len(quick) < len(ids):
             dense = msg.dense()
-            for k, row in enumerate(rows.tolist()):
-                if carried[k] is None:
-                    flat = stack[row].reshape(-1)
-                    np.maximum(flat, dense, out=flat)
-                    if planes is not None:
-                        note_map(planes.free, planes.solid, flat, row)
+            # Only the cells the sender knows can raise anything: merged cell by cell, a receiver's map is
+            # written (and its memory taken, swarm.util.memory) only where it changes, not over every page.
+            known_cells = np.flatnonzero(dense)
+            known_values = dense[known_cells]
+            others = np.array([row for k, row in enumerate(rows.tolist()) if carried[k] is None], dtype=np.int64)
+            if planes is not None:
+                merge_into_many(stack, planes.free, planes.solid, planes.mask(others), known_cells, known_values,
+                                _NO_CELLS, _NO_DIRTY, TILE)
+            else:
+                merge_cells_many(stack, others, known_cells, known_values)
             # The decoded map would live as long as the message (inboxes, queued deliveries): 360 KB on a
             # 300-tile map, 10 MB of a 64-robot run's peak. A later delivery of it decodes again.
             msg.__dict__.pop("_dense", None)
