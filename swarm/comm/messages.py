@@ -237,6 +237,26 @@ class MapUpdate:
             cached = self.__dict__["_dense"] = values
         return cached
 
+    def known_cells(self) -> tuple[np.ndarray, np.ndarray]:
+        """A full update's known cells: (ascending flat indices, values) of every cell that is not UNSEEN,
+        decoded once per message from the packed bytes (read-only). All that merging it needs: only these
+        can raise a receiver's cell."""
+        if not self.full:
+            raise MessageError("map_update: known_cells() needs a full update")
+        cached = self.__dict__.get("_known")
+        if cached is None:
+            h, w = self.shape
+            packed = np.frombuffer(self._raw(), dtype=np.uint8)
+            if len(packed) != (h * w + 3) // 4:
+                raise MessageError("map_update: wrong payload length")
+            idx, values, top = _cellcodec.known2(packed, h * w)
+            if top > 2:
+                raise MessageError("map_update: cell values outside 0..2")
+            idx.flags.writeable = False
+            values.flags.writeable = False
+            cached = self.__dict__["_known"] = (idx, values)
+        return cached
+
     def _raw(self) -> bytes:
         """The payload before zlib: kept by an update built in this process (:func:`full_update`,
         :func:`delta_update`), so its receivers here skip the decompression (lossless, so the same bytes);

@@ -83,7 +83,7 @@ class MapSharing:
         self._boxes = np.zeros((n, 4), dtype=np.int64)
         tiles = (-(-shape[0] // TILE), -(-shape[1] // TILE))
         self._dirty = lazy_zeros((n, *tiles), np.uint8) if self.lidar_reach is not None else None
-        self._whole = [False] * n  # a full map was merged: compare the whole maps
+        self._whole = np.zeros(n, dtype=np.bool_)  # a full map was merged: compare the whole maps
         self._rest = np.empty(n, dtype=np.int64)   # scratch of the compiled delta merge: receivers it did not book
         self._held = np.empty(n, dtype=np.int64)   # and those it booked that hold the sender's whole map
 
@@ -225,9 +225,14 @@ class MapSharing:
         whole: list[int] = []  # the receivers that now hold the sender's whole map (for ages)
         everyone = len(ids)
         if msg.full:
-            carried = self._merge_full(msg, ids, stack, rows)
+            quick = self._merge_full(msg, ids, stack, rows)
             if self.free is not None:
                 self.free.dirty[robots] = True  # counted afresh when next read
+            if lists is None:  # the books of every receiver at once (a swarm's full map reaches hundreds)
+                self._book_full(msg, robots, quick, stack.shape[-1], ours)
+                return
+            since = msg.__dict__["_since"][1] if quick.any() else None
+            carried = [since if q else None for q in quick.tolist()]
         else:
             idx, values = msg.cells()  # int64 and uint8, in range: checked when decoded
             if ours and tracking:  # the common case: merged and its receivers' books kept in one tight loop
@@ -329,48 +334,66 @@ class MapSharing:
         """The planes, when the merge is into the maps they mirror (every robot's: :meth:`receive_tick`)."""
         return self.planes if self.planes is not None and stack.shape[0] == self.n else None
 
-    def _merge_full(self, msg: MapUpdate, ids: list[int], stack: np.ndarray,
-                    rows: np.ndarray) -> list[np.ndarray | None]:
-        """Merge a full map into robots ``ids`` (maps ``stack[rows]``); per receiver, the cells the merge may
-        have changed (None: any). A full map this service built in delta mode on monotone maps notes the cells
+    def _merge_full(self, msg: MapUpdate, ids: list[int], stack: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """Merge a full map into robots ``ids`` (maps ``stack[rows]``); returns per receiver whether the merge
+        took only the cells since the sender's previous update (``msg``'s ``_since`` note), else any of its
+        cells may have changed. A full map this service built in delta mode on monotone maps notes the cells
         where it differs from its sender's previous update (``outgoing``). A receiver that merged every update
         of the sender up to that one already holds at least the previous update everywhere (merges take
         maxima and no cell decreases), so taking just those cells gives the same map: a broadcast full map
         then costs its receivers a delta's work instead of the whole map's each, which grew with the square of
-        the team (docs/performance-history.md)."""
+        the team (docs/performance-history.md). The other receivers take the sender's known cells, which
+        are all that can raise theirs, so a map is written (and its memory taken, swarm.util.memory) only
+        where it changes, not over every page."""
         since = msg.__dict__.get("_since")
-        quick: list[int] = []
+        robots = np.asarray(rows, dtype=np.int64)
+        quick = np.zeros(len(ids), dtype=np.bool_)
         if since is not None:
             prev, cells, values = since
-            sender = msg.sender
-            quick = [k for k, r in enumerate(ids) if self._complete[r, sender] and self.seen_seq[r, sender] == prev]
-        carried: list[np.ndarray | None] = [None] * len(ids)
-        planes = self._planes_for(stack)
-        if quick:
-            if planes is not None:
-                merge_into_many(stack, planes.free, planes.solid, planes.mask(rows[quick]), cells, values, _NO_CELLS,
-                                _NO_DIRTY, TILE)
+            if stack.shape[0] == self.n:  # the receivers' books are their rows (receive_tick)
+                quick = self._complete[robots, msg.sender] & (self.seen_seq[robots, msg.sender] == prev)
             else:
-                merge_cells_many(stack, rows[quick], cells, values)
-            for k in quick:
-                carried[k] = cells
-        if len(quick) < len(ids):
-            dense = msg.dense()
-            # Only the cells the sender knows can raise anything: merged cell by cell, a receiver's map is
-            # written (and its memory taken, swarm.util.memory) only where it changes, not over every page.
-            known_cells = np.flatnonzero(dense)
-            known_values = dense[known_cells]
-            others = np.array([row for k, row in enumerate(rows.tolist()) if carried[k] is None], dtype=np.int64)
+                quick = np.array([self._complete[r, msg.sender] and self.seen_seq[r, msg.sender] == prev
+                                  for r in ids], dtype=np.bool_)
+        planes = self._planes_for(stack)
+        if quick.any():
+            if planes is not None:
+                merge_into_many(stack, planes.free, planes.solid, planes.mask(robots[quick]), cells, values,
+                                _NO_CELLS, _NO_DIRTY, TILE)
+            else:
+                merge_cells_many(stack, robots[quick], cells, values)
+        if not quick.all():
+            known_cells, known_values = msg.known_cells()
+            others = robots[~quick]
             if planes is not None:
                 merge_into_many(stack, planes.free, planes.solid, planes.mask(others), known_cells, known_values,
                                 _NO_CELLS, _NO_DIRTY, TILE)
             else:
                 merge_cells_many(stack, others, known_cells, known_values)
-            # The decoded map would live as long as the message (inboxes, queued deliveries): 360 KB on a
-            # 300-tile map, 10 MB of a 64-robot run's peak. A later delivery of it decodes again.
-            msg.__dict__.pop("_dense", None)
-        return carried
+            # The decoded cells would live as long as the message (inboxes, queued deliveries); a later
+            # delivery of it decodes again.
+            msg.__dict__.pop("_known", None)
+        return quick
 
+    def _book_full(self, msg: MapUpdate, robots: np.ndarray, quick: np.ndarray, width: int, ours: bool) -> None:
+        """:meth:`_take`'s books after a full map reached ``robots`` (``quick``: those that took only the
+        cells since the sender's previous update), for every receiver at once: a quick one's next delta
+        compares the tiles of those cells, another one's the whole map; each now holds the sender's whole
+        map, has merged its update ``msg.seq`` and is complete unless an algorithm sent the map."""
+        sender = msg.sender
+        if self.lidar_reach is not None:
+            self._whole[robots[~quick]] = True
+            if quick.any():
+                cells = msg.__dict__["_since"][1]
+                if len(cells):
+                    rows, cols = np.divmod(cells, width)
+                    tiles = np.unique((rows // TILE) * self._dirty.shape[2] + cols // TILE)
+                    tr, tc = np.divmod(tiles, self._dirty.shape[2])
+                    self._dirty[robots[quick][:, None], tr[None, :], tc[None, :]] = 1
+        self._complete[robots, sender] = ours
+        self.whole[robots, sender] = True
+        self.seen_seq[robots, sender] = msg.seq
+        self._merges.append((robots, sender, msg.tick))
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)
 _NO_DIRTY = np.zeros((0, 1, 1), dtype=np.uint8)

@@ -119,3 +119,17 @@ def test_lazy_zeros_is_zeros():
         assert not a.any()
         a[(0,) * len(shape)] = 3
         assert a.sum() == 3
+
+
+def test_a_full_updates_known_cells_are_its_dense_maps_nonzero_cells():
+    from swarm.comm.messages import MapUpdate, decode, encode, full_update
+
+    rng = np.random.default_rng(3)
+    for h, w in ((1, 1), (7, 9), (40, 33)):
+        known = rng.integers(0, 3, (h, w)).astype(np.uint8)
+        known[rng.random((h, w)) < 0.7] = UNSEEN
+        for msg in (full_update(0, 1, 0, known, (0.0, 0.0, 0.0)), decode(encode(full_update(0, 1, 0, known, (0.0, 0.0, 0.0))))):
+            assert isinstance(msg, MapUpdate)
+            idx, values = msg.known_cells()
+            dense = msg.dense()
+            assert np.array_equal(idx, np.flatnonzero(dense)) and np.array_equal(values, dense[idx])
