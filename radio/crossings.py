@@ -185,6 +185,166 @@ def _radio_walk_segment(blocks, cell, x0, y0, x1, y1, tol, run_start, run_end, r
 
 
 @njit(cache=True, inline="always")
+def _radio_price_run(acc, k, run_len, tol, cross_db, metre_db, per_metre):  # pragma: no cover
+    """``acc`` plus the dB :func:`_radio_price_runs` charges run ``k``, added term by term in its order, so
+    a running total over the runs is its sum bit for bit."""
+    n_mat = run_len.shape[1]
+    if per_metre:
+        for m in range(1, n_mat):
+            acc += run_len[k, m] * metre_db[m]
+        return acc
+    best = 1
+    best_len = -1.0
+    charged = False
+    for m in range(1, n_mat):
+        a = run_len[k, m]
+        if a > best_len:
+            best_len = a
+            best = m
+        if a > tol:
+            charged = True
+            acc += cross_db[m]
+    if not charged:
+        acc += cross_db[best]
+    return acc
+
+
+@njit(cache=True, inline="always")
+def _radio_walk_until(blocks, cell, x0, y0, x1, y1, tol, run_start, run_end, run_len, cross_db, metre_db, per_metre,
+                      a1, s1, a2, s2):  # pragma: no cover
+    """:func:`_radio_walk_segment` for the link question alone: each kept run is priced as it closes (as
+    :func:`_radio_price_runs` prices it, in the same order, so the running sum is a prefix of its sum), and
+    the walk stops once neither direction can still link: ``a1 - dB < s1`` and ``a2 - dB < s2`` (``a`` a
+    transmitter's power less the path loss, ``s`` the receiver's sensitivity). Wall dB only grow along
+    the walk and these tests only fail more as they grow, so a stopped walk's links are the whole walk's.
+    Returns (kept runs so far, dB so far, stopped early). A long segment through a building (most pairs of
+    a spread-out swarm) stops after the few walls that exhaust its budget."""
+    rows = blocks.shape[1]
+    cols = blocks.shape[2]
+    dx = x1 - x0
+    dy = y1 - y0
+    length = math.sqrt(dx * dx + dy * dy)
+    if length == 0.0:
+        return 0, 0.0, False
+    inv_cell = 1.0 / cell
+    xs = x0 * inv_cell  # the walk runs in cell units
+    ys = y0 * inv_cell
+    dxs = dx * inv_cell
+    dys = dy * inv_cell
+    col = min(max(int(math.floor(xs)), 0), cols - 1)
+    row = min(max(int(math.floor(ys)), 0), rows - 1)
+    step_x = 1 if dx > 0.0 else (-1 if dx < 0.0 else 0)
+    step_y = 1 if dy > 0.0 else (-1 if dy < 0.0 else 0)
+    # the segment meets grid column line i at t = i * sx + cx (never, t = inf, if dx = 0); same for rows
+    sx = 1.0 / dxs if dx != 0.0 else 0.0
+    sy = 1.0 / dys if dy != 0.0 else 0.0
+    cx = -xs * sx if dx != 0.0 else np.inf
+    cy = -ys * sy if dy != 0.0 else np.inf
+    off_x = 0 if step_x > 0 else 1  # the far side of a block w cells wide is grid line col + step_x * w + off_x
+    off_y = 0 if step_y > 0 else 1
+    # A segment lying on a grid line is inside a wall only where the cells on both sides are solid; such
+    # segments walk cell by cell, comparing both neighbours.
+    on_row_line = dy == 0.0 and ys == math.floor(ys) and row > 0
+    on_col_line = dx == 0.0 and xs == math.floor(xs) and col > 0
+    on_line = on_row_line or on_col_line
+    q = (2 if step_x < 0 else 0) + (1 if step_y < 0 else 0)  # indexed, not sliced: views cost refcounting
+    n_mat = run_len.shape[1]
+    n = 0
+    priced = 0
+    db = 0.0
+    in_run = False
+    gap = 0.0
+    solid_len = 0.0
+    t = 0.0
+    while True:
+        m = int(blocks[q, row, col, 0])
+        if on_line:
+            k = 1
+            wide = 1
+            tall = 1
+            if m != 0 and on_row_line and blocks[q, row - 1, col, 0] == 0:
+                m = 0
+            if m != 0 and on_col_line and blocks[q, row, col - 1, 0] == 0:
+                m = 0
+        else:
+            k = int(blocks[q, row, col, 1])
+            wide = int(blocks[q, row, col, 2])
+            tall = int(blocks[q, row, col, 3])
+        # where the segment leaves rectangle A (wide x k) and rectangle B (k x tall); leap through the one
+        # it stays in longer
+        ax = (col + step_x * wide + off_x) * sx + cx
+        bx = (col + step_x * k + off_x) * sx + cx
+        ay = (row + step_y * k + off_y) * sy + cy
+        by = (row + step_y * tall + off_y) * sy + cy
+        t_a = min(ax, ay)
+        t_b = min(bx, by)
+        if t_a >= t_b:
+            w = wide
+            h = k
+            ex = ax
+            ey = ay
+            t_next = t_a
+        else:
+            w = k
+            h = tall
+            ex = bx
+            ey = by
+            t_next = t_b
+        if t_next > 1.0:
+            t_next = 1.0
+        if t_next < t:
+            t_next = t
+        seg = (t_next - t) * length
+        if m != 0:
+            if not in_run:
+                in_run = True
+                run_start[n] = t * length
+                for j in range(n_mat):
+                    run_len[n, j] = 0.0
+                solid_len = 0.0
+            gap = 0.0
+            run_len[n, m] += seg
+            solid_len += seg
+            run_end[n] = t_next * length
+        elif in_run:
+            gap += seg
+            if gap > tol:
+                n = _radio_close_run(n, solid_len, tol)
+                in_run = False
+                if n > priced:
+                    db = _radio_price_run(db, priced, run_len, tol, cross_db, metre_db, per_metre)
+                    priced = n
+                    if a1 - db < s1 and a2 - db < s2:
+                        return n, db, True
+        if t_next >= 1.0:
+            break
+        # the next cell: across the rectangle's x side, its y side, or exactly its corner. Coordinates are
+        # >= 0 inside the map, so int() truncation is floor() (and cheaper); the clamp keeps the cell on
+        # the rectangle's side whatever the rounding.
+        if ex < ey:
+            if h > 1:
+                lo_r = row - h + 1 if step_y < 0 else row
+                row = min(max(int(ys + t_next * dys), lo_r), lo_r + h - 1)
+            col += step_x * w
+        elif ey < ex:
+            if w > 1:
+                lo_c = col - w + 1 if step_x < 0 else col
+                col = min(max(int(xs + t_next * dxs), lo_c), lo_c + w - 1)
+            row += step_y * h
+        else:
+            col += step_x * w
+            row += step_y * h
+        t = t_next
+        if col < 0 or col >= cols or row < 0 or row >= rows:
+            break
+    if in_run:
+        n = _radio_close_run(n, solid_len, tol)
+        if n > priced:
+            db = _radio_price_run(db, priced, run_len, tol, cross_db, metre_db, per_metre)
+    return n, db, False
+
+
+@njit(cache=True, inline="always")
 def _radio_price_runs(n, run_len, tol, cross_db, metre_db, per_metre, counts, i, j):  # pragma: no cover
     """dB charged for ``n`` kept runs; adds one to ``counts[i, j, m]`` for every material crossing charged.
 

@@ -14,8 +14,9 @@ import math
 import numpy as np
 from numba import njit
 
-from .crossings import _distance, _radio_all_pairs, _radio_pair, _radio_pairs_with, _run_buffers
-from .pathloss import LOS, MAES, MIN_DISTANCE_M, MULTIWALL, _radio_link_budget
+from .crossings import (_distance, _radio_all_pairs, _radio_pairs_with, _radio_walk_segment, _radio_walk_until,
+                        _run_buffers)
+from .pathloss import GLOBAL, LOS, MAES, MIN_DISTANCE_M, MULTIWALL, _radio_link_budget
 
 
 @njit(cache=True)
@@ -91,34 +92,69 @@ def _radio_link_columns(blocks, xy, params, cross_db, metre_db, per_metre, code,
 def _radio_link_all(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, link):  # pragma: no cover
     """:func:`_radio_evaluate`'s ``link`` alone: each pair walked once (from its lower index, the same walk),
     eqs. 1-2 as :func:`radio.pathloss._radio_link_budget` computes them, both directions; none of the
-    float planes or the material counts (n^2 x 61 bytes: 6 GB for 10,000 robots). Returns the first bad
-    row (nothing filled) or -1."""
+    float planes or the material counts (n^2 x 61 bytes: 6 GB for 10,000 robots). A walk stops once the
+    walls so far rule out both directions (:func:`radio.crossings._radio_walk_until`), and the global model
+    walks nothing. Returns the first bad row (nothing filled) or -1."""
     bad = _radio_first_outside(xy, params[WIDTH], params[HEIGHT])
     if bad >= 0:
         return bad
     n = xy.shape[0]
     run_start, run_end, run_len = _run_buffers(blocks, cross_db.shape[0])
-    counts = np.zeros((1, 1, cross_db.shape[0]), np.int32)
-    alpha, beta, freq_term, max_range = params[ALPHA], params[BETA], params[FREQ_TERM], params[MAX_RANGE]
     for i in range(n):
         link[i, i] = False
         for j in range(i + 1, n):
-            d, walls, w = _radio_pair(blocks, params[CELL], xy, i, j, params[TOL], cross_db, metre_db, per_metre,
-                                      run_start, run_end, run_len, counts, 0, 0)
-            if code == MULTIWALL:
-                pl = 10.0 * alpha * math.log10(max(d, MIN_DISTANCE_M)) + beta + freq_term
-                link[i, j] = tx[j] - pl - w >= sens[i]
-                link[j, i] = tx[i] - pl - w >= sens[j]
-            elif code == MAES:
-                link[i, j] = tx[j] - w >= sens[i]
-                link[j, i] = tx[i] - w >= sens[j]
-            elif code == LOS:
-                ok = walls == 0 and d <= max_range
-                link[i, j] = ok
-                link[j, i] = ok
-            else:
-                link[i, j] = True
-                link[j, i] = True
+            ij, ji = _pair_link(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, i, j,
+                                run_start, run_end, run_len)
+            link[i, j] = ij
+            link[j, i] = ji
+    return -1
+
+
+@njit(cache=True, inline="always")
+def _pair_link(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, i, j, run_start, run_end,
+               run_len):  # pragma: no cover
+    """(i hears j, j hears i) for the pair i < j, as :func:`_radio_evaluate` judges them."""
+    if code == GLOBAL:
+        return True, True
+    d = _distance(xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1])
+    cell, tol = params[CELL], params[TOL]
+    if code == LOS:
+        walls = _radio_walk_segment(blocks, cell, xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1], tol, run_start, run_end,
+                                    run_len)
+        ok = walls == 0 and d <= params[MAX_RANGE]
+        return ok, ok
+    if code == MULTIWALL:
+        pl = 10.0 * params[ALPHA] * math.log10(max(d, MIN_DISTANCE_M)) + params[BETA] + params[FREQ_TERM]
+        a1 = tx[j] - pl
+        a2 = tx[i] - pl
+    else:  # MAES: no distance term
+        a1 = tx[j]
+        a2 = tx[i]
+    _, w, _ = _radio_walk_until(blocks, cell, xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1], tol, run_start, run_end,
+                                run_len, cross_db, metre_db, per_metre, a1, sens[i], a2, sens[j])
+    return a1 - w >= sens[i], a2 - w >= sens[j]
+
+
+@njit(cache=True)
+def _radio_link_columns_only(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, senders,
+                             link):  # pragma: no cover
+    """:func:`_radio_link_columns`' ``link`` alone, each pair's walk stopped once its walls rule out the link
+    (as :func:`_radio_link_all`). Returns the first bad row (nothing filled) or -1."""
+    bad = _radio_first_outside(xy, params[WIDTH], params[HEIGHT])
+    if bad >= 0:
+        return bad
+    n = xy.shape[0]
+    run_start, run_end, run_len = _run_buffers(blocks, cross_db.shape[0])
+    for k in range(senders.shape[0]):
+        j = senders[k]
+        for i in range(n):
+            if i == j:
+                link[i, k] = False
+                continue
+            a, b = min(i, j), max(i, j)
+            ab, ba = _pair_link(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, a, b,
+                                run_start, run_end, run_len)
+            link[i, k] = ab if i == a else ba
     return -1
 
 

@@ -39,7 +39,7 @@ from swarm.base.errors import InvalidInput
 from .config import RadioConfig
 from .crossings import WallCrossing, WallRaster, _radio_clear_within, _radio_price_runs
 from .evaluate import (CHARGED, DISTANCE, PATH_LOSS, RSSI, _radio_distances, _radio_evaluate, _radio_first_outside,
-                       _radio_link_all, _radio_link_columns)
+                       _radio_link_all, _radio_link_columns, _radio_link_columns_only)
 from .materials import resolve_table
 from .pathloss import GLOBAL, LOS, MAES, MULTIWALL, _radio_link_budget
 from .per import PacketErrorCurve
@@ -273,8 +273,8 @@ class LinkModel:
         if self.shadowing is not None:
             return self._columns(xy, which, tx, sens)[0]
         link = np.empty((r, which.size), dtype=np.bool_)
-        bad = _radio_link_columns(self.raster.blocks, xy, self._params, self.cross_db, self.metre_db,
-                                  self.per_metre, self.code, tx, sens, which, link, _NO_ROWS, _NO_ROWS)
+        bad = _radio_link_columns_only(self.raster.blocks, xy, self._params, self.cross_db, self.metre_db,
+                                       self.per_metre, self.code, tx, sens, which, link)
         if bad >= 0:
             raise self._outside("positions", xy[bad])
         return link

@@ -313,18 +313,25 @@ def test_link_columns_reject_bad_senders_and_positions():
 
 @pytest.mark.parametrize("config", [{}, {"model": "los", "max_range_m": 20.0}, {"model": "maes"}, {"model": "global"},
                                     {"tx_power_overrides": {"3": 5.0}, "sensitivity_overrides": {"7": -70.0}},
-                                    {"shadowing_sigma_db": 4.0}])
-def test_the_link_matrix_alone_is_the_states(config):
-    """LinkModel.link_matrix (each pair walked once, no float planes) and LinkModel.distances give the bits
-    of evaluate()'s link and distance, asymmetric radios and shadowing included."""
+                                    {"shadowing_sigma_db": 4.0}, {"wall_mode": "per_metre"}, {"sensitivity_dbm": -95.0}])
+@pytest.mark.parametrize("kind", ["building", "cave"])
+def test_the_link_matrix_alone_is_the_states(config, kind):
+    """LinkModel.link_matrix (each pair walked once, no float planes, walks stopped once their walls rule
+    the link out), link_columns (stopped likewise) and LinkModel.distances give the bits of evaluate()'s
+    link and distance: every model, asymmetric radios, shadowing, per-metre walls, robots spread over a
+    map (long walks through many walls)."""
     from maps import generate
     from radio import build_link_model, config_from_mapping
     from swarm.world.spawn import spawn
 
-    truth = generate("building", 60, 3)
-    for seed in range(4):
-        xy = spawn(truth, "random", 25, np.random.default_rng(seed))[:, :2]
+    truth = generate(kind, 150, 3)
+    for seed in range(3):
+        xy = spawn(truth, "random", 30, np.random.default_rng(seed))[:, :2]
         alone = build_link_model(truth, config_from_mapping(config), field_seed=1).link_matrix(xy)
+        senders = np.random.default_rng(seed).choice(30, 6, replace=False)
+        columns = build_link_model(truth, config_from_mapping(config), field_seed=1).link_columns(xy, senders)
         state = build_link_model(truth, config_from_mapping(config), field_seed=1).evaluate(xy)
         assert alone.dtype == bool and np.array_equal(alone, state.link)
+        assert np.array_equal(columns, state.link[:, senders])
+        assert 0 < state.link.sum() < 30 * 29 or config.get("model") == "global"
         assert np.array_equal(build_link_model(truth).distances(xy), state.distance)
