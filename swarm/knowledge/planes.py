@@ -93,17 +93,21 @@ def merge_into_many(stack: np.ndarray, free: np.ndarray, solid: np.ndarray, mask
     flat = stack.reshape(-1)
     counting = counts.shape[0] > 0
     marking = dirty.shape[0] > 0
-    words = mask.shape[0]
+    active = np.empty(mask.shape[0], np.int64)  # the words with a receiver: a spread-out swarm's update reaches
+    words = 0                                    # a few dozen robots, a few words of a thousand robots' mask
+    for q in range(mask.shape[0]):
+        if mask[q] != 0:
+            active[words] = q
+            words += 1
     one = np.uint64(1)
     for j in range(idx.shape[0]):
         c = idx[j]
         v = values[j]
         if v == 0:
             continue
-        for q in range(words):
+        for a in range(words):
+            q = active[a]
             m = mask[q]
-            if m == 0:
-                continue
             if v == FREE:
                 new = m & ~free[c, q]
                 was_free = np.uint64(0)
