@@ -18,6 +18,7 @@ compiled says so (run the script once more). Pin to one core for reference figur
     python benchmarks/speed/bench_scale.py --robots 1000@600 --ticks 1000 --algorithm greed
     python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 20000
     python benchmarks/speed/bench_scale.py --robots 10000@2000 --ticks 200
+    python benchmarks/speed/bench_scale.py --robots 16@150 1000@600 --ticks 1000 --pairs 3   # the 2x ratio
 """
 
 from __future__ import annotations
@@ -162,6 +163,8 @@ def main() -> None:
     ap.add_argument("--explored", type=float, default=None, help="run to this explored fraction instead")
     ap.add_argument("--max-ticks", type=int, default=20_000, help="the cap of an --explored run")
     ap.add_argument("--top", type=int, default=4, help="how many of the loop's costs to show")
+    ap.add_argument("--pairs", type=int, default=1, help="repeat the rows, alternating their order, and print each "
+                    "row's median us per robot-tick and its ratio to the first row's")
     ap.add_argument("--json", type=Path, default=None, help="write every row's figures here")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--robots-n", type=int, default=16, help=argparse.SUPPRESS)
@@ -171,21 +174,44 @@ def main() -> None:
         args.robots = args.robots_n
         child(args)
         return
-    if args.ticks < 1 or args.max_ticks < 1 or args.density <= 0:
-        ap.error("--ticks and --max-ticks must be >= 1 and --density > 0")
+    if args.ticks < 1 or args.max_ticks < 1 or args.density <= 0 or args.pairs < 1:
+        ap.error("--ticks, --max-ticks and --pairs must be >= 1 and --density > 0")
     rows = [parse_row(text, args.density) for text in args.robots]
     kinds = [args.kind] + (["cave"] if args.cave and args.kind != "cave" else [])
     print(f"{'robots':>6} {'map':>8} {'tiles':>5} {'ticks':>6} {'ticks/s':>9} {'us/r-t':>9} {'RSS MB':>8} "
           f"{'explored':>7}  biggest costs (share of the loop's CPU)", flush=True)
     out = []
-    for kind in kinds:
-        for robots, size in rows:
-            row = run_row(args, robots, size, kind)
-            if row is not None:
-                show(row, args.top)
-                out.append(row)
+    for k in range(args.pairs):
+        order = rows if k % 2 == 0 else rows[::-1]  # alternate, so drift in the machine's speed cancels
+        for kind in kinds:
+            for robots, size in order:
+                row = run_row(args, robots, size, kind)
+                if row is not None:
+                    show(row, args.top)
+                    out.append(row)
+    if args.pairs > 1:
+        ratios(out, rows[0])
     if args.json is not None:
         args.json.write_text(json.dumps(out, indent=1))
+
+
+def ratios(out: list[dict], first: tuple[int, int]) -> None:
+    """Per row, the median us per robot-tick over the repeats and its ratio to the first row's, pair by pair
+    (the runs of one repeat were taken back to back)."""
+    import statistics
+
+    def per(row: dict) -> float:
+        return 1e6 * row["cpu_s"] / max(row["ticks"] * row["robots"], 1)
+
+    keys = sorted({(r["robots"], r["size"], r["kind"]) for r in out}, key=lambda k: (k[2], k[0], k[1]))
+    for key in keys:
+        base_key = (first[0], first[1], key[2])
+        mine = [per(r) for r in out if (r["robots"], r["size"], r["kind"]) == key]
+        base = [per(r) for r in out if (r["robots"], r["size"], r["kind"]) == base_key]
+        pairs = sorted(a / b for a, b in zip(mine, base))
+        print(f"{key[0]:>6} {key[2]:>8} {key[1]:>5}: {statistics.median(mine):.1f} us per robot-tick (median of "
+              f"{len(mine)}), {statistics.median(pairs):.2f}x the {first[0]}-robot row (range "
+              f"{pairs[0]:.2f}-{pairs[-1]:.2f})", flush=True)
 
 
 if __name__ == "__main__":
