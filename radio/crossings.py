@@ -37,12 +37,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 
 from maps.model import CELL_M, Map
+from maps.rects import merge_rectangles
 
 from .blocks import single_cell_blocks, uniform_blocks
 
@@ -523,6 +525,18 @@ class WallRaster:
     @property
     def n_materials(self) -> int:
         return len(self.names)
+
+    @cached_property
+    def free_ids(self) -> np.ndarray:
+        """int32[H, W]: the free cells cut into rectangles (:func:`maps.rects.merge_rectangles`), each cell
+        labelled with its rectangle (1, 2, ...; 0 for solid). A segment between two points of one rectangle
+        crosses no wall (a rectangle is convex), so the link kernels need not walk it: most pairs of a swarm
+        gathered in a hall."""
+        free = (self.blocks[0, :, :, 0] == 0).astype(np.uint8)
+        ids = np.zeros(free.shape, dtype=np.int32)
+        for k, rect in enumerate(merge_rectangles(free), start=1):
+            ids[rect.row0:rect.row1, rect.col0:rect.col1] = k
+        return ids
 
     def _capacity(self) -> int:
         return self.blocks.shape[1] + self.blocks.shape[2] + 2  # more than the runs any segment can have

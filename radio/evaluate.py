@@ -89,38 +89,52 @@ def _radio_link_columns(blocks, xy, params, cross_db, metre_db, per_metre, code,
 
 
 @njit(cache=True)
-def _radio_link_all(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, link):  # pragma: no cover
+def _radio_link_all(blocks, free_ids, xy, params, cross_db, metre_db, per_metre, code, tx, sens,
+                    link):  # pragma: no cover
     """:func:`_radio_evaluate`'s ``link`` alone: each pair walked once (from its lower index, the same walk),
     eqs. 1-2 as :func:`radio.pathloss._radio_link_budget` computes them, both directions; none of the
     float planes or the material counts (n^2 x 61 bytes: 6 GB for 10,000 robots). A walk stops once the
-    walls so far rule out both directions (:func:`radio.crossings._radio_walk_until`), and the global model
-    walks nothing. Returns the first bad row (nothing filled) or -1."""
+    walls so far rule out both directions (:func:`radio.crossings._radio_walk_until`), a pair inside one free
+    rectangle (``free_ids``, :attr:`radio.crossings.WallRaster.free_ids`) is not walked (it crosses nothing,
+    the walk's answer), and the global model walks nothing. Returns the first bad row (nothing filled) or -1."""
     bad = _radio_first_outside(xy, params[WIDTH], params[HEIGHT])
     if bad >= 0:
         return bad
     n = xy.shape[0]
     run_start, run_end, run_len = _run_buffers(blocks, cross_db.shape[0])
+    rect = _free_rectangles(free_ids, xy, params[CELL])
     for i in range(n):
         link[i, i] = False
         for j in range(i + 1, n):
-            ij, ji = _pair_link(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, i, j,
-                                run_start, run_end, run_len)
+            ij, ji = _pair_link(blocks, rect[i] != 0 and rect[i] == rect[j], xy, params, cross_db, metre_db,
+                                per_metre, code, tx, sens, i, j, run_start, run_end, run_len)
             link[i, j] = ij
             link[j, i] = ji
     return -1
 
 
 @njit(cache=True, inline="always")
-def _pair_link(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, i, j, run_start, run_end,
-               run_len):  # pragma: no cover
-    """(i hears j, j hears i) for the pair i < j, as :func:`_radio_evaluate` judges them."""
+def _free_rectangles(free_ids, xy, cell):  # pragma: no cover
+    """Each robot's free rectangle (:attr:`radio.crossings.WallRaster.free_ids`; 0: none)."""
+    rows, cols = free_ids.shape
+    out = np.empty(xy.shape[0], np.int32)
+    for k in range(xy.shape[0]):
+        out[k] = free_ids[min(int(xy[k, 1] / cell), rows - 1), min(int(xy[k, 0] / cell), cols - 1)]
+    return out
+
+
+@njit(cache=True, inline="always")
+def _pair_link(blocks, clear, xy, params, cross_db, metre_db, per_metre, code, tx, sens, i, j, run_start,
+               run_end, run_len):  # pragma: no cover
+    """(i hears j, j hears i) for the pair i < j, as :func:`_radio_evaluate` judges them; ``clear``: both in one
+    free rectangle (no wall between them, so no walk)."""
     if code == GLOBAL:
         return True, True
     d = _distance(xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1])
     cell, tol = params[CELL], params[TOL]
     if code == LOS:
-        walls = _radio_walk_segment(blocks, cell, xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1], tol, run_start, run_end,
-                                    run_len)
+        walls = 0 if clear else _radio_walk_segment(blocks, cell, xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1], tol,
+                                                     run_start, run_end, run_len)
         ok = walls == 0 and d <= params[MAX_RANGE]
         return ok, ok
     if code == MULTIWALL:
@@ -130,14 +144,16 @@ def _pair_link(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens
     else:  # MAES: no distance term
         a1 = tx[j]
         a2 = tx[i]
-    _, w, _ = _radio_walk_until(blocks, cell, xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1], tol, run_start, run_end,
-                                run_len, cross_db, metre_db, per_metre, a1, sens[i], a2, sens[j])
+    w = 0.0
+    if not clear:
+        _, w, _ = _radio_walk_until(blocks, cell, xy[i, 0], xy[i, 1], xy[j, 0], xy[j, 1], tol, run_start, run_end,
+                                    run_len, cross_db, metre_db, per_metre, a1, sens[i], a2, sens[j])
     return a1 - w >= sens[i], a2 - w >= sens[j]
 
 
 @njit(cache=True)
-def _radio_link_columns_only(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, senders,
-                             link):  # pragma: no cover
+def _radio_link_columns_only(blocks, free_ids, xy, params, cross_db, metre_db, per_metre, code, tx, sens,
+                             senders, link):  # pragma: no cover
     """:func:`_radio_link_columns`' ``link`` alone, each pair's walk stopped once its walls rule out the link
     (as :func:`_radio_link_all`). Returns the first bad row (nothing filled) or -1."""
     bad = _radio_first_outside(xy, params[WIDTH], params[HEIGHT])
@@ -145,6 +161,7 @@ def _radio_link_columns_only(blocks, xy, params, cross_db, metre_db, per_metre, 
         return bad
     n = xy.shape[0]
     run_start, run_end, run_len = _run_buffers(blocks, cross_db.shape[0])
+    rect = _free_rectangles(free_ids, xy, params[CELL])
     for k in range(senders.shape[0]):
         j = senders[k]
         for i in range(n):
@@ -152,8 +169,8 @@ def _radio_link_columns_only(blocks, xy, params, cross_db, metre_db, per_metre, 
                 link[i, k] = False
                 continue
             a, b = min(i, j), max(i, j)
-            ab, ba = _pair_link(blocks, xy, params, cross_db, metre_db, per_metre, code, tx, sens, a, b,
-                                run_start, run_end, run_len)
+            ab, ba = _pair_link(blocks, rect[a] != 0 and rect[a] == rect[b], xy, params, cross_db, metre_db,
+                                per_metre, code, tx, sens, a, b, run_start, run_end, run_len)
             link[i, k] = ab if i == a else ba
     return -1
 

@@ -273,8 +273,8 @@ class LinkModel:
         if self.shadowing is not None:
             return self._columns(xy, which, tx, sens)[0]
         link = np.empty((r, which.size), dtype=np.bool_)
-        bad = _radio_link_columns_only(self.raster.blocks, xy, self._params, self.cross_db, self.metre_db,
-                                       self.per_metre, self.code, tx, sens, which, link)
+        bad = _radio_link_columns_only(self.raster.blocks, self.raster.free_ids, xy, self._params, self.cross_db,
+                                       self.metre_db, self.per_metre, self.code, tx, sens, which, link)
         if bad >= 0:
             raise self._outside("positions", xy[bad])
         return link
@@ -292,8 +292,8 @@ class LinkModel:
                                           and self._last_key == xy.tobytes() + tx.tobytes() + sens.tobytes()):
             return self.evaluate(xy).link
         link = np.empty((r, r), dtype=np.bool_)
-        bad = _radio_link_all(self.raster.blocks, xy, self._params, self.cross_db, self.metre_db, self.per_metre,
-                              self.code, tx, sens, link)
+        bad = _radio_link_all(self.raster.blocks, self.raster.free_ids, xy, self._params, self.cross_db,
+                              self.metre_db, self.per_metre, self.code, tx, sens, link)
         if bad >= 0:
             raise self._outside("positions", xy[bad])
         return link
