@@ -343,8 +343,9 @@ class MapSharing:
         maxima and no cell decreases), so taking just those cells gives the same map: a broadcast full map
         then costs its receivers a delta's work instead of the whole map's each, which grew with the square of
         the team (docs/performance-history.md). The other receivers take the sender's known cells, which
-        are all that can raise theirs, so a map is written (and its memory taken, swarm.util.memory) only
-        where it changes, not over every page."""
+        are all that can raise theirs: in a swarm (with knowledge planes) only those cells are merged, so a map
+        is written (and its memory taken, swarm.util.memory) only where it changes; in a team the whole
+        decoded map is, which costs less than listing its known cells."""
         since = msg.__dict__.get("_since")
         robots = np.asarray(rows, dtype=np.int64)
         quick = np.zeros(len(ids), dtype=np.bool_)
@@ -363,16 +364,20 @@ class MapSharing:
             else:
                 merge_cells_many(stack, robots[quick], cells, values)
         if not quick.all():
-            known_cells, known_values = msg.known_cells()
             others = robots[~quick]
-            if planes is not None:
+            if planes is not None:  # a swarm: the sender's known cells, so only the pages they raise are written
+                known_cells, known_values = msg.known_cells()
                 merge_into_many(stack, planes.free, planes.solid, planes.mask(others), known_cells, known_values,
                                 _NO_CELLS, _NO_DIRTY, TILE)
-            else:
-                merge_cells_many(stack, others, known_cells, known_values)
-            # The decoded cells would live as long as the message (inboxes, queued deliveries); a later
+            else:  # a team: the whole decoded map, cheaper than listing its known cells
+                dense = msg.dense()
+                for row in others.tolist():
+                    flat = stack[row].reshape(-1)
+                    np.maximum(flat, dense, out=flat)
+            # The decoded map or cells would live as long as the message (inboxes, queued deliveries); a later
             # delivery of it decodes again.
             msg.__dict__.pop("_known", None)
+            msg.__dict__.pop("_dense", None)
         return quick
 
     def _book_full(self, msg: MapUpdate, robots: np.ndarray, quick: np.ndarray, width: int, ours: bool) -> None:

@@ -332,7 +332,7 @@ class Simulation:
         inboxes, self.inboxes = self.inboxes, Inboxes.empty(self.spec.robots.count)
         deliveries, self._deliveries = self._deliveries, []
         if not deliveries:  # most ticks
-            return inboxes, [[] for _ in inboxes]
+            return inboxes, [[] for _ in range(len(inboxes))]
         merged = self.sharing.receive_tick(deliveries, self.known, ~self.failed, cells=self._mirror is not None,
                                            tick=tick)
         if self.maes_merge is not None:
