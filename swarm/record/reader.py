@@ -35,6 +35,8 @@ _ARRAYS_V1 = ("pose", "metrics", "known_gap", "known_val", "seen_gap", "link_idx
               "act_robot", *(f"{s}_n" for s in STREAMS_V1))
 _BLOCK_ARRAYS = (*_ARRAYS_V1, "msg_via", "msg_lost_n", "msg_lost", "msg_lost_cause", "group_robot", "group_id",
                  "aoi_idx", "aoi_val", "contact_robot", "team_free", "group_n", "aoi_n", "contact_n")
+_GAPPED_V3 = ("link_idx", "rssi_idx", "aoi_idx")
+"""Index streams that version 3 stores as per-tick gaps under ``*_gap`` (read back as indices here)."""
 
 
 @dataclass(frozen=True)
@@ -183,10 +185,19 @@ class Recording:
 
     def _arrays(self, body: dict[str, Any], index: int) -> dict[str, np.ndarray]:
         out = {}
+        gapped = self.version >= 3  # link_idx, rssi_idx and aoi_idx are stored as per-tick gaps
         for name in _BLOCK_ARRAYS if self.has_comm else _ARRAYS_V1:
-            if name not in body:
-                raise bad(self.path, f"block {index} has no {name!r}")
-            out[name] = unpack_array(body[name], f"block {index}.{name}", self.path)
+            stored = name.replace("_idx", "_gap") if gapped and name in _GAPPED_V3 else name
+            if stored not in body:
+                raise bad(self.path, f"block {index} has no {stored!r}")
+            out[name] = unpack_array(body[stored], f"block {index}.{stored}", self.path)
+        if gapped:
+            for name in _GAPPED_V3:
+                counts = out[name.replace("_idx", "_n")]
+                if int(counts.sum(dtype=np.int64)) != out[name].size:
+                    raise bad(self.path, f"block {index}: {name.replace('_idx', '_gap')} has {out[name].size} "
+                                         f"entries, its counts say {int(counts.sum(dtype=np.int64))}")
+                out[name] = _absolute(out[name].astype(np.int64), _offsets(counts.astype(np.int64)))
         if not self.has_comm:  # version 1: no communication streams, every message its sender's own
             n, msgs = body.get("n"), len(out["msg_sender"])
             zeros = np.zeros(n if isinstance(n, int) and n > 0 else 0, dtype=np.uint32)
@@ -283,11 +294,33 @@ class Recording:
         self.team_free: np.ndarray = cat["team_free"].astype(np.int64)
         """Per tick: the team's known free cells (0 in a version 1 file)."""
         self._msg["type"] = _cat(types, "i8")
-        self._msg_rssi = dequantise_rssi(cat["msg_rssi"].astype(np.int16), self.quantum)
         self._msg_recv_off = _offsets(self._msg["recv_n"])
+        msg_rssi = cat["msg_rssi"].astype(np.int16)
+        if self.version >= 3:
+            msg_rssi = self._undelta_msg_rssi(msg_rssi)
+        self._msg_rssi = dequantise_rssi(msg_rssi, self.quantum)
         self.message_types: tuple[str, ...] = tuple(type_names)
         self._act_robot = cat["act_robot"].astype(np.int64)
         self._acts: list[bytes] = acts
+
+    def _undelta_msg_rssi(self, delta: np.ndarray) -> np.ndarray:
+        """Version 3 stores each receiver's RSSI as its difference (mod 2**16) from the RSSI stream's value of
+        the pair at the sending tick: add that value back, for all messages at once (the stream's last update
+        of each pair at or before the tick, found by sorting the updates by pair and tick)."""
+        r, ticks = self.n_robots, self.ticks
+        update_tick = np.repeat(np.arange(ticks, dtype=np.int64), np.diff(self._off["rssi"]))
+        keys = self._rssi_idx * ticks + update_tick
+        order = np.argsort(keys, kind="stable")
+        keys, values = keys[order], self._rssi_val[order]
+        msg_tick = np.repeat(np.arange(ticks, dtype=np.int64), np.diff(self._off["msg"]))
+        per_receiver = np.repeat(np.arange(len(msg_tick)), self._msg["recv_n"])
+        pair = self._msg["recv"] * r + self._msg["via"][per_receiver]
+        pos = np.searchsorted(keys, pair * ticks + msg_tick[per_receiver], side="right") - 1
+        known = pos >= 0
+        known[known] = keys[pos[known]] // ticks == pair[known]
+        base = np.full(len(pair), RSSI_NAN, dtype=np.int32)
+        base[known] = values[pos[known]]
+        return (base + delta.astype(np.int32)).astype(np.int16)
 
     # ------------------------------------------------------------------------------ reconstruction ----
     def _check_tick(self, tick: int) -> int:

@@ -160,20 +160,20 @@ class _Block:
             **{f"{k}_n": pack_array(np.array(v), "<u4") for k, v in self.counts.items()},
             "known_gap": pack_array(_gaps(self.known_idx), "<u4", True), "known_val": cat(self.known_val, "|u1"),
             "seen_gap": pack_array(_gaps(self.seen_idx), "<u4", True),
-            "link_idx": cat(self.link_idx, "<u4"),
-            "rssi_idx": cat(self.rssi_idx, "<u4"), "rssi_val": cat(self.rssi_val, "<i2", True),
+            "link_gap": pack_array(_gaps(self.link_idx), "<u4", True),
+            "rssi_gap": pack_array(_gaps(self.rssi_idx), "<u4", True), "rssi_val": cat(self.rssi_val, "<i2", True),
             "msg_sender": pack_array(msg[:, 0], "<u2"), "msg_seq": pack_array(msg[:, 1], "<u4"),
             "msg_type": pack_array(msg[:, 2], "<u2"), "msg_size": pack_array(msg[:, 3], "<u4"),
             "msg_recv_n": pack_array(msg[:, 4], "<u2"),
             "msg_recv": pack_array(np.array(self.msg_recv), "<u2"),
-            "msg_rssi": pack_array(np.array(self.msg_rssi), "<i2"),
+            "msg_rssi": pack_array(np.array(self.msg_rssi), "<i2", shuffle=True),
             "msg_types": list(self.msg_types),
             "msg_via": pack_array(msg[:, 5], "<u2"), "msg_lost_n": pack_array(msg[:, 6], "<u2"),
             "msg_lost": pack_array(np.array(self.msg_lost), "<u2"),
             "msg_lost_cause": pack_array(np.array(self.msg_lost_cause), "|u1"),
             "group_robot": pack_array(np.array(self.group_robot), "<u2"),
             "group_id": pack_array(np.array(self.group_id), "<u2"),
-            "aoi_idx": cat(self.aoi_idx, "<u4"), "aoi_val": cat(self.aoi_val, "<u4", True),
+            "aoi_gap": pack_array(_gaps(self.aoi_idx), "<u4", True), "aoi_val": cat(self.aoi_val, "<u4", True),
             "contact_robot": pack_array(np.array(self.contact_robot), "<u2"),
             "team_free": pack_array(np.array(self.team_free), "<u4", shuffle=True),
             "act_robot": pack_array(np.array(self.act_robot), "<u2"), "act": list(self.act),
@@ -323,7 +323,11 @@ class Recorder:
                     if q is None:
                         q = quantise_rssi(links.rssi, self.quantum)
                     b.msg_recv.extend(receivers)
-                    b.msg_rssi.extend(q[receivers, env.transmitter].tolist())  # a relayed copy: its relay's signal
+                    # a relayed copy: its relay's signal. Stored as the difference from the RSSI stream's value
+                    # (the mirror still holds the sending tick's), modulo 2**16: a few units, where the values
+                    # themselves made the largest stream of a swarm's recording
+                    exact = q[receivers, env.transmitter].astype(np.int32)
+                    b.msg_rssi.extend((exact - self._rssi[receivers, env.transmitter]).astype(np.int16).tolist())
                 count += 1
         b.counts["msg"].append(count)
 

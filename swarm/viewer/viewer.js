@@ -20,7 +20,7 @@
   const LOST_TICKS = 6;           // so does a failed delivery
   const TRAIL_POINTS = 600;       // points per robot and trail (fading or limited trails are redrawn every frame)
   const TRAIL_BANDS = 10;         // a fading trail is drawn in this many bands of equal age, oldest faintest
-  const READABLE_VERSIONS = [1, 2];
+  const READABLE_VERSIONS = [1, 2, 3];
   const CAUSE_STYLE = {           // colour and explanation of each failed-delivery cause (HEAD loss_causes)
     link: [[200, 0, 0], 'no link: the receiver is out of the radio\'s reach (or failed)'],
     loss: [[230, 0, 180], 'random packet loss (comm.loss)'],
@@ -166,10 +166,16 @@
     const head = chunks[0][1];
     const tail = chunks[chunks.length - 1][1];
     if (!READABLE_VERSIONS.includes(head.version)) {
-      throw new Error(`format version ${head.version}; this viewer knows ${READABLE_VERSIONS.join(' and ')}`);
+      throw new Error(`format version ${head.version}; this viewer knows ${READABLE_VERSIONS.join(', ')}`);
     }
     const hasComm = head.version >= 2;
+    // version 3: link, RSSI and merge indices stored as per-tick gaps; msg_rssi as differences from the RSSI
+    // stream (not drawn: the viewer shows the stream's values)
+    const gapped = head.version >= 3;
     const blocks = chunks.slice(1, -1).map((c) => c[1]);
+    if (gapped) {
+      for (const b of blocks) { b.link_idx = b.link_gap; b.rssi_idx = b.rssi_gap; b.aoi_idx = b.aoi_gap; }
+    }
     const commStreams = ['group', 'aoi', 'contact'];
     const streams = ['known', 'seen', 'link', 'rssi', 'msg', 'act', ...(hasComm ? commStreams : [])];
     const commArrays = ['msg_via', 'msg_lost_n', 'msg_lost', 'msg_lost_cause', 'group_robot', 'group_id', 'aoi_idx',
@@ -214,14 +220,14 @@
       head, tail, R, H, W, T, off, explored, coverage, hasComm,
       poses: cat.pose, material: typed(head.material),
       knownIdx: ungap(cat.known_gap, off.known), knownVal: cat.known_val,
-      seenIdx: ungap(cat.seen_gap, off.seen), linkIdx: cat.link_idx,
-      rssiIdx: cat.rssi_idx, rssiVal: cat.rssi_val,
+      seenIdx: ungap(cat.seen_gap, off.seen), linkIdx: gapped ? ungap(cat.link_idx, off.link) : cat.link_idx,
+      rssiIdx: gapped ? ungap(cat.rssi_idx, off.rssi) : cat.rssi_idx, rssiVal: cat.rssi_val,
       msg: { sender: cat.msg_sender, seq: cat.msg_seq, type: concat(msgTypeParts, Uint16Array), size: cat.msg_size,
              recvOff: prefix(cat.msg_recv_n), recv: cat.msg_recv, rssi: cat.msg_rssi, tick: msgTick, types: typeNames,
              via: cat.msg_via, lostOff: prefix(cat.msg_lost_n), lost: cat.msg_lost, lostCause: cat.msg_lost_cause },
       causes: head.loss_causes || [],
       group: { robot: cat.group_robot, id: cat.group_id },
-      aoi: { idx: cat.aoi_idx, val: cat.aoi_val },
+      aoi: { idx: gapped ? ungap(cat.aoi_idx, off.aoi) : cat.aoi_idx, val: cat.aoi_val },
       contact: { robot: cat.contact_robot },
       teamFree: cat.team_free,
       act: { robot: cat.act_robot, data: acts, tick: actTick, decoded: new Map() },

@@ -21,6 +21,10 @@ from .test_record import rebuild
 
 V1_FILE = Path(__file__).parent / "data" / "v1-building20.swr"
 """Recorded by swarm's format version 1 writer (main before issue 34): 3 robots, building 20, 40 ticks."""
+V2_FILE = Path(__file__).parent / "data" / "v2-building20.swr"
+"""Recorded by swarm's format version 2 writer (main before issue 47) from :data:`V2_SPEC`."""
+V2_SPEC = {"seed": 3, "map": {"kind": "building", "size": 20}, "robots": {"count": 4}, "stop": {"max_ticks": 120},
+           "radio": {"tx_power_dbm": -30.0}, "comm": {"loss": 0.1, "relay": "flood"}, "record_every": 1}
 
 EVERY_CAUSE = {"seed": 3, "map": {"kind": "building", "size": 30}, "robots": {"count": 5}, "stop": {"max_ticks": 400},
                "radio": {"tx_power_dbm": -20.0, "per": "bpsk", "per_ref": 0.9, "per_ref_bytes": 100,
@@ -152,15 +156,37 @@ def test_a_version_1_recording_still_loads():
         rec.comm_at(5)
 
 
+def test_a_version_2_recording_reads_as_version_3_of_the_same_run():
+    """Version 3 stores link toggles, RSSI updates and merges as per-tick gaps: the run recorded by the
+    version 2 writer (indices) reads back the same at every tick as the same run recorded now."""
+    old = load_recording(V2_FILE)
+    new, _, _ = record(V2_SPEC)  # blocks of 64 ticks; the old file's were 32
+    assert (old.version, new.version) == (2, 3) and old.ticks == new.ticks == 121
+    assert new.header["spec"] == old.header["spec"]
+    toggles = merges = 0
+    for tick in range(old.ticks):
+        a, b = old.state_at(tick), new.state_at(tick)
+        assert np.array_equal(a.known, b.known) and np.array_equal(a.link, b.link)
+        assert np.array_equal(a.rssi, b.rssi, equal_nan=True)
+        ca, cb = old.comm_at(tick), new.comm_at(tick)
+        assert np.array_equal(ca.merged_at, cb.merged_at) and ca.groups == cb.groups
+        assert old.messages_at(tick) == new.messages_at(tick)
+        toggles += tick > 0 and not np.array_equal(a.link, old.state_at(tick - 1).link)
+        merges += tick > 0 and not np.array_equal(ca.merged_at, old.comm_at(tick - 1).merged_at)
+    assert toggles >= 3 and merges >= 10  # the gap-coded streams were exercised
+
+
 @pytest.mark.parametrize("edit, needle", [
     (lambda k, b: {**b, "msg_lost_cause": ["|u1", False, b"\x09" * len(b["msg_lost_cause"][2])]}
      if k == b"BLCK" and b["msg_lost_cause"][2] else b, "loss cause"),
     (lambda k, b: {**b, "group_id": ["<u2", False, b"\x63\x00" * (len(b["group_id"][2]) // 2)]}
      if k == b"BLCK" and b["group_id"][2] else b, "group"),
     (lambda k, b: {**b, "team_free": ["<u4", False, b""]} if k == b"BLCK" else b, "team_free"),
-    (lambda k, b: {k2: v for k2, v in b.items() if k2 != "aoi_idx"} if k == b"BLCK" else b, "aoi_idx"),
+    (lambda k, b: {k2: v for k2, v in b.items() if k2 != "aoi_gap"} if k == b"BLCK" else b, "aoi_gap"),
+    (lambda k, b: {**b, "link_gap": ["<u4", True, b["link_gap"][2][:-4]]} if k == b"BLCK" and b["link_gap"][2] else b,
+     "link_gap has"),
     (lambda k, b: {k2: v for k2, v in b.items() if k2 != "loss_causes"} if k == b"HEAD" else b, "loss_causes"),
-    (lambda k, b: {**b, "version": 3} if k == b"HEAD" else b, "version 3; this reader knows 1 to 2"),
+    (lambda k, b: {**b, "version": 4} if k == b"HEAD" else b, "version 4; this reader knows 1 to 3"),
 ])
 def test_broken_communication_streams_are_invalid_input(every_cause, edit, needle):
     data = rebuild(every_cause[3], edit)
