@@ -56,6 +56,7 @@ from maps.materials import colour_of
 from swarm.base.errors import InvalidInput
 
 from swarm.comm.medium import LOSS_CAUSES
+from swarm.util.memory import lazy_zeros
 from swarm.util.source import package_version
 from .container import BLOCK, FORMAT_NAME, FORMAT_VERSION, HEAD, MAGIC, TAIL, encode_chunk, pack_array
 from .kernels import RSSI_NAN, _record_changes, _record_links, changed_cells, quantise_rssi
@@ -131,8 +132,8 @@ class _Block:
         self.rssi_idx: list[np.ndarray] = []
         self.rssi_val: list[np.ndarray] = []
         self.msg_cols: list[tuple[int, ...]] = []  # sender, seq, type, size, receivers, transmitter, lost
-        self.msg_recv: list[int] = []
-        self.msg_rssi: list[int] = []
+        self.msg_recv: list[np.ndarray] = []  # per message (a swarm's message reaches a thousand robots)
+        self.msg_rssi: list[np.ndarray] = []
         self.msg_lost: list[int] = []
         self.msg_lost_cause: list[int] = []
         self.group_robot: list[int] = []
@@ -165,8 +166,8 @@ class _Block:
             "msg_sender": pack_array(msg[:, 0], "<u2"), "msg_seq": pack_array(msg[:, 1], "<u4"),
             "msg_type": pack_array(msg[:, 2], "<u2"), "msg_size": pack_array(msg[:, 3], "<u4"),
             "msg_recv_n": pack_array(msg[:, 4], "<u2"),
-            "msg_recv": pack_array(np.array(self.msg_recv), "<u2"),
-            "msg_rssi": pack_array(np.array(self.msg_rssi), "<i2", shuffle=True),
+            "msg_recv": cat(self.msg_recv, "<u2"),
+            "msg_rssi": cat(self.msg_rssi, "<i2", shuffle=True),
             "msg_types": list(self.msg_types),
             "msg_via": pack_array(msg[:, 5], "<u2"), "msg_lost_n": pack_array(msg[:, 6], "<u2"),
             "msg_lost": pack_array(np.array(self.msg_lost), "<u2"),
@@ -194,13 +195,15 @@ class Recorder:
         self.block_ticks = block_ticks
         self.quantum = rssi_quantum_db
         self.update_units = round(rssi_update_db / rssi_quantum_db)
-        self._known = np.zeros((n, h, w), dtype=np.uint8)
+        # written only where a map changed: lazily allocated pages (numpy's huge pages would take 2 MB per
+        # changed cell of a swarm's sparse knowledge; swarm.util.memory)
+        self._known = lazy_zeros((n, h, w), np.uint8)
         self._seen = np.zeros((h, w), dtype=np.uint8)
         self._link = np.zeros((n, n), dtype=np.bool_)
         self._rssi = np.full((n, n), RSSI_NAN, dtype=np.int16)
         self._acts: list[bytes | None] = [None] * n
         self._groups = [-1] * n                                  # each robot's group (its smallest member)
-        self._merged_at = np.zeros(n * n, dtype=np.int64)        # mirror of sim.ages.merged_at
+        self._merged_at = lazy_zeros((n * n,), np.int64)          # mirror of sim.ages.merged_at
         self._aoi_idx = np.empty(n * n, dtype=np.int64)          # scratch for its changes
         self._aoi_val = np.empty(n * n, dtype=np.int64)
         self._links_changed = True                               # since the groups were last labelled
@@ -312,22 +315,22 @@ class Recorder:
             for env in outbox:
                 message_type = getattr(type(env.message), "message_type", type(env.message).__name__)
                 code = b.msg_types.setdefault(message_type, len(b.msg_types))
-                receivers = list(env.delivered_to)
+                receivers = np.asarray(env.delivered_to, dtype=np.int64)
                 lost = env.lost or ()
                 b.msg_cols.append((env.sender, env.seq, code, len(env.data), len(receivers), env.transmitter,
                                    len(lost)))
                 for robot, cause in lost:
                     b.msg_lost.append(robot)
                     b.msg_lost_cause.append(cause)
-                if receivers:
+                if len(receivers):
                     if q is None:
                         q = quantise_rssi(links.rssi, self.quantum)
-                    b.msg_recv.extend(receivers)
+                    b.msg_recv.append(receivers)
                     # a relayed copy: its relay's signal. Stored as the difference from the RSSI stream's value
                     # (the mirror still holds the sending tick's), modulo 2**16: a few units, where the values
                     # themselves made the largest stream of a swarm's recording
                     exact = q[receivers, env.transmitter].astype(np.int32)
-                    b.msg_rssi.extend((exact - self._rssi[receivers, env.transmitter]).astype(np.int16).tolist())
+                    b.msg_rssi.append((exact - self._rssi[receivers, env.transmitter]).astype(np.int16))
                 count += 1
         b.counts["msg"].append(count)
 
