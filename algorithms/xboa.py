@@ -450,6 +450,7 @@ class XBOA:
 
     # --------------------------------------------------------------------------- coordination ----
     def _read_inbox(self, obs: Observation) -> None:
+        coarse: list[tuple[np.ndarray, np.ndarray]] = []  # the map's tiles, coarsened once for all the tick's claims
         for msg in obs.inbox:
             if not isinstance(msg, TargetAnnouncement) or msg.sender == obs.robot_id:
                 continue
@@ -457,20 +458,26 @@ class XBOA:
                 self.claims.pop(msg.sender, None)
                 continue
             self.claims[msg.sender] = _Claim(msg.tick, obs.tick, np.asarray(msg.poses, np.int64))
-            if (self.params.overlap_penalty and self.goals and msg.sender < obs.robot_id
-                    and msg.tick >= self.decided_at and self._overlaps(obs.known, msg.poses)):
+            if (self.params.overlap_penalty and self.goals and not self.redecide and msg.sender < obs.robot_id
+                    and msg.tick >= self.decided_at and self._overlaps(obs.known, msg.poses, coarse)):
                 self.redecide = True
         expired = [k for k, c in self.claims.items() if obs.tick - c.received > self.params.claim_ticks]
         for k in expired:
             del self.claims[k]
 
-    def _overlaps(self, known: np.ndarray, poses: np.ndarray) -> bool:
-        """Whether ``poses`` (another robot's plan) will observe at least CONFLICT_SHARE of my target region."""
+    def _overlaps(self, known: np.ndarray, poses: np.ndarray, coarse: list[tuple[np.ndarray, np.ndarray]]) -> bool:
+        """Whether ``poses`` (another robot's plan) will observe at least CONFLICT_SHARE of my target region.
+        ``coarse``: empty, or the (unknown, occupied) tiles of ``known`` from an earlier call of this tick (a
+        swarm's robot hears hundreds of claims a tick; coarsening the whole map for each made xBOA's cost
+        grow with robots x map area)."""
         region = self.regions[0] if self.regions else None
         if region is None or len(region) == 0:
             return False
         f = self.params.tile_cells
-        unknown, occupied, _ = coarsen(known, np.zeros(known.shape, bool), f)
+        if not coarse:
+            unknown, occupied, _ = coarsen(known, np.zeros(known.shape, bool), f)
+            coarse.append((unknown, occupied))
+        unknown, occupied = coarse[0]
         seen = predicted_observed(Belief(unknown, occupied, self.tile_m), _tile_poses(poses, f, unknown.shape,
                                                                                       self.lidar), self.lidar)
         tiles = np.stack(np.unravel_index(region[:, 0], known.shape), axis=1) // f
