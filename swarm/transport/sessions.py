@@ -18,6 +18,13 @@ import zenoh
 
 from swarm.base.errors import InvalidInput
 
+ACCEPT_TIMEOUT_MS = 2000
+"""How long a connection to a listening runtime may take to finish zenoh's handshake (its usrpwd
+authentication included) before it is closed; zenoh's default is 10 s."""
+ACCEPT_PENDING = 1000
+"""How many connections may be in that handshake at once; zenoh closes any further one at once (its
+default is 100, which 100 half-open connections fill for good: issue 48)."""
+
 IP_PROTOCOLS = ("tcp", "udp", "tls", "quic", "ws")
 PROTOCOLS = (*IP_PROTOCOLS, "unixsock-stream")
 ENDPOINT_ALLOWED = ("a zenoh endpoint PROTOCOL/HOST:PORT (PROTOCOL one of tcp, udp, tls, quic, ws; "
@@ -72,9 +79,26 @@ def session_config(listen: Sequence[str] = (), connect: Sequence[str] = (), user
         c.insert_json5("transport/auth/usrpwd/password", json.dumps(password))
     if dictionary_file is not None:
         c.insert_json5("transport/auth/usrpwd/dictionary_file", json.dumps(dictionary_file))
+    if listen:  # what connections that have not authenticated (yet) may hold: docs/security.md
+        c.insert_json5("transport/unicast/accept_timeout", str(ACCEPT_TIMEOUT_MS))
+        c.insert_json5("transport/unicast/accept_pending", str(accept_pending()))
     if access_control is not None:
         c.insert_json5("access_control", json.dumps(access_control))
     return c
+
+
+def accept_pending() -> int:
+    """:data:`ACCEPT_PENDING`, or less when this process may not open that many files: a pending
+    connection holds a file descriptor, and the runtime must still be able to write its result."""
+    try:
+        import resource
+
+        soft = resource.getrlimit(resource.RLIMIT_NOFILE)[0]
+    except (ImportError, OSError, ValueError):
+        return ACCEPT_PENDING
+    if soft == resource.RLIM_INFINITY:
+        return ACCEPT_PENDING
+    return max(16, min(ACCEPT_PENDING, soft // 4))
 
 
 def zenoh_reason(exc: BaseException) -> str:

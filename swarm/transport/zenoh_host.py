@@ -327,20 +327,38 @@ class ZenohHost:
             self._times.add("zenoh: wait for remote replies", time.perf_counter() - t0)
 
     def close(self) -> None:
+        """Tell the agents the run is over and close the session, in at most about :data:`CLOSE_TIMEOUT_S`
+        seconds and never raising: the run's result is computed by now, and no network trouble (zenoh's
+        own "close operation timed out!", connections that never finish their handshake) may cost it."""
         try:
             self.session.put(f"{self.prefix}/end", b"end", congestion_control=BLOCK)
         except Exception:  # the session may already be failing; closing below is what matters
             pass
-        for d in self._declared:
+        for d in [*self._declared, *self._publishers.values()]:
             try:
                 d.undeclare()
             except Exception:
                 pass
-        for p in self._publishers.values():
-            try:
-                p.undeclare()
-            except Exception:
-                pass
-        self.session.close()
+        close_session(self.session, CLOSE_TIMEOUT_S)
         if self._credentials is not None:
             self._credentials.remove()
+
+
+CLOSE_TIMEOUT_S = 5.0
+"""How long :meth:`ZenohHost.close` waits for zenoh to close the session before leaving it to finish (or
+not) in a daemon thread."""
+
+
+def close_session(session: zenoh.Session, timeout_s: float) -> bool:
+    """``session.close()`` in a daemon thread, waited for at most ``timeout_s``; True if it closed in time.
+    zenoh's errors are swallowed: a session that cannot close cleanly is still given up."""
+    def close() -> None:
+        try:
+            session.close()
+        except Exception:
+            pass
+
+    closer = threading.Thread(target=close, name="swarm-zenoh-close", daemon=True)
+    closer.start()
+    closer.join(timeout_s)
+    return not closer.is_alive()
