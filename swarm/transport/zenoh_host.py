@@ -42,7 +42,7 @@ import numpy as np
 import zenoh
 
 from swarm.base.types import Action
-from .auth import Credentials, RunSecret, access_control, check_run_id, verify_act
+from .auth import Credentials, RunSecret, access_control, check_run_id, new_nonce, verify_act
 from .base import HostStats, TickBatch
 from .batch import ActBatchDecoder, BatchEncoder
 from .group import AgentGroup
@@ -90,7 +90,8 @@ class ZenohHost:
         self.timeout_s = timeout_s
         self.join_timeout_s = join_timeout_s
         self.secret = secret or RunSecret.generate()
-        self._tokens = {r: self.secret.robot_token(run_id, r) for r in sorted(self.remote)}
+        self.nonce = new_nonce()  # this start's: acts signed for another run (same id and secret) are refused
+        self._tokens = {r: self.secret.robot_token(run_id, r).for_run(self.nonce) for r in sorted(self.remote)}
         self._credentials: Credentials | None = None
         if listen:
             self._credentials = Credentials(list(self._tokens.values()))
@@ -231,7 +232,7 @@ class ZenohHost:
             for reset in resets:
                 if reset.robot.id in self.remote and reset.robot.id not in missing:
                     self.session.put(f"{self.prefix}/robot/{reset.robot.id}/reset", encode_reset(reset),
-                                     congestion_control=BLOCK)
+                                     attachment=self.nonce, congestion_control=BLOCK)
 
     def act(self, batch: TickBatch) -> list[Action | None]:
         tick = batch.tick

@@ -118,3 +118,33 @@ def test_a_half_open_connection_flood_keeps_no_agent_out_and_the_result_is_writt
     assert elapsed < 45, f"the run took {elapsed:.1f} s"
     for a in agents:
         assert a.returncode == 0
+
+
+def test_acts_captured_in_one_run_are_refused_in_the_next_with_the_same_run_id_and_secret():
+    """Issue 48 item 4: run A's agent for robot 1 signs its own (different) decisions; run B, started with
+    the same run id and secret, gets those captured acts replayed before each honest reply. Each run's
+    nonce binds the signatures: B refuses every replay and equals the clean run."""
+    from swarm.api import Action
+    from swarm.sim.loop import Simulation
+    from swarm.transport.auth import RunSecret, sign_act
+    from swarm.transport.wire import encode_act
+    from tests.swarm.transport.test_trust import SPEC, honest, remote_run, same_run
+
+    spec = {**SPEC, "stop": {"max_ticks": 40}}
+    run_id, secret = "replay48", RunSecret.generate()
+    captured: dict[int, tuple[bytes, bytes]] = {}
+
+    def own_decision(tick, act, token):  # run A: robot 1's agent drives its own way, validly signed
+        mine = encode_act(tick, 1, Action(velocity=(1.0, 1.0)))
+        captured[tick] = (mine, sign_act(token, tick, mine))
+        return [captured[tick]]
+
+    def replay_first(tick, act, token):  # run B: the captured act for this tick, then the honest one
+        return [*([captured[tick]] if tick in captured else []), (act, sign_act(token, tick, act))]
+
+    remote_run({1: own_decision, 2: honest}, spec=spec, run_id=run_id, secret=secret)
+    assert len(captured) >= 40
+    clean = Simulation({**spec, "transport": "inprocess"}).run()
+    b = remote_run({1: replay_first, 2: honest}, spec=spec, run_id=run_id, secret=secret)
+    same_run(b, clean)
+    assert b.summary["acts"]["refused"] == [0, b.summary["ticks"], 0], "every replay refused"
