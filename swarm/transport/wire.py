@@ -26,7 +26,7 @@ import numpy as np
 from numba import njit
 
 from swarm.base.types import Action, NavStatus, Neighbour, Neighbours, Pose, RobotInfo, frozen_builder
-from swarm.comm.messages import MessageError, decode, encode, gaps_u32
+from swarm.comm.messages import MAX_MESSAGES_PER_TICK, MessageError, decode, encode, gaps_u32
 from swarm.knowledge.cellcodec import get_u32
 
 WIRE_VERSION = 2
@@ -68,13 +68,16 @@ class ObsPacket(NamedTuple):
 
 class ActPacket(NamedTuple):
     """A decoded act packet (a named tuple, as cheap to build as ObsPacket). ``action.messages`` holds the
-    messages that decoded; ``bad_messages`` counts those that did not (dropped one by one)."""
+    messages that decoded; ``bad_messages`` counts those that did not (dropped one by one) and those past
+    the first :data:`~swarm.comm.messages.MAX_MESSAGES_PER_TICK` (never decoded); ``problems`` says why,
+    one entry per undecodable message and one for the excess (for the run's ``message_dropped`` events)."""
 
     tick: int
     robot_id: int
     action: Action
     message_bytes: tuple[bytes, ...]
     bad_messages: int = 0
+    problems: tuple[str, ...] = ()
 
 
 _LOCAL = threading.local()
@@ -354,16 +357,21 @@ def decode_act(data: bytes) -> ActPacket:
         raise WireError("act: debug must be a map")
     if not messages:
         action = _action(goal=goal, velocity=velocity, messages=(), debug=debug, clear_goal=bool(clear_goal))
-        return _tuple_new(ActPacket, (tick, robot, action, (), 0))
+        return _tuple_new(ActPacket, (tick, robot, action, (), 0, ()))
     if not all(isinstance(m, bytes) for m in messages):
         raise WireError("act: messages must be a list of byte strings")
+    problems = []
+    if len(messages) > MAX_MESSAGES_PER_TICK:  # never decoded: one packet must not cost the run 170,000 decodes
+        problems.append(f"{len(messages) - MAX_MESSAGES_PER_TICK} message(s) over the per-tick budget (more than "
+                        f"{MAX_MESSAGES_PER_TICK} messages from one robot in a tick)")
     decoded, kept = [], []
-    for m in messages:
+    for m in messages[:MAX_MESSAGES_PER_TICK]:
         try:
             decoded.append(decode(m))
-        except MessageError:
+        except MessageError as exc:
+            problems.append(f"does not decode ({str(exc)[:80]})")
             continue
         kept.append(m)
     action = Action(goal=goal, velocity=velocity, messages=tuple(decoded), debug=debug, clear_goal=bool(clear_goal))
     return ActPacket(tick=tick, robot_id=robot, action=action, message_bytes=tuple(kept),
-                     bad_messages=len(messages) - len(kept))
+                     bad_messages=len(messages) - len(kept), problems=tuple(problems))

@@ -290,6 +290,7 @@ class ZenohHost:
                 action = Action()
             elif bad:
                 self.stats.count("bad_messages", i, bad)
+                self.stats.dropped.append((i, f"{bad} message(s) do not decode"))
             actions[i] = action
 
     def _take_remote(self, tick: int, live: list[int], actions: list[Action | None]) -> None:
@@ -315,6 +316,7 @@ class ZenohHost:
                 continue
             if packet.bad_messages:
                 self.stats.count("bad_messages", i, packet.bad_messages)
+                self.stats.dropped.extend((i, problem) for problem in packet.problems)
             actions[i] = packet.action
 
     def _wait(self, waiting: list[int]) -> None:

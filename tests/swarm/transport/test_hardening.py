@@ -148,3 +148,113 @@ def test_acts_captured_in_one_run_are_refused_in_the_next_with_the_same_run_id_a
     b = remote_run({1: replay_first, 2: honest}, spec=spec, run_id=run_id, secret=secret)
     same_run(b, clean)
     assert b.summary["acts"]["refused"] == [0, b.summary["ticks"], 0], "every replay refused"
+
+
+def test_one_agent_flooding_its_outbox_fails_and_stalls_no_other_robot():
+    """Issue 48 item 3: robot 1's authenticated agent puts one valid, signed, 8 MB act holding 170,000
+    heartbeats at ticks 1 and 2 (its own decisions otherwise). Only the first MAX_MESSAGES_PER_TICK of each
+    are taken, the rest dropped, counted as robot 1's malformed messages and noted in events; local robot
+    0 and remote robot 2 never fail and the run keeps its pace."""
+    import msgpack
+
+    from swarm.comm.messages import MAX_MESSAGES_PER_TICK, Heartbeat, encode
+    from swarm.transport.auth import sign_act
+    from swarm.transport.wire import MAX_PACKET_BYTES
+    from tests.swarm.transport.test_trust import SPEC, honest, remote_run
+
+    flood = 170_000
+
+    def heartbeats(tick, act, token):
+        if tick not in (1, 2):
+            return honest(tick, act, token)
+        items = msgpack.unpackb(act)
+        items[7] = [*items[7], *[encode(Heartbeat(sender=1, tick=tick, x=1.0, y=2.0, theta=0.3))] * flood]
+        packet = msgpack.packb(items, use_bin_type=True)
+        assert 8_000_000 < len(packet) <= MAX_PACKET_BYTES
+        return [(packet, sign_act(token, tick, packet))]
+
+    t0 = time.monotonic()
+    r = remote_run({1: heartbeats, 2: honest}, spec={**SPEC, "stop": {"max_ticks": 40}})
+    elapsed = time.monotonic() - t0
+    assert r.summary["failed_robots"] == [], [e for e in r.events if e["event"] == "agent_failed"]
+    assert r.summary["ticks"] == 40
+    assert r.summary["acts"]["malformed"] == [0, 0, 0]
+    over = 2 * (flood - MAX_MESSAGES_PER_TICK)
+    assert r.summary["messages"]["malformed_by_robot"][0] == r.summary["messages"]["malformed_by_robot"][2] == 0
+    assert r.summary["messages"]["malformed_by_robot"][1] == over
+    budget = [e for e in r.events if e["event"] == "message_dropped" and "per-tick budget" in e["reason"]]
+    assert [(e["tick"], e["robot"]) for e in budget] == [(1, 1), (2, 1)]
+    assert elapsed < 60, f"40 ticks took {elapsed:.0f} s"
+
+
+def test_messages_that_do_not_decode_at_all_are_counted_and_each_gets_an_event():
+    """Issue 48 item 10 (first half): robot 1's agent adds an oversized, an unknown-type and a deeply nested
+    message to its act at ticks 1-3. Each is dropped, counted as robot 1's malformed message and gets its
+    own ``message_dropped`` event saying why; the run is the clean one."""
+    import msgpack
+
+    from swarm.comm.messages import MAX_MESSAGE_BYTES
+    from swarm.sim.loop import Simulation
+    from swarm.transport.auth import sign_act
+    from tests.swarm.transport.test_trust import SPEC, honest, remote_run, same_run
+
+    bad = [b"\x00" * (MAX_MESSAGE_BYTES + 1), msgpack.packb(["no.such.type", 1, 1]), b"\x91" * 5000 + b"\xc0"]
+
+    def undecodable(tick, act, token):
+        if tick not in (1, 2, 3):
+            return honest(tick, act, token)
+        items = msgpack.unpackb(act)
+        items[7] = [*items[7], *bad]
+        packet = msgpack.packb(items, use_bin_type=True)
+        return [(packet, sign_act(token, tick, packet))]
+
+    spec = {**SPEC, "stop": {"max_ticks": 30}}
+    r = remote_run({1: undecodable, 2: honest}, spec=spec)
+    same_run(r, Simulation({**spec, "transport": "inprocess"}).run())
+    assert r.summary["messages"]["malformed_by_robot"] == [0, 9, 0]
+    drops = [e for e in r.events if e["event"] == "message_dropped"]
+    assert [(e["tick"], e["robot"]) for e in drops] == [(t, 1) for t in (1, 2, 3) for _ in bad]
+    reasons = [e["reason"] for e in drops[:3]]
+    assert "larger than" in reasons[0] and "unknown message type" in reasons[1] and "undecodable" in reasons[2]
+    assert all(r.startswith("does not decode") for r in reasons)
+
+
+class Chatty:
+    """A module:Class algorithm whose robot 1 sends 100 heartbeats a tick (robot 0 stays quiet)."""
+
+    name = "chatty"
+
+    def reset(self, robot, params, rng):
+        self.id = robot.id
+
+    def act(self, obs):
+        from swarm.api import Action
+        from swarm.comm.messages import Heartbeat
+
+        x, y, theta = obs.pose
+        beats = tuple(Heartbeat(sender=self.id, tick=obs.tick, x=x, y=y, theta=theta) for _ in range(100))
+        return Action(velocity=(0.2, 0.1), messages=beats if self.id == 1 else ())
+
+
+def test_the_per_tick_budget_is_the_same_in_process_and_over_zenoh():
+    """The budget is applied where every transport's actions meet the radio: an in-process algorithm that
+    sends 100 messages a tick has 64 sent and 36 dropped and counted, with one event a tick, exactly as
+    over zenoh (bit-identical results)."""
+    from swarm.comm.messages import MAX_MESSAGES_PER_TICK
+    from swarm.sim.loop import Simulation
+
+    spec = {"seed": 3, "map": {"kind": "building", "size": 30}, "robots": {"count": 2},
+            "algorithm": {"name": "tests.swarm.transport.test_hardening:Chatty"}, "stop": {"max_ticks": 20}}
+    a = Simulation({**spec, "transport": "inprocess"}).run()
+    b = Simulation({**spec, "transport": "zenoh"}).run()
+    ticks = a.summary["ticks"]
+    assert a.summary["messages"]["malformed_by_robot"] == [0, (100 - MAX_MESSAGES_PER_TICK) * ticks]
+    sent = a.summary["messages"]["sent"]  # robot 1's heartbeats and the runtime's map sharing
+    assert MAX_MESSAGES_PER_TICK * ticks <= sent < (MAX_MESSAGES_PER_TICK + 1) * ticks
+    budget = [e for e in a.events if e["event"] == "message_dropped"]
+    assert [(e["tick"], e["robot"]) for e in budget] == [(t, 1) for t in range(ticks)]
+    assert "36 message(s) over the per-tick budget" in budget[0]["reason"]
+    def strip(r):
+        return {k: v for k, v in r.deterministic_view().items() if k not in ("spec", "key")}
+
+    assert strip(a) == strip(b)
