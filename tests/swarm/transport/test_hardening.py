@@ -258,3 +258,79 @@ def test_the_per_tick_budget_is_the_same_in_process_and_over_zenoh():
         return {k: v for k, v in r.deterministic_view().items() if k not in ("spec", "key")}
 
     assert strip(a) == strip(b)
+
+
+def make_certificates(folder: Path) -> tuple[str, str, str]:
+    """A throw-away certificate authority and a certificate it signed for localhost / 127.0.0.1: the
+    paths of the CA's certificate, the server's certificate and its private key (PEM)."""
+    import datetime
+    import ipaddress
+
+    from cryptography import x509
+    from cryptography.hazmat.primitives import hashes, serialization
+    from cryptography.hazmat.primitives.asymmetric import ec
+    from cryptography.x509.oid import NameOID
+
+    now = datetime.datetime.now(datetime.UTC)
+    ca_key, key = ec.generate_private_key(ec.SECP256R1()), ec.generate_private_key(ec.SECP256R1())
+    ca_name = x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "swarm test CA")])
+    ca = (x509.CertificateBuilder().subject_name(ca_name).issuer_name(ca_name).public_key(ca_key.public_key())
+          .serial_number(x509.random_serial_number()).not_valid_before(now - datetime.timedelta(hours=1))
+          .not_valid_after(now + datetime.timedelta(hours=2))
+          .add_extension(x509.BasicConstraints(ca=True, path_length=None), critical=True).sign(ca_key, hashes.SHA256()))
+    leaf = (x509.CertificateBuilder().subject_name(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, "localhost")]))
+            .issuer_name(ca_name).public_key(key.public_key()).serial_number(x509.random_serial_number())
+            .not_valid_before(now - datetime.timedelta(hours=1)).not_valid_after(now + datetime.timedelta(hours=2))
+            .add_extension(x509.SubjectAlternativeName([x509.DNSName("localhost"),
+                                                        x509.IPAddress(ipaddress.ip_address("127.0.0.1"))]), critical=False)
+            .add_extension(x509.BasicConstraints(ca=False, path_length=None), critical=True).sign(ca_key, hashes.SHA256()))
+    paths = (folder / "ca.pem", folder / "server.pem", folder / "server.key")
+    paths[0].write_bytes(ca.public_bytes(serialization.Encoding.PEM))
+    paths[1].write_bytes(leaf.public_bytes(serialization.Encoding.PEM))
+    paths[2].write_bytes(key.private_bytes(serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8,
+                                           serialization.NoEncryption()))
+    return tuple(str(p) for p in paths)
+
+
+def test_a_tls_endpoint_carries_the_run_and_refuses_plain_tcp(tmp_path: Path, monkeypatch: pytest.MonkeyPatch):
+    """docs/security.md's recipe: the runtime listens on tls/localhost:PORT with SWARM_TLS_CERTIFICATE and
+    SWARM_TLS_PRIVATE_KEY; an agent given SWARM_TLS_ROOT_CA joins and drives its robot; a plain-TCP zenoh
+    session to the same port never links."""
+    import uuid
+
+    import zenoh
+
+    from swarm.sim.loop import Simulation, TransportOptions
+    from swarm.transport.auth import RunSecret
+    from swarm.transport.sessions import session_config
+
+    ca, cert, key = make_certificates(tmp_path)
+    monkeypatch.setenv("SWARM_TLS_CERTIFICATE", cert)
+    monkeypatch.setenv("SWARM_TLS_PRIVATE_KEY", key)
+    port = free_port()
+    endpoint, run_id, secret = f"tls/localhost:{port}", f"tls-{uuid.uuid4().hex[:8]}", RunSecret.generate()
+    spec = {"seed": 1, "map": {"kind": "building", "size": 30}, "robots": {"count": 2}, "transport": "zenoh",
+            "stop": {"max_ticks": 40}}
+    sim = Simulation(spec, transport=TransportOptions(listen=(endpoint,), remote=(1,), timeout_s=20, run_id=run_id,
+                                                      secret=secret))
+    box: dict = {}
+    runner = threading.Thread(target=lambda: box.setdefault("r", sim.run()), daemon=True)
+    runner.start()
+    token = secret.robot_token(run_id, 1)
+    plain = zenoh.open(session_config(connect=[f"tcp/localhost:{port}"], user=token.user, password=token.password))
+    agent = swarm("agent", "--connect", endpoint, "--run", run_id, "--robot", "1", "--timeout", "40",
+                  env={"SWARM_TOKEN": token.text(), "SWARM_TLS_ROOT_CA": ca})
+    try:
+        runner.join(120)
+        assert not runner.is_alive(), "the run must finish"
+        assert not list(plain.info.peers_zid()), "a plain-TCP session never linked to the TLS endpoint"
+        _, err = agent.communicate(timeout=30)
+    finally:
+        plain.close()
+        if agent.poll() is None:
+            agent.kill()
+            agent.communicate(timeout=30)
+    assert agent.returncode == 0, err[-2000:]
+    r = box["r"]
+    assert r.summary["failed_robots"] == [] and r.summary["distance_m"][1] > 0.5
+    assert r.summary["acts"] == {k: [0, 0] for k in ("malformed", "refused", "late", "duplicate")}
