@@ -92,13 +92,13 @@ def _pack(items: list[Any]) -> bytes:
     return packer.pack(items)
 
 
-def _unpack(data: bytes, kind: str, fields: int) -> list[Any]:
+def _unpack(data: bytes, kind: str, fields: int, limit: int = MAX_PACKET_BYTES) -> list[Any]:
     """The packet's items, kind and version included, checked to be a ``kind`` packet of this wire version
-    with ``fields`` fields after them."""
-    if not isinstance(data, (bytes, bytearray, memoryview)) or len(data) > MAX_PACKET_BYTES:
-        raise WireError(f"{kind}: not bytes or larger than {MAX_PACKET_BYTES} bytes")
+    with ``fields`` fields after them and at most ``limit`` bytes."""
+    if not isinstance(data, (bytes, bytearray, memoryview)) or len(data) > limit:
+        raise WireError(f"{kind}: not bytes or larger than {limit} bytes")
     try:
-        items = msgpack.unpackb(data, raw=False, strict_map_key=False, max_bin_len=MAX_PACKET_BYTES)
+        items = msgpack.unpackb(data, raw=False, strict_map_key=False, max_bin_len=limit)
     except Exception as exc:  # msgpack raises many unrelated exception types on corrupt input
         raise WireError(f"{kind}: undecodable ({type(exc).__name__})") from None
     if type(items) is not list or len(items) < 2 or items[0] != kind:

@@ -334,3 +334,34 @@ def test_a_tls_endpoint_carries_the_run_and_refuses_plain_tcp(tmp_path: Path, mo
     r = box["r"]
     assert r.summary["failed_robots"] == [] and r.summary["distance_m"][1] > 0.5
     assert r.summary["acts"] == {k: [0, 0] for k in ("malformed", "refused", "late", "duplicate")}
+
+
+def test_agents_near_their_byte_budget_do_not_fail_the_local_robot():
+    """Three remote agents each send one valid 3 MB message (a minotaur doorway list of 75,000 doorways,
+    inside the 4 MiB per-tick budget) at tick 1: the runtime's own batch for its local robot 0 then holds
+    9 MB, more than a packet from the network may; it is the runtime's own packet, so robot 0 goes on.
+    (The senders' own test agents decode each other's lists on zenoh's thread and may lose their link.)"""
+    import msgpack
+
+    from algorithms.minotaur.messages import DoorwayList
+    from swarm.comm.messages import MAX_BYTES_PER_TICK, encode
+    from swarm.transport.auth import sign_act
+    from swarm.transport.wire import MAX_PACKET_BYTES
+    from tests.swarm.transport.test_trust import SPEC, honest, remote_run
+
+    def doorways(tick, act, token):
+        if tick != 1:
+            return honest(tick, act, token)
+        doors = tuple((1.0 + k % 1000, 2.0 + k // 1000, k % 2, 1.5, 0.5, 1, 0) for k in range(75_000))
+        blob = encode(DoorwayList(sender=token.robot, doors=doors, target=(1.0, 1.0), door=()))
+        assert 3 * len(blob) > MAX_PACKET_BYTES and len(blob) <= MAX_BYTES_PER_TICK
+        items = msgpack.unpackb(act)
+        items[7] = [*items[7], blob]
+        packet = msgpack.packb(items, use_bin_type=True)
+        return [(packet, sign_act(token, tick, packet))]
+
+    spec = {**SPEC, "robots": {"count": 4}, "stop": {"max_ticks": 6}}
+    r = remote_run({1: doorways, 2: doorways, 3: doorways}, spec=spec)
+    assert 0 not in r.summary["failed_robots"], [e for e in r.events if e["event"] == "agent_failed"]
+    assert r.summary["messages"]["malformed"] == 0 and r.summary["ticks"] == 6
+    assert r.summary["messages"]["delivered"] >= 3, "the lists reached robot 0"
