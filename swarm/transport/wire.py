@@ -26,7 +26,7 @@ import numpy as np
 from numba import njit
 
 from swarm.base.types import Action, NavStatus, Neighbour, Neighbours, Pose, RobotInfo, frozen_builder
-from swarm.comm.messages import MAX_MESSAGES_PER_TICK, MessageError, decode, encode, gaps_u32
+from swarm.comm.messages import MAX_BYTES_PER_TICK, MAX_MESSAGES_PER_TICK, MessageError, decode, encode, gaps_u32
 from swarm.knowledge.cellcodec import get_u32
 
 WIRE_VERSION = 2
@@ -281,17 +281,20 @@ _NO_VALUES.flags.writeable = False
 class ObsDecoder:
     """Decodes one agent's obs packets, checked: field types and sizes, map cells inside the map, a known nav
     state. Reuses the previous :class:`NavStatus` while its bytes are unchanged (most ticks), as the runtime's
-    navigator reuses its own: building the frozen dataclass was a sixth of the decoding."""
+    navigator reuses its own: building the frozen dataclass was a sixth of the decoding. ``n_robots``: the
+    run's robot count; the packet's inbox may hold each other robot's per-tick budget of messages on top of
+    a packet's usual limit (others' traffic must not make a robot's observation too large to take)."""
 
-    __slots__ = ("map_cells", "_nav_bytes", "_nav")
+    __slots__ = ("map_cells", "_nav_bytes", "_nav", "_limit")
 
-    def __init__(self, map_cells: int) -> None:
+    def __init__(self, map_cells: int, n_robots: int = 1) -> None:
         self.map_cells = map_cells
         self._nav_bytes = b""
         self._nav = NavStatus()
+        self._limit = MAX_PACKET_BYTES + max(n_robots - 1, 0) * MAX_BYTES_PER_TICK
 
     def __call__(self, data: bytes) -> ObsPacket:
-        _, _, tick, robot, state, n, cells, inbox, neighbours = _unpack(data, "obs", 7)
+        _, _, tick, robot, state, n, cells, inbox, neighbours = _unpack(data, "obs", 7, self._limit)
         if type(tick) is not int or type(robot) is not int:
             raise WireError("obs: tick and robot must be integers")
         if type(state) is not bytes or len(state) != OBS_STATE.size:
@@ -323,9 +326,9 @@ _tuple_new = tuple.__new__
 _nav_status, _action = frozen_builder(NavStatus), frozen_builder(Action)
 
 
-def decode_obs(data: bytes, map_cells: int) -> ObsPacket:
+def decode_obs(data: bytes, map_cells: int, n_robots: int = 1) -> ObsPacket:
     """One observation packet, checked (see :class:`ObsDecoder`, which agents keep to decode theirs)."""
-    return ObsDecoder(map_cells)(data)
+    return ObsDecoder(map_cells, n_robots)(data)
 
 
 # ------------------------------------------------------------------------------------------ act ----

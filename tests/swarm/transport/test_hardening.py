@@ -365,3 +365,24 @@ def test_agents_near_their_byte_budget_do_not_fail_the_local_robot():
     assert 0 not in r.summary["failed_robots"], [e for e in r.events if e["event"] == "agent_failed"]
     assert r.summary["messages"]["malformed"] == 0 and r.summary["ticks"] == 6
     assert r.summary["messages"]["delivered"] >= 3, "the lists reached robot 0"
+
+
+def test_a_remote_robots_observation_may_carry_every_other_robots_budget():
+    """Two other robots' full per-tick budgets (4 MiB each) in one robot's inbox make an 8 MiB+ obs packet:
+    its agent takes it (the limit grows with the run's robot count), where it used to drop it and let its
+    robot time out. A packet larger than every budget together is still refused."""
+    import numpy as np
+
+    from swarm.base.types import NavStatus
+    from swarm.comm.messages import MAX_BYTES_PER_TICK
+    from swarm.transport.wire import MAX_PACKET_BYTES, WireError, decode_obs, encode_obs
+
+    def obs(inbox):
+        return encode_obs(5, 2, (1.0, 2.0, 0.0), np.zeros(0, np.int64), np.zeros(0, np.uint8), inbox, (), False,
+                          NavStatus(), 0.0, 0.0)
+
+    full = obs((b"\x00" * (MAX_BYTES_PER_TICK - 16),) * 2)
+    assert len(full) > MAX_PACKET_BYTES
+    assert len(decode_obs(full, 100, n_robots=3).inbox) == 2
+    with pytest.raises(WireError, match="larger than"):
+        decode_obs(obs((b"\x00" * (MAX_BYTES_PER_TICK - 16),) * 5), 100, n_robots=3)
