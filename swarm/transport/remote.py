@@ -21,7 +21,7 @@ from .agent import AgentRunner
 from .auth import NONCE_BYTES, RobotToken, sign_act
 from .sessions import open_session
 from .wire import WireError, decode_reset
-from .zenoh_host import BLOCK
+from .zenoh_host import BLOCK, CLOSE_TIMEOUT_S, close_session
 
 
 def run_agent(connect: str, run_id: str, robot: int, token: RobotToken, algorithm: str | None = None,
@@ -91,4 +91,4 @@ def run_agent(connect: str, run_id: str, robot: int, token: RobotToken, algorith
                 d.undeclare()
             except Exception:
                 pass
-        session.close()
+        close_session(session, CLOSE_TIMEOUT_S)  # bounded: the exit status is decided
