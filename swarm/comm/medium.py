@@ -23,7 +23,7 @@ from numba import njit
 from swarm.base.params import OMIT_DEFAULT, check_choice, check_float, check_int
 from swarm.results.schema import DROP_CAUSES
 
-from .messages import MAX_MESSAGE_BYTES, MapUpdate, MessageError, encode
+from .messages import MAX_BYTES_PER_TICK, MAX_MESSAGE_BYTES, MAX_MESSAGES_PER_TICK, MapUpdate, MessageError, encode
 
 if TYPE_CHECKING:
     from radio.per import PacketErrorCurve
@@ -199,6 +199,11 @@ class Medium:
         malformed, counted and noted in :attr:`dropped`: its ``sender`` is not the robot (a forgery), it is
         not a registered message or does not encode, it is larger than a message may be, or it is a map
         update of another map's shape or with a corrupt payload (it would fail every receiver's merge)."""
+        data = self._checked(sender, msg)
+        return None if data is None else self._sealed(sender, data, msg)
+
+    def _checked(self, sender: int, msg: Any) -> bytes | None:
+        """The wire bytes of a message ``sender``'s algorithm sends, or None (counted, noted) if malformed."""
         problem = _outgoing_problem(sender, msg, self.map_shape)
         data = b""
         if problem is None:
@@ -213,8 +218,36 @@ class Medium:
             self.stats.count_malformed(sender)
             self.dropped.append((sender, problem))
             return None
+        return data
+
+    def _sealed(self, sender: int, data: bytes, msg: Any) -> Envelope:
         self._seq[sender] += 1
         return Envelope(sender, self._seq[sender], data, msg)
+
+    def outbox(self, sender: int, messages: Sequence[Any]) -> list[Envelope]:
+        """The envelopes of the messages ``sender``'s algorithm sends in one tick (each checked as by
+        :meth:`envelope`), within its per-tick budget: the first :data:`MAX_MESSAGES_PER_TICK` messages, as
+        long as their encoded bytes stay within :data:`MAX_BYTES_PER_TICK`; the rest are dropped, counted as
+        malformed and noted in :attr:`dropped` once, with their number."""
+        out: list[Envelope] = []
+        used = 0
+        for k, msg in enumerate(messages):
+            if k == MAX_MESSAGES_PER_TICK:
+                self._over_budget(sender, len(messages) - k, f"more than {MAX_MESSAGES_PER_TICK} messages")
+                break
+            data = self._checked(sender, msg)
+            if data is None:
+                continue
+            used += len(data)
+            if used > MAX_BYTES_PER_TICK:
+                self._over_budget(sender, len(messages) - k, f"more than {MAX_BYTES_PER_TICK} bytes")
+                break
+            out.append(self._sealed(sender, data, msg))
+        return out
+
+    def _over_budget(self, sender: int, n: int, what: str) -> None:
+        self.stats.count_malformed(sender, n)
+        self.dropped.append((sender, f"{n} message(s) over the per-tick budget ({what} from one robot in a tick)"))
 
     def service_envelope(self, sender: int, msg: Any) -> Envelope:
         """Encode a message of the runtime's own map-sharing service (built here: not checked again)."""

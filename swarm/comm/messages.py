@@ -36,6 +36,12 @@ from swarm.knowledge import cellcodec as _cellcodec
 T = TypeVar("T")
 
 MAX_MESSAGE_BYTES = 4 * 1024 * 1024
+MAX_MESSAGES_PER_TICK = 64
+"""What one robot's algorithm (or remote agent) may send in one tick: at most this many messages, together
+at most :data:`MAX_BYTES_PER_TICK` bytes encoded (one message of the largest size). The rest of its outbox
+is dropped and counted as malformed (issue 48: one agent's 170,000 heartbeats in a tick failed or stalled
+the other robots). The runtime's own map sharing is not counted."""
+MAX_BYTES_PER_TICK = MAX_MESSAGE_BYTES
 MAP_ZLIB_LEVEL = 6
 """zlib level of MapUpdate payloads. Part of the results: it sets the bytes counted and what a bandwidth cap
 lets through (level 1 was measured on one full 300 x 300 benchmark map: 25 against 118 us, 647 against 414

@@ -356,10 +356,8 @@ class Simulation:
                 outboxes.append([])
                 continue
             box = [self.medium.service_envelope(i, m) for m in service[i]]
-            for m in extra:
-                env = self.medium.envelope(i, m)
-                if env is not None:
-                    box.append(env)
+            if extra:
+                box += self.medium.outbox(i, extra)  # within the robot's per-tick budget
             outboxes.append(box)
         if self.medium.dropped:
             self._note_drops(tick)
@@ -433,16 +431,20 @@ class Simulation:
             pieces[i] = sync_changes(self.known[i], self._mirror[i])
         return np.concatenate(pieces), np.cumsum([len(piece) for piece in pieces], dtype=np.int64)
 
-    def _note_drops(self, tick: int) -> None:
-        """Events for the messages the medium dropped as malformed this tick (the first
-        ``MAX_DROP_EVENTS`` of a run; all of them are counted in ``summary.messages``)."""
+    def _note_drops(self, tick: int, dropped: list[tuple[int, str]] | None = None) -> None:
+        """Events for the messages the medium (or, given ``dropped``, the transport: a remote agent's that do
+        not decode) dropped as malformed this tick (the first ``MAX_DROP_EVENTS`` of a run; all of them are
+        counted in ``summary.messages``); ``dropped`` is emptied."""
+        dropped = self.medium.dropped if dropped is None else dropped
         room = MAX_DROP_EVENTS - self._drop_events
-        for robot, reason in self.medium.dropped[:max(room, 0)]:
+        for robot, reason in dropped[:max(room, 0)]:
             self.events.append({"tick": tick, "robot": robot, "event": "message_dropped", "reason": reason})
-        self._drop_events += min(len(self.medium.dropped), max(room, 0))
-        self.medium.dropped.clear()
+        self._drop_events += min(len(dropped), max(room, 0))
+        dropped.clear()
 
     def _note_failures(self, tick: int, host: AgentHost) -> None:
+        if host.stats.dropped:
+            self._note_drops(tick, host.stats.dropped)
         for i, (at, reason) in sorted(host.stats.failures.items()):
             if not self.failed[i]:
                 self.failed[i] = True

@@ -80,7 +80,7 @@ class AgentRunner:
         self._view.flags.writeable = False
         vouch_known(self._view)  # values are checked (0..2) before a packet writes them
         self._inbox = timed(times, "agent: inbox decode", (inbox or InboxDecoder()).decode)
-        self._decode = timed(times, "agent: obs decode", ObsDecoder(self.known.size))
+        self._decode = timed(times, "agent: obs decode", ObsDecoder(self.known.size, reset.robot.n_robots))
         self._act = timed(times, "agent: algorithm", self.algorithm.act)
         self._encode_act = timed(times, "agent: act encode", encode_act)
 

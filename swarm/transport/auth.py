@@ -6,9 +6,11 @@ derived from it per robot, so an agent can be given the power to act for its own
 * the **robot key** ``HMAC-SHA256(secret, "swarm robot key" | run id | robot)``, which a **robot token**
   (``swarm-robot-token:<run>:<robot>:<hex>``) carries;
 * from the robot key, the robot's zenoh **user/password** (``robot-<id>``; zenoh's usrpwd authentication
-  is a challenge-response, the password never travels) and its **act key**;
+  is a challenge-response, the password never travels) and, with the **run nonce** (16 random bytes the
+  runtime draws at start and sends each agent as its ``reset`` packet's attachment), its **act key**;
 * every act packet carries, as its zenoh attachment, the tick (uint64, little-endian) and
-  ``HMAC-SHA256(act key, "swarm act" | run id | robot | tick | payload)`` (:func:`sign_act`).
+  ``HMAC-SHA256(act key, "swarm act" | run id | robot | tick | payload)`` (:func:`sign_act`). The nonce
+  makes acts captured in one run worthless in the next, even with the same run id and secret.
 
 The runtime writes a zenoh access-control policy (:func:`access_control`) that lets robot N's user
 subscribe only to robot N's ``obs``/``reset`` keys and the run's ``end`` key, put only on robot N's ``act``
@@ -35,6 +37,7 @@ RUN_SECRET_PREFIX = "swarm-run-secret:"
 ROBOT_TOKEN_PREFIX = "swarm-robot-token:"
 TOKEN_ENV = "SWARM_TOKEN"
 TAG_BYTES = 32
+NONCE_BYTES = 16  # the run nonce: the attachment of every reset packet
 ATTACHMENT = struct.Struct("<Q32s")  # tick, HMAC tag: the attachment of every signed act packet
 RUN_ID_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]{0,99}")
 RUN_ID_ALLOWED = ("1-100 characters of letters, digits, '_', '.' and '-', starting with a letter or digit "
@@ -54,11 +57,17 @@ def _mac(key: bytes, *parts: bytes) -> bytes:
 
 @dataclass(frozen=True)
 class RobotToken:
-    """What one robot's agent holds: the power to join run ``run_id`` as robot ``robot`` and act for it."""
+    """What one robot's agent holds: the power to join run ``run_id`` as robot ``robot`` and act for it
+    (``nonce``: the run nonce its act key is bound to, :meth:`for_run`; empty until the reset says it)."""
 
     run_id: str
     robot: int
     key: bytes
+    nonce: bytes = b""
+
+    def for_run(self, nonce: bytes) -> RobotToken:
+        """This token bound to one start of the run: its act key depends on the run nonce."""
+        return RobotToken(self.run_id, self.robot, self.key, bytes(nonce))
 
     @property
     def user(self) -> str:
@@ -72,7 +81,8 @@ class RobotToken:
 
     @property
     def act_key(self) -> bytes:
-        return _mac(self.key, b"swarm act key")
+        """The key act packets are signed with: the robot key's, bound to the run nonce."""
+        return _mac(self.key, b"swarm act key", self.nonce)
 
     def text(self) -> str:
         return f"{ROBOT_TOKEN_PREFIX}{self.run_id}:{self.robot}:{self.key.hex()}"
@@ -169,8 +179,14 @@ def agent_token(token: RunSecret | RobotToken, run_id: str, robot: int, field: s
 
 
 # ------------------------------------------------------------------------------ signed act packets ----
+def new_nonce() -> bytes:
+    """A fresh run nonce: a runtime draws one each time it starts."""
+    return secrets.token_bytes(NONCE_BYTES)
+
+
 def sign_act(token: RobotToken, tick: int, payload: bytes, act_key: bytes | None = None) -> bytes:
-    """The attachment of an act packet for ``tick``: the tick and its HMAC tag."""
+    """The attachment of an act packet for ``tick``: the tick and its HMAC tag (``act_key``: the token's,
+    computed once by a caller that signs every tick)."""
     key = act_key if act_key is not None else token.act_key
     return ATTACHMENT.pack(tick, _mac(key, b"swarm act", token.run_id.encode(), str(token.robot).encode(),
                                       str(tick).encode(), payload))

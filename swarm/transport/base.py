@@ -75,6 +75,9 @@ class HostStats:
 
     counts: dict[str, dict[int, int]] = field(default_factory=lambda: {k: {} for k in (*ACT_COUNTS, "bad_messages")})
     failures: dict[int, tuple[int, str]] = field(default_factory=dict)  # robot -> (tick, reason)
+    dropped: list[tuple[int, str]] = field(default_factory=list)
+    """(robot, reason) of the messages dropped since the runtime last read this (``bad_messages``): it
+    turns them into ``message_dropped`` events, as it does for those the radio's medium refuses."""
 
     def count(self, kind: str, robot: int, n: int = 1) -> None:
         """Add ``n`` to robot ``robot``'s ``kind`` counter (``bad_messages``: messages in taken acts that did

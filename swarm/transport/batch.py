@@ -27,12 +27,12 @@ import numpy as np
 from numba import njit
 
 from swarm.base.types import Action, NavStatus, frozen_builder
-from swarm.comm.messages import MessageError, decode, encode
+from swarm.comm.messages import MAX_BYTES_PER_TICK, MessageError, decode, encode
 from swarm.knowledge.cellcodec import get_u32, put_raw_cells
 from .bearings import _bearing
 from .packing import OBS_STATE_DTYPE
-from .wire import (COLLIDED, HAS_GOAL, NAV_STATES, NEIGHBOUR, NEIGHBOUR_DTYPE, OBS_STATE, WIRE_VERSION, WireError,
-                   _NAV_INDEX, _pack, _unpack)
+from .wire import (COLLIDED, HAS_GOAL, MAX_PACKET_BYTES, NAV_STATES, NEIGHBOUR, NEIGHBOUR_DTYPE, OBS_STATE, WIRE_VERSION,
+                   WireError, _NAV_INDEX, _pack, _unpack)
 
 OBS_BATCH, ACT_BATCH = "obs_batch", "act_batch"
 COUNTS = 3
@@ -221,15 +221,19 @@ class ObsBatchDecoder:
     of 16 values is more than the work. The robot ids, checked once, are kept while they stay the same
     bytes (every tick while no robot fails)."""
 
-    __slots__ = ("n_robots", "map_cells", "_ids")
+    __slots__ = ("n_robots", "map_cells", "_ids", "_limit")
 
     def __init__(self, n_robots: int, map_cells: int) -> None:
         self.n_robots = n_robots
         self.map_cells = map_cells
         self._ids: tuple[bytes, tuple[int, ...]] = (b"", ())
+        # The batch carries the tick's inbox messages once: up to every robot's per-tick budget on top of
+        # a packet's usual limit, so one agent's outbox (issue 48) cannot make it too large for the others.
+        self._limit = MAX_PACKET_BYTES + n_robots * MAX_BYTES_PER_TICK
 
     def __call__(self, data: bytes) -> ObsBatch:
-        _, _, tick, ids_b, counts_b, states_b, cells_b, near_b, refs_b, messages = _unpack(data, OBS_BATCH, 8)
+        _, _, tick, ids_b, counts_b, states_b, cells_b, near_b, refs_b, messages = _unpack(data, OBS_BATCH, 8,
+                                                                                          self._limit)
         if type(tick) is not int or tick < 0:
             raise WireError("obs_batch: tick must be a non-negative integer")
         if tuple(map(type, (ids_b, counts_b, states_b, cells_b, near_b, refs_b))) != _COLUMN_TYPES:

@@ -2,8 +2,9 @@
 
 The agent connects to the runtime's ``listen`` endpoint as its robot's zenoh user (authenticated with the
 robot token, :mod:`swarm.transport.auth`), subscribes to its robot's keys, announces itself with a
-liveliness token, takes the ``reset`` packet (algorithm, parameters, seed) and then answers every
-observation with an act packet signed for its tick, until the runtime publishes ``end``.
+liveliness token, takes the ``reset`` packet (algorithm, parameters, seed; its attachment is the run
+nonce the act key is bound to) and then answers every observation with an act packet signed for its tick,
+until the runtime publishes ``end``.
 """
 
 from __future__ import annotations
@@ -17,20 +18,23 @@ import zenoh
 from swarm.base.errors import InvalidInput
 
 from .agent import AgentRunner
-from .auth import RobotToken, sign_act
+from .auth import NONCE_BYTES, RobotToken, sign_act
 from .sessions import open_session
 from .wire import WireError, decode_reset
-from .zenoh_host import BLOCK
+from .zenoh_host import BLOCK, CLOSE_TIMEOUT_S, close_session
 
 
 def run_agent(connect: str, run_id: str, robot: int, token: RobotToken, algorithm: str | None = None,
               timeout_s: float = 60.0, log: Callable[[str], None] = print) -> int:
     """Serve one robot until the run ends; returns a process exit status (0 = the run ended normally)."""
     prefix = f"swarm/{run_id}"
-    inbox: queue.SimpleQueue[tuple[str, bytes]] = queue.SimpleQueue()
+    inbox: queue.SimpleQueue[tuple[str, bytes, bytes | None]] = queue.SimpleQueue()
 
     def push(kind: str) -> Callable[[zenoh.Sample], None]:
-        return lambda sample: inbox.put((kind, sample.payload.to_bytes()))
+        def put(sample: zenoh.Sample) -> None:
+            attachment = sample.attachment
+            inbox.put((kind, sample.payload.to_bytes(), attachment.to_bytes() if attachment is not None else None))
+        return put
 
     session = open_session("--connect", [connect], connect=[connect], user=token.user, password=token.password)
     declared = []
@@ -50,10 +54,10 @@ def run_agent(connect: str, run_id: str, robot: int, token: RobotToken, algorith
         declared.append(act)
         declared.append(session.liveliness().declare_token(f"{prefix}/robot/{robot}/alive"))
         runner: AgentRunner | None = None
-        act_key = token.act_key
+        act_key = b""
         while True:
             try:
-                kind, data = inbox.get(timeout=timeout_s)
+                kind, data, attachment = inbox.get(timeout=timeout_s)
             except queue.Empty:
                 log(f"swarm agent: nothing from the runtime for {timeout_s:g} s; giving up")
                 return 1
@@ -62,11 +66,16 @@ def run_agent(connect: str, run_id: str, robot: int, token: RobotToken, algorith
                 return 0
             if kind == "reset":
                 try:
+                    if attachment is None or len(attachment) != NONCE_BYTES:
+                        raise WireError(f"reset: no {NONCE_BYTES}-byte run nonce attached (a runtime of another "
+                                        "swarm version?)")
                     reset = decode_reset(data)
                     runner = AgentRunner(reset, algorithm)
                 except (WireError, InvalidInput) as exc:
                     log(f"swarm agent: cannot start from the runtime's reset packet ({str(exc)[:200]})")
                     return 2
+                token = token.for_run(attachment)
+                act_key = token.act_key
                 log(f"swarm agent: robot {robot} of run {run_id}, algorithm {algorithm or reset.algorithm}")
             elif kind == "obs" and runner is not None:
                 try:
@@ -82,4 +91,4 @@ def run_agent(connect: str, run_id: str, robot: int, token: RobotToken, algorith
                 d.undeclare()
             except Exception:
                 pass
-        session.close()
+        close_session(session, CLOSE_TIMEOUT_S)  # bounded: the exit status is decided

@@ -3,7 +3,8 @@
 Every session is a peer with multicast scouting off and only the endpoints it is given
 (docs/measurements.md A1, A5), so parallel runs never meet. A runtime that listens requires zenoh's
 usrpwd authentication and applies an access-control policy (:mod:`swarm.transport.auth`); an agent
-connects with its robot's user and password. A bad endpoint or one that cannot be opened is an
+connects with its robot's user and password. ``tls/...`` endpoints take their PEM files from the
+environment (:data:`TLS_ENV`). A bad endpoint or one that cannot be opened is an
 :class:`~swarm.base.errors.InvalidInput` naming the flag, never a zenoh traceback.
 """
 
@@ -11,12 +12,26 @@ from __future__ import annotations
 
 import ipaddress
 import json
+import os
 import re
 from typing import Any, Sequence
 
 import zenoh
 
 from swarm.base.errors import InvalidInput
+
+ACCEPT_TIMEOUT_MS = 2000
+"""How long a connection to a listening runtime may take to finish zenoh's handshake (its usrpwd
+authentication included) before it is closed; zenoh's default is 10 s."""
+ACCEPT_PENDING = 1000
+"""How many connections may be in that handshake at once; zenoh closes any further one at once (its
+default is 100, which 100 half-open connections fill for good: issue 48)."""
+
+TLS_ENV = {"SWARM_TLS_CERTIFICATE": "listen_certificate", "SWARM_TLS_PRIVATE_KEY": "listen_private_key",
+           "SWARM_TLS_ROOT_CA": "root_ca_certificate"}
+"""Environment variables naming PEM files for zenoh's TLS (``transport/link/tls/...``): the runtime's
+certificate chain and private key for a ``tls/...`` ``--listen`` endpoint, and the certificate authority
+an agent checks the runtime's certificate against for a ``tls/...`` ``--connect`` (docs/security.md)."""
 
 IP_PROTOCOLS = ("tcp", "udp", "tls", "quic", "ws")
 PROTOCOLS = (*IP_PROTOCOLS, "unixsock-stream")
@@ -59,7 +74,9 @@ def session_config(listen: Sequence[str] = (), connect: Sequence[str] = (), user
                    access_control: dict[str, Any] | None = None) -> zenoh.Config:
     """Peer mode, no multicast scouting, only the given endpoints; optionally usrpwd credentials
     (``user``/``password``: this session's; ``dictionary_file``: who may connect to it) and an
-    access-control policy."""
+    access-control policy. A session with endpoints takes its TLS files from :data:`TLS_ENV`; one that
+    listens bounds the connections still in zenoh's handshake (:data:`ACCEPT_TIMEOUT_MS`,
+    :func:`accept_pending`)."""
     c = zenoh.Config()
     c.insert_json5("mode", '"peer"')
     c.insert_json5("scouting/multicast/enabled", "false")
@@ -72,9 +89,30 @@ def session_config(listen: Sequence[str] = (), connect: Sequence[str] = (), user
         c.insert_json5("transport/auth/usrpwd/password", json.dumps(password))
     if dictionary_file is not None:
         c.insert_json5("transport/auth/usrpwd/dictionary_file", json.dumps(dictionary_file))
+    if listen or connect:
+        for env, key in TLS_ENV.items():
+            if os.environ.get(env):
+                c.insert_json5(f"transport/link/tls/{key}", json.dumps(os.environ[env]))
+    if listen:  # what connections that have not authenticated (yet) may hold: docs/security.md
+        c.insert_json5("transport/unicast/accept_timeout", str(ACCEPT_TIMEOUT_MS))
+        c.insert_json5("transport/unicast/accept_pending", str(accept_pending()))
     if access_control is not None:
         c.insert_json5("access_control", json.dumps(access_control))
     return c
+
+
+def accept_pending() -> int:
+    """:data:`ACCEPT_PENDING`, or less when this process may not open that many files: a pending
+    connection holds a file descriptor, and the runtime must still be able to write its result."""
+    try:
+        import resource
+
+        soft = resource.getrlimit(resource.RLIMIT_NOFILE)[0]
+    except (ImportError, OSError, ValueError):
+        return ACCEPT_PENDING
+    if soft == resource.RLIM_INFINITY:
+        return ACCEPT_PENDING
+    return max(16, min(ACCEPT_PENDING, soft // 4))
 
 
 def zenoh_reason(exc: BaseException) -> str:

@@ -26,7 +26,7 @@ import numpy as np
 from numba import njit
 
 from swarm.base.types import Action, NavStatus, Neighbour, Neighbours, Pose, RobotInfo, frozen_builder
-from swarm.comm.messages import MessageError, decode, encode, gaps_u32
+from swarm.comm.messages import MAX_BYTES_PER_TICK, MAX_MESSAGES_PER_TICK, MessageError, decode, encode, gaps_u32
 from swarm.knowledge.cellcodec import get_u32
 
 WIRE_VERSION = 2
@@ -68,13 +68,16 @@ class ObsPacket(NamedTuple):
 
 class ActPacket(NamedTuple):
     """A decoded act packet (a named tuple, as cheap to build as ObsPacket). ``action.messages`` holds the
-    messages that decoded; ``bad_messages`` counts those that did not (dropped one by one)."""
+    messages that decoded; ``bad_messages`` counts those that did not (dropped one by one) and those past
+    the first :data:`~swarm.comm.messages.MAX_MESSAGES_PER_TICK` (never decoded); ``problems`` says why,
+    one entry per undecodable message and one for the excess (for the run's ``message_dropped`` events)."""
 
     tick: int
     robot_id: int
     action: Action
     message_bytes: tuple[bytes, ...]
     bad_messages: int = 0
+    problems: tuple[str, ...] = ()
 
 
 _LOCAL = threading.local()
@@ -89,13 +92,13 @@ def _pack(items: list[Any]) -> bytes:
     return packer.pack(items)
 
 
-def _unpack(data: bytes, kind: str, fields: int) -> list[Any]:
+def _unpack(data: bytes, kind: str, fields: int, limit: int = MAX_PACKET_BYTES) -> list[Any]:
     """The packet's items, kind and version included, checked to be a ``kind`` packet of this wire version
-    with ``fields`` fields after them."""
-    if not isinstance(data, (bytes, bytearray, memoryview)) or len(data) > MAX_PACKET_BYTES:
-        raise WireError(f"{kind}: not bytes or larger than {MAX_PACKET_BYTES} bytes")
+    with ``fields`` fields after them and at most ``limit`` bytes."""
+    if not isinstance(data, (bytes, bytearray, memoryview)) or len(data) > limit:
+        raise WireError(f"{kind}: not bytes or larger than {limit} bytes")
     try:
-        items = msgpack.unpackb(data, raw=False, strict_map_key=False, max_bin_len=MAX_PACKET_BYTES)
+        items = msgpack.unpackb(data, raw=False, strict_map_key=False, max_bin_len=limit)
     except Exception as exc:  # msgpack raises many unrelated exception types on corrupt input
         raise WireError(f"{kind}: undecodable ({type(exc).__name__})") from None
     if type(items) is not list or len(items) < 2 or items[0] != kind:
@@ -278,17 +281,20 @@ _NO_VALUES.flags.writeable = False
 class ObsDecoder:
     """Decodes one agent's obs packets, checked: field types and sizes, map cells inside the map, a known nav
     state. Reuses the previous :class:`NavStatus` while its bytes are unchanged (most ticks), as the runtime's
-    navigator reuses its own: building the frozen dataclass was a sixth of the decoding."""
+    navigator reuses its own: building the frozen dataclass was a sixth of the decoding. ``n_robots``: the
+    run's robot count; the packet's inbox may hold each other robot's per-tick budget of messages on top of
+    a packet's usual limit (others' traffic must not make a robot's observation too large to take)."""
 
-    __slots__ = ("map_cells", "_nav_bytes", "_nav")
+    __slots__ = ("map_cells", "_nav_bytes", "_nav", "_limit")
 
-    def __init__(self, map_cells: int) -> None:
+    def __init__(self, map_cells: int, n_robots: int = 1) -> None:
         self.map_cells = map_cells
         self._nav_bytes = b""
         self._nav = NavStatus()
+        self._limit = MAX_PACKET_BYTES + max(n_robots - 1, 0) * MAX_BYTES_PER_TICK
 
     def __call__(self, data: bytes) -> ObsPacket:
-        _, _, tick, robot, state, n, cells, inbox, neighbours = _unpack(data, "obs", 7)
+        _, _, tick, robot, state, n, cells, inbox, neighbours = _unpack(data, "obs", 7, self._limit)
         if type(tick) is not int or type(robot) is not int:
             raise WireError("obs: tick and robot must be integers")
         if type(state) is not bytes or len(state) != OBS_STATE.size:
@@ -320,9 +326,9 @@ _tuple_new = tuple.__new__
 _nav_status, _action = frozen_builder(NavStatus), frozen_builder(Action)
 
 
-def decode_obs(data: bytes, map_cells: int) -> ObsPacket:
+def decode_obs(data: bytes, map_cells: int, n_robots: int = 1) -> ObsPacket:
     """One observation packet, checked (see :class:`ObsDecoder`, which agents keep to decode theirs)."""
-    return ObsDecoder(map_cells)(data)
+    return ObsDecoder(map_cells, n_robots)(data)
 
 
 # ------------------------------------------------------------------------------------------ act ----
@@ -354,16 +360,21 @@ def decode_act(data: bytes) -> ActPacket:
         raise WireError("act: debug must be a map")
     if not messages:
         action = _action(goal=goal, velocity=velocity, messages=(), debug=debug, clear_goal=bool(clear_goal))
-        return _tuple_new(ActPacket, (tick, robot, action, (), 0))
+        return _tuple_new(ActPacket, (tick, robot, action, (), 0, ()))
     if not all(isinstance(m, bytes) for m in messages):
         raise WireError("act: messages must be a list of byte strings")
+    problems = []
+    if len(messages) > MAX_MESSAGES_PER_TICK:  # never decoded: one packet must not cost the run 170,000 decodes
+        problems.append(f"{len(messages) - MAX_MESSAGES_PER_TICK} message(s) over the per-tick budget (more than "
+                        f"{MAX_MESSAGES_PER_TICK} messages from one robot in a tick)")
     decoded, kept = [], []
-    for m in messages:
+    for m in messages[:MAX_MESSAGES_PER_TICK]:
         try:
             decoded.append(decode(m))
-        except MessageError:
+        except MessageError as exc:
+            problems.append(f"does not decode ({str(exc)[:80]})")
             continue
         kept.append(m)
     action = Action(goal=goal, velocity=velocity, messages=tuple(decoded), debug=debug, clear_goal=bool(clear_goal))
     return ActPacket(tick=tick, robot_id=robot, action=action, message_bytes=tuple(kept),
-                     bad_messages=len(messages) - len(kept))
+                     bad_messages=len(messages) - len(kept), problems=tuple(problems))

@@ -42,7 +42,7 @@ import numpy as np
 import zenoh
 
 from swarm.base.types import Action
-from .auth import Credentials, RunSecret, access_control, check_run_id, verify_act
+from .auth import Credentials, RunSecret, access_control, check_run_id, new_nonce, verify_act
 from .base import HostStats, TickBatch
 from .batch import ActBatchDecoder, BatchEncoder
 from .group import AgentGroup
@@ -90,7 +90,8 @@ class ZenohHost:
         self.timeout_s = timeout_s
         self.join_timeout_s = join_timeout_s
         self.secret = secret or RunSecret.generate()
-        self._tokens = {r: self.secret.robot_token(run_id, r) for r in sorted(self.remote)}
+        self.nonce = new_nonce()  # this start's: acts signed for another run (same id and secret) are refused
+        self._tokens = {r: self.secret.robot_token(run_id, r).for_run(self.nonce) for r in sorted(self.remote)}
         self._credentials: Credentials | None = None
         if listen:
             self._credentials = Credentials(list(self._tokens.values()))
@@ -231,7 +232,7 @@ class ZenohHost:
             for reset in resets:
                 if reset.robot.id in self.remote and reset.robot.id not in missing:
                     self.session.put(f"{self.prefix}/robot/{reset.robot.id}/reset", encode_reset(reset),
-                                     congestion_control=BLOCK)
+                                     attachment=self.nonce, congestion_control=BLOCK)
 
     def act(self, batch: TickBatch) -> list[Action | None]:
         tick = batch.tick
@@ -289,6 +290,7 @@ class ZenohHost:
                 action = Action()
             elif bad:
                 self.stats.count("bad_messages", i, bad)
+                self.stats.dropped.append((i, f"{bad} message(s) do not decode"))
             actions[i] = action
 
     def _take_remote(self, tick: int, live: list[int], actions: list[Action | None]) -> None:
@@ -314,6 +316,7 @@ class ZenohHost:
                 continue
             if packet.bad_messages:
                 self.stats.count("bad_messages", i, packet.bad_messages)
+                self.stats.dropped.extend((i, problem) for problem in packet.problems)
             actions[i] = packet.action
 
     def _wait(self, waiting: list[int]) -> None:
@@ -327,20 +330,38 @@ class ZenohHost:
             self._times.add("zenoh: wait for remote replies", time.perf_counter() - t0)
 
     def close(self) -> None:
+        """Tell the agents the run is over and close the session, in at most about :data:`CLOSE_TIMEOUT_S`
+        seconds and never raising: the run's result is computed by now, and no network trouble (zenoh's
+        own "close operation timed out!", connections that never finish their handshake) may cost it."""
         try:
             self.session.put(f"{self.prefix}/end", b"end", congestion_control=BLOCK)
         except Exception:  # the session may already be failing; closing below is what matters
             pass
-        for d in self._declared:
+        for d in [*self._declared, *self._publishers.values()]:
             try:
                 d.undeclare()
             except Exception:
                 pass
-        for p in self._publishers.values():
-            try:
-                p.undeclare()
-            except Exception:
-                pass
-        self.session.close()
+        close_session(self.session, CLOSE_TIMEOUT_S)
         if self._credentials is not None:
             self._credentials.remove()
+
+
+CLOSE_TIMEOUT_S = 5.0
+"""How long :meth:`ZenohHost.close` waits for zenoh to close the session before leaving it to finish (or
+not) in a daemon thread."""
+
+
+def close_session(session: zenoh.Session, timeout_s: float) -> bool:
+    """``session.close()`` in a daemon thread, waited for at most ``timeout_s``; True if it closed in time.
+    zenoh's errors are swallowed: a session that cannot close cleanly is still given up."""
+    def close() -> None:
+        try:
+            session.close()
+        except Exception:
+            pass
+
+    closer = threading.Thread(target=close, name="swarm-zenoh-close", daemon=True)
+    closer.start()
+    closer.join(timeout_s)
+    return not closer.is_alive()

@@ -157,8 +157,15 @@ def test_malformed_actions_are_dropped_and_counted():
         while not list(s.info.peers_zid()):
             time.sleep(0.01)
         answered = []
+        nonce = threading.Event()
+
+        def on_reset(sample):  # the run nonce the act key is bound to
+            nonlocal token
+            token = token.for_run(sample.attachment.to_bytes())
+            nonce.set()
 
         def on_obs(sample):
+            assert nonce.is_set()
             packet = decode_obs(sample.payload.to_bytes(), 80 * 80)
             k = len(answered)
             answered.append(packet.tick)
@@ -167,11 +174,13 @@ def test_malformed_actions_are_dropped_and_counted():
             s.put(f"{prefix}/act", reply, attachment=sign_act(token, packet.tick, reply),
                   congestion_control=zenoh.CongestionControl.BLOCK)
 
+        reset = s.declare_subscriber(f"{prefix}/reset", zenoh.handlers.Callback(on_reset, indirect=False))
         sub = s.declare_subscriber(f"{prefix}/obs", zenoh.handlers.Callback(on_obs, indirect=False))
         alive = s.liveliness().declare_token(f"{prefix}/alive")
         t.join(60)
         alive.undeclare()
         sub.undeclare()
+        reset.undeclare()
     assert not t.is_alive()
     r = box["r"]
     assert r.summary["acts"]["malformed"] == [0, len(bad), 0]

@@ -84,12 +84,13 @@ class Agent(threading.Thread):
             def on_packet(sample: zenoh.Sample) -> None:
                 kind = str(sample.key_expr).rsplit("/", 1)[-1]
                 data = sample.payload.to_bytes()
-                if kind == "reset":
+                if kind == "reset":  # its attachment: the run nonce the act key is bound to
                     state["runner"] = AgentRunner(decode_reset(data))
+                    state["token"] = self.token.for_run(sample.attachment.to_bytes())
                 elif kind == "obs":
                     obs = state["runner"].observe(data)
                     act = state["runner"].answer(obs)
-                    for payload, attachment in self.tamper(obs.tick, act, self.token):
+                    for payload, attachment in self.tamper(obs.tick, act, state["token"]):
                         s.put(f"{prefix}/act", payload, attachment=attachment,
                               congestion_control=zenoh.CongestionControl.BLOCK)
 
@@ -105,10 +106,12 @@ class Agent(threading.Thread):
 
 
 def remote_run(tampers: dict[int, Tamper], extra: Callable[[str, str, RunSecret], None] | None = None,
-               spec: dict | None = None, timeout_s: float = 20.0):
+               spec: dict | None = None, timeout_s: float = 20.0, run_id: str | None = None,
+               secret: RunSecret | None = None):
     """Run SPEC with the robots in ``tampers`` remote; ``extra(endpoint, run_id, secret)`` may start more
-    sessions (injectors) before the agents join."""
-    endpoint, run_id, secret = free_endpoint(), f"t-{uuid.uuid4().hex[:8]}", RunSecret.generate()
+    sessions (injectors) before the agents join. A new run id and secret unless given."""
+    endpoint = free_endpoint()
+    run_id, secret = run_id or f"t-{uuid.uuid4().hex[:8]}", secret or RunSecret.generate()
     options = TransportOptions(listen=(endpoint,), remote=tuple(sorted(tampers)), timeout_s=timeout_s, run_id=run_id,
                                secret=secret)
     sim = Simulation(spec or SPEC, transport=options)
