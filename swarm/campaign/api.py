@@ -113,8 +113,10 @@ def run(spec: Any, out: str | os.PathLike[str], *, workers: int | None = None, d
         raise InvalidInput("--inline", True, "not together with --workers or --dask")
     if isinstance(flush_runs, bool) or not isinstance(flush_runs, int) or not 1 <= flush_runs <= 100_000:
         raise InvalidInput("--part-size", flush_runs, "an integer from 1 to 100000")
-    if out is None:
-        raise InvalidInput("-o", None, "a results folder for this campaign")
+    if not isinstance(out, (str, os.PathLike)) or not str(out):
+        raise InvalidInput("-o", out, "a results folder for this campaign (a path)")
+    if shard is not None and not isinstance(shard, str):
+        raise InvalidInput("--shard", shard, "a string 'i/N' with 0 <= i < N, e.g. '3/10', or 'slurm'")
     shard_t = parse_shard(shard)
     if isinstance(dask, str):
         check_dask_address(dask)
@@ -160,6 +162,8 @@ def _store(folder: str | os.PathLike[str]) -> Any:
     """The folder's :class:`~swarm.campaign.store.ResultsStore`, once it is known to be a results folder."""
     from .store import ResultsStore
 
+    if not isinstance(folder, (str, os.PathLike)) or not str(folder):
+        raise InvalidInput("DIR", folder, "a campaign results folder (a path)")
     path = Path(folder)
     if not path.is_dir():
         raise InvalidInput("DIR", str(path), "an existing campaign results folder")

@@ -134,6 +134,31 @@ def test_campaign_errors_are_one_line(kwargs, field, tmp_path):
     assert str(exc.value).startswith(f"{field}: got ")
 
 
+@pytest.mark.parametrize("observers, field", [(5, "observers"), ("print", "observers"), ([print, 5], "observers[1]"),
+                                              (print, "observers")])
+def test_observers_that_are_not_a_list_of_callables_are_one_line_errors(observers, field):
+    with pytest.raises(InvalidInput) as exc:
+        swarm.run({"map": {"size": 20}}, observers=observers, max_ticks=3)
+    assert str(exc.value).startswith(f"{field}: got ") and "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("kwargs, field", [({"shard": (1, 2)}, "--shard"), ({"shard": 1}, "--shard"),
+                                           ({"out": 5}, "-o"), ({"out": ""}, "-o")])
+def test_campaign_run_arguments_of_the_wrong_type_are_one_line_errors(kwargs, field, tmp_path):
+    args = {"out": tmp_path / "x", "inline": True, **kwargs}
+    with pytest.raises(InvalidInput) as exc:
+        swarm.campaign.run(GRID, args.pop("out"), **args)
+    assert str(exc.value).startswith(f"{field}: got ")
+    assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.parametrize("folder", [None, 5, "", ["a"]])
+@pytest.mark.parametrize("load", ["load", "load_timeseries"])
+def test_campaign_load_of_a_non_path_is_a_one_line_error(folder, load):
+    with pytest.raises(InvalidInput, match="^DIR: got "):
+        getattr(swarm.campaign, load)(folder)
+
+
 def test_campaign_spec_and_folder_errors(tmp_path, capsys):
     bad = {**GRID, "grid": {**GRID["grid"], "robots": "two"}}
     with pytest.raises(InvalidInput, match=r"^grid\.robots: got 'two'"):
