@@ -14,7 +14,7 @@ from swarm.base.errors import InvalidInput
 from swarm.sim.spec import MAX_ROBOTS
 from swarm.sim.spec_input import flag_overrides, load_spec_file, merge
 from .group import cli
-from .checks import FiniteSeconds, check_output_path, write_failed
+from .checks import FiniteSeconds, check_output_path, writing
 from .options import parse_params
 
 
@@ -131,10 +131,8 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
     for flag, path, write in outputs:
         if path is None:
             continue
-        try:
+        with writing(flag, path):  # checked before the run; a disk may still fill up
             click.echo(f"wrote {write(path)}")
-        except OSError as exc:  # checked before the run; a disk may still fill up
-            raise write_failed(flag, path, exc) from None
 
 
 def _check_transport_flags(spec, listen: tuple[str, ...], remote: tuple[int, ...], run_id: str | None,
