@@ -28,7 +28,8 @@ def from_mapping(cls: type[T], data: Mapping[str, Any] | None, prefix: str = "")
     value that does not fit its field's simple annotation (see :func:`annotation_allows`: ``int``,
     ``float``, ``bool``, ``str``, lists of those, ``Mapping``, ``X | None``). Values are passed on as
     given, never converted. The class's own ``__post_init__`` checks run first, so their (more precise)
-    message wins when both refuse a value."""
+    message wins when both refuse a value; a field they name is given the full name (``prefix`` + field,
+    ``motion.max_speed``) unless they named it so already."""
     data = dict(data or {})
     names = [f.name for f in dataclasses.fields(cls) if f.init]  # type: ignore[arg-type]
     for key in data:
@@ -37,8 +38,10 @@ def from_mapping(cls: type[T], data: Mapping[str, Any] | None, prefix: str = "")
             raise InvalidInput(f"{prefix}{shown}", data[key], f"a parameter of {cls.__name__}: {', '.join(names)}")
     try:
         obj = cls(**data)
-    except InvalidInput:
-        raise
+    except InvalidInput as exc:
+        if not prefix or exc.field.startswith(prefix):
+            raise
+        raise InvalidInput(f"{prefix}{exc.field}", exc.value, exc.allowed) from None
     except Exception:  # e.g. a TypeError comparing "abc" with 1 in __post_init__: say which value is wrong
         problem = type_problem(cls, data, prefix)
         if problem is not None:

@@ -12,7 +12,7 @@ import click
 from swarm.base.errors import InvalidInput
 
 from swarm.sim.spec import MAX_ROBOTS
-from swarm.sim.spec_input import flag_overrides, load_spec_file, merge
+from swarm.sim.spec_input import check_size_flag, flag_overrides, load_spec_file, merge
 from .group import cli
 from .checks import FiniteSeconds, check_output_path, writing
 from .options import parse_params
@@ -23,7 +23,7 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
     """The run spec as a mapping: the ``--spec`` file, then flags that were given, then ``--set``
     (:mod:`swarm.sim.spec_input` reads the file and the flags as :func:`swarm.run` reads its arguments)."""
     data: dict[str, Any] = load_spec_file(spec_file) if spec_file else {}
-    over = flag_overrides(flags)
+    over = flag_overrides(flags, "--")
     if algorithm_params:
         over.setdefault("algorithm", {})["params"] = parse_params(algorithm_params)
     if map_params:
@@ -31,6 +31,7 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
     data = merge(data, over)
     if sets:
         data = merge(data, parse_params(sets, "--set"))
+    check_size_flag(data, flags, "--")
     return data
 
 

@@ -56,7 +56,12 @@ class MapSpec:
                 raise InvalidInput("map.path", self.path, "only with map.kind = 'file'")
             w, h = parse_size(self.size)
             object.__setattr__(self, "size", w if w == h else [w, h])
-            object.__setattr__(self, "params", to_mapping(params_for(self.kind, self.params)))
+            try:
+                params = params_for(self.kind, self.params)
+            except InvalidInput as exc:  # the generator names its fields "<kind>.<field>"
+                field = exc.field.removeprefix(f"{self.kind}.")
+                raise InvalidInput(f"map.params.{field}", exc.value, exc.allowed) from None
+            object.__setattr__(self, "params", to_mapping(params))
         if self.seed is not None:
             check_int("map.seed", self.seed, 0, 2**63 - 1)
         if not isinstance(self.params, Mapping):
@@ -243,7 +248,7 @@ def _resolve_motion(d: dict[str, Any]) -> dict[str, Any]:
 def _resolve_radio(d: dict[str, Any]) -> dict[str, Any]:
     from radio import RadioConfig, config_from_mapping
 
-    config = config_from_mapping(d) if d else RadioConfig()
+    config = config_from_mapping(d, "radio.") if d else RadioConfig()
     return _plain(to_mapping(config))
 
 

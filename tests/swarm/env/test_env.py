@@ -290,7 +290,7 @@ def test_team_time_and_collision_rewards():
     ({"action": "jump"}, "action"), ({"crop_cells": 31}, "crop_cells"), ({"learners": [5]}, "learners"),
     ({"transport": "zenoh"}, "transport"), ({"action": "velocity", "delegate": True}, "delegate"),
     ({"reward": {"speed": 1.0}}, "reward.speed"), ({"ticks_per_step": 0}, "ticks_per_step"),
-    ({"robots": 0}, "robots.count"), ({"radio": "nonsense"}, "model"),  # the radio section names its own fields
+    ({"robots": 0}, "robots.count"), ({"radio": "nonsense"}, "radio.model"),
 ])
 def test_bad_options_are_one_line_errors(kwargs, field):
     with pytest.raises(InvalidInput) as exc:

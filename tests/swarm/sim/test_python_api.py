@@ -85,7 +85,9 @@ def test_errors_are_the_clis_one_line_errors(argv, kwargs, capsys, tmp_path):
 
 
 @pytest.mark.parametrize("kwargs, field", [({"robts": 2}, "robts"), ({"lidar": 3}, "lidar"), ({"map": 5}, "map"),
-                                           ({"params": [1]}, "params")])
+                                           ({"params": [1]}, "params"), ({"map": "cavee"}, "map"),
+                                           ({"map": "x.npz", "size": 30}, "size"),
+                                           ({"motion": {"max_speed": -1}}, "motion.max_speed")])
 def test_unknown_or_ill_typed_keywords_are_one_line_errors(kwargs, field):
     with pytest.raises(InvalidInput) as exc:
         swarm.run(**kwargs)
