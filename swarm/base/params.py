@@ -193,13 +193,15 @@ OMIT_DEFAULT = "omit_default"
 spec written before it existed keeps its canonical form and its run key (campaign folders resume)."""
 
 
-def to_mapping(obj: Any) -> dict[str, Any]:
+def to_mapping(obj: Any, omit_defaults: bool = True) -> dict[str, Any]:
     """JSON-able dict of a parameter dataclass (tuples become lists, nested mappings become dicts); fields
-    marked :data:`OMIT_DEFAULT` are left out while they hold their default."""
+    marked :data:`OMIT_DEFAULT` are left out while they hold their default, unless ``omit_defaults`` is
+    False (every setting shown, as ``swarm run --print-spec`` shows them)."""
     out = {}
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
-        if f.metadata.get(OMIT_DEFAULT) and f.default is not dataclasses.MISSING and value == f.default:
+        if (omit_defaults and f.metadata.get(OMIT_DEFAULT) and f.default is not dataclasses.MISSING
+                and value == f.default):
             continue
         out[f.name] = _plain(value)
     return out

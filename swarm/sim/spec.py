@@ -193,11 +193,22 @@ class RunSpec:
 
     def to_toml(self) -> str:
         """The fully-resolved spec as a TOML run-spec file (``swarm run --spec`` reads it back to the same
-        :attr:`key`). TOML has no null: a setting that is None (a seed drawn from ``seed``, an automatic
-        ray count) is left out, which is what its default means."""
+        :attr:`key`), every default shown: also the settings the canonical form leaves out while they hold
+        their default (:data:`~swarm.base.params.OMIT_DEFAULT`: ``comm.relay``, ``radio.per``, an algorithm's
+        ``variant``...), which read back to the same key. TOML has no null: a setting that is None (a seed
+        drawn from ``seed``, an automatic ray count) is left out, which is what its default means."""
         import tomli_w
 
-        return tomli_w.dumps(_without_none(self.canonical()))
+        from swarm.plugins.explorers import build_params
+
+        data = self.canonical()
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if hasattr(value, "__dataclass_fields__"):
+                data[f.name] = _plain(to_mapping(value, omit_defaults=False))
+        params = build_params(self.algorithm.name, self.algorithm.params)
+        data["algorithm"]["params"] = _plain(to_mapping(params, omit_defaults=False))
+        return tomli_w.dumps(_without_none(json.loads(json.dumps(data, sort_keys=True))))
 
     @cached_property
     def key(self) -> str:

@@ -170,3 +170,11 @@ def test_campaign_spec_and_folder_errors(tmp_path, capsys):
     assert str(exc.value) == cli_error(["campaign", "report", str(tmp_path)], capsys)
     with pytest.raises(InvalidInput, match="^DIR: got"):
         swarm.campaign.load_timeseries(tmp_path / "missing")
+
+
+def test_a_results_repr_is_one_short_line():
+    result = swarm.run({"map": {"size": 20}, "record_every": 1}, max_ticks=400, explored=1.0)
+    assert len(result.timeseries["tick"]) > 300
+    text = repr(result)
+    assert len(text) < 300 and "\n" not in text and text.startswith(f"RunResult(key={result.key!r}, ")
+    assert "time-series rows" in text
