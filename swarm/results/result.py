@@ -35,7 +35,7 @@ class RunResult:
         try:
             rows = len(next(iter(self.timeseries.values()), ()))
             what = f"{self.one_line()}; {rows} time-series rows, {len(self.events)} events"
-        except Exception:
+        except (KeyError, TypeError, ValueError, AttributeError, IndexError):  # a hand-built, partial result
             what = "incomplete"
         return f"RunResult(key={self.key!r}, {what})"
 
