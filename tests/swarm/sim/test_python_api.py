@@ -4,6 +4,7 @@ does (the same spec, the same one-line errors) and return what the CLI writes.""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -124,6 +125,37 @@ def test_campaign_run_load_and_timeseries(tmp_path, capsys):
         assert (rows["algorithm"] == run["algorithm"]).all()
     one = runs["key"].iloc[3]
     assert set(swarm.campaign.load_timeseries(tmp_path / "api", keys=[one])["key"]) == {one}
+
+
+UNGUARDED_SCRIPT = """
+import sys
+import swarm
+print("script body ran", flush=True)
+out = swarm.campaign.run(sys.argv[1], sys.argv[2], workers=2)
+print("ran", out.ran, "of", out.total, "failed", out.failed)
+"""
+
+
+def test_a_campaign_script_without_a_main_guard_runs_as_written(tmp_path):
+    """The README's ``swarm.campaign.run(...)`` saved as a script, with no ``if __name__ == "__main__":``:
+    the pool's workers must not run the script again (they did, and the pool broke)."""
+    import os
+    import subprocess
+    import sys
+
+    import tomli_w
+
+    spec = tmp_path / "grid.toml"
+    spec.write_text(tomli_w.dumps(GRID))
+    script = tmp_path / "grid.py"
+    script.write_text(UNGUARDED_SCRIPT)
+    root = str(Path(swarm.__file__).resolve().parents[1])
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")]))}
+    proc = subprocess.run([sys.executable, str(script), str(spec), str(tmp_path / "out")], capture_output=True,
+                          text=True, timeout=300, cwd=tmp_path, env=env, check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.splitlines() == ["script body ran", "ran 8 of 8 failed 0"], proc.stdout
+    assert "Traceback" not in proc.stderr and len(swarm.campaign.load(tmp_path / "out")) == 8
 
 
 @pytest.mark.parametrize("kwargs, field", [
