@@ -160,12 +160,15 @@ def _check_transport_flags(spec, listen: tuple[str, ...], remote: tuple[int, ...
 
 def _transport_options(spec, listen: tuple[str, ...], remote: tuple[int, ...], timeout: float,
                        run_id: str | None, token_file: Path | None):
-    """How the run reaches its remote agents: their secret (read or created) and the commands to start them."""
+    """How the run reaches its remote agents: their secret (read or created) and the commands to start them,
+    printed once the runtime listens (a --listen endpoint that cannot be bound fails first, with no command
+    to start an agent for)."""
     from swarm.sim.loop import TransportOptions
     from swarm.transport.auth import TOKEN_ENV, runtime_secret
     from swarm.transport.zenoh_host import new_run_id
 
     secret = runtime_secret(token_file) if listen else None
+    lines: list[str] = []
     if remote:
         assert secret is not None
         run_id = run_id or new_run_id(spec.key)
@@ -176,8 +179,14 @@ def _transport_options(spec, listen: tuple[str, ...], remote: tuple[int, ...], t
                 how = f"(with ${TOKEN_ENV} set)"
             else:
                 how = f"--token {secret.robot_token(run_id, r).text()}"
-            click.echo(f"waiting for: swarm agent --connect {listen[0]} --run {run_id} --robot {r} {how}", err=True)
-    return TransportOptions(listen=listen, remote=remote, timeout_s=timeout, run_id=run_id, secret=secret)
+            lines.append(f"waiting for: swarm agent --connect {listen[0]} --run {run_id} --robot {r} {how}")
+
+    def announce() -> None:
+        for line in lines:
+            click.echo(line, err=True)
+
+    return TransportOptions(listen=listen, remote=remote, timeout_s=timeout, run_id=run_id, secret=secret,
+                            on_listening=announce if lines else None)
 
 
 @cli.command("agent")
