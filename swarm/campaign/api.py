@@ -183,13 +183,29 @@ def load(folder: str | os.PathLike[str]) -> pd.DataFrame:
     return table.to_pandas().sort_values(["index", "key"], kind="stable").reset_index(drop=True)
 
 
+def _keys(keys: Any) -> list[str] | None:
+    """``keys`` of :func:`load_timeseries` as a list of run keys (strings), or a one-line error."""
+    allowed = "None or a list of run keys (strings), e.g. runs['key']"
+    if keys is None:
+        return None
+    if isinstance(keys, (str, bytes, Mapping)):
+        raise InvalidInput("keys", keys, allowed)
+    try:
+        listed = list(keys)
+    except TypeError:
+        raise InvalidInput("keys", keys, allowed) from None
+    if not all(isinstance(key, str) for key in listed):
+        raise InvalidInput("keys", keys, allowed)
+    return listed
+
+
 def load_timeseries(folder: str | os.PathLike[str], keys: Any = None, labels: bool = True) -> pd.DataFrame:
     """The time series of the runs of a results folder (those of ``keys`` only, if given): one row per
     recorded tick with the run's ``key``, ``tick``, ``explored``, ``coverage`` and the comm metrics
     (:data:`swarm.results.schema.TIMESERIES`); ``labels`` joins each run's grid cell (:data:`LABELS`), so
     ``df.groupby(["algorithm", "tick"]).explored.mean()`` is a curve."""
     store = _store(folder)
-    table = store.timeseries_table(keys)
+    table = store.timeseries_table(_keys(keys))
     frame = table.to_pandas() if table is not None else pd.DataFrame({"key": pd.Series(dtype=object),
                                                                        "tick": pd.Series(dtype="int64")})
     if labels:
