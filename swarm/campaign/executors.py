@@ -136,6 +136,16 @@ class _WorkerProcess(multiprocessing.context.SpawnProcess):
                 sys.modules["__main__"] = main
 
 
+def _check_outside_main(task: Task) -> None:
+    """A pool worker does not run the caller's script (:class:`_WorkerProcess`), so it cannot load an
+    algorithm defined there (``__main__:Class``): refused before the run, rather than every run failing."""
+    name = task[1].get("algorithm", {}).get("name", "")
+    if isinstance(name, str) and name.startswith("__main__:"):
+        raise InvalidInput("algorithm.name", name, "a class in an importable module ('package.module:Class'): "
+                                                   "pool workers do not run your script; move the class to a "
+                                                   "module, or run the campaign inline")
+
+
 class _WorkerContext(multiprocessing.context.SpawnContext):
     """The ``spawn`` context, with workers that leave the caller's script alone (:class:`_WorkerProcess`)."""
 
@@ -163,6 +173,7 @@ class PoolExecutor:
         it = iter(tasks)
         window = 2 * self.workers
         for task in it:
+            _check_outside_main(task)
             pending.add(self.pool.submit(execute, task))
             if len(pending) >= window:
                 done, pending = wait(pending, return_when=FIRST_COMPLETED)

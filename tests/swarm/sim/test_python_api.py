@@ -158,6 +158,50 @@ def test_a_campaign_script_without_a_main_guard_runs_as_written(tmp_path):
     assert "Traceback" not in proc.stderr and len(swarm.campaign.load(tmp_path / "out")) == 8
 
 
+MAIN_ALGORITHM_SCRIPT = """
+import sys
+import swarm
+from algorithms.greed import Greed
+
+
+class MyGreed(Greed):
+    pass
+
+
+spec = sys.argv[1]
+try:
+    swarm.campaign.run(spec, sys.argv[2], workers=2)
+except swarm.InvalidInput as exc:
+    print(exc)
+print(swarm.campaign.run(spec, sys.argv[2] + "-inline", inline=True).ran)
+"""
+
+
+def test_an_algorithm_defined_in_the_script_is_refused_on_the_pool_and_runs_inline(tmp_path):
+    """Pool workers do not run the caller's script, so a class defined there cannot run in them: one line,
+    before the pool runs anything, instead of every run failing; inline, in the script's own process, it runs."""
+    import os
+    import subprocess
+    import sys
+
+    import tomli_w
+
+    spec = tmp_path / "grid.toml"
+    spec.write_text(tomli_w.dumps({**GRID, "grid": {**GRID["grid"], "algorithm": ["__main__:MyGreed"]}}))
+    script = tmp_path / "mine.py"
+    script.write_text(MAIN_ALGORITHM_SCRIPT)
+    root = str(Path(swarm.__file__).resolve().parents[1])
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")]))}
+    proc = subprocess.run([sys.executable, str(script), str(spec), str(tmp_path / "out")], capture_output=True,
+                          text=True, timeout=300, cwd=tmp_path, env=env, check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    refusal, ran = proc.stdout.splitlines()
+    assert refusal.startswith("algorithm.name: got '__main__:MyGreed'; allowed: a class in an importable module")
+    assert ran == "4"
+    written = swarm.campaign.load(tmp_path / "out")  # the warm-up run in the script's process may be there
+    assert (written["status"] == "ok").all(), "no run failed"
+
+
 @pytest.mark.parametrize("kwargs, field", [
     ({"inline": True, "workers": 2}, "--inline"), ({"dask": "nowhere"}, "--dask"), ({"shard": "3/2"}, "--shard"),
     ({"workers": 0}, "--workers"), ({"dask": object()}, "dask"),
