@@ -28,7 +28,8 @@ def from_mapping(cls: type[T], data: Mapping[str, Any] | None, prefix: str = "")
     value that does not fit its field's simple annotation (see :func:`annotation_allows`: ``int``,
     ``float``, ``bool``, ``str``, lists of those, ``Mapping``, ``X | None``). Values are passed on as
     given, never converted. The class's own ``__post_init__`` checks run first, so their (more precise)
-    message wins when both refuse a value."""
+    message wins when both refuse a value; a field they name is given the full name (``prefix`` + field,
+    ``motion.max_speed``) unless they named it so already."""
     data = dict(data or {})
     names = [f.name for f in dataclasses.fields(cls) if f.init]  # type: ignore[arg-type]
     for key in data:
@@ -37,8 +38,10 @@ def from_mapping(cls: type[T], data: Mapping[str, Any] | None, prefix: str = "")
             raise InvalidInput(f"{prefix}{shown}", data[key], f"a parameter of {cls.__name__}: {', '.join(names)}")
     try:
         obj = cls(**data)
-    except InvalidInput:
-        raise
+    except InvalidInput as exc:
+        if not prefix or exc.field.startswith(prefix):
+            raise
+        raise InvalidInput(f"{prefix}{exc.field}", exc.value, exc.allowed) from None
     except Exception:  # e.g. a TypeError comparing "abc" with 1 in __post_init__: say which value is wrong
         problem = type_problem(cls, data, prefix)
         if problem is not None:
@@ -190,13 +193,15 @@ OMIT_DEFAULT = "omit_default"
 spec written before it existed keeps its canonical form and its run key (campaign folders resume)."""
 
 
-def to_mapping(obj: Any) -> dict[str, Any]:
+def to_mapping(obj: Any, omit_defaults: bool = True) -> dict[str, Any]:
     """JSON-able dict of a parameter dataclass (tuples become lists, nested mappings become dicts); fields
-    marked :data:`OMIT_DEFAULT` are left out while they hold their default."""
+    marked :data:`OMIT_DEFAULT` are left out while they hold their default, unless ``omit_defaults`` is
+    False (every setting shown, as ``swarm run --print-spec`` shows them)."""
     out = {}
     for f in dataclasses.fields(obj):
         value = getattr(obj, f.name)
-        if f.metadata.get(OMIT_DEFAULT) and f.default is not dataclasses.MISSING and value == f.default:
+        if (omit_defaults and f.metadata.get(OMIT_DEFAULT) and f.default is not dataclasses.MISSING
+                and value == f.default):
             continue
         out[f.name] = _plain(value)
     return out

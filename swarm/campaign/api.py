@@ -113,8 +113,10 @@ def run(spec: Any, out: str | os.PathLike[str], *, workers: int | None = None, d
         raise InvalidInput("--inline", True, "not together with --workers or --dask")
     if isinstance(flush_runs, bool) or not isinstance(flush_runs, int) or not 1 <= flush_runs <= 100_000:
         raise InvalidInput("--part-size", flush_runs, "an integer from 1 to 100000")
-    if out is None:
-        raise InvalidInput("-o", None, "a results folder for this campaign")
+    if not isinstance(out, (str, os.PathLike)) or not str(out):
+        raise InvalidInput("-o", out, "a results folder for this campaign (a path)")
+    if shard is not None and not isinstance(shard, str):
+        raise InvalidInput("--shard", shard, "a string 'i/N' with 0 <= i < N, e.g. '3/10', or 'slurm'")
     shard_t = parse_shard(shard)
     if isinstance(dask, str):
         check_dask_address(dask)
@@ -160,6 +162,8 @@ def _store(folder: str | os.PathLike[str]) -> Any:
     """The folder's :class:`~swarm.campaign.store.ResultsStore`, once it is known to be a results folder."""
     from .store import ResultsStore
 
+    if not isinstance(folder, (str, os.PathLike)) or not str(folder):
+        raise InvalidInput("DIR", folder, "a campaign results folder (a path)")
     path = Path(folder)
     if not path.is_dir():
         raise InvalidInput("DIR", str(path), "an existing campaign results folder")
@@ -179,13 +183,29 @@ def load(folder: str | os.PathLike[str]) -> pd.DataFrame:
     return table.to_pandas().sort_values(["index", "key"], kind="stable").reset_index(drop=True)
 
 
+def _keys(keys: Any) -> list[str] | None:
+    """``keys`` of :func:`load_timeseries` as a list of run keys (strings), or a one-line error."""
+    allowed = "None or a list of run keys (strings), e.g. runs['key']"
+    if keys is None:
+        return None
+    if isinstance(keys, (str, bytes, Mapping)):
+        raise InvalidInput("keys", keys, allowed)
+    try:
+        listed = list(keys)
+    except TypeError:
+        raise InvalidInput("keys", keys, allowed) from None
+    if not all(isinstance(key, str) for key in listed):
+        raise InvalidInput("keys", keys, allowed)
+    return listed
+
+
 def load_timeseries(folder: str | os.PathLike[str], keys: Any = None, labels: bool = True) -> pd.DataFrame:
     """The time series of the runs of a results folder (those of ``keys`` only, if given): one row per
     recorded tick with the run's ``key``, ``tick``, ``explored``, ``coverage`` and the comm metrics
     (:data:`swarm.results.schema.TIMESERIES`); ``labels`` joins each run's grid cell (:data:`LABELS`), so
     ``df.groupby(["algorithm", "tick"]).explored.mean()`` is a curve."""
     store = _store(folder)
-    table = store.timeseries_table(keys)
+    table = store.timeseries_table(_keys(keys))
     frame = table.to_pandas() if table is not None else pd.DataFrame({"key": pd.Series(dtype=object),
                                                                        "tick": pd.Series(dtype="int64")})
     if labels:

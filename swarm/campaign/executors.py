@@ -12,9 +12,11 @@ import os
 import re
 import resource
 import socket
+import sys
 import threading
 import time
 import traceback
+import types
 from collections.abc import Iterable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Protocol
@@ -111,8 +113,48 @@ def _worker_start(parent: int | None = None) -> None:
     from swarm.sim import loop  # noqa: F401
 
 
+_MAIN_SWAP = threading.Lock()
+
+
+class _WorkerProcess(multiprocessing.context.SpawnProcess):
+    """A spawned pool worker that does not run the caller's ``__main__`` script again.
+
+    A spawned child normally re-imports the parent's main script (to find what it pickled there), so a
+    script calling ``swarm.campaign.run`` without ``if __name__ == "__main__":`` started the campaign again
+    in every worker and broke the pool. A worker only runs :func:`execute` on plain data, so it is started
+    with a bare ``__main__`` in place of the script's: the swap lasts while the process is launched (its
+    start data is built and pickled then) and holds a lock, so two launches never interleave."""
+
+    @staticmethod
+    def _Popen(process_obj: Any) -> Any:
+        with _MAIN_SWAP:
+            main = sys.modules["__main__"]
+            sys.modules["__main__"] = types.ModuleType("__main__")  # no __file__, no __spec__: nothing to run
+            try:
+                return multiprocessing.context.SpawnProcess._Popen(process_obj)
+            finally:
+                sys.modules["__main__"] = main
+
+
+def _check_outside_main(task: Task) -> None:
+    """A pool worker does not run the caller's script (:class:`_WorkerProcess`), so it cannot load an
+    algorithm defined there (``__main__:Class``): refused before the run, rather than every run failing."""
+    name = task[1].get("algorithm", {}).get("name", "")
+    if isinstance(name, str) and name.startswith("__main__:"):
+        raise InvalidInput("algorithm.name", name, "a class in an importable module ('package.module:Class'): "
+                                                   "pool workers do not run your script; move the class to a "
+                                                   "module, or run the campaign inline")
+
+
+class _WorkerContext(multiprocessing.context.SpawnContext):
+    """The ``spawn`` context, with workers that leave the caller's script alone (:class:`_WorkerProcess`)."""
+
+    Process = _WorkerProcess
+
+
 class PoolExecutor:
-    """A local process pool (``spawn`` start method: no inherited zenoh/numba threads). Each worker imports
+    """A local process pool (``spawn`` start method: no inherited zenoh/numba threads; the caller's script is
+    not run again in the workers, so it needs no ``__main__`` guard). Each worker imports
     the runtime when it starts, not in its first run, and exits when the campaign process is gone. Closing
     waits for the runs in flight; :meth:`abort` (Ctrl-C, SIGTERM) stops the workers at once instead (their
     runs are not written; a resumed campaign runs them again)."""
@@ -122,7 +164,7 @@ class PoolExecutor:
     def __init__(self, workers: int, max_runs_per_worker: int | None = None) -> None:
         self.name = f"pool:{workers}"
         self.workers = workers
-        self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn"),
+        self.pool = ProcessPoolExecutor(max_workers=workers, mp_context=_WorkerContext(),
                                         max_tasks_per_child=max_runs_per_worker, initializer=_worker_start,
                                         initargs=(os.getpid(),))
 
@@ -131,6 +173,7 @@ class PoolExecutor:
         it = iter(tasks)
         window = 2 * self.workers
         for task in it:
+            _check_outside_main(task)
             pending.add(self.pool.submit(execute, task))
             if len(pending) >= window:
                 done, pending = wait(pending, return_when=FIRST_COMPLETED)

@@ -199,7 +199,7 @@ def estimate_cmd(spec_path: Path, per_cell: int, workers: int | None, by: str | 
     from swarm.campaign import load_campaign
     from swarm.campaign.estimate import estimate, report_lines
     from swarm.campaign.runner import parse_shard
-    from .checks import check_output_path, write_failed
+    from .checks import check_output_path, writing
 
     shard_t = parse_shard(shard)
     dims = None if by is None else [d.strip() for d in by.split(",") if d.strip()]
@@ -214,10 +214,8 @@ def estimate_cmd(spec_path: Path, per_cell: int, workers: int | None, by: str | 
     if json_out is not None:
         from maps.io import atomic_write_bytes
 
-        try:
+        with writing("--json", json_out):
             atomic_write_bytes(json_out, json.dumps(est.to_dict(), indent=1).encode())
-        except OSError as exc:
-            raise write_failed("--json", json_out, exc) from None
         click.echo(f"wrote {json_out}")
 
 

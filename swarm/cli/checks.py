@@ -9,6 +9,8 @@ from __future__ import annotations
 import math
 import os
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -61,6 +63,16 @@ def check_output_path(flag: str, path: Path) -> Path:
     return path
 
 
-def write_failed(flag: str, path: Path, exc: OSError) -> InvalidInput:
-    """The error for an output that could not be written after all (a full disk, a vanished folder)."""
-    return InvalidInput(flag, str(path), f"a path that can be written ({exc.strerror or type(exc).__name__})")
+@contextmanager
+def writing(flag: str, path: Path) -> Iterator[None]:
+    """Write the output of ``flag`` at ``path`` inside this block: an OSError (a full disk, a quota, a vanished
+    folder) becomes a one-line :class:`InvalidInput` naming the flag (exit 2, not a traceback), and the checks of
+    :func:`maps.io.atomic_write_bytes` (field ``output``) name the flag. Atomic writers leave no partial file."""
+    try:
+        yield
+    except OSError as exc:
+        raise InvalidInput(flag, str(path), f"a path that can be written ({exc.strerror or type(exc).__name__})") from None
+    except InvalidInput as exc:
+        if exc.field != "output":
+            raise
+        raise InvalidInput(flag, exc.value, exc.allowed) from None

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from .checks import writing
 from .group import cli
 from .options import Choice, IntRange, parse_params
 from .options import Path as PathType
@@ -54,9 +55,11 @@ def generate_cmd(kind: str, size: str, seed: int, params: tuple[str, ...], outpu
         check_scale(m, scale, "--scale")  # before writing anything
     click.echo(f"{m.summary()} (generated in {elapsed * 1000:.0f} ms)")
     if output is not None:
-        click.echo(f"wrote {save_npz(m, output)}")
+        with writing("--output", output):
+            click.echo(f"wrote {save_npz(m, output)}")
     if png is not None:
-        click.echo(f"wrote {save_png(m, png, scale=scale, title=f'{kind} {size} seed {seed}')}")
+        with writing("--png", png):
+            click.echo(f"wrote {save_png(m, png, scale=scale, title=f'{kind} {size} seed {seed}')}")
 
 
 @map_group.command("params")
@@ -89,7 +92,8 @@ def show_cmd(path: Path, output: Path | None, legend: Path | None, scale: int | 
         check_scale(m, scale, "--scale")
     click.echo(m.summary())
     if output is not None:
-        click.echo(f"wrote {save_png(m, output, scale=scale, title=path.name)}")
+        with writing("--output", output):
+            click.echo(f"wrote {save_png(m, output, scale=scale, title=path.name)}")
 
 
 @map_group.command("import")
@@ -125,6 +129,8 @@ def import_cmd(path: Path, legend: Path | None, output: Path, png: Path | None, 
         options["material"] = material
     m = load_map(path, legend=legend, **options)
     click.echo(m.summary())
-    click.echo(f"wrote {save_npz(m, output)}")
+    with writing("--output", output):
+        click.echo(f"wrote {save_npz(m, output)}")
     if png is not None:
-        click.echo(f"wrote {save_png(m, png, title=path.name)}")
+        with writing("--png", png):
+            click.echo(f"wrote {save_png(m, png, title=path.name)}")

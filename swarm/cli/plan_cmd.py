@@ -7,6 +7,7 @@ from typing import Any
 
 import click
 
+from .checks import writing
 from .group import cli
 from .options import POINT, parse_params
 
@@ -86,7 +87,8 @@ def plan_cmd(path: Path, src: tuple[float, float], dst: tuple[float, float], pla
         click.echo(line)
     if output is not None:
         title = f"{path.name}: {planner}, {result['driven']:.1f} m (A* {result['astar_driven']:.1f} m)"
-        click.echo(f"wrote {save_plan_png(truth, space, result, output, scale, title)}")
+        with writing("--output", output):
+            click.echo(f"wrote {save_plan_png(truth, space, result, output, scale, title)}")
 
 
 def _fmt(p: tuple[float, float]) -> str:

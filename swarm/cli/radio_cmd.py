@@ -7,6 +7,7 @@ from typing import Any, Callable
 
 import click
 
+from .checks import writing
 from .group import cli
 from .options import FLOAT, POINT, Choice, IntRange, parse_params
 from .options import Path as PathType
@@ -188,5 +189,6 @@ def heatmap_cmd(path: Path, model: str | None, freq: float | None, tx_power: flo
                f"{100 * field.linked_share:.1f}% of free space hears the transmitter "
                f"(sensitivity {field.sensitivity_dbm:g} dBm; computed in {elapsed * 1000:.0f} ms)")
     title = f"{path.name}: RSSI from ({tx[0]:g}, {tx[1]:g}), {link_model.name}, {c.frequency_ghz:g} GHz"
-    click.echo(f"wrote {save_heatmap(truth, field, output, scale=scale, title=title)}")
+    with writing("--output", output):
+        click.echo(f"wrote {save_heatmap(truth, field, output, scale=scale, title=title)}")
 

@@ -12,9 +12,9 @@ import click
 from swarm.base.errors import InvalidInput
 
 from swarm.sim.spec import MAX_ROBOTS
-from swarm.sim.spec_input import flag_overrides, load_spec_file, merge
+from swarm.sim.spec_input import check_size_flag, flag_overrides, load_spec_file, merge
 from .group import cli
-from .checks import FiniteSeconds, check_output_path, write_failed
+from .checks import FiniteSeconds, check_output_path, writing
 from .options import parse_params
 
 
@@ -23,7 +23,7 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
     """The run spec as a mapping: the ``--spec`` file, then flags that were given, then ``--set``
     (:mod:`swarm.sim.spec_input` reads the file and the flags as :func:`swarm.run` reads its arguments)."""
     data: dict[str, Any] = load_spec_file(spec_file) if spec_file else {}
-    over = flag_overrides(flags)
+    over = flag_overrides(flags, "--")
     if algorithm_params:
         over.setdefault("algorithm", {})["params"] = parse_params(algorithm_params)
     if map_params:
@@ -31,6 +31,7 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
     data = merge(data, over)
     if sets:
         data = merge(data, parse_params(sets, "--set"))
+    check_size_flag(data, flags, "--")
     return data
 
 
@@ -131,10 +132,8 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
     for flag, path, write in outputs:
         if path is None:
             continue
-        try:
+        with writing(flag, path):  # checked before the run; a disk may still fill up
             click.echo(f"wrote {write(path)}")
-        except OSError as exc:  # checked before the run; a disk may still fill up
-            raise write_failed(flag, path, exc) from None
 
 
 def _check_transport_flags(spec, listen: tuple[str, ...], remote: tuple[int, ...], run_id: str | None,
@@ -161,12 +160,15 @@ def _check_transport_flags(spec, listen: tuple[str, ...], remote: tuple[int, ...
 
 def _transport_options(spec, listen: tuple[str, ...], remote: tuple[int, ...], timeout: float,
                        run_id: str | None, token_file: Path | None):
-    """How the run reaches its remote agents: their secret (read or created) and the commands to start them."""
+    """How the run reaches its remote agents: their secret (read or created) and the commands to start them,
+    printed once the runtime listens (a --listen endpoint that cannot be bound fails first, with no command
+    to start an agent for)."""
     from swarm.sim.loop import TransportOptions
     from swarm.transport.auth import TOKEN_ENV, runtime_secret
     from swarm.transport.zenoh_host import new_run_id
 
     secret = runtime_secret(token_file) if listen else None
+    lines: list[str] = []
     if remote:
         assert secret is not None
         run_id = run_id or new_run_id(spec.key)
@@ -177,8 +179,14 @@ def _transport_options(spec, listen: tuple[str, ...], remote: tuple[int, ...], t
                 how = f"(with ${TOKEN_ENV} set)"
             else:
                 how = f"--token {secret.robot_token(run_id, r).text()}"
-            click.echo(f"waiting for: swarm agent --connect {listen[0]} --run {run_id} --robot {r} {how}", err=True)
-    return TransportOptions(listen=listen, remote=remote, timeout_s=timeout, run_id=run_id, secret=secret)
+            lines.append(f"waiting for: swarm agent --connect {listen[0]} --run {run_id} --robot {r} {how}")
+
+    def announce() -> None:
+        for line in lines:
+            click.echo(line, err=True)
+
+    return TransportOptions(listen=listen, remote=remote, timeout_s=timeout, run_id=run_id, secret=secret,
+                            on_listening=announce if lines else None)
 
 
 @cli.command("agent")

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import click
 
+from .checks import writing
 from .group import cli
 
 
@@ -49,7 +50,8 @@ def view_cmd(recording: Path, output: Path | None, no_open: bool) -> None:
     out = output if output is not None else recording.with_suffix(".html")
     if out.resolve() == recording.resolve():
         raise InvalidInput("--output", str(out), "a path other than the recording itself")
-    written = write_html(recording, out)
+    with writing("--output", out):
+        written = write_html(recording, out)
     click.echo(f"wrote {written}")
     if not no_open:
         problem = open_in_browser(written)

@@ -53,6 +53,18 @@ _NAV_CODE = {"moving": NAV_MOVING, "planning": NAV_MOVING, "unreachable": NAV_FA
 _CONTACT_TICKS = 600.0
 
 
+def _velocity(a: Any) -> np.ndarray | None:
+    """A velocity-mode action as two finite floats, or None when it is not one (strings, mappings, None,
+    another shape): the caller turns that into a one-line error."""
+    if isinstance(a, (str, bytes, Mapping)) or a is None:
+        return None
+    try:
+        v = np.asarray(a, dtype=np.float64).reshape(-1)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    return v if v.shape == (2,) and np.isfinite(v).all() else None
+
+
 class _NoLinks:
     """The radio picture of a one-robot run, for the features kernel (never read)."""
 
@@ -156,7 +168,7 @@ class ExplorationCore:
         n_actions = self._n_actions
         for l, robot in enumerate(self.learners):
             if robot not in actions:
-                raise InvalidInput("actions", sorted(actions), f"an action for every learning robot ({list(self.learners)})")
+                raise InvalidInput("actions", list(actions)[:8], f"an action for every learning robot ({list(self.learners)})")
             a = actions[robot]
             if goal_mode:
                 if not (type(a) is int and 0 <= a < n_actions):  # the common case is checked cheaply
@@ -168,8 +180,8 @@ class ExplorationCore:
                 row = self.goals[l, a - 1, 0] if a else -1
                 first[robot] = Action(goal=cell_centre(int(row), int(self.goals[l, a - 1, 1]))) if row >= 0 else KEEP
             else:
-                v = np.asarray(a, dtype=np.float64).reshape(-1)
-                if v.shape != (2,) or not np.isfinite(v).all():
+                v = _velocity(a)
+                if v is None:
                     raise InvalidInput(f"actions[{robot}]", a, "two finite numbers in [-1, 1]: speed, turn rate")
                 v = np.clip(v, -1.0, 1.0)
                 m = self.sim.motion
@@ -178,12 +190,17 @@ class ExplorationCore:
         return first, later, asked
 
     def _index(self, robot: int, a: Any) -> int:
-        """A goal-mode action given as another integer type (numpy's), or a one-line error."""
+        """A goal-mode action given as another integer type (numpy's, a 0-d array), or a one-line error; an
+        array of several values, a string or a bool is refused rather than compared element-wise."""
+        index = -1
         try:
-            index = int(a)
-        except (TypeError, ValueError):
-            index = -1
-        if index != a or not 0 <= index < self._n_actions:
+            if np.ndim(a) == 0 and not isinstance(a, (bool, np.bool_, str, bytes)):
+                whole = int(a)
+                if bool(whole == a):
+                    index = whole
+        except (TypeError, ValueError, OverflowError):
+            pass
+        if not 0 <= index < self._n_actions:
             raise InvalidInput(f"actions[{robot}]", a, f"an integer 0..{self._n_actions - 1}")
         return index
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
@@ -60,9 +61,11 @@ class SwarmParallelEnv(ParallelEnv):
     def step(self, actions: dict[str, Any]) -> tuple[dict, dict, dict, dict, dict]:
         if not self.agents:
             raise RuntimeError("step() after every agent is done: call reset()")
+        if not isinstance(actions, Mapping):
+            raise InvalidInput("actions", actions, "a dict of agent name -> action, e.g. {'robot_0': 1}")
         if not actions.keys() >= self._agent_set:
             missing = [a for a in self.agents if a not in actions]
-            raise InvalidInput("actions", sorted(actions), f"an action for every live agent (missing {missing[:4]})")
+            raise InvalidInput("actions", list(actions)[:8], f"an action for every live agent (missing {missing[:4]})")
         core = self.core
         core.step({robot: actions[a] for a, robot in self._pairs})
         obs, infos = self._observations(), self._infos()

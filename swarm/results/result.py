@@ -29,6 +29,16 @@ class RunResult:
     "robots": {name: [[per robot] per row]}}``, rows at the time series' ticks. Kept apart from ``summary``
     and ``timeseries`` so those stay what they were (benchmarks/result_digests.py hashes them)."""
 
+    def __repr__(self) -> str:
+        """One short line: the key, the summary and how much the result holds (the default repr printed the
+        whole time series, 83 KB for 2,000 ticks). Never raises, whatever a hand-built result holds."""
+        try:
+            rows = len(next(iter(self.timeseries.values()), ()))
+            what = f"{self.one_line()}; {rows} time-series rows, {len(self.events)} events"
+        except (KeyError, TypeError, ValueError, AttributeError, IndexError):  # a hand-built, partial result
+            what = "incomplete"
+        return f"RunResult(key={self.key!r}, {what})"
+
     def to_dict(self) -> dict[str, Any]:
         return {"key": self.key, "spec": self.spec, "summary": self.summary, "timeseries": self.timeseries,
                 "events": self.events, "provenance": self.provenance, "comm": self.comm}

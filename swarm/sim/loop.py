@@ -82,6 +82,9 @@ class TransportOptions:
     times: PhaseTimes | None = field(default=None, compare=False)  # benchmarks: where the ticks go
     secret: RunSecret | None = field(default=None, repr=False)  # remote agents' tokens derive from it (a fresh one if None)
     share_maps: bool = True  # zenoh: local agents read the runtime's maps in place (False: ship them the changes)
+    on_listening: Callable[[], None] | None = field(default=None, compare=False, repr=False)
+    """Called once the ``listen`` endpoints are open, before the run waits for remote agents: ``swarm run``
+    prints the agents' commands then, not before a bind that may fail."""
 
 
 @dataclass
@@ -201,6 +204,8 @@ class Simulation:
         if opts.times is not None:
             self._time_phases(opts.times)
         try:
+            if opts.on_listening is not None:
+                opts.on_listening()
             host.start(self.resets())
             if host.mirrors:
                 self._mirror = np.zeros_like(self.known)

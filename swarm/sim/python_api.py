@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from typing import Any, Callable, Sequence
 
+from swarm.base.errors import InvalidInput
 from swarm.results.result import RunResult
 from .spec import RunSpec
 from .spec_input import resolve
@@ -36,7 +37,18 @@ def run(spec: Any = None, /, *, observers: Sequence[Callable[[Any], None]] = (),
     from .loop import Simulation
 
     resolved = resolve(spec, overrides)
-    return Simulation(resolved, observers=observers).run()
+    return Simulation(resolved, observers=check_observers(observers)).run()
+
+
+def check_observers(observers: Any) -> tuple[Callable[[Any], None], ...]:
+    """``observers`` as a tuple of callables, or a one-line error naming the first that is not one (a bare
+    callable, or a non-sequence, would otherwise fail mid-run with a TypeError)."""
+    if isinstance(observers, (str, bytes)) or not isinstance(observers, Sequence):
+        raise InvalidInput("observers", observers, "a list of callables, each called with a TickView after every tick")
+    for i, observer in enumerate(observers):
+        if not callable(observer):
+            raise InvalidInput(f"observers[{i}]", observer, "a callable taking a TickView")
+    return tuple(observers)
 
 
 def resolve_spec(spec: Any = None, /, **overrides: Any) -> RunSpec:

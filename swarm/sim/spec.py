@@ -56,7 +56,12 @@ class MapSpec:
                 raise InvalidInput("map.path", self.path, "only with map.kind = 'file'")
             w, h = parse_size(self.size)
             object.__setattr__(self, "size", w if w == h else [w, h])
-            object.__setattr__(self, "params", to_mapping(params_for(self.kind, self.params)))
+            try:
+                params = params_for(self.kind, self.params)
+            except InvalidInput as exc:  # the generator names its fields "<kind>.<field>"
+                field = exc.field.removeprefix(f"{self.kind}.")
+                raise InvalidInput(f"map.params.{field}", exc.value, exc.allowed) from None
+            object.__setattr__(self, "params", to_mapping(params))
         if self.seed is not None:
             check_int("map.seed", self.seed, 0, 2**63 - 1)
         if not isinstance(self.params, Mapping):
@@ -188,11 +193,22 @@ class RunSpec:
 
     def to_toml(self) -> str:
         """The fully-resolved spec as a TOML run-spec file (``swarm run --spec`` reads it back to the same
-        :attr:`key`). TOML has no null: a setting that is None (a seed drawn from ``seed``, an automatic
-        ray count) is left out, which is what its default means."""
+        :attr:`key`), every default shown: also the settings the canonical form leaves out while they hold
+        their default (:data:`~swarm.base.params.OMIT_DEFAULT`: ``comm.relay``, ``radio.per``, an algorithm's
+        ``variant``...), which read back to the same key. TOML has no null: a setting that is None (a seed
+        drawn from ``seed``, an automatic ray count) is left out, which is what its default means."""
         import tomli_w
 
-        return tomli_w.dumps(_without_none(self.canonical()))
+        from swarm.plugins.explorers import build_params
+
+        data = self.canonical()
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if hasattr(value, "__dataclass_fields__"):
+                data[f.name] = _plain(to_mapping(value, omit_defaults=False))
+        params = build_params(self.algorithm.name, self.algorithm.params)
+        data["algorithm"]["params"] = _plain(to_mapping(params, omit_defaults=False))
+        return tomli_w.dumps(_without_none(json.loads(json.dumps(data, sort_keys=True))))
 
     @cached_property
     def key(self) -> str:
@@ -243,7 +259,7 @@ def _resolve_motion(d: dict[str, Any]) -> dict[str, Any]:
 def _resolve_radio(d: dict[str, Any]) -> dict[str, Any]:
     from radio import RadioConfig, config_from_mapping
 
-    config = config_from_mapping(d) if d else RadioConfig()
+    config = config_from_mapping(d, "radio.") if d else RadioConfig()
     return _plain(to_mapping(config))
 
 

@@ -26,6 +26,8 @@ TOP_FLAGS = ("seed", "transport")
 SECTIONS = ("map", "robots", "algorithm", "lidar", "motion", "navigation", "radio", "comm", "stop")
 """Spec sections an override may give as a table, merged into the spec's (``lidar={"range_m": 4}``)."""
 GENERATED_KINDS = ("building", "cave")
+MAP_FILE_SUFFIXES = (".npz", ".pgm", ".csv")
+"""Map files a run reads (:func:`maps.io.load_map` without a legend)."""
 
 
 def load_spec_file(path: str | os.PathLike[str], field: str = "--spec") -> dict[str, Any]:
@@ -52,18 +54,23 @@ def merge(base: Mapping[str, Any], overrides: Mapping[str, Any]) -> dict[str, An
     return out
 
 
-def map_override(value: str) -> dict[str, Any]:
-    """``--map`` / ``map=``: a generated kind, or a map file (size 50 is only the file's placeholder)."""
+def map_override(value: str, field: str = "map") -> dict[str, Any]:
+    """``--map`` / ``map=``: a generated kind, or a map file (size 50 is only the file's placeholder). A
+    value that is neither (a misspelt kind, ``cavee``) is refused naming the kinds, not opened as a file."""
     if value in GENERATED_KINDS:
         return {"kind": value}
+    if Path(value).suffix.lower() not in MAP_FILE_SUFFIXES:
+        raise InvalidInput(field, value, f"a map kind ({' | '.join(GENERATED_KINDS)}) or a map file "
+                                         f"({', '.join(MAP_FILE_SUFFIXES)}): this is neither")
     return {"kind": "file", "path": str(value), "size": 50}
 
 
-def flag_overrides(flags: Mapping[str, Any]) -> dict[str, Any]:
-    """The spec tables the flags that were given (not None) set, as ``swarm run``'s flags set them."""
+def flag_overrides(flags: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """The spec tables the flags that were given (not None) set, as ``swarm run``'s flags set them; errors
+    name the flag as ``prefix + name`` (``--map`` on the command line, ``map`` in Python)."""
     over: dict[str, Any] = {}
     if flags.get("map") is not None:
-        over["map"] = map_override(flags["map"])
+        over["map"] = map_override(flags["map"], f"{prefix}map")
     for flag, (section, key) in FLAG_FIELDS.items():
         if flags.get(flag) is not None:
             over.setdefault(section, {})[key] = flags[flag]
@@ -71,6 +78,14 @@ def flag_overrides(flags: Mapping[str, Any]) -> dict[str, Any]:
         if flags.get(flag) is not None:
             over[flag] = flags[flag]
     return over
+
+
+def check_size_flag(data: Mapping[str, Any], flags: Mapping[str, Any], prefix: str = "") -> None:
+    """A size flag is refused on a map file (given by the map flag or the spec): the file sets the map's
+    size, and the flag would only be stored in the spec and shown as the map's size."""
+    table = data.get("map")
+    if flags.get("size") is not None and isinstance(table, Mapping) and table.get("kind") == "file":
+        raise InvalidInput(f"{prefix}size", flags["size"], "no size with a map file (the file sets the map's size)")
 
 
 def looks_like_toml(text: str) -> bool:
@@ -131,6 +146,7 @@ def resolve(spec: Any = None, overrides: Mapping[str, Any] | None = None, field:
         else:
             raise InvalidInput(key, value, f"a table of {key} settings")
     data = merge(data, merge(tables, flag_overrides(flags)))
+    check_size_flag(data, flags)
     return RunSpec.from_mapping(data)
 
 
@@ -140,4 +156,4 @@ def _table(key: str, value: Any) -> dict[str, Any]:
     return dict(value)
 
 
-__all__ = ["FLAG_FIELDS", "KEYWORDS", "SECTIONS", "flag_overrides", "load_spec_file", "merge", "resolve", "spec_source"]
+__all__ = ["FLAG_FIELDS", "KEYWORDS", "SECTIONS", "check_size_flag", "flag_overrides", "load_spec_file", "merge", "resolve", "spec_source"]

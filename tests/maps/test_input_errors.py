@@ -282,7 +282,7 @@ def test_known_materials_are_the_radio_table():
 def test_generators_refuse_unknown_materials(kind, params, field):
     with pytest.raises(InvalidInput) as info:
         generate(kind, 20, 0, params)
-    assert info.value.field == field
+    assert info.value.field == f"{kind}.{field}", "the generator names its own fields in full"
     assert "concrete" in info.value.allowed and "glass" in info.value.allowed
 
 
@@ -325,7 +325,7 @@ def test_legend_may_declare_extra_materials(tmp_path):
 def test_weights_whose_sum_overflows_are_refused():
     with pytest.raises(InvalidInput) as info:
         generate("building", 20, 0, {"interior_materials": {"concrete": 1e308, "wood": 1e308}})
-    assert info.value.field == "interior_materials"
+    assert info.value.field == "building.interior_materials"
 
 
 # ----------------------------------------------------------------------------------- long values ----

@@ -294,7 +294,7 @@ def test_accepted_values_are_passed_on_unconverted():
 
 
 def test_the_classes_own_checks_speak_first():
-    with pytest.raises(InvalidInput, match=r"^recheck_ticks: got 'x'; allowed: an integer in 1\.\.100000$"):
+    with pytest.raises(InvalidInput, match=r"^algorithm\.params\.recheck_ticks: got 'x'; allowed: an integer in 1\.\.100000$"):
         registry.build_params("frontier", {"recheck_ticks": "x"})
 
 
@@ -347,7 +347,7 @@ def test_the_command_offers_every_check():
 def test_algorithms_check_bad_flags_exit_2_and_the_listing_stays(capsys):
     assert run(capsys, "algorithms", "check", "greed", "--robots", "0")[0] == 2
     code, _, err = run(capsys, "algorithms", "check", "greed", "--param", "deadlock_ticks=soon")
-    assert code == 2 and err.startswith("swarm: error: deadlock_ticks: got 'soon'")
+    assert code == 2 and err.startswith("swarm: error: algorithm.params.deadlock_ticks: got 'soon'")
     code, out, _ = run(capsys, "algorithms")
     assert code == 0 and "greed  (algorithms.greed:Greed)" in out and "deadlock_ticks = 50" in out
 

@@ -22,6 +22,7 @@ from swarm.campaign import parse_campaign, status
 from swarm.campaign.store import RUNS_SUFFIX, TS_SUFFIX, ResultsStore
 from swarm.campaign.writers import WRITERS, overlaps
 
+from ... import full_disk
 from .test_campaign import TINY
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -253,31 +254,14 @@ def test_a_read_only_results_folder_fails_before_any_run_with_one_line(tmp_path,
     assert not run_files(out)
 
 
-FAILING_FSYNC = """
-import errno, os, sys
-real, calls = os.fsync, [0]
-def fsync(fd):
-    name = os.readlink(f"/proc/self/fd/{fd}")
-    if ".parquet" in name:
-        calls[0] += 1
-        if calls[0] >= int(os.environ["FAIL_AT"]):
-            raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
-    return real(fd)
-os.fsync = fsync  # the disk fills up: every write of a part file from the FAIL_AT-th on fails
-from swarm.cli import main
-sys.exit(main(sys.argv[1:]))
-"""
-
-
-@pytest.mark.skipif(not Path("/proc/self/fd").exists(), reason="needs /proc")
+@pytest.mark.skipif(not full_disk.SUPPORTED, reason="needs /proc")
 @pytest.mark.parametrize("fail_at, what", [(4, "time-series file of part 2"), (5, "robots file of part 2"),
                                            (6, "runs file of part 2")])
 def test_a_full_disk_stops_with_one_line_keeping_committed_parts_and_no_temp_file(tmp_path, fail_at, what):
     spec = spec_file(tmp_path, replicates=1)
     out = tmp_path / "out"
     args = ["campaign", "run", str(spec), "-o", str(out), "--inline", "--part-size", "3"]
-    proc = subprocess.run([sys.executable, "-c", FAILING_FSYNC, *args], capture_output=True, text=True, timeout=240,
-                          env={**os.environ, "FAIL_AT": str(fail_at)}, cwd=ROOT)
+    proc = full_disk.run_on_full_disk(args, ".parquet", fail_at)
     assert proc.returncode == 2, proc.stderr
     err = proc.stderr.splitlines()
     assert "Traceback" not in proc.stderr

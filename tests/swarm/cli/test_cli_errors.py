@@ -78,6 +78,49 @@ def test_bad_run_and_agent_flags_are_one_line_errors(argv, flag, capsys, tmp_pat
     assert not list(tmp_path.iterdir()), "nothing was written"
 
 
+@pytest.fixture
+def map_file(tmp_path) -> Path:
+    from maps import generate
+    from maps.io import save_npz
+
+    return save_npz(generate("building", "30x20", 1), tmp_path / "b.npz")
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--map", "{file}", "--size", "200"], "--size: got '200'; allowed: no size with a map file"),
+    (["--spec", "{spec}", "--size", "200"], "--size: got '200'; allowed: no size with a map file"),
+    (["--map", "cavee"], "--map: got 'cavee'; allowed: a map kind (building | cave) or a map file (.npz, .pgm, .csv)"),
+    (["--map", "{folder}"], "--map: got '{folder}'; allowed: a map kind (building | cave) or a map file"),
+])
+def test_map_flags_that_do_not_fit_are_refused(argv, message, map_file, capsys):
+    spec = map_file.with_suffix(".toml")
+    spec.write_text(f'[map]\nkind = "file"\npath = "{map_file}"\n')
+    fill = {"file": map_file, "spec": spec, "folder": map_file.parent}
+    code, out, err = run_cli(["run", "--max-ticks", "2", *[a.format(**fill) for a in argv]], capsys)
+    assert_one_line_error(code, err)
+    assert err.startswith(f"swarm: error: {message.format(**fill)}"), err
+    assert out == ""
+
+
+def test_a_map_file_runs_without_a_size(map_file, capsys):
+    code, _, err = run_cli(["run", "--max-ticks", "2", "--map", str(map_file)], capsys)
+    assert code == 0, err
+
+
+@pytest.mark.parametrize("sets, field", [
+    (["--set", "motion.max_speed=-1"], "motion.max_speed"), (["--param", "recheck_ticks=-1"], "algorithm.params.recheck_ticks"),
+    (["--set", "lidar.range_m=-1"], "lidar.range_m"), (["--set", "radio.per='x'"], "radio.per"),
+    (["--set", "radio.shadowing_sigma_db=-1"], "radio.shadowing_sigma_db"),
+    (["--set", "radio.materials.glass='x'"], "radio.materials.glass"),
+    (["--map", "cave", "--map-param", "fill_percent=200"], "map.params.fill_percent"),
+    (["--map-param", "bogus=1"], "map.params.bogus"),
+])
+def test_errors_name_the_full_field(sets, field, capsys):
+    code, _, err = run_cli(["run", "--max-ticks", "2", *sets], capsys)
+    assert_one_line_error(code, err)
+    assert err.startswith(f"swarm: error: {field}: got "), err
+
+
 def test_output_flags_are_checked_before_the_run(capsys, tmp_path):
     """A result that cannot be written is refused before the run is computed, not after it."""
     locked = tmp_path / "locked"

@@ -290,7 +290,7 @@ def test_team_time_and_collision_rewards():
     ({"action": "jump"}, "action"), ({"crop_cells": 31}, "crop_cells"), ({"learners": [5]}, "learners"),
     ({"transport": "zenoh"}, "transport"), ({"action": "velocity", "delegate": True}, "delegate"),
     ({"reward": {"speed": 1.0}}, "reward.speed"), ({"ticks_per_step": 0}, "ticks_per_step"),
-    ({"robots": 0}, "robots.count"), ({"radio": "nonsense"}, "model"),  # the radio section names its own fields
+    ({"robots": 0}, "robots.count"), ({"radio": "nonsense"}, "radio.model"),
 ])
 def test_bad_options_are_one_line_errors(kwargs, field):
     with pytest.raises(InvalidInput) as exc:
@@ -305,6 +305,37 @@ def test_bad_actions_are_one_line_errors():
         env.step({a: 9 for a in env.agents})
     with pytest.raises(InvalidInput, match="an action for every live agent"):
         env.step({"robot_0": 0})
+
+
+@pytest.mark.parametrize("action", [np.array([1, 2]), np.array([[1]]), None, "1", b"1", 1.5, True, [1], {}, 2**70,
+                                    np.float64("nan"), object()])
+def test_a_goal_action_of_the_wrong_shape_or_type_is_a_one_line_error(action):
+    env = senv.SwarmEnv(**SMALL)
+    env.reset(seed=0)
+    with pytest.raises(InvalidInput, match=r"^actions\[0\]: got .*; allowed: an integer 0..8$"):
+        env.step(action)
+    assert env.step(np.int64(1))[4]["tick"] == 1, "the env still steps"
+
+
+@pytest.mark.parametrize("action", [["a", "b"], None, {}, "ab", [1.0], [1.0, float("inf")], [1, 2, 3],
+                                    [object(), 1.0], [[1.0], [2.0, 3.0]]])
+def test_a_velocity_action_of_the_wrong_shape_or_type_is_a_one_line_error(action):
+    env = senv.SwarmEnv(**SMALL, action="velocity")
+    env.reset(seed=0)
+    with pytest.raises(InvalidInput, match=r"^actions\[0\]: got .*; allowed: two finite numbers"):
+        env.step(action)
+    assert env.step(np.array([0.5, 0.0]))[4]["tick"] == 1
+
+
+@pytest.mark.parametrize("actions", [[0, 0, 0], None, (0, 0, 0), 0, "robot_0", np.zeros(3)])
+def test_parallel_step_of_a_non_dict_is_a_one_line_error(actions):
+    env = senv.SwarmParallelEnv(**SMALL)
+    env.reset(seed=0)
+    with pytest.raises(InvalidInput, match=r"^actions: got .*; allowed: a dict of agent name -> action"):
+        env.step(actions)
+    with pytest.raises(InvalidInput, match="an action for every live agent"):
+        env.step({1: 0, "robot_0": 0})  # keys of mixed types are shown, not sorted
+    assert env.step(dict.fromkeys(env.agents, 0))[4]["robot_0"]["tick"] == 1
 
 
 def test_ticks_per_step_and_spec_options_reach_the_run():

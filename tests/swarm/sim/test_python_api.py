@@ -4,6 +4,7 @@ does (the same spec, the same one-line errors) and return what the CLI writes.""
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pandas as pd
 import pytest
@@ -85,7 +86,9 @@ def test_errors_are_the_clis_one_line_errors(argv, kwargs, capsys, tmp_path):
 
 
 @pytest.mark.parametrize("kwargs, field", [({"robts": 2}, "robts"), ({"lidar": 3}, "lidar"), ({"map": 5}, "map"),
-                                           ({"params": [1]}, "params")])
+                                           ({"params": [1]}, "params"), ({"map": "cavee"}, "map"),
+                                           ({"map": "x.npz", "size": 30}, "size"),
+                                           ({"motion": {"max_speed": -1}}, "motion.max_speed")])
 def test_unknown_or_ill_typed_keywords_are_one_line_errors(kwargs, field):
     with pytest.raises(InvalidInput) as exc:
         swarm.run(**kwargs)
@@ -124,6 +127,81 @@ def test_campaign_run_load_and_timeseries(tmp_path, capsys):
     assert set(swarm.campaign.load_timeseries(tmp_path / "api", keys=[one])["key"]) == {one}
 
 
+UNGUARDED_SCRIPT = """
+import sys
+import swarm
+print("script body ran", flush=True)
+out = swarm.campaign.run(sys.argv[1], sys.argv[2], workers=2)
+print("ran", out.ran, "of", out.total, "failed", out.failed)
+"""
+
+
+def test_a_campaign_script_without_a_main_guard_runs_as_written(tmp_path):
+    """The README's ``swarm.campaign.run(...)`` saved as a script, with no ``if __name__ == "__main__":``:
+    the pool's workers must not run the script again (they did, and the pool broke)."""
+    import os
+    import subprocess
+    import sys
+
+    import tomli_w
+
+    spec = tmp_path / "grid.toml"
+    spec.write_text(tomli_w.dumps(GRID))
+    script = tmp_path / "grid.py"
+    script.write_text(UNGUARDED_SCRIPT)
+    root = str(Path(swarm.__file__).resolve().parents[1])
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")]))}
+    proc = subprocess.run([sys.executable, str(script), str(spec), str(tmp_path / "out")], capture_output=True,
+                          text=True, timeout=300, cwd=tmp_path, env=env, check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert proc.stdout.splitlines() == ["script body ran", "ran 8 of 8 failed 0"], proc.stdout
+    assert "Traceback" not in proc.stderr and len(swarm.campaign.load(tmp_path / "out")) == 8
+
+
+MAIN_ALGORITHM_SCRIPT = """
+import sys
+import swarm
+from algorithms.greed import Greed
+
+
+class MyGreed(Greed):
+    pass
+
+
+spec = sys.argv[1]
+try:
+    swarm.campaign.run(spec, sys.argv[2], workers=2)
+except swarm.InvalidInput as exc:
+    print(exc)
+print(swarm.campaign.run(spec, sys.argv[2] + "-inline", inline=True).ran)
+"""
+
+
+def test_an_algorithm_defined_in_the_script_is_refused_on_the_pool_and_runs_inline(tmp_path):
+    """Pool workers do not run the caller's script, so a class defined there cannot run in them: one line,
+    before the pool runs anything, instead of every run failing; inline, in the script's own process, it runs."""
+    import os
+    import subprocess
+    import sys
+
+    import tomli_w
+
+    spec = tmp_path / "grid.toml"
+    spec.write_text(tomli_w.dumps({**GRID, "grid": {**GRID["grid"], "algorithm": ["__main__:MyGreed"]}}))
+    script = tmp_path / "mine.py"
+    script.write_text(MAIN_ALGORITHM_SCRIPT)
+    root = str(Path(swarm.__file__).resolve().parents[1])
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, [root, os.environ.get("PYTHONPATH")]))}
+    proc = subprocess.run([sys.executable, str(script), str(spec), str(tmp_path / "out")], capture_output=True,
+                          text=True, timeout=300, cwd=tmp_path, env=env, check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    refusal, ran = proc.stdout.splitlines()
+    assert refusal.startswith("algorithm.name: got '__main__:MyGreed'; allowed: a class in an importable module")
+    assert ran == "4"
+    written = swarm.campaign.load(tmp_path / "out")  # the warm-up run in the script's process may be there
+    assert (written["status"] == "ok").all(), "no run failed"
+
+
 @pytest.mark.parametrize("kwargs, field", [
     ({"inline": True, "workers": 2}, "--inline"), ({"dask": "nowhere"}, "--dask"), ({"shard": "3/2"}, "--shard"),
     ({"workers": 0}, "--workers"), ({"dask": object()}, "dask"),
@@ -132,6 +210,31 @@ def test_campaign_errors_are_one_line(kwargs, field, tmp_path):
     with pytest.raises(InvalidInput) as exc:
         swarm.campaign.run(GRID, tmp_path / "x", **kwargs)
     assert str(exc.value).startswith(f"{field}: got ")
+
+
+@pytest.mark.parametrize("observers, field", [(5, "observers"), ("print", "observers"), ([print, 5], "observers[1]"),
+                                              (print, "observers")])
+def test_observers_that_are_not_a_list_of_callables_are_one_line_errors(observers, field):
+    with pytest.raises(InvalidInput) as exc:
+        swarm.run({"map": {"size": 20}}, observers=observers, max_ticks=3)
+    assert str(exc.value).startswith(f"{field}: got ") and "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("kwargs, field", [({"shard": (1, 2)}, "--shard"), ({"shard": 1}, "--shard"),
+                                           ({"out": 5}, "-o"), ({"out": ""}, "-o")])
+def test_campaign_run_arguments_of_the_wrong_type_are_one_line_errors(kwargs, field, tmp_path):
+    args = {"out": tmp_path / "x", "inline": True, **kwargs}
+    with pytest.raises(InvalidInput) as exc:
+        swarm.campaign.run(GRID, args.pop("out"), **args)
+    assert str(exc.value).startswith(f"{field}: got ")
+    assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.parametrize("folder", [None, 5, "", ["a"]])
+@pytest.mark.parametrize("load", ["load", "load_timeseries"])
+def test_campaign_load_of_a_non_path_is_a_one_line_error(folder, load):
+    with pytest.raises(InvalidInput, match="^DIR: got "):
+        getattr(swarm.campaign, load)(folder)
 
 
 def test_campaign_spec_and_folder_errors(tmp_path, capsys):
@@ -143,3 +246,11 @@ def test_campaign_spec_and_folder_errors(tmp_path, capsys):
     assert str(exc.value) == cli_error(["campaign", "report", str(tmp_path)], capsys)
     with pytest.raises(InvalidInput, match="^DIR: got"):
         swarm.campaign.load_timeseries(tmp_path / "missing")
+
+
+def test_a_results_repr_is_one_short_line():
+    result = swarm.run({"map": {"size": 20}, "record_every": 1}, max_ticks=400, explored=1.0)
+    assert len(result.timeseries["tick"]) > 300
+    text = repr(result)
+    assert len(text) < 300 and "\n" not in text and text.startswith(f"RunResult(key={result.key!r}, ")
+    assert "time-series rows" in text

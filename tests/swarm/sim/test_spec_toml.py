@@ -40,3 +40,18 @@ def test_print_spec_output_is_a_spec_file(tmp_path, capsys):
     assert main(["run", "--spec", str(path), "--print-spec"]) == 0
     assert capsys.readouterr().out == printed
     assert RunSpec.from_mapping(tomllib.loads(printed)).robots.count == 3
+
+
+def test_print_spec_shows_every_default_and_reads_back_to_the_same_run(tmp_path, capsys):
+    """Settings the canonical form omits at their default (so older specs keep their key) are printed too."""
+    assert main(["run", "--print-spec", "--algorithm", "tnf"]) == 0
+    printed = capsys.readouterr().out
+    data = tomllib.loads(printed)
+    assert (data["comm"]["relay"], data["comm"]["relay_hops"]) == ("none", 4)
+    assert (data["radio"]["shadowing_sigma_db"], data["radio"]["per"]) == (0.0, "off")
+    assert {"shadowing_corr_m", "per_ref"} <= set(data["radio"]) and "variant" in data["algorithm"]["params"]
+    path = tmp_path / "run.toml"
+    path.write_text(printed)
+    assert main(["run", "--spec", str(path), "--print-spec"]) == 0
+    assert capsys.readouterr().out == printed
+    assert RunSpec.from_mapping(data).key == RunSpec.from_mapping({"algorithm": {"name": "tnf"}}).key

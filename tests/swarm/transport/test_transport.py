@@ -211,3 +211,42 @@ def test_phase_timers_see_each_step_and_change_no_result():
         assert z.get("agent: observe") > 0 and z.get("zenoh: obs put") > 0
     fn = len
     assert timed(None, "x", fn) is fn
+
+
+RUN_LISTENING = [sys.executable, "-m", "swarm", "run", "--transport", "zenoh", "--size", "20", "--robots", "2",
+                 "--max-ticks", "20", "--remote", "1", "--agent-timeout", "20"]
+
+
+def test_a_listen_endpoint_that_cannot_be_bound_fails_before_any_agent_command_is_printed():
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen()
+        endpoint = f"tcp/127.0.0.1:{taken.getsockname()[1]}"
+        proc = subprocess.run([*RUN_LISTENING, "--listen", endpoint], capture_output=True, text=True, timeout=120,
+                              env={k: v for k, v in os.environ.items() if k != "SWARM_TOKEN"}, check=False)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.startswith("swarm: error: --listen: ") and proc.stderr.count("\n") == 1, proc.stderr
+    assert "waiting for" not in proc.stderr + proc.stdout
+
+
+def test_the_agent_command_is_printed_once_the_runtime_listens_and_starts_the_agent():
+    endpoint = f"tcp/127.0.0.1:{free_port()}"
+    env = {k: v for k, v in os.environ.items() if k != "SWARM_TOKEN"}
+    run = subprocess.Popen([*RUN_LISTENING, "--listen", endpoint], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                           text=True, env=env)
+    agent = None
+    try:
+        line = run.stderr.readline()
+        assert line.startswith(f"waiting for: swarm agent --connect {endpoint} --run "), line
+        with socket.create_connection(("127.0.0.1", int(endpoint.rsplit(":", 1)[1])), timeout=5):
+            pass  # the endpoint is bound when the command is printed
+        agent = subprocess.Popen([sys.executable, "-m", *line.split("waiting for: ", 1)[1].split()],
+                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        out, err = run.communicate(timeout=120)
+        assert run.returncode == 0, err
+        assert "stopped at tick" in out
+    finally:
+        for proc in (run, agent):
+            if proc is not None and proc.poll() is None:
+                proc.kill()
+                proc.wait(10)
