@@ -24,7 +24,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from swarm.api import CELL_M, FREE, Observation, cell_of, check_float, check_int
+from swarm.api import CELL_M, FREE, Neighbours, Observation, cell_of, check_float, check_int
 
 
 def check_recovery_params(p: Any) -> None:
@@ -70,7 +70,10 @@ class Backoff:
             r, c = cell_of(x - d * math.cos(theta), y - d * math.sin(theta))
             if not (0 <= r < h and 0 <= c < w) or obs.known[r, c] != FREE:
                 return False
-        for other in obs.neighbours:
+        near = obs.neighbours
+        if isinstance(near, Neighbours):  # the runtime's lazy neighbours: build only the close ones
+            near = near.within(self.ROBOT_CLEARANCE_M)
+        for other in near:
             if other.distance < self.ROBOT_CLEARANCE_M and abs(other.bearing) > math.pi / 2:
                 return False
         return True

@@ -75,6 +75,18 @@ class Neighbours(Sequence[Neighbour]):
             self._source = None
         return self._items
 
+    def within(self, range_m: float) -> tuple[Neighbour, ...]:
+        """The neighbours closer than ``range_m`` (in robot order), without building the others: a robot in
+        a swarm senses hundreds, and a check such as "is anyone right behind me" needs the nearest few."""
+        if self._source is None:
+            return tuple(n for n in self._all() if n.distance < range_m)
+        row, near, distance, bearing, xy = self._source
+        cols = np.flatnonzero(near[row])
+        cols = cols[distance[row, cols] < range_m]
+        return tuple(Neighbour(*r) for r in zip(cols.tolist(), distance[row, cols].tolist(),
+                                                bearing[row, cols].tolist(), xy[cols, 0].tolist(),
+                                                xy[cols, 1].tolist()))
+
     def __getitem__(self, index):  # type: ignore[override]
         return self._all()[index]
 
