@@ -19,6 +19,7 @@ from maps.io import atomic_write_bytes
 
 from swarm.record import Recording
 from swarm.record.animation import ROBOT_COLOURS, SEEN_FREE, UNSEEN_FREE
+from swarm.record.container import bad
 from swarm.record.reader import read_bytes
 
 OTHERS_FREE = (226, 229, 236)
@@ -31,8 +32,14 @@ def _asset(name: str) -> str:
 
 
 def title_of(rec: Recording) -> str:
-    """A one-line description of the recorded run, e.g. ``frontier x4 on building 50, seed 1``."""
+    """A one-line description of the recorded run, e.g. ``frontier x4 on building 50, seed 1``.
+
+    The reader checks only that HEAD ``spec`` is a map; a crafted file may hold anything inside it, so a
+    section that is not a map is the one-line error for a bad recording, not an AttributeError."""
     spec = rec.spec
+    for section in ("algorithm", "map"):
+        if not isinstance(spec.get(section, {}), dict):
+            raise bad(rec.path, f"HEAD spec field {section!r} is not a map")
     algorithm = spec.get("algorithm", {}).get("name", "?")
     m = spec.get("map", {})
     where = m.get("path") if m.get("kind") == "file" else f"{m.get('kind', '?')} {m.get('size', '?')}"
