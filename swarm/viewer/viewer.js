@@ -1148,6 +1148,7 @@
           const ij = (bits[bij >>> 3] >>> (bij & 7)) & 1, ji = (bits[bji >>> 3] >>> (bji & 7)) & 1;
           if (!ij && !ji) continue;
           if (pairs++ % every) continue;
+          if (drawn === LINK_BUDGET) break;
           let m = Infinity;
           if (ij) m = Math.min(m, this.margin(i, j));
           if (ji) m = Math.min(m, this.margin(j, i));
@@ -1286,10 +1287,10 @@
       if (!this.pointGrid || this.pointGrid.length !== gw * gh) this.pointGrid = new Uint8Array(gw * gh);
       const taken = this.pointGrid.fill(0);
       const paths = new Map();
-      const p = this.rec.poses, scale = this.cellPx / this.cellM, top = this.rec.H * this.cellPx;
+      const p = this.rec.poses, cellM = this.cellM, cellPx = this.cellPx, H = this.rec.H;
       let drawn = 0;
       for (let i = 0, k = this.tick * R * 3; i < R; i++, k += 3) {
-        const cx = p[k] * scale, cy = top - p[k + 1] * scale;
+        const cx = p[k] / cellM * cellPx, cy = (H - p[k + 1] / cellM) * cellPx;   // as canvasXY, inlined
         const gx = Math.floor(cx / cell), gy = Math.floor(cy / cell);
         if (gx < 0 || gy < 0 || gx >= gw || gy >= gh || taken[gy * gw + gx]) continue;
         taken[gy * gw + gx] = 1;

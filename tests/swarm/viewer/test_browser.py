@@ -1,7 +1,9 @@
 """The replay page in headless Chromium, driven by Playwright: robots drawn where the recording puts them,
 the slider moves time, clicking a robot opens its panel, the JavaScript decoder agrees with Python's, lost
 messages and communication groups are drawn, the age-of-information panel shows the run's values, trails
-fade and can be limited, and a version 1 recording still plays.
+fade and can be limited, and a version 1 recording still plays. At swarm size (more than 64 robots):
+points, at most one per pixel cell; only the selected robot's map held; panels and layers within budgets;
+a recording embedded in pieces.
 
 Needs Debian's chromium (``/usr/bin/chromium``) and the ``playwright`` package; ``.ci/run`` installs both.
 Playwright's own browser download does not work here, so we launch the system Chromium.
@@ -69,9 +71,9 @@ def browser():
         b.close()
 
 
-def open_page(browser, html):
+def open_page(browser, html, width=1280, height=800):
     """A page of ``html`` once its script is ready; after the test: no errors, nothing fetched."""
-    context = browser.new_context(viewport={"width": 1280, "height": 800}, device_scale_factor=1)
+    context = browser.new_context(viewport={"width": width, "height": height}, device_scale_factor=1)
     pg = context.new_page()
     errors: list[str] = []
     pg.on("pageerror", lambda exc: errors.append(str(exc)))
@@ -403,3 +405,125 @@ def test_a_version_1_recording_plays_without_the_communication_layers(browser, t
         assert pg.evaluate("swarmViewer.drawnLosses()") == [] and pg.evaluate("swarmViewer.drawnGroups()") == []
         assert pg.locator("#aoi-panel").is_hidden()
         assert "format version 1" in pg.inner_text("#lost-legend")
+
+
+# ------------------------------------------------------------------------------ swarm size ----
+SWARM_SPEC = {"seed": 3, "map": {"kind": "building", "size": 50}, "robots": {"count": 120},
+              "stop": {"max_ticks": 40}, "radio": {"tx_power_dbm": -30.0}, "comm": {"loss": 0.2}}
+"""More robots than the viewer draws as discs (64), crowded at the start, more links, message deliveries
+and losses than a frame draws."""
+SWARM_TICK = 20
+
+
+@pytest.fixture(scope="module")
+def swarm_recording(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("swarm")
+    sim = Simulation(SWARM_SPEC)
+    recorder = Recorder.attach(sim)
+    result = sim.run()
+    recorder.finish(sim, result)
+    path = recorder.save(folder / "swarm.swr")
+    return load_recording(path), write_html(path, folder / "swarm.html"), result
+
+
+@pytest.fixture
+def swarm_page(browser, swarm_recording):
+    yield from open_page(browser, swarm_recording[1])
+
+
+@pytest.mark.parametrize("width", [1280, 600])
+def test_a_swarm_is_drawn_as_points_at_most_one_per_pixel_cell(browser, swarm_recording, width):
+    """In a small window (2 pixels a cell) robots that start side by side share pixel cells."""
+    rec = swarm_recording[0]
+    for pg in open_page(browser, swarm_recording[1], width=width, height=400 if width < 1000 else 800):
+        assert pg.evaluate("swarmViewer.pointMode()") is True
+        set_layers(pg, **ONLY)
+        cell = pg.evaluate("swarmViewer.budgets.pointCell")
+        for tick in (0, SWARM_TICK):
+            pg.evaluate(f"swarmViewer.setTick({tick})")
+            check_points(pg, rec, tick, cell, crowded=width < 1000 and tick == 0)
+
+
+def check_points(pg, rec, tick, cell, crowded):
+    """One point per occupied pixel cell (fewer than robots when crowded), every robot under or next to a
+    point in a robot's colour."""
+    xy = np.array([expected_canvas_xy(pg, rec, *rec.poses[tick, i, :2]) for i in range(rec.n_robots)])
+    cells = {(int(x // cell), int(y // cell)) for x, y in xy}
+    assert pg.evaluate("swarmViewer.drawnCounts().robots") == len(cells)
+    if crowded:
+        assert len(cells) < rec.n_robots
+    image, palette = map_image(pg), np.array(ROBOT_COLOURS)
+    for x, y in xy:
+        window = image[max(0, int(y) - cell): int(y) + cell + 1, max(0, int(x) - cell): int(x) + cell + 1]
+        assert (window.reshape(-1, 1, 3) == palette).all(axis=2).any()
+
+
+def test_a_swarm_robots_own_map_is_rebuilt_when_selected(swarm_page, swarm_recording):
+    """Only the selected robot's map is held, rebuilt from its stream entries, exact forward and back."""
+    rec, pg = swarm_recording[0], swarm_page
+    h, w = rec.shape
+    held = pg.evaluate("swarmViewer.stateBytes()")
+    assert held["robotMapCount"] == 0 and held["state"] < rec.n_robots * h * w   # not every robot's map
+    for robot, tick in ((77, SWARM_TICK), (77, rec.last_tick), (77, 3), (5, SWARM_TICK), (77, 0)):
+        pg.evaluate(f"swarmViewer.setTick({tick}); swarmViewer.select({robot})")
+        known = pg.evaluate(f"""() => {{ const out = [];
+            for (let r = 0; r < {h}; r++) for (let c = 0; c < {w}; c++) out.push(swarmViewer.knownCell({robot}, r, c));
+            return out; }}""")
+        want = rec.known_at(tick)[robot]
+        assert np.array_equal(np.array(known, dtype=np.uint8).reshape(h, w), want)
+        text = pg.locator("#robot-panel").inner_text()   # counts kept without the map
+        assert f"{int((want == 1).sum())} free + {int((want == 2).sum())} wall cells" in text
+        held = pg.evaluate("swarmViewer.stateBytes()")
+        assert 1 <= held["robotMapCount"] <= 2 and held["robotMaps"] < 2 * 8 * h * w
+
+
+def test_a_swarms_panels_list_the_oldest_information_only(swarm_page, swarm_recording):
+    rec, pg = swarm_recording[0], swarm_page
+    rows = pg.evaluate("swarmViewer.budgets.aoiRows")
+    pg.evaluate(f"swarmViewer.setTick({SWARM_TICK})")
+    comm = rec.comm_at(SWARM_TICK)
+    oldest = sorted(range(rec.n_robots), key=lambda i: (-comm.aoi_age[i], i))[:rows]
+    cells = pg.evaluate("Array.from(document.querySelectorAll('#aoi-rows tr')).map((tr) => ({ ...tr.dataset }))")
+    assert [int(c["robot"]) for c in cells] == oldest
+    assert [float(c["age"]) for c in cells] == [comm.aoi_age[i] for i in oldest]
+    assert f"the {rows} of {rec.n_robots} robots" in pg.inner_text("#aoi-note")
+    other = next(i for i in range(rec.n_robots) if i not in oldest)
+    pg.evaluate(f"swarmViewer.select({other})")
+    assert int(pg.evaluate("document.querySelector('#aoi-rows tr:last-child').dataset.robot")) == other
+    heard = rec.links_at(SWARM_TICK)[0][other].sum()
+    items = pg.evaluate("swarmViewer.budgets.listItems")
+    assert heard > items
+    links = pg.inner_text("#robot-links")
+    assert links.count("dB margin") == items and f"the strongest {items} of {heard}" in links
+
+
+def test_a_swarms_links_messages_and_losses_are_drawn_within_budgets(swarm_page, swarm_recording):
+    rec, pg = swarm_recording[0], swarm_page
+    budgets = pg.evaluate("swarmViewer.budgets")
+    pg.evaluate(f"swarmViewer.setTick({SWARM_TICK})")
+    link = rec.links_at(SWARM_TICK)[0]
+    pairs = int((link | link.T).sum()) // 2
+    window = [m for m in rec.messages() if SWARM_TICK - 6 < m.tick <= SWARM_TICK]
+    deliveries, lost = sum(len(m.receivers) for m in window), [(m, r) for m in window for r, _ in m.lost]
+    assert pairs > budgets["links"] and deliveries > budgets["messages"] and len(lost) > budgets["losses"]
+    drawn = pg.evaluate("swarmViewer.drawnCounts()")
+    assert budgets["links"] / 2 <= drawn["links"] <= budgets["links"]            # an even sample, not none
+    assert budgets["messages"] / 2 <= drawn["messages"] <= budgets["messages"]
+    assert budgets["losses"] / 2 <= drawn["losses"] <= budgets["losses"]
+    want = {(m.tick, m.transmitter, r) for m, r in lost}
+    assert {(d["tick"], d["from"], d["to"]) for d in pg.evaluate("swarmViewer.drawnLosses()")} <= want
+
+
+def test_a_recording_embedded_in_pieces_plays(browser, recording, tmp_path, monkeypatch):
+    import swarm.viewer.build as build
+
+    rec = recording[0]
+    monkeypatch.setattr(build, "PIECE_BYTES", 3 * 4000)
+    source = tmp_path / "run.swr"
+    source.write_bytes(Path(recording[1]).with_suffix(".swr").read_bytes())
+    html = write_html(source, tmp_path / "pieces.html")
+    assert html.read_text().count('class="swr-data"') > 2
+    for pg in open_page(browser, html):
+        assert pg.evaluate("document.querySelectorAll('script.swr-data').length") == 0   # dropped once decoded
+        pg.evaluate(f"swarmViewer.setTick({TICK})")
+        assert pg.evaluate("swarmViewer.pose(1)") == rec.poses[TICK, 1].tolist()
