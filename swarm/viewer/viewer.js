@@ -40,6 +40,7 @@
   const AOI_ROWS = 16;            // age-of-information rows: every robot up to this, else the oldest
   const LIST_ITEMS = 24;          // robots listed in the robot panel's lists (links heard, ages, mates)
   const TOTALS_EVERY = 16;        // message totals are checkpointed every this many ticks
+  const MAX_ZOOM = 64;            // mouse wheel zoom: up to this many times the fitted map
 
   // ------------------------------------------------------------------------------ decoding ----
   /** The recording from its base64 pieces (each a whole number of 3-byte groups), which are then dropped
@@ -637,20 +638,51 @@
       this.cellPx = this.canvas.width / W;
       this.canvas.style.width = this.canvas.width + 'px';
       this.canvas.style.height = this.canvas.height + 'px';
-      // many robots: points (drawRobots), and the hit radius, group margins and flashes shrink with them
-      this.points = this.rec.R > POINTS_ABOVE;
-      this.robotPx = this.points ? 2 : Math.max(4, this.head.robot_radius_m / this.cellM * this.cellPx);
+      this.setView(this.zoom || 1, this.offX || 0, this.offY || 0);
     }
 
-    worldToCanvas(x, y) {
-      return [x / this.cellM * this.cellPx, (this.rec.H - y / this.cellM) * this.cellPx];
+    /** Zoom (1: the whole map fits; at most MAX_ZOOM) and the offset of the canvas into the zoomed map,
+     *  clamped so the map always fills the canvas. */
+    setView(zoom, offX, offY) {
+      this.zoom = Math.min(MAX_ZOOM, Math.max(1, zoom));
+      this.offX = Math.min(Math.max(0, offX), this.canvas.width * (this.zoom - 1));
+      this.offY = Math.min(Math.max(0, offY), this.canvas.height * (this.zoom - 1));
+      this.scaleRobots();
+    }
+
+    /** Zoom by ``factor`` keeping the canvas point (cx, cy) where it is. */
+    zoomAt(factor, cx, cy) {
+      const z = Math.min(MAX_ZOOM, Math.max(1, this.zoom * factor)), f = z / this.zoom;
+      this.setView(z, (cx + this.offX) * f - cx, (cy + this.offY) * f - cy);
+    }
+
+    /** Points or discs: points when more than POINTS_ABOVE robots are in view at this tick (zoomed out on a
+     *  swarm); discs otherwise, at least 4 pixels, growing with the zoom. The hit radius, group margins
+     *  and message rings follow. */
+    scaleRobots() {
+      let inView = 0;
+      if (this.rec.R > POINTS_ABOVE) {
+        const w = this.canvas.width, h = this.canvas.height;
+        for (let i = 0; i < this.rec.R && inView <= POINTS_ABOVE; i++) {
+          const [x, y] = this.canvasXY(i);
+          if (x >= 0 && y >= 0 && x < w && y < h) inView++;
+        }
+      }
+      this.points = inView > POINTS_ABOVE;
+      this.robotPx = this.points ? 2 : Math.max(4, this.head.robot_radius_m / this.cellM * this.cellPx * this.zoom);
+    }
+
+    worldToCanvas(x, y) {   // (at zoom 1 and offset 0 exactly the unzoomed arithmetic)
+      return [x / this.cellM * this.cellPx * this.zoom - this.offX,
+              (this.rec.H - y / this.cellM) * this.cellPx * this.zoom - this.offY];
     }
 
     /** Where robot i is drawn at tick t: worldToCanvas(pose(i, t)) without the intermediate arrays (called
      *  hundreds of thousands of times a frame at swarm size). */
     canvasXY(i, t = this.tick) {
       const k = (t * this.rec.R + i) * 3, p = this.rec.poses;
-      return [p[k] / this.cellM * this.cellPx, (this.rec.H - p[k + 1] / this.cellM) * this.cellPx];
+      return [p[k] / this.cellM * this.cellPx * this.zoom - this.offX,
+              (this.rec.H - p[k + 1] / this.cellM) * this.cellPx * this.zoom - this.offY];
     }
 
     pose(i, t = this.tick) {
@@ -677,12 +709,36 @@
         document.getElementById(id).addEventListener('change', () => this.draw());
       }
       this.trailSeconds.addEventListener('input', () => this.draw());
+      // wheel: zoom about the mouse; drag: pan (a drag is not a click); key 0: the whole map again
+      this.canvas.addEventListener('wheel', (e) => {
+        e.preventDefault();
+        const rect = this.canvas.getBoundingClientRect();
+        this.zoomAt(Math.exp(-e.deltaY * 0.002), e.clientX - rect.left, e.clientY - rect.top);
+        this.draw();
+      }, { passive: false });
+      let drag = null;
+      this.canvas.addEventListener('mousedown', (e) => {
+        drag = { x: e.clientX, y: e.clientY, offX: this.offX, offY: this.offY, moved: false };
+      });
+      window.addEventListener('mouseup', () => { if (drag && !drag.moved) drag = null; });
       this.canvas.addEventListener('mousemove', (e) => {
         const rect = this.canvas.getBoundingClientRect();
+        if (drag && e.buttons === 1 && this.zoom > 1) {
+          const dx = e.clientX - drag.x, dy = e.clientY - drag.y;
+          if (drag.moved || Math.hypot(dx, dy) > 3) {
+            drag.moved = true;
+            this.setView(this.zoom, drag.offX - dx, drag.offY - dy);
+            this.draw();
+            return;
+          }
+        }
         this.showTip(e.clientX - rect.left, e.clientY - rect.top, e.clientX, e.clientY);
       });
       this.canvas.addEventListener('mouseleave', () => { this.tip.hidden = true; });
       this.canvas.addEventListener('click', (e) => {
+        const dragged = drag && drag.moved;
+        drag = null;
+        if (dragged) return;
         const rect = this.canvas.getBoundingClientRect();
         this.select(this.robotAt(e.clientX - rect.left, e.clientY - rect.top));
       });
@@ -694,6 +750,7 @@
         const step = e.shiftKey ? 10 : 1;
         if (e.key === 'ArrowRight') this.setTick(this.tick + step);
         if (e.key === 'ArrowLeft') this.setTick(this.tick - step);
+        if (e.key === '0') { this.setView(1, 0, 0); this.draw(); }
       });
       window.addEventListener('resize', () => { this.layout(); this.baseLast = null; this.trailTick = -1; this.draw(); });
     }
@@ -767,10 +824,11 @@
       };
       const ctx = this.ctx;
       this.drawn = { losses: [], groups: [], robots: 0, links: 0, messages: 0 };
+      this.scaleRobots();
       step('base', () => {
         this.drawBase();
         ctx.imageSmoothingEnabled = false;
-        ctx.drawImage(this.base, 0, 0, this.canvas.width, this.canvas.height);
+        ctx.drawImage(this.base, -this.offX, -this.offY, this.canvas.width * this.zoom, this.canvas.height * this.zoom);
       });
       if (this.rec.hasComm && on('show-groups')) step('groups', () => this.drawGroups());
       if (on('show-trails')) step('trails', () => this.drawTrails());
@@ -893,8 +951,10 @@
     drawWholeTrails() {
       const t = this.tick, layer = this.trails;
       this.trailRange = [0, t];
-      if (layer.width !== this.canvas.width || layer.height !== this.canvas.height || t < this.trailTick) {
-        layer.width = this.canvas.width; layer.height = this.canvas.height;
+      const view = [this.canvas.width, this.canvas.height, this.zoom, this.offX, this.offY].join();
+      if (view !== this.trailView || t < this.trailTick) {   // drawn in canvas pixels: a new view starts again
+        layer.width = this.canvas.width; layer.height = this.canvas.height;   // (also clears it)
+        this.trailView = view;
         this.trailTick = -1;
       }
       if (t > this.trailTick) {
@@ -1288,9 +1348,10 @@
       const taken = this.pointGrid.fill(0);
       const paths = new Map();
       const p = this.rec.poses, cellM = this.cellM, cellPx = this.cellPx, H = this.rec.H;
+      const zoom = this.zoom, offX = this.offX, offY = this.offY;
       let drawn = 0;
       for (let i = 0, k = this.tick * R * 3; i < R; i++, k += 3) {
-        const cx = p[k] / cellM * cellPx, cy = (H - p[k + 1] / cellM) * cellPx;   // as canvasXY, inlined
+        const cx = p[k] / cellM * cellPx * zoom - offX, cy = (H - p[k + 1] / cellM) * cellPx * zoom - offY;   // canvasXY
         const gx = Math.floor(cx / cell), gy = Math.floor(cy / cell);
         if (gx < 0 || gy < 0 || gx >= gw || gy >= gh || taken[gy * gw + gx]) continue;
         taken[gy * gw + gx] = 1;
@@ -1462,6 +1523,9 @@
         linkCount: () => v.linkCount(),
         knownCell: (i, row, col) => v.robotMap(i).map[row * v.rec.W + col],
         pointMode: () => v.points,
+        // zoom about the canvas point (cx, cy) by factor (as the mouse wheel), or read the view
+        zoomAt: (factor, cx, cy) => { v.zoomAt(factor, cx, cy); v.draw(); },
+        view: () => ({ zoom: v.zoom, offX: v.offX, offY: v.offY }),
         profile: () => ({ ...v.profile }),
         drawnCounts: () => ({ robots: v.drawn.robots, links: v.drawn.links, messages: v.drawn.messages,
                               losses: v.drawn.losses.length }),

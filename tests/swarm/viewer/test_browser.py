@@ -527,3 +527,36 @@ def test_a_recording_embedded_in_pieces_plays(browser, recording, tmp_path, monk
         assert pg.evaluate("document.querySelectorAll('script.swr-data').length") == 0   # dropped once decoded
         pg.evaluate(f"swarmViewer.setTick({TICK})")
         assert pg.evaluate("swarmViewer.pose(1)") == rec.poses[TICK, 1].tolist()
+
+
+def test_zooming_in_on_a_swarm_draws_the_robots_in_view_as_discs(swarm_page, swarm_recording):
+    rec, pg = swarm_recording[0], swarm_page
+    set_layers(pg, **ONLY)
+    pg.evaluate(f"swarmViewer.setTick({SWARM_TICK})")
+    robot = 7
+    before = pg.evaluate(f"swarmViewer.robotScreenPosition({robot})")
+    mouse = np.round([before["x"], before["y"]])
+    pg.mouse.move(*mouse)
+    for _ in range(3):
+        pg.mouse.wheel(0, -400)
+    pg.wait_for_function("swarmViewer.view().zoom > 8")
+    view = pg.evaluate("swarmViewer.view()")
+    after = pg.evaluate(f"swarmViewer.robotScreenPosition({robot})")
+    # the wheel zooms about the mouse: the point under it stays, the robot (a fraction of a pixel away) with it
+    moved = np.subtract([after["x"], after["y"]], mouse)
+    assert moved == pytest.approx(np.subtract([before["x"], before["y"]], mouse) * view["zoom"], abs=0.01)
+    x, y = expected_canvas_xy(pg, rec, *rec.poses[SWARM_TICK, robot, :2])
+    want = (x * view["zoom"] - view["offX"], y * view["zoom"] - view["offY"])
+    assert (after["canvasX"], after["canvasY"]) == pytest.approx(want, abs=0.01)
+    assert pg.evaluate("swarmViewer.pointMode()") is False   # few robots in view: discs, as at team size
+    assert after["radius"] > 10
+    assert canvas_pixel(pg, after["canvasX"], after["canvasY"]) == ROBOT_COLOURS[robot % len(ROBOT_COLOURS)]
+    pg.mouse.down()   # a drag pans (and is not a click: nothing gets selected)
+    pg.mouse.move(mouse[0] - 100, mouse[1] - 50, steps=5)
+    pg.mouse.up()
+    panned = pg.evaluate("swarmViewer.view()")
+    assert (panned["offX"], panned["offY"]) == pytest.approx((view["offX"] + 100, view["offY"] + 50))
+    assert pg.evaluate("swarmViewer.selected()") is None
+    pg.keyboard.press("0")
+    assert pg.evaluate("swarmViewer.view()") == {"zoom": 1, "offX": 0, "offY": 0}
+    assert pg.evaluate("swarmViewer.pointMode()") is True
