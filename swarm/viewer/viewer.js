@@ -495,6 +495,7 @@
     constructor(rec, cfg) {
       this.rec = rec;
       this.cfg = cfg;
+      rec.msg.rssi = null;   // shown nowhere: 2 bytes a delivery, 200 KB a tick at 1,000 robots
       this.state = new ReplayState(rec);
       this.head = rec.head;
       this.cellM = rec.head.cell_m;
@@ -917,20 +918,26 @@
       const perRobot = Math.max(2, Math.min(TRAIL_POINTS, Math.floor(TRAIL_BUDGET / this.rec.R)));
       const stride = Math.max(1, Math.ceil(span / perRobot));
       const bands = fade ? Math.min(TRAIL_BANDS, span) : 1;
-      const batched = this.points ? new Map() : null;
+      // a style per colour and band, and in the point mode a path per style (stroked once at the end)
+      const nc = this.robotColours.length, styles = [], batched = this.points ? [] : null;
+      for (let c = 0; c < Math.min(nc, this.rec.R); c++) {
+        const colour = mix(this.robotColours[c], [255, 255, 255], 0.35);
+        for (let b = 0; b < bands; b++) {
+          styles.push(rgb(colour, fade ? 0.08 + 0.92 * (b + 1) / bands : 1));
+          if (batched) batched.push(new Path2D());
+        }
+      }
       ctx.save();
       ctx.lineWidth = this.points ? 1 : 1.5; ctx.lineJoin = 'round'; ctx.lineCap = 'butt';
       for (let i = 0; i < this.rec.R; i++) {
-        const colour = mix(this.colour(i), [255, 255, 255], 0.35);
         for (let b = 0; b < bands; b++) {
           const a = from + Math.floor(b * span / bands), z = from + Math.floor((b + 1) * span / bands);
-          const style = rgb(colour, fade ? 0.08 + 0.92 * (b + 1) / bands : 1);
+          const style = (i % nc) * bands + b;
           let path = ctx;
           if (batched) {
-            if (!batched.has(style)) batched.set(style, new Path2D());
-            path = batched.get(style);
+            path = batched[style];
           } else {
-            ctx.strokeStyle = style;
+            ctx.strokeStyle = styles[style];
             ctx.beginPath();
           }
           path.moveTo(...this.canvasXY(i, a));
@@ -941,7 +948,7 @@
           if (!batched) ctx.stroke();
         }
       }
-      if (batched) for (const [style, path] of batched) { ctx.strokeStyle = style; ctx.stroke(path); }
+      if (batched) batched.forEach((path, k) => { ctx.strokeStyle = styles[k]; ctx.stroke(path); });
       ctx.restore();
     }
 
