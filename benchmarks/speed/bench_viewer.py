@@ -5,7 +5,8 @@ and measures:
 
 - ``html MB``: the page (the recording in base64, 4/3 of the file, plus the script);
 - ``load s``: from navigation until the viewer is ready (decode, index, keyframes, first frame);
-- ``renderer MB``: resident memory of the page's renderer process(es) once loaded (psutil), and the JS heap;
+- ``renderer MB``: resident memory of the page's renderer process(es) once loaded (psutil), the JS heap
+  (typed arrays included) after a garbage collection, and the replay state with its keyframes;
 - ``ms/frame``: playback, one tick after another (``setTick(t + 1)``), each frame rasterised (a one-pixel
   ``getImageData`` flushes the canvas), mean and 95th percentile over ``--frames`` ticks; with all layers
   on, then with a robot selected (its own knowledge map); ``cpu ms/frame``: the renderer's CPU time per
@@ -33,7 +34,7 @@ from swarm.viewer import write_html
 
 CHROMIUM = "/usr/bin/chromium"
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync", "--enable-precise-memory-info"]
+         "--disable-component-update", "--disable-sync", "--enable-precise-memory-info", "--js-flags=--expose-gc"]
 
 FRAMES_JS = """async ([from, n, robot]) => {
   const v = swarmViewer, map = document.getElementById('map').getContext('2d');
@@ -100,8 +101,10 @@ def measure(browser, recording: Path, folder: Path, frames: int, profiles: list[
     last = page.evaluate("swarmViewer.lastTick")
     n_robots = page.evaluate("swarmViewer.nRobots")
     start = max(0, last // 3 - frames // 2)
+    page.evaluate("gc()")   # what the page holds, not what decoding left for the collector
     out = {"robots": n_robots, "ticks": last + 1, "html MB": html.stat().st_size / 1e6, "load s": load_s,
-           "renderer MB": renderer_rss_mb(), "heap MB": page.evaluate("performance.memory.usedJSHeapSize") / 1e6}
+           "renderer MB": renderer_rss_mb(), "heap MB": page.evaluate("performance.memory.usedJSHeapSize") / 1e6,
+           "state MB": page.evaluate("swarmViewer.stateBytes().state") / 1e6}
     for label, robot in (("union", None), ("robot 0", 0)):
         cpu = renderer_cpu_s()
         times, steps = page.evaluate(FRAMES_JS, [start, frames, robot])
