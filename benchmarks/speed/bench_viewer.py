@@ -5,8 +5,9 @@ and measures:
 
 - ``html MB``: the page (the recording in base64, 4/3 of the file, plus the script);
 - ``load s``: from navigation until the viewer is ready (decode, index, keyframes, first frame);
-- ``renderer MB``: resident memory of the page's renderer process(es) once loaded (psutil), the JS heap
-  (typed arrays included) after a garbage collection, and the replay state with its keyframes;
+- ``renderer MB``: resident memory of the page's renderer process(es) once loaded (psutil); ``heap MB``:
+  the JS heap with the typed arrays' memory after a garbage collection (mostly the decoded recording);
+  ``state MB``: the replay state with its keyframes;
 - ``ms/frame``: playback, one tick after another (``setTick(t + 1)``), each frame rasterised (a one-pixel
   ``getImageData`` flushes the canvas), mean and 95th percentile over ``--frames`` ticks; with all layers
   on, then with a robot selected (its own knowledge map); ``cpu ms/frame``: the renderer's CPU time per
@@ -34,7 +35,7 @@ from swarm.viewer import write_html
 
 CHROMIUM = "/usr/bin/chromium"
 FLAGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync", "--enable-precise-memory-info", "--js-flags=--expose-gc"]
+         "--disable-component-update", "--disable-sync", "--js-flags=--expose-gc"]
 
 FRAMES_JS = """async ([from, n, robot]) => {
   const v = swarmViewer, map = document.getElementById('map').getContext('2d');
@@ -102,8 +103,10 @@ def measure(browser, recording: Path, folder: Path, frames: int, profiles: list[
     n_robots = page.evaluate("swarmViewer.nRobots")
     start = max(0, last // 3 - frames // 2)
     page.evaluate("gc()")   # what the page holds, not what decoding left for the collector
+    time.sleep(1)
+    heap = page.context.new_cdp_session(page).send("Runtime.getHeapUsage")   # exact, unlike performance.memory
     out = {"robots": n_robots, "ticks": last + 1, "html MB": html.stat().st_size / 1e6, "load s": load_s,
-           "renderer MB": renderer_rss_mb(), "heap MB": page.evaluate("performance.memory.usedJSHeapSize") / 1e6,
+           "renderer MB": renderer_rss_mb(), "heap MB": (heap["usedSize"] + heap["backingStorageSize"]) / 1e6,
            "state MB": page.evaluate("swarmViewer.stateBytes().state") / 1e6}
     for label, robot in (("union", None), ("robot 0", 0)):
         cpu = renderer_cpu_s()
