@@ -40,6 +40,7 @@
   const AOI_ROWS = 16;            // age-of-information rows: every robot up to this, else the oldest
   const LIST_ITEMS = 24;          // robots listed in the robot panel's lists (links heard, ages, mates)
   const TOTALS_EVERY = 16;        // message totals are checkpointed every this many ticks
+  const PAIR_AGES_UP_TO = 64;     // robots: up to this, the map-merge pairs are kept for the per-robot ages
   const MAX_ZOOM = 64;            // mouse wheel zoom: up to this many times the fitted map
 
   // ------------------------------------------------------------------------------ decoding ----
@@ -276,6 +277,33 @@
     return prev;
   }
 
+  /** The map-merge stream (``merged_at[i, s]`` entries, for every pair that merged) as what the age of
+   *  information needs: per tick, each robot whose sum over s != i of merged_at[i, s] changed, and by how
+   *  much. At 1,000 robots the pair entries are ~100,000 a tick (800 KB, two thirds of a decoded
+   *  recording); the sums are at most R a tick. Exact: integer differences in doubles. */
+  function mergeSums(rec) {
+    const { R, T, off } = rec, idx = rec.aoi.idx, val = rec.aoi.val;
+    const merged = new Int32Array(R * R);   // the latest merged_at of each pair (while converting only)
+    const pending = new Float64Array(R), touched = new Uint8Array(R), changed = [];
+    const cap = Math.min(idx.length, R * T);
+    const robot = new Uint32Array(cap), delta = new Float64Array(cap), offsets = new Float64Array(T + 1);
+    let n = 0;
+    for (let t = 0; t < T; t++) {
+      for (let k = off.aoi[t]; k < off.aoi[t + 1]; k++) {
+        const i = Math.floor(idx[k] / R);
+        const d = val[k] - merged[idx[k]];
+        merged[idx[k]] = val[k];
+        if (idx[k] === i * R + i || !d) continue;   // its own entry is not in its age
+        if (!touched[i]) { touched[i] = 1; changed.push(i); }
+        pending[i] += d;
+      }
+      for (const i of changed) { robot[n] = i; delta[n] = pending[i]; n++; pending[i] = 0; touched[i] = 0; }
+      changed.length = 0;
+      offsets[t + 1] = n;
+    }
+    return { off: offsets, robot: robot.slice(0, n), delta: delta.slice(0, n) };
+  }
+
   /** The first position in the sorted array ``a`` whose value is >= x. */
   function lowerBound(a, x) {
     let lo = 0, hi = a.length;
@@ -296,13 +324,12 @@
       this.rssi = new Int16Array(R * R);
       this.counts = new Float64Array(3 * R);           // per robot: cells UNSEEN, FREE, SOLID
       this.groupOf = new Int32Array(R);                // per robot: its group's smallest member
-      this.mergedAt = new Int32Array(R * R);           // [i * R + s]: when i last merged (a map holding) s's map
-      this.mergedSum = new Float64Array(R);            // per robot i: the sum over s of mergedAt[i * R + s]
+      this.mergedSum = new Float64Array(R);            // per robot i: the sum over s != i of merged_at[i, s]
       this.lastContact = new Float64Array(R);          // per robot: the last tick it received a message
       this.cells = H * W;
       this.reset();
       // keyframes within KEYFRAME_BUDGET; the first is the empty state before tick 0, made by reset(), not kept
-      const snapshotBytes = H * W + this.link.length + 6 * R * R + 8 * 6 * R;
+      const snapshotBytes = H * W + this.link.length + 2 * R * R + 8 * 6 * R;
       const count = 1 + Math.floor(KEYFRAME_BUDGET / snapshotBytes);
       this.every = Math.max(32, Math.ceil(T / count));
       this.keyframes = [null];
@@ -318,7 +345,7 @@
       this.seen.fill(0); this.link.fill(0); this.rssi.fill(RSSI_NAN);
       this.counts.fill(0);
       for (let i = 0; i < R; i++) this.counts[3 * i] = this.cells;
-      this.groupOf.fill(-1); this.mergedAt.fill(0); this.mergedSum.fill(0); this.lastContact.fill(-1);
+      this.groupOf.fill(-1); this.mergedSum.fill(0); this.lastContact.fill(-1);
       this.links = 0;   // bits set in link: the readout's link count, O(1) a frame
       this.tick = -1;
     }
@@ -326,14 +353,14 @@
     snapshot() {
       return { tick: this.tick, links: this.links, seen: this.seen.slice(), link: this.link.slice(),
                rssi: this.rssi.slice(), counts: this.counts.slice(), groupOf: this.groupOf.slice(),
-               mergedAt: this.mergedAt.slice(), mergedSum: this.mergedSum.slice(),
+               mergedSum: this.mergedSum.slice(),
                lastContact: this.lastContact.slice() };
     }
 
     restore(k) {
       if (k === null) { this.reset(); return; }
       this.seen.set(k.seen); this.link.set(k.link); this.rssi.set(k.rssi);
-      this.counts.set(k.counts); this.groupOf.set(k.groupOf); this.mergedAt.set(k.mergedAt);
+      this.counts.set(k.counts); this.groupOf.set(k.groupOf);
       this.mergedSum.set(k.mergedSum); this.lastContact.set(k.lastContact);
       this.links = k.links;
       this.tick = k.tick;
@@ -366,11 +393,8 @@
       }
       for (let k = off.rssi[t]; k < off.rssi[t + 1]; k++) this.rssi[r.rssiIdx[k]] = r.rssiVal[k];
       for (let k = off.group[t]; k < off.group[t + 1]; k++) this.groupOf[r.group.robot[k]] = r.group.id[k];
-      for (let k = off.aoi[t]; k < off.aoi[t + 1]; k++) {
-        const idx = r.aoi.idx[k], i = Math.floor(idx / R);
-        this.mergedSum[i] += r.aoi.val[k] - this.mergedAt[idx];
-        this.mergedAt[idx] = r.aoi.val[k];
-      }
+      const sums = r.mergeSums;
+      for (let k = sums.off[t]; k < sums.off[t + 1]; k++) this.mergedSum[sums.robot[k]] += sums.delta[k];
       for (let k = off.contact[t]; k < off.contact[t + 1]; k++) this.lastContact[r.contact.robot[k]] = t;
       this.tick = t;
     }
@@ -497,6 +521,9 @@
       this.rec = rec;
       this.cfg = cfg;
       rec.msg.rssi = null;   // shown nowhere: 2 bytes a delivery, 200 KB a tick at 1,000 robots
+      rec.mergeSums = mergeSums(rec);
+      // the pairs themselves only for the robot panel's list of ages, and only at team size
+      if (rec.R > PAIR_AGES_UP_TO) rec.aoi = null;
       this.state = new ReplayState(rec);
       this.head = rec.head;
       this.cellM = rec.head.cell_m;
@@ -1140,8 +1167,7 @@
       for (let i = 0; i < R; i++) {
         let age = 0, since = 0, missing = 0;
         if (R > 1) {  // a lone robot has no one to miss, wait for or hear
-          const sum = st.mergedSum[i] - st.mergedAt[i * R + i];
-          age = t - sum / (R - 1);
+          age = t - st.mergedSum[i] / (R - 1);
           since = t - Math.max(st.lastContact[i], 0);
           if (team > 0) missing = Math.min(Math.max(1 - st.counts[3 * i + FREE] / team, 0), 1);
         }
@@ -1452,21 +1478,33 @@
         act && act.debug !== null && act.debug !== undefined ? JSON.stringify(act.debug, null, 1) : '(none)';
     }
 
+    /** When robot i last merged (a map holding) each robot's map, at tick t: its entries in the map-merge
+     *  stream up to t (kept up to PAIR_AGES_UP_TO robots, where they are few). */
+    mergedRow(i, t) {
+      const R = this.rec.R, a = this.rec.aoi, row = new Float64Array(R);
+      for (let k = 0; k < this.rec.off.aoi[t + 1]; k++) {
+        if (a.idx[k] >= i * R && a.idx[k] < (i + 1) * R) row[a.idx[k] - i * R] = a.val[k];
+      }
+      return row;
+    }
+
     /** The robot panel's communication rows: its group, last contact, and how old its information about
-     *  each other robot is. */
+     *  each other robot is (that list at team size only, see PAIR_AGES_UP_TO). */
     commFacts(i) {
       const R = this.rec.R, t = this.tick, tickS = this.head.tick_s, c = this.commState()[i];
       const mates = this.groups().find((g) => g.includes(i)).filter((j) => j !== i);
-      const others = [];
-      for (let s = 0; s < R; s++) if (s !== i) others.push(s);
-      const merged = this.state.mergedAt;
-      if (others.length > LIST_ITEMS) others.sort((a, b) => merged[i * R + a] - merged[i * R + b] || a - b);
-      const ages = others.map((s) => `${s}: ${((t - merged[i * R + s]) * tickS).toFixed(1)} s`);
+      let ages = [];
+      if (this.rec.aoi) {
+        const merged = this.mergedRow(i, t), others = [];
+        for (let s = 0; s < R; s++) if (s !== i) others.push(s);
+        if (others.length > LIST_ITEMS) others.sort((a, b) => merged[a] - merged[b] || a - b);
+        ages = others.map((s) => `${s}: ${((t - merged[s]) * tickS).toFixed(1)} s`);
+      }
       return [['group', mates.length ? `with ${listed(mates.map(String), mates.length > LIST_ITEMS ? ` (${mates.length})` : '')}` : 'alone'],
               ['last contact', `${(c.since * tickS).toFixed(1)} s ago`],
               ['missing', `${(100 * c.missing).toFixed(1)} % of the team's free cells`],
-              ['info age', `${(c.age * tickS).toFixed(1)} s on average; ` +
-                listed(ages, ages.length > LIST_ITEMS ? ` (the oldest ${LIST_ITEMS} of ${ages.length})` : '')]];
+              ['info age', `${(c.age * tickS).toFixed(1)} s on average` + (ages.length ? '; ' +
+                listed(ages, ages.length > LIST_ITEMS ? ` (the oldest ${LIST_ITEMS} of ${ages.length})` : '') : '')]];
     }
 
     renderLegend() {

@@ -560,3 +560,23 @@ def test_zooming_in_on_a_swarm_draws_the_robots_in_view_as_discs(swarm_page, swa
     pg.keyboard.press("0")
     assert pg.evaluate("swarmViewer.view()") == {"zoom": 1, "offX": 0, "offY": 0}
     assert pg.evaluate("swarmViewer.pointMode()") is True
+
+
+def test_the_robot_panel_gives_the_age_of_what_it_knows_of_each_other_robot(page, recording):
+    rec, pg = recording[0], page
+    tick, robot = rec.last_tick - 100, 1
+    pg.evaluate(f"swarmViewer.setTick({tick}); swarmViewer.select({robot})")
+    comm = rec.comm_at(tick)
+    text = pg.locator("#robot-facts").inner_text()
+    ages = "; ".join([f"{comm.aoi_age[robot] / 10:.1f} s on average",
+                      ", ".join(f"{s}: {(tick - comm.merged_at[robot, s]) / 10:.1f} s"
+                                for s in range(rec.n_robots) if s != robot)])
+    assert f"info age\t{ages}" in text
+
+
+def test_a_swarm_robots_panel_gives_its_mean_age_of_information(swarm_page, swarm_recording):
+    """Above 64 robots the map-merge pairs are not kept (two thirds of a decoded swarm recording)."""
+    rec, pg = swarm_recording[0], swarm_page
+    pg.evaluate(f"swarmViewer.setTick({SWARM_TICK}); swarmViewer.select(3)")
+    age = rec.comm_at(SWARM_TICK).aoi_age[3]
+    assert f"info age\t{age / 10:.1f} s on average\n" in pg.locator("#robot-facts").inner_text() + "\n"
