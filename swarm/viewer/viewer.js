@@ -304,6 +304,38 @@
     return { off: offsets, robot: robot.slice(0, n), delta: delta.slice(0, n) };
   }
 
+  /** The deliveries (each message's receivers) as what the viewer shows of them: per tick, how many
+   *  messages each robot received (the robot panel's totals), and an even sample of at most MESSAGE_BUDGET
+   *  receivers a tick to flash (``shown``, ``shownOff`` per message; drawMessages samples the window's
+   *  again). At 1,000 robots a tick has ~100,000 deliveries (200 KB decoded); what is kept is ~1,000
+   *  counts and 2,500 receivers. */
+  function deliveries(rec) {
+    const { R, T, msg, off } = rec;
+    const cap = Math.min(msg.recv.length, R * T);
+    const robot = new Uint32Array(cap), count = new Float64Array(cap), received = new Float64Array(T + 1);
+    const pending = new Float64Array(R), changed = [];
+    const shownOff = new Float64Array(msg.sender.length + 1), shown = [];
+    let n = 0;
+    for (let t = 0; t < T; t++) {
+      const lo = msg.recvOff[off.msg[t]], hi = msg.recvOff[off.msg[t + 1]];
+      const every = Math.max(1, Math.ceil((hi - lo) / MESSAGE_BUDGET));
+      for (let k = off.msg[t]; k < off.msg[t + 1]; k++) {
+        for (let q = msg.recvOff[k]; q < msg.recvOff[k + 1]; q++) {
+          const r = msg.recv[q];
+          if (!pending[r]) changed.push(r);
+          pending[r]++;
+          if ((q - lo) % every === 0) shown.push(r);
+        }
+        shownOff[k + 1] = shown.length;
+      }
+      for (const r of changed) { robot[n] = r; count[n] = pending[r]; n++; pending[r] = 0; }
+      changed.length = 0;
+      received[t + 1] = n;
+    }
+    return { receivedOff: received, receivedRobot: robot.slice(0, n), receivedCount: count.slice(0, n),
+             shownOff, shown: Uint16Array.from(shown) };
+  }
+
   /** The first position in the sorted array ``a`` whose value is >= x. */
   function lowerBound(a, x) {
     let lo = 0, hi = a.length;
@@ -522,6 +554,8 @@
       this.cfg = cfg;
       rec.msg.rssi = null;   // shown nowhere: 2 bytes a delivery, 200 KB a tick at 1,000 robots
       rec.mergeSums = mergeSums(rec);
+      Object.assign(rec.msg, deliveries(rec));
+      rec.msg.recv = null;   // what is shown of it is in shown; the totals in the per-tick counts
       // the pairs themselves only for the robot panel's list of ages, and only at team size
       if (rec.R > PAIR_AGES_UP_TO) rec.aoi = null;
       this.state = new ReplayState(rec);
@@ -586,8 +620,8 @@
         }
         for (let k = off.msg[t]; k < off.msg[t + 1]; k++) {
           s[msg.via[k]]++; b[msg.via[k]] += msg.size[k];   // the transmitter (a relay sends copies)
-          for (let q = msg.recvOff[k]; q < msg.recvOff[k + 1]; q++) r[msg.recv[q]]++;
         }
+        for (let k = msg.receivedOff[t]; k < msg.receivedOff[t + 1]; k++) r[msg.receivedRobot[k]] += msg.receivedCount[k];
       }
       return { sent, bytes, received };
     }
@@ -606,9 +640,9 @@
         const p = this.checkpoints;
         c = { robot: i, sent: p.sent[at * R + i], bytes: p.bytes[at * R + i], received: p.received[at * R + i] };
       }
-      for (let k = off.msg[from]; k < off.msg[t + 1]; k++) {
-        if (msg.via[k] === i) { c.sent++; c.bytes += msg.size[k]; }
-        for (let q = msg.recvOff[k]; q < msg.recvOff[k + 1]; q++) if (msg.recv[q] === i) c.received++;
+      for (let k = off.msg[from]; k < off.msg[t + 1]; k++) if (msg.via[k] === i) { c.sent++; c.bytes += msg.size[k]; }
+      for (let k = msg.receivedOff[from]; k < msg.receivedOff[t + 1]; k++) {
+        if (msg.receivedRobot[k] === i) c.received += msg.receivedCount[k];
       }
       c.tick = t;
       this.totalsCache = c;
@@ -1271,12 +1305,13 @@
     }
 
     /** The last FLASH_TICKS ticks' messages, fading: a line from the transmitter toward each receiver and a
-     *  ring around the transmitter. Beyond MESSAGE_BUDGET lines (RING_BUDGET rings) an even sample is drawn:
-     *  at 1,000 robots a tick's messages reach ~100,000 receivers. */
+     *  ring around the transmitter. The receivers are an even sample of at most MESSAGE_BUDGET in the window
+     *  (of those deliveries() kept), the rings one of at most RING_BUDGET: at 1,000 robots a tick's
+     *  messages reach ~100,000 receivers. */
     drawMessages() {
       const ctx = this.ctx, m = this.rec.msg, off = this.rec.off.msg;
       const first = Math.max(0, this.tick - FLASH_TICKS + 1);
-      const lineEvery = Math.max(1, Math.ceil((m.recvOff[off[this.tick + 1]] - m.recvOff[off[first]]) / MESSAGE_BUDGET));
+      const lineEvery = Math.max(1, Math.ceil((m.shownOff[off[this.tick + 1]] - m.shownOff[off[first]]) / MESSAGE_BUDGET));
       const ringEvery = Math.max(1, Math.ceil((off[this.tick + 1] - off[first]) / RING_BUDGET));
       const paths = new Map();   // one path per style (type, age, line or ring): a few strokes a frame
       const path = (kind, style, width) => {
@@ -1291,9 +1326,9 @@
         const colour = typeColour(m.types[m.type[k]]);
         const [sx, sy] = this.canvasXY(m.via[k]);
         const f = Math.min(1, (age + 1) / 3);   // the flash travels from sender to receiver
-        const q0 = m.recvOff[k] + (lineEvery - m.recvOff[k] % lineEvery) % lineEvery;
-        for (let q = q0; q < m.recvOff[k + 1]; q += lineEvery) {
-          const [rx, ry] = this.canvasXY(m.recv[q]);
+        const q0 = m.shownOff[k] + (lineEvery - m.shownOff[k] % lineEvery) % lineEvery;
+        for (let q = q0; q < m.shownOff[k + 1]; q += lineEvery) {
+          const [rx, ry] = this.canvasXY(m.shown[q]);
           const lines = path('line', rgb(colour, 0.8 * alpha), this.points ? 1 : 2);
           lines.moveTo(sx, sy); lines.lineTo(sx + f * (rx - sx), sy + f * (ry - sy));
           drawn++;
