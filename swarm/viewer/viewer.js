@@ -44,21 +44,18 @@
   const MAX_ZOOM = 64;            // mouse wheel zoom: up to this many times the fitted map
 
   // ------------------------------------------------------------------------------ decoding ----
-  /** The recording from its base64 pieces (each a whole number of 3-byte groups), which are then dropped
-   *  from the page: the text of a 1 GB recording would otherwise stay in memory beside its bytes. */
+  /** The recording from its base64 pieces (each a whole number of 3-byte groups), each dropped from the
+   *  page once decoded: the text of a large recording would otherwise stay in memory beside its bytes.
+   *  (atob skips whitespace itself.) */
   function embeddedBytes(elements) {
-    const texts = elements.map((e) => e.textContent.replace(/\s+/g, ''));
-    let n = 0;
-    for (const t of texts) n += t.length / 4 * 3 - (t.endsWith('==') ? 2 : t.endsWith('=') ? 1 : 0);
-    const out = new Uint8Array(n);
-    let at = 0;
-    for (const t of texts) {
-      const bin = atob(t);
-      for (let i = 0; i < bin.length; i++) out[at + i] = bin.charCodeAt(i);
-      at += bin.length;
-    }
-    for (const e of elements) e.remove();
-    return out;
+    const pieces = elements.map((e) => {
+      const bin = atob(e.textContent);
+      e.remove();
+      const out = new Uint8Array(bin.length);
+      for (let i = 0; i < bin.length; i++) out[i] = bin.charCodeAt(i);
+      return out;
+    });
+    return pieces.length === 1 ? pieces[0] : concat(pieces, Uint8Array);
   }
 
   async function inflate(bytes) {
@@ -169,6 +166,97 @@
     return out;
   }
 
+  // The two largest streams at swarm size are reduced block by block to what the page shows, so neither
+  // they nor the inflated blocks are ever all in memory (1,000 robots: ~1 MB a tick of the two, ~1.4 MB a
+  // tick inflated; a 3,000-tick recording would not load).
+
+  /** The map-merge stream (``merged_at[i, s]`` entries, every pair that merged) as the age of information
+   *  needs it: per tick, each robot whose sum over s != i of merged_at[i, s] changed, and by how much (at
+   *  most R a tick, against ~100,000 pair entries at 1,000 robots). Exact: integer differences in doubles. */
+  class MergeSums {
+    constructor(R) {
+      this.R = R;
+      this.merged = new Int32Array(R * R);   // the latest merged_at of each pair, while reading
+      this.pending = new Float64Array(R);
+      this.touched = new Uint8Array(R);
+      this.parts = { n: [], robot: [], delta: [] };
+    }
+
+    /** One block: entries per tick, their flat indices i * R + s, their values. */
+    add(counts, idx, val) {
+      const R = this.R, n = new Uint32Array(counts.length), robot = [], delta = [], changed = [];
+      let k = 0;
+      for (let t = 0; t < counts.length; t++) {
+        for (const end = k + counts[t]; k < end; k++) {
+          const i = Math.floor(idx[k] / R), d = val[k] - this.merged[idx[k]];
+          this.merged[idx[k]] = val[k];
+          if (idx[k] === i * R + i || !d) continue;   // its own entry is not in its age
+          if (!this.touched[i]) { this.touched[i] = 1; changed.push(i); }
+          this.pending[i] += d;
+        }
+        for (const i of changed) { robot.push(i); delta.push(this.pending[i]); this.pending[i] = 0; this.touched[i] = 0; }
+        n[t] = changed.length;
+        changed.length = 0;
+      }
+      this.parts.n.push(n); this.parts.robot.push(Uint32Array.from(robot)); this.parts.delta.push(Float64Array.from(delta));
+    }
+
+    result(T) {
+      const p = this.parts;
+      return { off: p.n.length ? prefix(concat(p.n, Uint32Array)) : new Float64Array(T + 1),
+               robot: concat(p.robot, Uint32Array), delta: concat(p.delta, Float64Array) };
+    }
+  }
+
+  /** The deliveries (each message's receivers) as the page shows them: per tick, how many messages each
+   *  robot received (the robot panel's totals), and an even sample of at most MESSAGE_BUDGET receivers a
+   *  tick to flash (drawMessages samples the window's again). 1,000 robots: ~100,000 deliveries a tick,
+   *  of which ~1,000 counts and 2,500 receivers are kept. */
+  class Deliveries {
+    constructor(R) {
+      this.pending = new Float64Array(R);
+      this.parts = { n: [], robot: [], count: [], shownN: [], shown: [] };
+    }
+
+    /** One block: messages per tick, receivers per message, the receivers back to back. */
+    add(msgN, recvN, recv) {
+      const pending = this.pending, n = new Uint32Array(msgN.length), shownN = new Uint32Array(recvN.length);
+      const robot = [], count = [], shown = [], changed = [];
+      let m = 0, q = 0;
+      for (let t = 0; t < msgN.length; t++) {
+        let total = 0;
+        for (let j = m; j < m + msgN[t]; j++) total += recvN[j];
+        const every = Math.max(1, Math.ceil(total / MESSAGE_BUDGET)), first = q;
+        for (const end = m + msgN[t]; m < end; m++) {
+          for (const stop = q + recvN[m]; q < stop; q++) {
+            const r = recv[q];
+            if (!pending[r]) changed.push(r);
+            pending[r]++;
+            if ((q - first) % every === 0) { shown.push(r); shownN[m]++; }
+          }
+        }
+        for (const r of changed) { robot.push(r); count.push(pending[r]); pending[r] = 0; }
+        n[t] = changed.length;
+        changed.length = 0;
+      }
+      const p = this.parts;
+      p.n.push(n); p.robot.push(Uint32Array.from(robot)); p.count.push(Float64Array.from(count));
+      p.shownN.push(shownN); p.shown.push(Uint16Array.from(shown));
+    }
+
+    result() {
+      const p = this.parts;
+      return { receivedOff: prefix(concat(p.n, Uint32Array)), receivedRobot: concat(p.robot, Uint32Array),
+               receivedCount: concat(p.count, Float64Array), shownOff: prefix(concat(p.shownN, Uint32Array)),
+               shown: concat(p.shown, Uint16Array) };
+    }
+  }
+
+  /** A block's absolute indices of a stream stored as indices (``X_idx``). */
+  function blockIndices(b, stream) {
+    return typed(b[stream + '_idx']);
+  }
+
   async function parseRecording(bytes) {
     for (let i = 0; i < MAGIC.length; i++) {
       if (bytes[i] !== MAGIC[i]) throw new Error('not a .swr recording');
@@ -181,31 +269,38 @@
       const length = dv.getUint32(pos + 4, true);
       const payload = bytes.subarray(pos + 12, pos + 12 + length);
       if (payload.length !== length) throw new Error('truncated recording');
-      chunks.push([kind, unpackMsgpack(await inflate(payload))]);
+      chunks.push([kind, payload]);   // inflated one at a time below: all at once is 1.4 MB a tick at 1,000 robots
       pos += 12 + length;
     }
     if (!chunks.length || chunks[0][0] !== 'HEAD' || chunks[chunks.length - 1][0] !== 'TAIL') {
       throw new Error('incomplete recording');
     }
-    const head = chunks[0][1];
-    const tail = chunks[chunks.length - 1][1];
+    const head = unpackMsgpack(await inflate(chunks[0][1]));
+    const tail = unpackMsgpack(await inflate(chunks[chunks.length - 1][1]));
     if (!READABLE_VERSIONS.includes(head.version)) {
       throw new Error(`format version ${head.version}; this viewer knows ${READABLE_VERSIONS.join(' and ')}`);
     }
     const hasComm = head.version >= 2;
-    const blocks = chunks.slice(1, -1).map((c) => c[1]);
+    const R = head.n_robots, H = head.shape[0], W = head.shape[1];
+    const T = tail.ticks;
+    const keepPairs = R <= PAIR_AGES_UP_TO;   // the map-merge pairs, for the robot panel's list of ages
     const commStreams = ['group', 'aoi', 'contact'];
     const streams = ['known', 'seen', 'link', 'rssi', 'msg', 'act', ...(hasComm ? commStreams : [])];
-    const commArrays = ['msg_via', 'msg_lost_n', 'msg_lost', 'msg_lost_cause', 'group_robot', 'group_id', 'aoi_idx',
-                        'aoi_val', 'contact_robot', 'team_free'];
+    const commArrays = ['msg_via', 'msg_lost_n', 'msg_lost', 'msg_lost_cause', 'group_robot', 'group_id',
+                        ...(keepPairs ? ['aoi_idx', 'aoi_val'] : []), 'contact_robot', 'team_free'];
+    // not msg_recv, msg_rssi (no view shows the latter): Deliveries reduces the receivers block by block
     const arrays = ['pose', 'metrics', 'known_gap', 'known_val', 'seen_gap', 'link_idx', 'rssi_idx', 'rssi_val',
-                    'msg_sender', 'msg_seq', 'msg_type', 'msg_size', 'msg_recv_n', 'msg_recv', 'msg_rssi',
+                    'msg_sender', 'msg_seq', 'msg_type', 'msg_size', 'msg_recv_n',
                     'act_robot', ...streams.map((s) => s + '_n'), ...(hasComm ? commArrays : [])];
     const parts = {};
     for (const name of arrays) parts[name] = [];
     const typeNames = [], typeCode = {}, msgTypeParts = [], acts = [];
-    for (const b of blocks) {
+    const merges = new MergeSums(R), deliveries = new Deliveries(R);
+    for (const [, payload] of chunks.slice(1, -1)) {
+      const b = unpackMsgpack(await inflate(payload));
       for (const name of arrays) parts[name].push(typed(b[name]));
+      if (hasComm) merges.add(typed(b.aoi_n), blockIndices(b, 'aoi'), typed(b.aoi_val));
+      deliveries.add(typed(b.msg_n), typed(b.msg_recv_n), typed(b.msg_recv));
       const local = b.msg_types.map((name) => {
         if (!(name in typeCode)) { typeCode[name] = typeNames.length; typeNames.push(name); }
         return typeCode[name];
@@ -217,8 +312,6 @@
     }
     const cat = {};
     for (const name of arrays) cat[name] = concat(parts[name], parts[name].length ? parts[name][0].constructor : Uint8Array);
-    const R = head.n_robots, H = head.shape[0], W = head.shape[1];
-    const T = tail.ticks;
     if (!hasComm) {   // version 1: no communication streams; every message is its sender's own
       const none = new Uint16Array(0), zeros = new Uint32Array(T);
       Object.assign(cat, { msg_via: cat.msg_sender, msg_lost_n: new Uint16Array(cat.msg_sender.length),
@@ -243,11 +336,11 @@
       seenIdx: ungap(cat.seen_gap, off.seen), linkIdx: cat.link_idx,
       rssiIdx: cat.rssi_idx, rssiVal: cat.rssi_val,
       msg: { sender: cat.msg_sender, seq: cat.msg_seq, type: concat(msgTypeParts, Uint16Array), size: cat.msg_size,
-             recvOff: prefix(cat.msg_recv_n), recv: cat.msg_recv, rssi: cat.msg_rssi, tick: msgTick, types: typeNames,
+             recvOff: prefix(cat.msg_recv_n), ...deliveries.result(), tick: msgTick, types: typeNames,
              via: cat.msg_via, lostOff: prefix(cat.msg_lost_n), lost: cat.msg_lost, lostCause: cat.msg_lost_cause },
       causes: head.loss_causes || [],
       group: { robot: cat.group_robot, id: cat.group_id },
-      aoi: { idx: cat.aoi_idx, val: cat.aoi_val },
+      aoi: keepPairs ? { idx: cat.aoi_idx, val: cat.aoi_val } : null, mergeSums: merges.result(T),
       contact: { robot: cat.contact_robot },
       teamFree: cat.team_free,
       act: { robot: cat.act_robot, data: acts, tick: actTick, decoded: new Map() },
@@ -275,65 +368,6 @@
       for (let p = start[r]; p < start[r + 1]; p++) scratch[idx[order[p]] - base] = UNSEEN;
     }
     return prev;
-  }
-
-  /** The map-merge stream (``merged_at[i, s]`` entries, for every pair that merged) as what the age of
-   *  information needs: per tick, each robot whose sum over s != i of merged_at[i, s] changed, and by how
-   *  much. At 1,000 robots the pair entries are ~100,000 a tick (800 KB, two thirds of a decoded
-   *  recording); the sums are at most R a tick. Exact: integer differences in doubles. */
-  function mergeSums(rec) {
-    const { R, T, off } = rec, idx = rec.aoi.idx, val = rec.aoi.val;
-    const merged = new Int32Array(R * R);   // the latest merged_at of each pair (while converting only)
-    const pending = new Float64Array(R), touched = new Uint8Array(R), changed = [];
-    const cap = Math.min(idx.length, R * T);
-    const robot = new Uint32Array(cap), delta = new Float64Array(cap), offsets = new Float64Array(T + 1);
-    let n = 0;
-    for (let t = 0; t < T; t++) {
-      for (let k = off.aoi[t]; k < off.aoi[t + 1]; k++) {
-        const i = Math.floor(idx[k] / R);
-        const d = val[k] - merged[idx[k]];
-        merged[idx[k]] = val[k];
-        if (idx[k] === i * R + i || !d) continue;   // its own entry is not in its age
-        if (!touched[i]) { touched[i] = 1; changed.push(i); }
-        pending[i] += d;
-      }
-      for (const i of changed) { robot[n] = i; delta[n] = pending[i]; n++; pending[i] = 0; touched[i] = 0; }
-      changed.length = 0;
-      offsets[t + 1] = n;
-    }
-    return { off: offsets, robot: robot.slice(0, n), delta: delta.slice(0, n) };
-  }
-
-  /** The deliveries (each message's receivers) as what the viewer shows of them: per tick, how many
-   *  messages each robot received (the robot panel's totals), and an even sample of at most MESSAGE_BUDGET
-   *  receivers a tick to flash (``shown``, ``shownOff`` per message; drawMessages samples the window's
-   *  again). At 1,000 robots a tick has ~100,000 deliveries (200 KB decoded); what is kept is ~1,000
-   *  counts and 2,500 receivers. */
-  function deliveries(rec) {
-    const { R, T, msg, off } = rec;
-    const cap = Math.min(msg.recv.length, R * T);
-    const robot = new Uint32Array(cap), count = new Float64Array(cap), received = new Float64Array(T + 1);
-    const pending = new Float64Array(R), changed = [];
-    const shownOff = new Float64Array(msg.sender.length + 1), shown = [];
-    let n = 0;
-    for (let t = 0; t < T; t++) {
-      const lo = msg.recvOff[off.msg[t]], hi = msg.recvOff[off.msg[t + 1]];
-      const every = Math.max(1, Math.ceil((hi - lo) / MESSAGE_BUDGET));
-      for (let k = off.msg[t]; k < off.msg[t + 1]; k++) {
-        for (let q = msg.recvOff[k]; q < msg.recvOff[k + 1]; q++) {
-          const r = msg.recv[q];
-          if (!pending[r]) changed.push(r);
-          pending[r]++;
-          if ((q - lo) % every === 0) shown.push(r);
-        }
-        shownOff[k + 1] = shown.length;
-      }
-      for (const r of changed) { robot[n] = r; count[n] = pending[r]; n++; pending[r] = 0; }
-      changed.length = 0;
-      received[t + 1] = n;
-    }
-    return { receivedOff: received, receivedRobot: robot.slice(0, n), receivedCount: count.slice(0, n),
-             shownOff, shown: Uint16Array.from(shown) };
   }
 
   /** The first position in the sorted array ``a`` whose value is >= x. */
@@ -552,12 +586,6 @@
     constructor(rec, cfg) {
       this.rec = rec;
       this.cfg = cfg;
-      rec.msg.rssi = null;   // shown nowhere: 2 bytes a delivery, 200 KB a tick at 1,000 robots
-      rec.mergeSums = mergeSums(rec);
-      Object.assign(rec.msg, deliveries(rec));
-      rec.msg.recv = null;   // what is shown of it is in shown; the totals in the per-tick counts
-      // the pairs themselves only for the robot panel's list of ages, and only at team size
-      if (rec.R > PAIR_AGES_UP_TO) rec.aoi = null;
       this.state = new ReplayState(rec);
       this.head = rec.head;
       this.cellM = rec.head.cell_m;
