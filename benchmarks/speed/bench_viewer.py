@@ -48,7 +48,7 @@ FRAMES_JS = """async ([from, n, robot]) => {
     const b = performance.now();
     map.getImageData(0, 0, 1, 1);   // rasterise the frame, as showing it would
     times.push(performance.now() - a);
-    const p = v.profile();
+    const p = v.profile ? v.profile() : {};   // (a viewer before issue 47 has no profile)
     p.raster = performance.now() - b;
     for (const [k, ms] of Object.entries(p)) steps[k] = (steps[k] || 0) + ms / n;
   }
@@ -102,12 +102,13 @@ def measure(browser, recording: Path, folder: Path, frames: int, profiles: list[
     last = page.evaluate("swarmViewer.lastTick")
     n_robots = page.evaluate("swarmViewer.nRobots")
     start = max(0, last // 3 - frames // 2)
-    page.evaluate("gc()")   # what the page holds, not what decoding left for the collector
-    time.sleep(1)
+    for _ in range(2):   # what the page holds, not what decoding left for the collector
+        page.evaluate("gc()")
+        time.sleep(1)
     heap = page.context.new_cdp_session(page).send("Runtime.getHeapUsage")   # exact, unlike performance.memory
     out = {"robots": n_robots, "ticks": last + 1, "html MB": html.stat().st_size / 1e6, "load s": load_s,
            "renderer MB": renderer_rss_mb(), "heap MB": (heap["usedSize"] + heap["backingStorageSize"]) / 1e6,
-           "state MB": page.evaluate("swarmViewer.stateBytes().state") / 1e6}
+           "state MB": page.evaluate("swarmViewer.stateBytes ? swarmViewer.stateBytes().state : NaN") / 1e6}
     for label, robot in (("union", None), ("robot 0", 0)):
         cpu = renderer_cpu_s()
         times, steps = page.evaluate(FRAMES_JS, [start, frames, robot])

@@ -36,7 +36,7 @@
   const MESSAGE_BUDGET = 2500;    // message flashes (sender to receiver lines) drawn at most
   const RING_BUDGET = 300;        // rings around transmitters drawn at most (overlapping rings rasterise slowly)
   const LOSS_BUDGET = 2500;       // failed deliveries drawn at most
-  const TRAIL_BUDGET = 60000;     // trail points drawn at most, over all robots
+  const TRAIL_BUDGET = 20000;     // trail points drawn at most, over all robots (600 each up to 33 robots)
   const AOI_ROWS = 16;            // age-of-information rows: every robot up to this, else the oldest
   const LIST_ITEMS = 24;          // robots listed in the robot panel's lists (links heard, ages, mates)
   const TOTALS_EVERY = 16;        // message totals are checkpointed every this many ticks
