@@ -1297,30 +1297,48 @@
       const batched = this.points ? new Map() : null;
       ctx.lineWidth = this.points ? 1 : 2.5;
       let pairs = 0, drawn = 0;
-      for (let i = 0; i < R && drawn < LINK_BUDGET; i++) {
-        const [xi, yi] = this.canvasXY(i);
-        for (let j = i + 1; j < R; j++) {
-          const bij = i * R + j, bji = j * R + i;   // inlined st.linked: R * R / 2 pairs a frame
-          const ij = (bits[bij >>> 3] >>> (bij & 7)) & 1, ji = (bits[bji >>> 3] >>> (bji & 7)) & 1;
-          if (!ij && !ji) continue;
-          if (pairs++ % every) continue;
-          if (drawn === LINK_BUDGET) break;
-          let m = Infinity;
-          if (ij) m = Math.min(m, this.margin(i, j));
-          if (ji) m = Math.min(m, this.margin(j, i));
-          const [xj, yj] = this.canvasXY(j);
-          const colour = rgb(rampColour(isFinite(m) ? m : 40), 0.85);
-          drawn++;
-          if (batched) {
-            const band = (ij && ji ? 's' : 'd') + Math.round(isFinite(m) ? Math.min(40, Math.max(0, m)) / 5 : 8);
-            if (!batched.has(band)) batched.set(band, [colour, ij && ji, new Path2D()]);
-            const path = batched.get(band)[2];
-            path.moveTo(xi, yi); path.lineTo(xj, yj);
-            continue;
+      const draw = (i, j, ij, ji) => {
+        let m = Infinity;
+        if (ij) m = Math.min(m, this.margin(i, j));
+        if (ji) m = Math.min(m, this.margin(j, i));
+        const [xi, yi] = this.canvasXY(i), [xj, yj] = this.canvasXY(j);
+        const colour = rgb(rampColour(isFinite(m) ? m : 40), 0.85);
+        drawn++;
+        if (batched) {
+          const band = (ij && ji ? 's' : 'd') + Math.round(isFinite(m) ? Math.min(40, Math.max(0, m)) / 5 : 8);
+          if (!batched.has(band)) batched.set(band, [colour, ij && ji, new Path2D()]);
+          const path = batched.get(band)[2];
+          path.moveTo(xi, yi); path.lineTo(xj, yj);
+          return;
+        }
+        ctx.strokeStyle = colour;
+        ctx.setLineDash(ij && ji ? [] : [6, 4]);
+        ctx.beginPath(); ctx.moveTo(xi, yi); ctx.lineTo(xj, yj); ctx.stroke();
+      };
+      const bit = (b) => (bits[b >>> 3] >>> (b & 7)) & 1;
+      if (st.links < R * R / 8) {
+        // sparse (a spread swarm): each set bit once, zero bytes skipped; bit r * R + s is "r hears s", and
+        // the pair {i < j} is taken at bit i * R + j if set, else at j * R + i (a one-way link)
+        scan: for (let byte = 0; byte < bits.length; byte++) {
+          for (let v = bits[byte]; v; v &= v - 1) {
+            const b = byte * 8 + 31 - Math.clz32(v & -v);
+            const r = Math.floor(b / R), s = b - r * R, i = Math.min(r, s), j = Math.max(r, s);
+            if (i === j || (r > s && bit(i * R + j))) continue;
+            if (pairs++ % every) continue;
+            if (drawn === LINK_BUDGET) break scan;
+            draw(i, j, bit(i * R + j), bit(j * R + i));
           }
-          ctx.strokeStyle = colour;
-          ctx.setLineDash(ij && ji ? [] : [6, 4]);
-          ctx.beginPath(); ctx.moveTo(xi, yi); ctx.lineTo(xj, yj); ctx.stroke();
+        }
+      } else {
+        // dense (a gathered swarm): every pair, R * R / 2 tests, cheaper than visiting every set bit
+        pairs: for (let i = 0; i < R; i++) {
+          for (let j = i + 1; j < R; j++) {
+            const ij = bit(i * R + j), ji = bit(j * R + i);
+            if (!ij && !ji) continue;
+            if (pairs++ % every) continue;
+            if (drawn === LINK_BUDGET) break pairs;
+            draw(i, j, ij, ji);
+          }
         }
       }
       if (batched) {
@@ -1332,10 +1350,6 @@
       this.drawn.links = drawn;
     }
 
-    /** The last FLASH_TICKS ticks' messages, fading: a line from the transmitter toward each receiver and a
-     *  ring around the transmitter. The receivers are an even sample of at most MESSAGE_BUDGET in the window
-     *  (of those deliveries() kept), the rings one of at most RING_BUDGET: at 1,000 robots a tick's
-     *  messages reach ~100,000 receivers. */
     drawMessages() {
       const ctx = this.ctx, m = this.rec.msg, off = this.rec.off.msg;
       const first = Math.max(0, this.tick - FLASH_TICKS + 1);

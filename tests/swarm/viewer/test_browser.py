@@ -580,3 +580,32 @@ def test_a_swarm_robots_panel_gives_its_mean_age_of_information(swarm_page, swar
     pg.evaluate(f"swarmViewer.setTick({SWARM_TICK}); swarmViewer.select(3)")
     age = rec.comm_at(SWARM_TICK).aoi_age[3]
     assert f"info age\t{age / 10:.1f} s on average\n" in pg.locator("#robot-facts").inner_text() + "\n"
+
+
+def check_links_drawn_once(pg, rec, ticks) -> list[int]:
+    """Every pair with a link either way is drawn, one line each (below the budget); the pair counts."""
+    set_layers(pg, **{**ONLY, "links": True})
+    counts = []
+    for tick in ticks:
+        link = rec.links_at(tick)[0]
+        pg.evaluate(f"swarmViewer.setTick({tick})")
+        counts.append(int(np.triu(link | link.T, 1).sum()))
+        assert pg.evaluate("swarmViewer.drawnCounts().links") == counts[-1]
+    return counts
+
+
+def test_each_linked_pair_is_drawn_once(page, recording):
+    counts = check_links_drawn_once(page, recording[0], range(0, recording[0].ticks, 97))
+    assert 0 < max(counts) and min(counts) < max(counts)
+
+
+def test_each_linked_pair_of_a_spread_swarm_is_drawn_once(browser, tmp_path):
+    """Robots spread at random: few links (the viewer then visits set bits, not all pairs)."""
+    sim = Simulation({**SWARM_SPEC, "robots": {"count": 100, "spawn": "random"}, "stop": {"max_ticks": 10}})
+    recorder = Recorder.attach(sim)
+    recorder.finish(sim, sim.run())
+    path = recorder.save(tmp_path / "spread.swr")
+    rec = load_recording(path)
+    for pg in open_page(browser, write_html(path, tmp_path / "spread.html")):
+        counts = check_links_drawn_once(pg, rec, range(rec.ticks))
+        assert 0 < max(counts) and 2 * max(counts) < rec.n_robots ** 2 / 8   # sparse indeed
