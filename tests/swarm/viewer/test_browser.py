@@ -515,7 +515,7 @@ def test_a_swarms_links_messages_and_losses_are_drawn_within_budgets(swarm_page,
 
 
 def test_a_recording_embedded_in_pieces_plays(browser, recording, tmp_path, monkeypatch):
-    import swarm.viewer.build as build
+    from swarm.viewer import build
 
     rec = recording[0]
     monkeypatch.setattr(build, "PIECE_BYTES", 3 * 4000)
