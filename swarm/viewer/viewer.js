@@ -8,8 +8,13 @@
  * Version 2 recordings add the communication streams: failed deliveries with their cause, the tick's groups,
  * map merges (age of information) and contacts; version 1 files still play, without those layers.
  *
- * For tests and scripting, window.swarmViewer exposes setTick, select, pose, robotScreenPosition, and what
- * the last frame drew: drawnLosses(), drawnGroups(), aoi() ...
+ * At swarm size (issue 47) the page holds the union map and one selected robot's map, not every robot's;
+ * the largest streams are reduced block by block as they are read; a frame draws points beyond 64 robots
+ * in view and budgets of links, flashes, losses and trail points; the wheel zooms, a drag pans.
+ *
+ * For tests and scripting, window.swarmViewer exposes setTick, select, pose, robotScreenPosition, zoomAt,
+ * view, and what the last frame drew: drawnLosses(), drawnGroups(), drawnCounts(), aoi(), pointMode(),
+ * with stateBytes() and each frame step's milliseconds, profile() (benchmarks/speed/bench_viewer.py).
  */
 (function () {
   'use strict';
