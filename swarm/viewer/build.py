@@ -3,6 +3,9 @@
 The page embeds the ``.swr`` bytes unchanged (base64, 4/3 of the file) rather than a JSON rendering of them:
 one format, one decoder per language, and the page is little larger than the recording. The script decodes it
 with the browser's own ``DecompressionStream``, so the page needs no server and no network.
+
+A large recording is embedded in pieces of at most ``PIECE_BYTES`` (a browser's strings stop at 512 MiB,
+and a swarm-size recording can be larger); each piece is its own ``<script class="swr-data">`` element.
 """
 
 from __future__ import annotations
@@ -19,10 +22,13 @@ from maps.io import atomic_write_bytes
 
 from swarm.record import Recording
 from swarm.record.animation import ROBOT_COLOURS, SEEN_FREE, UNSEEN_FREE
+from swarm.record.container import bad
 from swarm.record.reader import read_bytes
 
 OTHERS_FREE = (226, 229, 236)
 """In a robot's view: free cells some other robot has seen but this one has not."""
+PIECE_BYTES = 36 * 1024 * 1024
+"""Recording bytes per embedded base64 piece (48 MiB of text); a multiple of 3, so each piece decodes alone."""
 _PLACEHOLDER = re.compile(r"\{\{(TITLE|STYLE|SCRIPT|CONFIG|DATA)\}\}")
 
 
@@ -31,8 +37,14 @@ def _asset(name: str) -> str:
 
 
 def title_of(rec: Recording) -> str:
-    """A one-line description of the recorded run, e.g. ``frontier x4 on building 50, seed 1``."""
+    """A one-line description of the recorded run, e.g. ``frontier x4 on building 50, seed 1``.
+
+    The reader checks only that HEAD ``spec`` is a map; a crafted file may hold anything inside it, so a
+    section that is not a map is the one-line error for a bad recording, not an AttributeError."""
     spec = rec.spec
+    for section in ("algorithm", "map"):
+        if not isinstance(spec.get(section, {}), dict):
+            raise bad(rec.path, f"HEAD spec field {section!r} is not a map")
     algorithm = spec.get("algorithm", {}).get("name", "?")
     m = spec.get("map", {})
     where = m.get("path") if m.get("kind") == "file" else f"{m.get('kind', '?')} {m.get('size', '?')}"
@@ -51,7 +63,9 @@ def build_html(data: bytes, source: str = "<bytes>") -> str:
         "SCRIPT": _asset("viewer.js"),
         # "</" cannot end the <script> element early once escaped; JSON allows "\/".
         "CONFIG": json.dumps(config).replace("</", "<\\/"),
-        "DATA": base64.b64encode(data).decode("ascii"),
+        "DATA": "\n".join(f'<script type="application/octet-stream" class="swr-data">'
+                           f'{base64.b64encode(data[at:at + PIECE_BYTES]).decode("ascii")}</script>'
+                           for at in range(0, max(len(data), 1), PIECE_BYTES)),
     }
     return _PLACEHOLDER.sub(lambda m: parts[m.group(1)], _asset("template.html"))
 

@@ -1,7 +1,9 @@
 """The replay page in headless Chromium, driven by Playwright: robots drawn where the recording puts them,
 the slider moves time, clicking a robot opens its panel, the JavaScript decoder agrees with Python's, lost
 messages and communication groups are drawn, the age-of-information panel shows the run's values, trails
-fade and can be limited, and a version 1 recording still plays.
+fade and can be limited, and a version 1 recording still plays. At swarm size (more than 64 robots):
+points, at most one per pixel cell; only the selected robot's map held; panels and layers within budgets;
+a recording embedded in pieces.
 
 Needs Debian's chromium (``/usr/bin/chromium``) and the ``playwright`` package; ``.ci/run`` installs both.
 Playwright's own browser download does not work here, so we launch the system Chromium.
@@ -69,9 +71,9 @@ def browser():
         b.close()
 
 
-def open_page(browser, html):
+def open_page(browser, html, width=1280, height=800):
     """A page of ``html`` once its script is ready; after the test: no errors, nothing fetched."""
-    context = browser.new_context(viewport={"width": 1280, "height": 800}, device_scale_factor=1)
+    context = browser.new_context(viewport={"width": width, "height": height}, device_scale_factor=1)
     pg = context.new_page()
     errors: list[str] = []
     pg.on("pageerror", lambda exc: errors.append(str(exc)))
@@ -403,3 +405,207 @@ def test_a_version_1_recording_plays_without_the_communication_layers(browser, t
         assert pg.evaluate("swarmViewer.drawnLosses()") == [] and pg.evaluate("swarmViewer.drawnGroups()") == []
         assert pg.locator("#aoi-panel").is_hidden()
         assert "format version 1" in pg.inner_text("#lost-legend")
+
+
+# ------------------------------------------------------------------------------ swarm size ----
+SWARM_SPEC = {"seed": 3, "map": {"kind": "building", "size": 50}, "robots": {"count": 120},
+              "stop": {"max_ticks": 40}, "radio": {"tx_power_dbm": -30.0}, "comm": {"loss": 0.2}}
+"""More robots than the viewer draws as discs (64), crowded at the start, more links, message deliveries
+and losses than a frame draws."""
+SWARM_TICK = 20
+
+
+@pytest.fixture(scope="module")
+def swarm_recording(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("swarm")
+    sim = Simulation(SWARM_SPEC)
+    recorder = Recorder.attach(sim)
+    result = sim.run()
+    recorder.finish(sim, result)
+    path = recorder.save(folder / "swarm.swr")
+    return load_recording(path), write_html(path, folder / "swarm.html"), result
+
+
+@pytest.fixture
+def swarm_page(browser, swarm_recording):
+    yield from open_page(browser, swarm_recording[1])
+
+
+@pytest.mark.parametrize("width", [1280, 600])
+def test_a_swarm_is_drawn_as_points_at_most_one_per_pixel_cell(browser, swarm_recording, width):
+    """In a small window (2 pixels a cell) robots that start side by side share pixel cells."""
+    rec = swarm_recording[0]
+    for pg in open_page(browser, swarm_recording[1], width=width, height=400 if width < 1000 else 800):
+        assert pg.evaluate("swarmViewer.pointMode()") is True
+        set_layers(pg, **ONLY)
+        cell = pg.evaluate("swarmViewer.budgets.pointCell")
+        for tick in (0, SWARM_TICK):
+            pg.evaluate(f"swarmViewer.setTick({tick})")
+            check_points(pg, rec, tick, cell, crowded=width < 1000 and tick == 0)
+
+
+def check_points(pg, rec, tick, cell, crowded):
+    """One point per occupied pixel cell (fewer than robots when crowded), every robot under or next to a
+    point in a robot's colour."""
+    xy = np.array([expected_canvas_xy(pg, rec, *rec.poses[tick, i, :2]) for i in range(rec.n_robots)])
+    cells = {(int(x // cell), int(y // cell)) for x, y in xy}
+    assert pg.evaluate("swarmViewer.drawnCounts().robots") == len(cells)
+    if crowded:
+        assert len(cells) < rec.n_robots
+    image, palette = map_image(pg), np.array(ROBOT_COLOURS)
+    for x, y in xy:
+        window = image[max(0, int(y) - cell): int(y) + cell + 1, max(0, int(x) - cell): int(x) + cell + 1]
+        assert (window.reshape(-1, 1, 3) == palette).all(axis=2).any()
+
+
+def test_a_swarm_robots_own_map_is_rebuilt_when_selected(swarm_page, swarm_recording):
+    """Only the selected robot's map is held, rebuilt from its stream entries, exact forward and back."""
+    rec, pg = swarm_recording[0], swarm_page
+    h, w = rec.shape
+    held = pg.evaluate("swarmViewer.stateBytes()")
+    assert held["robotMapCount"] == 0 and held["state"] < rec.n_robots * h * w   # not every robot's map
+    for robot, tick in ((77, SWARM_TICK), (77, rec.last_tick), (77, 3), (5, SWARM_TICK), (77, 0)):
+        pg.evaluate(f"swarmViewer.setTick({tick}); swarmViewer.select({robot})")
+        known = pg.evaluate(f"""() => {{ const out = [];
+            for (let r = 0; r < {h}; r++) for (let c = 0; c < {w}; c++) out.push(swarmViewer.knownCell({robot}, r, c));
+            return out; }}""")
+        want = rec.known_at(tick)[robot]
+        assert np.array_equal(np.array(known, dtype=np.uint8).reshape(h, w), want)
+        text = pg.locator("#robot-panel").inner_text()   # counts kept without the map
+        assert f"{int((want == 1).sum())} free + {int((want == 2).sum())} wall cells" in text
+        held = pg.evaluate("swarmViewer.stateBytes()")
+        assert 1 <= held["robotMapCount"] <= 2 and held["robotMaps"] < 2 * 8 * h * w
+
+
+def test_a_swarms_panels_list_the_oldest_information_only(swarm_page, swarm_recording):
+    rec, pg = swarm_recording[0], swarm_page
+    rows = pg.evaluate("swarmViewer.budgets.aoiRows")
+    pg.evaluate(f"swarmViewer.setTick({SWARM_TICK})")
+    comm = rec.comm_at(SWARM_TICK)
+    oldest = sorted(range(rec.n_robots), key=lambda i: (-comm.aoi_age[i], i))[:rows]
+    cells = pg.evaluate("Array.from(document.querySelectorAll('#aoi-rows tr')).map((tr) => ({ ...tr.dataset }))")
+    assert [int(c["robot"]) for c in cells] == oldest
+    assert [float(c["age"]) for c in cells] == [comm.aoi_age[i] for i in oldest]
+    assert f"the {rows} of {rec.n_robots} robots" in pg.inner_text("#aoi-note")
+    other = next(i for i in range(rec.n_robots) if i not in oldest)
+    pg.evaluate(f"swarmViewer.select({other})")
+    assert int(pg.evaluate("document.querySelector('#aoi-rows tr:last-child').dataset.robot")) == other
+    heard = rec.links_at(SWARM_TICK)[0][other].sum()
+    items = pg.evaluate("swarmViewer.budgets.listItems")
+    assert heard > items
+    links = pg.inner_text("#robot-links")
+    assert links.count("dB margin") == items and f"the strongest {items} of {heard}" in links
+
+
+def test_a_swarms_links_messages_and_losses_are_drawn_within_budgets(swarm_page, swarm_recording):
+    rec, pg = swarm_recording[0], swarm_page
+    budgets = pg.evaluate("swarmViewer.budgets")
+    pg.evaluate(f"swarmViewer.setTick({SWARM_TICK})")
+    link = rec.links_at(SWARM_TICK)[0]
+    pairs = int((link | link.T).sum()) // 2
+    window = [m for m in rec.messages() if SWARM_TICK - 6 < m.tick <= SWARM_TICK]
+    deliveries, lost = sum(len(m.receivers) for m in window), [(m, r) for m in window for r, _ in m.lost]
+    assert pairs > budgets["links"] and deliveries > budgets["messages"] and len(lost) > budgets["losses"]
+    drawn = pg.evaluate("swarmViewer.drawnCounts()")
+    assert budgets["links"] / 2 <= drawn["links"] <= budgets["links"]            # an even sample, not none
+    assert budgets["messages"] / 2 <= drawn["messages"] <= budgets["messages"]
+    assert budgets["losses"] / 2 <= drawn["losses"] <= budgets["losses"]
+    want = {(m.tick, m.transmitter, r) for m, r in lost}
+    assert {(d["tick"], d["from"], d["to"]) for d in pg.evaluate("swarmViewer.drawnLosses()")} <= want
+
+
+def test_a_recording_embedded_in_pieces_plays(browser, recording, tmp_path, monkeypatch):
+    from swarm.viewer import build
+
+    rec = recording[0]
+    monkeypatch.setattr(build, "PIECE_BYTES", 3 * 4000)
+    source = tmp_path / "run.swr"
+    source.write_bytes(Path(recording[1]).with_suffix(".swr").read_bytes())
+    html = write_html(source, tmp_path / "pieces.html")
+    assert html.read_text().count('class="swr-data"') > 2
+    for pg in open_page(browser, html):
+        assert pg.evaluate("document.querySelectorAll('script.swr-data').length") == 0   # dropped once decoded
+        pg.evaluate(f"swarmViewer.setTick({TICK})")
+        assert pg.evaluate("swarmViewer.pose(1)") == rec.poses[TICK, 1].tolist()
+
+
+def test_zooming_in_on_a_swarm_draws_the_robots_in_view_as_discs(swarm_page, swarm_recording):
+    rec, pg = swarm_recording[0], swarm_page
+    set_layers(pg, **ONLY)
+    pg.evaluate(f"swarmViewer.setTick({SWARM_TICK})")
+    robot = 7
+    before = pg.evaluate(f"swarmViewer.robotScreenPosition({robot})")
+    mouse = np.round([before["x"], before["y"]])
+    pg.mouse.move(*mouse)
+    for _ in range(3):
+        pg.mouse.wheel(0, -400)
+    pg.wait_for_function("swarmViewer.view().zoom > 8")
+    view = pg.evaluate("swarmViewer.view()")
+    after = pg.evaluate(f"swarmViewer.robotScreenPosition({robot})")
+    # the wheel zooms about the mouse: the point under it stays, the robot (a fraction of a pixel away) with it
+    moved = np.subtract([after["x"], after["y"]], mouse)
+    assert moved == pytest.approx(np.subtract([before["x"], before["y"]], mouse) * view["zoom"], abs=0.01)
+    x, y = expected_canvas_xy(pg, rec, *rec.poses[SWARM_TICK, robot, :2])
+    want = (x * view["zoom"] - view["offX"], y * view["zoom"] - view["offY"])
+    assert (after["canvasX"], after["canvasY"]) == pytest.approx(want, abs=0.01)
+    assert pg.evaluate("swarmViewer.pointMode()") is False   # few robots in view: discs, as at team size
+    assert after["radius"] > 10
+    assert canvas_pixel(pg, after["canvasX"], after["canvasY"]) == ROBOT_COLOURS[robot % len(ROBOT_COLOURS)]
+    pg.mouse.down()   # a drag pans (and is not a click: nothing gets selected)
+    pg.mouse.move(mouse[0] - 100, mouse[1] - 50, steps=5)
+    pg.mouse.up()
+    panned = pg.evaluate("swarmViewer.view()")
+    assert (panned["offX"], panned["offY"]) == pytest.approx((view["offX"] + 100, view["offY"] + 50))
+    assert pg.evaluate("swarmViewer.selected()") is None
+    pg.keyboard.press("0")
+    assert pg.evaluate("swarmViewer.view()") == {"zoom": 1, "offX": 0, "offY": 0}
+    assert pg.evaluate("swarmViewer.pointMode()") is True
+
+
+def test_the_robot_panel_gives_the_age_of_what_it_knows_of_each_other_robot(page, recording):
+    rec, pg = recording[0], page
+    tick, robot = rec.last_tick - 100, 1
+    pg.evaluate(f"swarmViewer.setTick({tick}); swarmViewer.select({robot})")
+    comm = rec.comm_at(tick)
+    text = pg.locator("#robot-facts").inner_text()
+    ages = "; ".join([f"{comm.aoi_age[robot] / 10:.1f} s on average",
+                      ", ".join(f"{s}: {(tick - comm.merged_at[robot, s]) / 10:.1f} s"
+                                for s in range(rec.n_robots) if s != robot)])
+    assert f"info age\t{ages}" in text
+
+
+def test_a_swarm_robots_panel_gives_its_mean_age_of_information(swarm_page, swarm_recording):
+    """Above 64 robots the map-merge pairs are not kept (two thirds of a decoded swarm recording)."""
+    rec, pg = swarm_recording[0], swarm_page
+    pg.evaluate(f"swarmViewer.setTick({SWARM_TICK}); swarmViewer.select(3)")
+    age = rec.comm_at(SWARM_TICK).aoi_age[3]
+    assert f"info age\t{age / 10:.1f} s on average\n" in pg.locator("#robot-facts").inner_text() + "\n"
+
+
+def check_links_drawn_once(pg, rec, ticks) -> list[int]:
+    """Every pair with a link either way is drawn, one line each (below the budget); the pair counts."""
+    set_layers(pg, **{**ONLY, "links": True})
+    counts = []
+    for tick in ticks:
+        link = rec.links_at(tick)[0]
+        pg.evaluate(f"swarmViewer.setTick({tick})")
+        counts.append(int(np.triu(link | link.T, 1).sum()))
+        assert pg.evaluate("swarmViewer.drawnCounts().links") == counts[-1]
+    return counts
+
+
+def test_each_linked_pair_is_drawn_once(page, recording):
+    counts = check_links_drawn_once(page, recording[0], range(0, recording[0].ticks, 97))
+    assert 0 < max(counts) and min(counts) < max(counts)
+
+
+def test_each_linked_pair_of_a_spread_swarm_is_drawn_once(browser, tmp_path):
+    """Robots spread at random: few links (the viewer then visits set bits, not all pairs)."""
+    sim = Simulation({**SWARM_SPEC, "robots": {"count": 100, "spawn": "random"}, "stop": {"max_ticks": 10}})
+    recorder = Recorder.attach(sim)
+    recorder.finish(sim, sim.run())
+    path = recorder.save(tmp_path / "spread.swr")
+    rec = load_recording(path)
+    for pg in open_page(browser, write_html(path, tmp_path / "spread.html")):
+        counts = check_links_drawn_once(pg, rec, range(rec.ticks))
+        assert 0 < max(counts) and 2 * max(counts) < rec.n_robots ** 2 / 8   # sparse indeed
