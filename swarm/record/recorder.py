@@ -30,7 +30,9 @@ per-tick work does not depend on how much the robots did:
   gets every robot's age of information, time since contact and missing share at every tick, equal to the
   run's ``RunResult.comm`` rows at theirs.
 
-Chunks of ``block_ticks`` ticks are compressed as they fill, so memory holds only compressed bytes.
+Chunks of ``block_ticks`` ticks are compressed as they fill, so memory holds only compressed bytes; a
+chunk closes earlier once its streams hold :data:`BLOCK_BYTES` (a swarm's 256 ticks would inflate to
+gigabytes, which every reader must hold at once).
 
 **What is exact.** Poses (float64), explored/coverage (float64), every robot's knowledge map, the union
 ``seen`` raster, the boolean link matrix, every message's (sender, seq, type, size, receivers,
@@ -64,6 +66,8 @@ from .kernels import RSSI_NAN, _record_changes, _record_links, changed_cells, qu
 if TYPE_CHECKING:
     from swarm.sim.loop import Simulation, TickView
 
+BLOCK_BYTES = 64 << 20
+"""A block closes once its streams hold this many bytes as stored (before compression), whatever its ticks."""
 MAX_DEBUG_BYTES = 256 * 1024
 """An action whose packed form exceeds this keeps its goal/velocity but its debug is replaced by a note."""
 _U32 = 1 << 32
@@ -121,6 +125,7 @@ class _Block:
 
     def __init__(self, t0: int) -> None:
         self.t0 = t0
+        self.nbytes = 0  # the streams' size as stored, uncompressed (BLOCK_BYTES)
         self.poses: list[np.ndarray] = []
         self.metrics: list[tuple[float, float]] = []
         self.counts: dict[str, list[int]] = {k: [] for k in ("known", "seen", "link", "rssi", "msg", "act",
@@ -271,7 +276,7 @@ class Recorder:
         if tick != self._next_tick:
             raise RuntimeError(f"recorder expected tick {self._next_tick}, got {tick} (one recorder per run)")
         self._capture_pending()
-        if len(self._block) >= self.block_ticks:
+        if len(self._block) >= self.block_ticks or self._block.nbytes >= BLOCK_BYTES:
             self._flush()
         b = self._block
         b.poses.append(np.array(poses, dtype=np.float64))
@@ -286,6 +291,10 @@ class Recorder:
         self._capture_links(b, links)
         self._capture_comm(b, tick, known, tracker, links)
         self._capture_actions(b, actions)
+        c = {k: v[-1] for k, v in b.counts.items() if k != "msg"}
+        b.nbytes += (24 * self.n + 56 + 5 * c["known"] + 4 * c["seen"] + 4 * c["link"] + 6 * c["rssi"]
+                     + 4 * c["group"] + 8 * c["aoi"] + 2 * c["contact"]
+                     + 2 * c["act"] + sum(len(a) for a in b.act[len(b.act) - c["act"]:]))
         self._pending = (sent, links)
         self._next_tick += 1
 
@@ -331,6 +340,7 @@ class Recorder:
                     # themselves made the largest stream of a swarm's recording
                     exact = q[receivers, env.transmitter].astype(np.int32)
                     b.msg_rssi.append((exact - self._rssi[receivers, env.transmitter]).astype(np.int16))
+                b.nbytes += 18 + 4 * len(receivers) + 3 * len(lost)
                 count += 1
         b.counts["msg"].append(count)
 

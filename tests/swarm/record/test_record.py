@@ -140,6 +140,23 @@ def test_same_spec_gives_identical_bytes(run):
     assert again == run["data"]
 
 
+def test_a_block_closes_at_its_byte_budget_and_reads_back_the_same(run, monkeypatch):
+    """A swarm's blocks close by size (recorder.BLOCK_BYTES), not only by ticks: with a small budget the
+    same run makes more, shorter blocks, whose every tick reads back as before."""
+    import swarm.record.recorder as recorder_module
+    monkeypatch.setattr(recorder_module, "BLOCK_BYTES", 12_000)
+    data, _, _ = record(SPEC, block_ticks=BLOCK_TICKS)
+    lengths = [body["n"] for kind, body in iter_chunks(data, "x") if kind == BLOCK]
+    default = [body["n"] for kind, body in iter_chunks(run["data"], "x") if kind == BLOCK]
+    assert len(lengths) > len(default) and max(lengths) < BLOCK_TICKS
+    small, whole = Recording(data, "small.swr"), run["rec"]
+    for tick in CHECK_TICKS:
+        a, b = small.state_at(tick), whole.state_at(tick)
+        assert np.array_equal(a.known, b.known) and np.array_equal(a.link, b.link)
+        assert np.array_equal(a.poses, b.poses) and small.messages_at(tick) == whole.messages_at(tick)
+        assert np.array_equal(small.comm_at(tick).merged_at, whole.comm_at(tick).merged_at)
+
+
 def test_tick_out_of_range_is_invalid_input(run):
     from maps import InvalidInput
 
