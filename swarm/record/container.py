@@ -34,7 +34,23 @@ READABLE_VERSIONS = (1, 2)
 CHUNK_HEADER = struct.Struct("<4sII")  # kind, payload length, CRC-32 of the payload
 HEAD, BLOCK, TAIL = b"HEAD", b"BLCK", b"TAIL"
 MAX_CHUNK_BYTES = 1 << 30
-"""No chunk, compressed or not, may exceed 1 GiB: a corrupt length field must not allocate the world."""
+"""No chunk's payload (compressed) may exceed 1 GiB: a corrupt length field must not allocate the world."""
+MAX_INFLATED_CHUNK = 256 << 20
+"""No chunk may inflate to more than 256 MiB. A 256-tick block of a 1,000-robot run inflates to a few tens of
+MiB (docs/recording-format.md, Limits); zlib inflates up to ~1,000x, so without this a 1 MiB chunk could
+ask for a gigabyte."""
+MAX_INFLATED_TOTAL = 4 << 30
+"""All chunks of a file together may inflate to at most 4 GiB: the reader holds every stream in memory."""
+MAX_ITEMS_CHUNK = 1 << 21
+"""Array elements and map entries one chunk may decode to (2 Mi): msgpack turns one byte into a Python object
+of ~60 bytes, so the inflated size alone does not bound memory. A block holds 3 per array field plus one
+per changed action: at most 256 Ki for 1,000 robots changing their action every tick of 256."""
+MAX_ITEMS_TOTAL = 1 << 24
+"""Array elements and map entries the whole file may decode to (16 Mi; ~3 Mi for 1,000 robots x 3,000 ticks
+changing their action every tick)."""
+INFLATE_STEP = 1 << 24
+"""Bytes inflated per step (16 MiB): the limits are checked between steps, so an oversized chunk is refused
+after at most this much more than the limit, whatever it claims to hold."""
 
 DTYPES = ("<f8", "<u4", "<u2", "<i2", "|u1")
 """The only array dtypes the format uses; the JavaScript reader knows exactly these."""
@@ -82,10 +98,22 @@ def encode_chunk(kind: bytes, body: dict[str, Any], level: int = 6) -> bytes:
     return CHUNK_HEADER.pack(kind, len(payload), zlib.crc32(payload)) + payload
 
 
-def iter_chunks(data: bytes, path: str) -> Iterator[tuple[bytes, dict[str, Any]]]:
-    """Yield ``(kind, body)`` for every chunk after the magic; corrupt or truncated data raises."""
+class Budget:
+    """What a file's chunks have inflated and decoded to so far, against :data:`MAX_INFLATED_TOTAL` and
+    :data:`MAX_ITEMS_TOTAL` (one per file: :func:`iter_chunks` makes it)."""
+
+    def __init__(self) -> None:
+        self.inflated = 0
+        self.items = 0
+
+
+def iter_chunks(data: bytes, path: str, budget: Budget | None = None) -> Iterator[tuple[bytes, dict[str, Any]]]:
+    """Yield ``(kind, body)`` for every chunk after the magic; corrupt, truncated or oversized data raises
+    (sizes: :data:`MAX_CHUNK_BYTES`, :data:`MAX_INFLATED_CHUNK`, :data:`MAX_INFLATED_TOTAL`,
+    :data:`MAX_ITEMS_CHUNK`, :data:`MAX_ITEMS_TOTAL`), before the oversized part is allocated."""
     if data[: len(MAGIC)] != MAGIC:
         raise bad(path, "the file does not start with the .swr magic number")
+    budget = budget if budget is not None else Budget()
     pos = len(MAGIC)
     index = 0
     while pos < len(data):
@@ -94,27 +122,72 @@ def iter_chunks(data: bytes, path: str) -> Iterator[tuple[bytes, dict[str, Any]]
         kind, length, crc = CHUNK_HEADER.unpack_from(data, pos)
         pos += CHUNK_HEADER.size
         if length > MAX_CHUNK_BYTES:
-            raise bad(path, f"chunk {index} claims {length} bytes")
+            raise bad(path, f"chunk {index} claims {length} bytes (at most {MAX_CHUNK_BYTES})")
+        if length > len(data) - pos:
+            raise bad(path, f"truncated inside chunk {index} ({len(data) - pos} of {length} bytes)")
         payload = data[pos: pos + length]
-        if len(payload) != length:
-            raise bad(path, f"truncated inside chunk {index} ({len(payload)} of {length} bytes)")
         if zlib.crc32(payload) != crc:
             raise bad(path, f"chunk {index} fails its CRC check")
         pos += length
-        yield kind, _decode_body(payload, index, path)
+        yield kind, _decode_body(payload, index, path, budget)
         index += 1
 
 
-def _decode_body(payload: bytes, index: int, path: str) -> dict[str, Any]:
+def _mib(n: int) -> str:
+    return f"{n / (1 << 20):g} MiB"
+
+
+def inflate(payload: bytes, index: int, path: str, budget: Budget) -> bytearray:
+    """The inflated payload of chunk ``index``, :data:`INFLATE_STEP` bytes at a time: refused as soon as it
+    passes :data:`MAX_INFLATED_CHUNK` or takes the file past :data:`MAX_INFLATED_TOTAL`."""
+    inflater = zlib.decompressobj()
+    out = bytearray()
+    pending = payload
     try:
-        inflater = zlib.decompressobj()
-        raw = inflater.decompress(payload, MAX_CHUNK_BYTES)
-        if inflater.unconsumed_tail or not inflater.eof:
-            raise zlib.error("incomplete or oversized stream")
-        body = msgpack.unpackb(raw, raw=False, strict_map_key=False, max_bin_len=MAX_CHUNK_BYTES,
-                               max_str_len=MAX_CHUNK_BYTES, max_array_len=1 << 26, max_map_len=1 << 20)
-    except Exception as exc:  # zlib and msgpack raise several unrelated types for corrupt input
+        while not inflater.eof:
+            piece = inflater.decompress(pending, INFLATE_STEP)
+            pending = inflater.unconsumed_tail
+            out += piece
+            if len(out) > MAX_INFLATED_CHUNK:
+                raise bad(path, f"chunk {index} inflates to more than {_mib(MAX_INFLATED_CHUNK)} (the most a chunk "
+                                "may hold, docs/recording-format.md#limits)")
+            if budget.inflated + len(out) > MAX_INFLATED_TOTAL:
+                raise bad(path, f"its chunks inflate to more than {_mib(MAX_INFLATED_TOTAL)} by chunk {index} (the "
+                                "most a file may hold, docs/recording-format.md#limits)")
+            if not piece and not pending:
+                raise zlib.error("incomplete stream")
+    except zlib.error:
+        raise bad(path, f"chunk {index} does not inflate (a damaged zlib stream)") from None
+    budget.inflated += len(out)
+    return out
+
+
+class _TooMany(Exception):
+    """Raised from msgpack's hooks once a chunk or the file decodes to too many items."""
+
+
+def _decode_body(payload: bytes, index: int, path: str, budget: Budget) -> dict[str, Any]:
+    raw = inflate(payload, index, path, budget)
+    limit = min(MAX_ITEMS_CHUNK, MAX_ITEMS_TOTAL - budget.items)
+    items = 0
+
+    def count(obj: Any) -> Any:  # msgpack calls it for every array and map it builds, innermost first
+        nonlocal items
+        items += len(obj)
+        if items > limit:
+            raise _TooMany
+        return obj
+
+    try:
+        body = msgpack.unpackb(raw, raw=False, strict_map_key=False, max_bin_len=MAX_INFLATED_CHUNK,
+                               max_str_len=MAX_INFLATED_CHUNK, max_array_len=MAX_ITEMS_CHUNK,
+                               max_map_len=MAX_ITEMS_CHUNK, max_ext_len=0, list_hook=count, object_hook=count)
+    except _TooMany:
+        raise bad(path, f"chunk {index} decodes to more than {limit} array items and map entries (at most "
+                        f"{MAX_ITEMS_CHUNK} a chunk, {MAX_ITEMS_TOTAL} a file)") from None
+    except Exception as exc:  # msgpack raises several unrelated types for corrupt input
         raise bad(path, f"chunk {index} does not decode ({type(exc).__name__})") from None
+    budget.items += items
     if not isinstance(body, dict):
         raise bad(path, f"chunk {index} is not a map")
     return body

@@ -1,0 +1,147 @@
+"""Decompression limits of the ``.swr`` reader (issue 48, item 5): a small CRC-valid file that inflates to
+gigabytes, or decodes to millions of Python objects, is refused early, in bounded time and memory.
+
+The bombs are built here: a zlib stream of N zero bytes is a 17-byte head then the same ~1 KiB deflate
+block per MiB (each block ends with a full flush, which resets the compressor, so every MiB compresses to
+identical bytes), then an empty final block and the Adler-32 of the whole content.
+"""
+
+from __future__ import annotations
+
+import resource
+import struct
+import subprocess
+import sys
+import time
+import tracemalloc
+import zlib
+from pathlib import Path
+
+import msgpack
+import pytest
+
+from maps import InvalidInput
+from swarm.record import container
+from swarm.record.container import BLOCK, CHUNK_HEADER, HEAD, MAGIC, TAIL, encode_chunk
+from swarm.record.reader import Recording
+
+ROOT = Path(__file__).resolve().parents[3]
+MIB = 1 << 20
+
+
+def zero_bomb(prefix: bytes, mib: int) -> bytes:
+    """zlib(``prefix`` + ``mib`` MiB of zero bytes), built in a fraction of the time zlib would take."""
+    zeros = b"\0" * MIB
+    c = zlib.compressobj(9)
+    head = c.compress(prefix) + c.flush(zlib.Z_FULL_FLUSH)
+    block = c.compress(zeros) + c.flush(zlib.Z_FULL_FLUSH)
+    tail = c.flush()[:-4]  # the final empty block; its Adler-32 covers only what c saw
+    adler = zlib.adler32(prefix)
+    for _ in range(mib):
+        adler = zlib.adler32(zeros, adler)
+    return head + block * mib + tail + struct.pack(">I", adler)
+
+
+def bin_map_bomb(mib: int) -> bytes:
+    """zlib of the msgpack map ``{"x": <mib MiB of zero bytes>}``: a chunk that decodes when inflated."""
+    prefix = b"\x81\xa1x\xc6" + struct.pack(">I", mib * MIB)
+    return zero_bomb(prefix, mib)
+
+
+def chunk(kind: bytes, payload: bytes) -> bytes:
+    return CHUNK_HEADER.pack(kind, len(payload), zlib.crc32(payload)) + payload
+
+
+def bomb_file(mib_per_chunk: int = 1024) -> bytes:
+    """The issue's bomb: four CRC-valid chunks (HEAD, two blocks, TAIL) of ~1 MiB, each inflating to 1 GiB."""
+    payload = bin_map_bomb(mib_per_chunk)
+    return MAGIC + b"".join(chunk(kind, payload) for kind in (HEAD, BLOCK, BLOCK, TAIL))
+
+
+def test_the_zero_bomb_is_a_valid_zlib_stream():
+    raw = zlib.decompress(bin_map_bomb(3))
+    assert msgpack.unpackb(raw) == {"x": b"\0" * (3 * MIB)}
+
+
+def _child(code: str, timeout: float) -> tuple[subprocess.CompletedProcess, float, float]:
+    """Run ``code`` in a fresh Python; its completed process, wall seconds and peak RSS in MB."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    t0 = time.monotonic()
+    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=timeout,
+                          check=False, cwd=ROOT, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
+    wall = time.monotonic() - t0
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+    assert peak >= before
+    return proc, wall, peak / 1024  # ru_maxrss is in KiB on Linux; the maximum over all children so far
+
+
+@pytest.mark.timeout(120)
+def test_a_gigabyte_bomb_is_refused_in_seconds_and_little_memory(tmp_path):
+    """4.2 MB of CRC-valid chunks inflating to 1 GiB each took 5.4 GB and over two minutes to refuse."""
+    path = tmp_path / "bomb.swr"
+    path.write_bytes(bomb_file())
+    assert path.stat().st_size < 5 * MIB
+    code = ("from swarm.record import load_recording\n"
+            "from swarm.base.errors import InvalidInput\n"
+            f"try:\n    load_recording({str(path)!r})\n"
+            "except InvalidInput as exc:\n    print(exc)\n")
+    proc, wall, peak_mb = _child(code, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert "inflates to more than 256 MiB" in proc.stdout and "chunk 0" in proc.stdout
+    assert wall < 20, wall
+    assert peak_mb < 700, peak_mb
+
+
+@pytest.mark.timeout(120)
+def test_swarm_view_refuses_the_bomb_in_one_line(tmp_path):
+    path = tmp_path / "bomb.swr"
+    path.write_bytes(bomb_file())
+    code = f"import sys\nfrom swarm.cli import main\nsys.exit(main(['view', {str(path)!r}, '-o', {str(tmp_path / 'v.html')!r}]))\n"
+    proc, wall, peak_mb = _child(code, timeout=60)
+    assert proc.returncode == 2, proc.stderr
+    lines = proc.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("swarm: error: recording") and "inflates to more than" in lines[0]
+    assert wall < 20 and peak_mb < 700, (wall, peak_mb)
+    assert not (tmp_path / "v.html").exists()
+
+
+def test_a_chunk_just_over_the_limit_is_refused_and_one_under_decodes():
+    over = MAGIC + chunk(HEAD, bin_map_bomb(container.MAX_INFLATED_CHUNK // MIB + 1))
+    with pytest.raises(InvalidInput, match="chunk 0 inflates to more than 256 MiB"):
+        Recording(over, "over.swr")
+    under = MAGIC + chunk(HEAD, bin_map_bomb(container.MAX_INFLATED_CHUNK // MIB - 1))
+    with pytest.raises(InvalidInput, match="HEAD does not name"):  # decoded, then found not to be a recording
+        Recording(under, "under.swr")
+
+
+def test_the_total_over_all_chunks_is_bounded(monkeypatch):
+    monkeypatch.setattr(container, "MAX_INFLATED_TOTAL", 10 * MIB)
+    payload = bin_map_bomb(3)
+    data = MAGIC + b"".join(chunk(BLOCK, payload) for _ in range(4))
+    with pytest.raises(InvalidInput, match="inflate to more than 10 MiB by chunk 3"):
+        list(container.iter_chunks(data, "many.swr"))
+
+
+@pytest.mark.parametrize("body", [
+    {"a": [[]] * 1_500_000, "b": [[]] * 1_500_000},  # 3 MB of msgpack, ~200 MB of empty lists
+    {"a": [{}] * 1_500_000, "b": [{}] * 1_500_000},
+    {"x": [[[]] * 1_000_000] * 3},
+])
+def test_many_small_objects_are_refused_before_they_fill_memory(body):
+    """msgpack makes a ~60-byte Python object of each one-byte empty array or map."""
+    data = MAGIC + encode_chunk(HEAD, body, level=1)
+    assert len(data) < MIB
+    tracemalloc.start()
+    try:
+        with pytest.raises(InvalidInput, match="array items and map entries"):
+            Recording(data, "objects.swr")
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    assert peak < 400 * MIB, peak / MIB
+
+
+def test_a_chunk_length_past_the_end_is_refused_before_reading():
+    data = MAGIC + CHUNK_HEADER.pack(HEAD, 1 << 29, 0) + b"\0" * 100
+    with pytest.raises(InvalidInput, match=r"truncated inside chunk 0 \(100 of 536870912 bytes\)"):
+        Recording(data, "short.swr")
