@@ -10,9 +10,11 @@ columns of the runs files and passed a part whose other columns were damaged or 
   and has the runs table's types (:data:`swarm.results.schema.RUNS`; a column null in every row may have
   the null type, as older versions wrote it); ``key`` is a non-null string unique in the part, ``status`` is
   ``ok`` or ``failed``, the grid labels and axes are non-null strings;
-- every companion the runs file records (size and CRC-32, in its Parquet metadata since issue 48) is there
-  with that size and CRC-32: a bit flip, a truncation or a rewrite anywhere in it is seen without decoding
-  it. A part of an older version records nothing: it needs a time-series file when one of its runs is ok,
+- its rows equal what was written: the runs file records the CRC-32 of its own column names, types and
+  values (in its Parquet metadata since issue 48), so a flip in the footer that renames or retypes a column
+  is seen (one in the footer's statistics changes nothing read and passes);
+- every companion the runs file records (size and CRC-32) is there with that size and CRC-32: a bit flip,
+  a truncation or a rewrite anywhere in it is seen without decoding it. A part of an older version records nothing: it needs a time-series file when one of its runs is ok,
   and each companion must open and have the schema's types.
 
 What a damaged part means is documented in docs/campaigns.md ("Damaged parts"): status lists it and counts
@@ -97,9 +99,20 @@ def file_crc(path: Path) -> tuple[int, int]:
     return size, crc
 
 
-def companion_record(paths: dict[str, Path]) -> dict[bytes, bytes]:
-    """The runs-file metadata recording the size and CRC-32 of each companion in ``paths`` (suffix -> path)."""
-    return {RECORD_KEY: json.dumps({suffix: list(file_crc(path)) for suffix, path in paths.items()}).encode()}
+def table_crc(table: pa.Table) -> int:
+    """CRC-32 of a table's column names, types and values (not of its file: a flip in the footer's statistics
+    changes nothing read, a flip in a column name or type changes this). For runs files: a row per run."""
+    names = [(f.name, str(f.type)) for f in table.schema]
+    text = json.dumps([names, table.to_pydict()], default=repr, allow_nan=True)
+    return zlib.crc32(text.encode())
+
+
+def companion_record(paths: dict[str, Path], runs: pa.Table) -> dict[bytes, bytes]:
+    """The runs-file metadata recording the size and CRC-32 of each companion in ``paths`` (suffix -> path)
+    and the CRC-32 of the runs table itself (:func:`table_crc`)."""
+    record: dict[str, Any] = {suffix: list(file_crc(path)) for suffix, path in paths.items()}
+    record["runs"] = table_crc(runs)
+    return {RECORD_KEY: json.dumps(record).encode()}
 
 
 def _types_ok(schema: pa.Schema, types: dict[str, str], what: str) -> None:
@@ -183,7 +196,7 @@ def check_part(parts: Path, part: str) -> PartCheck:
         _check_runs(table)
         meta = table.schema.metadata or {}
         if RECORD_KEY in meta:
-            _check_record(parts, part, meta[RECORD_KEY])
+            _check_record(parts, part, meta[RECORD_KEY], table)
         else:  # an older part: what its files say must hold together
             if "ok" in table.column("status").to_pylist() and not (parts / f"{part}{TS_SUFFIX}").exists():
                 raise Damaged("its time-series file is missing")
@@ -198,12 +211,15 @@ def check_part(parts: Path, part: str) -> PartCheck:
         return PartCheck(part, None, f"unreadable ({clip(type(exc).__name__ + ': ' + str(exc), 60)})", keys)
 
 
-def _check_record(parts: Path, part: str, raw: bytes) -> None:
+def _check_record(parts: Path, part: str, raw: bytes, table: pa.Table) -> None:
     try:
         record: Any = json.loads(raw)
+        runs_crc = int(record.pop("runs"))
         items = [(s, int(v[0]), int(v[1])) for s, v in record.items()]
     except (ValueError, TypeError, AttributeError, IndexError, KeyError):
         raise Damaged("its runs file's companion record is damaged") from None
+    if table_crc(table.replace_schema_metadata(None)) != runs_crc:
+        raise Damaged("its runs file was changed or damaged after it was written (CRC-32 of its rows differs)")
     for suffix, size, crc in items:
         if suffix not in COMPANIONS:
             raise Damaged("its runs file's companion record is damaged")

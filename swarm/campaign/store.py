@@ -181,7 +181,8 @@ class ResultsStore:
                 _write_table(robots_path, robots_table(robots), owned=writer is not None)
                 written[ROBOTS_SUFFIX] = robots_path
             table = runs_table(runs)  # recording its companions' size and CRC-32: see .parts
-            table = table.replace_schema_metadata({**(table.schema.metadata or {}), **companion_record(written)})
+            table = table.replace_schema_metadata({**(table.schema.metadata or {}),
+                                                   **companion_record(written, table)})
             _write_table(runs_path, table, owned=writer is not None)
         except OSError as exc:
             if not runs_path.exists():
