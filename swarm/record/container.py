@@ -147,13 +147,14 @@ def inflate(payload: bytes, index: int, path: str, budget: Budget) -> bytearray:
         while not inflater.eof:
             piece = inflater.decompress(pending, INFLATE_STEP)
             pending = inflater.unconsumed_tail
-            out += piece
-            if len(out) > MAX_INFLATED_CHUNK:
+            size = len(out) + len(piece)  # checked before the piece is kept
+            if size > MAX_INFLATED_CHUNK:
                 raise bad(path, f"chunk {index} inflates to more than {_mib(MAX_INFLATED_CHUNK)} (the most a chunk "
                                 "may hold, docs/recording-format.md#limits)")
-            if budget.inflated + len(out) > MAX_INFLATED_TOTAL:
+            if budget.inflated + size > MAX_INFLATED_TOTAL:
                 raise bad(path, f"its chunks inflate to more than {_mib(MAX_INFLATED_TOTAL)} by chunk {index} (the "
                                 "most a file may hold, docs/recording-format.md#limits)")
+            out += piece
             if not piece and not pending:
                 raise zlib.error("incomplete stream")
     except zlib.error:

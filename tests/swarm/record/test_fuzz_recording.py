@@ -144,7 +144,7 @@ def test_bombs_anywhere(chunks, where, size_mib, items):
     if items:
         bomb = encode_chunk(BLOCK, {"x": [[]] * 2_100_000}, level=1)
     else:
-        bomb = chunk(BLOCK, bin_map_bomb(size_mib))
+        bomb = chunk(BLOCK, bin_map_bomb(size_mib << 20))
     parts = [encode([c])[len(MAGIC):] for c in chunks]
     parts.insert(min(where, len(parts)), bomb)
     with pytest.raises(InvalidInput):

@@ -29,38 +29,42 @@ ROOT = Path(__file__).resolve().parents[3]
 MIB = 1 << 20
 
 
-def zero_bomb(prefix: bytes, mib: int) -> bytes:
-    """zlib(``prefix`` + ``mib`` MiB of zero bytes), built in a fraction of the time zlib would take."""
-    zeros = b"\0" * MIB
+def zero_bomb(prefix: bytes, zeros: int) -> bytes:
+    """zlib(``prefix`` + ``zeros`` zero bytes), built in a fraction of the time zlib would take."""
+    mib = b"\0" * MIB
     c = zlib.compressobj(9)
     head = c.compress(prefix) + c.flush(zlib.Z_FULL_FLUSH)
-    block = c.compress(zeros) + c.flush(zlib.Z_FULL_FLUSH)
+    block = c.compress(mib) + c.flush(zlib.Z_FULL_FLUSH)
+    rest = c.compress(b"\0" * (zeros % MIB)) + c.flush(zlib.Z_FULL_FLUSH)
     tail = c.flush()[:-4]  # the final empty block; its Adler-32 covers only what c saw
     adler = zlib.adler32(prefix)
-    for _ in range(mib):
-        adler = zlib.adler32(zeros, adler)
-    return head + block * mib + tail + struct.pack(">I", adler)
+    for _ in range(zeros // MIB):
+        adler = zlib.adler32(mib, adler)
+    adler = zlib.adler32(b"\0" * (zeros % MIB), adler)
+    return head + block * (zeros // MIB) + rest + tail + struct.pack(">I", adler)
 
 
-def bin_map_bomb(mib: int) -> bytes:
-    """zlib of the msgpack map ``{"x": <mib MiB of zero bytes>}``: a chunk that decodes when inflated."""
-    prefix = b"\x81\xa1x\xc6" + struct.pack(">I", mib * MIB)
-    return zero_bomb(prefix, mib)
+def bin_map_bomb(inflated: int) -> bytes:
+    """zlib of the msgpack map ``{"x": <zero bytes>}`` inflating to exactly ``inflated`` bytes: a chunk that
+    decodes once inflated."""
+    zeros = inflated - 8  # the map, its key and the bin header
+    return zero_bomb(b"\x81\xa1x\xc6" + struct.pack(">I", zeros), zeros)
 
 
 def chunk(kind: bytes, payload: bytes) -> bytes:
     return CHUNK_HEADER.pack(kind, len(payload), zlib.crc32(payload)) + payload
 
 
-def bomb_file(mib_per_chunk: int = 1024) -> bytes:
-    """The issue's bomb: four CRC-valid chunks (HEAD, two blocks, TAIL) of ~1 MiB, each inflating to 1 GiB."""
-    payload = bin_map_bomb(mib_per_chunk)
+def bomb_file() -> bytes:
+    """The issue's bomb: four CRC-valid chunks (HEAD, two blocks, TAIL) of ~1 MiB, each inflating to 1 GiB
+    that decodes (before issue 48 all four were inflated and decoded: 5.4 GB, two minutes)."""
+    payload = bin_map_bomb(1 << 30)
     return MAGIC + b"".join(chunk(kind, payload) for kind in (HEAD, BLOCK, BLOCK, TAIL))
 
 
 def test_the_zero_bomb_is_a_valid_zlib_stream():
-    raw = zlib.decompress(bin_map_bomb(3))
-    assert msgpack.unpackb(raw) == {"x": b"\0" * (3 * MIB)}
+    raw = zlib.decompress(bin_map_bomb(3 * MIB + 5))
+    assert len(raw) == 3 * MIB + 5 and msgpack.unpackb(raw) == {"x": b"\0" * (3 * MIB - 3)}
 
 
 def _child(code: str, timeout: float) -> tuple[subprocess.CompletedProcess, float, float]:
@@ -106,17 +110,17 @@ def test_swarm_view_refuses_the_bomb_in_one_line(tmp_path):
 
 
 def test_a_chunk_just_over_the_limit_is_refused_and_one_under_decodes():
-    over = MAGIC + chunk(HEAD, bin_map_bomb(container.MAX_INFLATED_CHUNK // MIB + 1))
+    over = MAGIC + chunk(HEAD, bin_map_bomb(container.MAX_INFLATED_CHUNK + 1))
     with pytest.raises(InvalidInput, match="chunk 0 inflates to more than 256 MiB"):
         Recording(over, "over.swr")
-    under = MAGIC + chunk(HEAD, bin_map_bomb(container.MAX_INFLATED_CHUNK // MIB - 1))
+    under = MAGIC + chunk(HEAD, bin_map_bomb(container.MAX_INFLATED_CHUNK))
     with pytest.raises(InvalidInput, match="HEAD does not name"):  # decoded, then found not to be a recording
         Recording(under, "under.swr")
 
 
 def test_the_total_over_all_chunks_is_bounded(monkeypatch):
     monkeypatch.setattr(container, "MAX_INFLATED_TOTAL", 10 * MIB)
-    payload = bin_map_bomb(3)
+    payload = bin_map_bomb(3 * MIB)
     data = MAGIC + b"".join(chunk(BLOCK, payload) for _ in range(4))
     with pytest.raises(InvalidInput, match="inflate to more than 10 MiB by chunk 3"):
         list(container.iter_chunks(data, "many.swr"))
