@@ -35,22 +35,41 @@ CHUNK_HEADER = struct.Struct("<4sII")  # kind, payload length, CRC-32 of the pay
 HEAD, BLOCK, TAIL = b"HEAD", b"BLCK", b"TAIL"
 MAX_CHUNK_BYTES = 1 << 30
 """No chunk's payload (compressed) may exceed 1 GiB: a corrupt length field must not allocate the world."""
-MAX_INFLATED_CHUNK = 256 << 20
-"""No chunk may inflate to more than 256 MiB. A 256-tick block of a 1,000-robot run inflates to a few tens of
-MiB (docs/recording-format.md, Limits); zlib inflates up to ~1,000x, so without this a 1 MiB chunk could
-ask for a gigabyte."""
-MAX_INFLATED_TOTAL = 4 << 30
-"""All chunks of a file together may inflate to at most 4 GiB: the reader holds every stream in memory."""
-MAX_ITEMS_CHUNK = 1 << 21
-"""Array elements and map entries one chunk may decode to (2 Mi): msgpack turns one byte into a Python object
-of ~60 bytes, so the inflated size alone does not bound memory. A block holds 3 per array field plus one
-per changed action: at most 256 Ki for 1,000 robots changing their action every tick of 256."""
-MAX_ITEMS_TOTAL = 1 << 24
-"""Array elements and map entries the whole file may decode to (16 Mi; ~3 Mi for 1,000 robots x 3,000 ticks
-changing their action every tick)."""
+MAX_RATIO = 200
+"""Past :data:`RATIO_FLOOR`, a chunk may inflate to at most 200 times its size in the file. Real chunks
+inflate 5-10x (a 256-tick block of 64 robots: 1.3 MB -> 13 MB; of 1,000 robots: docs/recording-format.md
+#limits); zlib reaches ~1,030x, which is what a decompression bomb uses: 1 MiB asking for a gigabyte."""
+RATIO_FLOOR = 64 << 20
+"""A chunk may always inflate to 64 MiB, however well it compressed (small chunks of repetitive data do)."""
+MAX_FILE_RATIO = 50
+"""All chunks together may inflate to at most 50 times the file's size (or :data:`FILE_FLOOR`): many small
+chunks each under :data:`RATIO_FLOOR` must not add up to a bomb either."""
+FILE_FLOOR = 256 << 20
+MAX_INFLATED_CHUNK = 4 << 30
+"""Whatever its ratio, no chunk may inflate to more than 4 GiB (msgpack's own limit for one array)."""
+MAX_INFLATED_TOTAL = 64 << 30
+"""Whatever its ratio, no file may inflate to more than 64 GiB (the reader holds every stream in memory)."""
+ITEMS_FLOOR = 1 << 20
+"""Array elements plus map entries a chunk may always decode to (1 Mi); beyond, one per two bytes of the
+chunk in the file. msgpack makes a Python object of ~60 bytes from one byte (an empty array), so the
+inflated size alone does not bound memory. Real chunks: 0.001 items a compressed byte (a block holds 3 per
+array field and one per changed action), a TAIL's per-robot lists 0.3."""
+FILE_ITEMS_FLOOR = 1 << 22
+"""Items the whole file may always decode to (4 Mi); beyond, one per two bytes of the file."""
 INFLATE_STEP = 1 << 24
 """Bytes inflated per step (16 MiB): the limits are checked between steps, so an oversized chunk is refused
 after at most this much more than the limit, whatever it claims to hold."""
+
+
+def chunk_limits(compressed: int) -> tuple[int, int]:
+    """(bytes, items) a chunk of ``compressed`` bytes in the file may inflate and decode to."""
+    return (min(MAX_INFLATED_CHUNK, max(RATIO_FLOOR, MAX_RATIO * compressed)),
+            max(ITEMS_FLOOR, compressed // 2))
+
+
+def file_limits(size: int) -> tuple[int, int]:
+    """(bytes, items) all chunks of a file of ``size`` bytes may inflate and decode to together."""
+    return min(MAX_INFLATED_TOTAL, max(FILE_FLOOR, MAX_FILE_RATIO * size)), max(FILE_ITEMS_FLOOR, size // 2)
 
 DTYPES = ("<f8", "<u4", "<u2", "<i2", "|u1")
 """The only array dtypes the format uses; the JavaScript reader knows exactly these."""
@@ -99,21 +118,23 @@ def encode_chunk(kind: bytes, body: dict[str, Any], level: int = 6) -> bytes:
 
 
 class Budget:
-    """What a file's chunks have inflated and decoded to so far, against :data:`MAX_INFLATED_TOTAL` and
-    :data:`MAX_ITEMS_TOTAL` (one per file: :func:`iter_chunks` makes it)."""
+    """What a file's chunks have inflated and decoded to so far, against :func:`file_limits` (one per file:
+    :func:`iter_chunks` makes it)."""
 
-    def __init__(self) -> None:
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self.max_inflated, self.max_items = file_limits(size)
         self.inflated = 0
         self.items = 0
 
 
 def iter_chunks(data: bytes, path: str, budget: Budget | None = None) -> Iterator[tuple[bytes, dict[str, Any]]]:
     """Yield ``(kind, body)`` for every chunk after the magic; corrupt, truncated or oversized data raises
-    (sizes: :data:`MAX_CHUNK_BYTES`, :data:`MAX_INFLATED_CHUNK`, :data:`MAX_INFLATED_TOTAL`,
-    :data:`MAX_ITEMS_CHUNK`, :data:`MAX_ITEMS_TOTAL`), before the oversized part is allocated."""
+    before the oversized part is allocated (:func:`chunk_limits`, :func:`file_limits`: what a chunk and the
+    file may inflate and decode to follows from their size in the file, docs/recording-format.md#limits)."""
     if data[: len(MAGIC)] != MAGIC:
         raise bad(path, "the file does not start with the .swr magic number")
-    budget = budget if budget is not None else Budget()
+    budget = budget if budget is not None else Budget(len(data))
     pos = len(MAGIC)
     index = 0
     while pos < len(data):
@@ -134,12 +155,13 @@ def iter_chunks(data: bytes, path: str, budget: Budget | None = None) -> Iterato
 
 
 def _mib(n: int) -> str:
-    return f"{n / (1 << 20):g} MiB"
+    return f"{n / (1 << 30):.4g} GiB" if n >= 1 << 30 else f"{n / (1 << 20):.4g} MiB"
 
 
 def inflate(payload: bytes, index: int, path: str, budget: Budget) -> bytearray:
     """The inflated payload of chunk ``index``, :data:`INFLATE_STEP` bytes at a time: refused as soon as it
-    passes :data:`MAX_INFLATED_CHUNK` or takes the file past :data:`MAX_INFLATED_TOTAL`."""
+    passes the chunk's limit or takes the file past its own (:func:`chunk_limits`, :func:`file_limits`)."""
+    limit = chunk_limits(len(payload))[0]
     inflater = zlib.decompressobj()
     out = bytearray()
     pending = payload
@@ -148,12 +170,14 @@ def inflate(payload: bytes, index: int, path: str, budget: Budget) -> bytearray:
             piece = inflater.decompress(pending, INFLATE_STEP)
             pending = inflater.unconsumed_tail
             size = len(out) + len(piece)  # checked before the piece is kept
-            if size > MAX_INFLATED_CHUNK:
-                raise bad(path, f"chunk {index} inflates to more than {_mib(MAX_INFLATED_CHUNK)} (the most a chunk "
-                                "may hold, docs/recording-format.md#limits)")
-            if budget.inflated + size > MAX_INFLATED_TOTAL:
-                raise bad(path, f"its chunks inflate to more than {_mib(MAX_INFLATED_TOTAL)} by chunk {index} (the "
-                                "most a file may hold, docs/recording-format.md#limits)")
+            if size > limit:
+                raise bad(path, f"chunk {index} inflates to more than {_mib(limit)} from {len(payload)} bytes (a "
+                                f"chunk may inflate to {MAX_RATIO}x its size or {_mib(RATIO_FLOOR)}, at most "
+                                f"{_mib(MAX_INFLATED_CHUNK)}: docs/recording-format.md#limits)")
+            if budget.inflated + size > budget.max_inflated:
+                raise bad(path, f"its chunks inflate to more than {_mib(budget.max_inflated)} by chunk {index} (a "
+                                f"file may inflate to {MAX_FILE_RATIO}x its size or {_mib(FILE_FLOOR)}, at most "
+                                f"{_mib(MAX_INFLATED_TOTAL)}: docs/recording-format.md#limits)")
             out += piece
             if not piece and not pending:
                 raise zlib.error("incomplete stream")
@@ -169,7 +193,8 @@ class _TooMany(Exception):
 
 def _decode_body(payload: bytes, index: int, path: str, budget: Budget) -> dict[str, Any]:
     raw = inflate(payload, index, path, budget)
-    limit = min(MAX_ITEMS_CHUNK, MAX_ITEMS_TOTAL - budget.items)
+    chunk_items = chunk_limits(len(payload))[1]
+    limit = min(chunk_items, budget.max_items - budget.items)
     items = 0
 
     def count(obj: Any) -> Any:  # msgpack calls it for every array and map it builds, innermost first
@@ -180,12 +205,15 @@ def _decode_body(payload: bytes, index: int, path: str, budget: Budget) -> dict[
         return obj
 
     try:
-        body = msgpack.unpackb(raw, raw=False, strict_map_key=False, max_bin_len=MAX_INFLATED_CHUNK,
-                               max_str_len=MAX_INFLATED_CHUNK, max_array_len=MAX_ITEMS_CHUNK,
-                               max_map_len=MAX_ITEMS_CHUNK, max_ext_len=0, list_hook=count, object_hook=count)
-    except _TooMany:
-        raise bad(path, f"chunk {index} decodes to more than {limit} array items and map entries (at most "
-                        f"{MAX_ITEMS_CHUNK} a chunk, {MAX_ITEMS_TOTAL} a file)") from None
+        body = msgpack.unpackb(raw, raw=False, strict_map_key=False, max_bin_len=len(raw), max_str_len=len(raw),
+                               max_array_len=limit, max_map_len=limit, max_ext_len=0, list_hook=count,
+                               object_hook=count)
+    except (_TooMany, ValueError) as exc:
+        if not isinstance(exc, _TooMany) and "exceeds max_" not in str(exc):  # msgpack's own length checks
+            raise bad(path, f"chunk {index} does not decode ({type(exc).__name__})") from None
+        raise bad(path, f"chunk {index} decodes to more than {limit} array items and map entries (a chunk may "
+                        f"hold one per 2 bytes it occupies or {ITEMS_FLOOR}, a file one per 2 bytes or "
+                        f"{FILE_ITEMS_FLOOR}: docs/recording-format.md#limits)") from None
     except Exception as exc:  # msgpack raises several unrelated types for corrupt input
         raise bad(path, f"chunk {index} does not decode ({type(exc).__name__})") from None
     budget.items += items
