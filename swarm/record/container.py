@@ -37,16 +37,16 @@ MAX_CHUNK_BYTES = 1 << 30
 """No chunk's payload (compressed) may exceed 1 GiB: a corrupt length field must not allocate the world."""
 MAX_RATIO = 200
 """Past :data:`RATIO_FLOOR`, a chunk may inflate to at most 200 times its size in the file. Real chunks
-inflate 5-10x (a 256-tick block of 64 robots: 1.3 MB -> 13 MB; of 1,000 robots: docs/recording-format.md
-#limits); zlib reaches ~1,030x, which is what a decompression bomb uses: 1 MiB asking for a gigabyte."""
+inflate 10-14x (a 256-tick block of 64 robots: 1.3 MB -> 13 MB; 61 ticks of 1,000 robots: 136 MB -> 1.9 GB);
+zlib reaches ~1,030x, which is what a decompression bomb uses: 1 MiB asking for a gigabyte."""
 RATIO_FLOOR = 64 << 20
 """A chunk may always inflate to 64 MiB, however well it compressed (small chunks of repetitive data do)."""
-MAX_FILE_RATIO = 50
-"""All chunks together may inflate to at most 50 times the file's size (or :data:`FILE_FLOOR`): many small
+MAX_FILE_RATIO = 100
+"""All chunks together may inflate to at most 100 times the file's size (or :data:`FILE_FLOOR`): many small
 chunks each under :data:`RATIO_FLOOR` must not add up to a bomb either."""
 FILE_FLOOR = 256 << 20
-MAX_INFLATED_CHUNK = 4 << 30
-"""Whatever its ratio, no chunk may inflate to more than 4 GiB (msgpack's own limit for one array)."""
+MAX_INFLATED_CHUNK = 16 << 30
+"""Whatever its ratio, no chunk may inflate to more than 16 GiB (msgpack holds at most 4 GiB in one array)."""
 MAX_INFLATED_TOTAL = 64 << 30
 """Whatever its ratio, no file may inflate to more than 64 GiB (the reader holds every stream in memory)."""
 ITEMS_FLOOR = 1 << 20

@@ -130,7 +130,7 @@ def test_a_big_chunk_that_compresses_like_real_data_is_accepted():
 
 
 def test_the_file_total_is_bounded_by_the_file_size(monkeypatch):
-    """Many chunks each under the floor must not add up to a bomb: a file inflates to 50x its size at most."""
+    """Many chunks each under the floor must not add up to a bomb: a file inflates to 100x its size at most."""
     monkeypatch.setattr(container, "FILE_FLOOR", 10 * MIB)
     payload = bin_map_bomb(3 * MIB)
     data = MAGIC + b"".join(chunk(BLOCK, payload) for _ in range(4))
