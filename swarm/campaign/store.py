@@ -84,7 +84,7 @@ class ResultsStore:
         self.folder = Path(folder)
         self.parts = self.folder / PARTS
         self._seq = itertools.count()
-        self._checked: dict[str, tuple[tuple[int, int], PartCheck]] = {}
+        self._checked: dict[str, tuple[tuple[Any, ...], PartCheck]] = {}
 
     # ------------------------------------------------------------------------------------ set-up ----
     def prepare(self, source: str) -> None:
@@ -206,7 +206,7 @@ class ResultsStore:
                 st = path.stat()
             except OSError:  # gone meanwhile (moved to quarantine by another process)
                 continue
-            stamp = (st.st_size, st.st_mtime_ns)
+            stamp = (st.st_size, st.st_mtime_ns, *(_stamp(self.parts / f"{part}{s}") for s in COMPANIONS))
             cached = self._checked.get(part)
             if cached is None or cached[0] != stamp:
                 cached = self._checked[part] = (stamp, check_part(self.parts, part))
@@ -313,6 +313,16 @@ class ResultsStore:
         redo = {k for c in self.damaged() for k in c.keys}
         return {k: st for k, st in zip(table.column("key").to_pylist(), table.column("status").to_pylist())
                 if k not in redo}
+
+
+def _stamp(path: Path) -> tuple[int, int] | None:
+    """Size and modification time of a file, None if it is not there (a part's verdict is redone when any
+    of its files changes)."""
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    return st.st_size, st.st_mtime_ns
 
 
 def _write_table(path: Path, table: pa.Table, owned: bool = False) -> None:
