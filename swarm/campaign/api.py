@@ -169,6 +169,7 @@ def _store(folder: str | os.PathLike[str]) -> Any:
         raise InvalidInput("DIR", str(path), "an existing campaign results folder")
     store = ResultsStore(path)
     store.spec_source()  # no campaign.toml: not a results folder (one-line error)
+    store.require_sound()  # a damaged part is named, never merged (swarm.campaign.parts)
     return store
 
 

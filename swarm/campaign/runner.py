@@ -17,7 +17,7 @@ from .spec import CampaignSpec, Run, parse_campaign
 from swarm.results.schema import (COMM_ROBOT_SERIES, COMM_SERIES_COLUMNS, NONDETERMINISTIC_COLUMNS, TIMESERIES_COLUMNS,
                       comm_columns, summary_columns)
 from swarm.util.source import version_label
-from .store import ResultsStore
+from .store import QUARANTINE, ResultsStore
 from .writers import Writer, live_writers
 
 
@@ -202,6 +202,14 @@ def run_campaign(spec: CampaignSpec, folder: str | Path, executor: ExecutorArg =
     if warmup is None:
         warmup = getattr(executor, "shares_cache", True)
     with Writer(store, spec.source, shard=shard, retry_failed=retry_failed, total=total) as writer:
+        damaged = store.damaged()
+        if damaged:  # never merged: moved aside, and their runs are run again (docs/campaigns.md)
+            moved = store.quarantine(damaged)
+            if log:
+                for check in damaged[:10]:
+                    log(f"damaged part moved to {QUARANTINE}/, its runs will run again: {check.describe()}")
+                if len(moved) > 10:
+                    log(f"... and {len(moved) - 10} more damaged parts moved to {QUARANTINE}/")
         done = store.done_keys()
         todo = array("q", (i for i, key in spec.iter_keys(shard)
                            if (wanted is None or i in wanted)
@@ -324,6 +332,7 @@ def status(folder: str | Path) -> dict[str, Any]:
     """done / failed / pending counts of a results folder against its spec, and its live writers."""
     store = ResultsStore(folder)
     spec = parse_campaign(store.spec_source(), str(Path(folder) / "campaign.toml"), max_runs=None)
+    damaged = store.damaged()
     done = store.done_keys()
     ok = failed = total = 0
     for _, key in spec.iter_keys():
@@ -339,7 +348,7 @@ def status(folder: str | Path) -> dict[str, Any]:
                 errors[err] = errors.get(err, 0) + 1
     return {"campaign": spec.name, "total": total, "done": ok, "failed": failed,
             "pending": total - ok - failed, "errors": errors, "parts": len(store.run_files()),
-            "writers": live_writers(folder)}
+            "damaged": [c.describe() for c in damaged], "writers": live_writers(folder)}
 
 
 def deterministic_rows(folder: str | Path) -> list[dict[str, Any]]:

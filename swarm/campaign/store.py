@@ -7,6 +7,7 @@ Layout::
     DIR/parts/<id>.robots.parquet       per robot and row (key, tick, robot, comm metrics); optional
     DIR/parts/<id>.runs.parquet         one row per run: spec columns, seeds, summary metrics, status
     DIR/writers/<writer>.lock           one per live writer (see :mod:`.writers`)
+    DIR/quarantine/                     damaged parts moved aside by a campaign run (:mod:`.parts`)
 
 A part is committed by renaming its runs file into place *after* its time-series and robots files: a run
 counts as done only when its runs row exists, and a time-series or robots file without its runs file (a
@@ -14,7 +15,9 @@ crash in between) is ignored and removed by a later start-up once its writer is 
 suffix, so a kill -9 at any moment leaves either a whole part or nothing. Parts are named
 ``<time ns>-<seq>.<writer>`` so that later parts sort later and every part and temporary file names the
 writer that made it (parts of older versions have no writer: ``<time ns>-<random>``); a key that appears
-twice (a failed run retried) resolves to its latest row.
+twice (a failed run retried) resolves to its latest row. The runs file records the size and CRC-32 of its
+companions, and every reader goes through one check of each part (:mod:`.parts`): a damaged part is never
+merged.
 """
 
 from __future__ import annotations
@@ -36,14 +39,21 @@ from swarm.base.errors import InvalidInput
 
 from swarm.results.schema import THRESHOLD_COLUMNS, robots_table, runs_table, timeseries_table  # noqa: F401  (re-export)
 from .identity import difference
+from .parts import (
+    COMPANIONS,
+    ROBOTS_SUFFIX,
+    RUNS_SUFFIX,
+    TS_SUFFIX,
+    PartCheck,
+    check_part,
+    companion_record,
+    normalise_companion,
+)
 from .text import clip
 
 PARTS = "parts"
-RUNS_SUFFIX = ".runs.parquet"
-TS_SUFFIX = ".timeseries.parquet"
-ROBOTS_SUFFIX = ".robots.parquet"
-COMPANIONS = (TS_SUFFIX, ROBOTS_SUFFIX)
-"""Files of a part written before its runs file (and removed with it when a writer died in between)."""
+QUARANTINE = "quarantine"
+"""Where a campaign run moves damaged parts (never deleted: the bytes stay for whoever wants to look)."""
 SPEC_FILE = "campaign.toml"
 WRITER_ID = r"[A-Za-z0-9_-]{1,40}-[0-9]{1,10}-[0-9a-f]{8}"
 """``<host>-<pid>-<nonce>`` (see :func:`swarm.campaign.writers.new_writer_id`)."""
@@ -74,6 +84,7 @@ class ResultsStore:
         self.folder = Path(folder)
         self.parts = self.folder / PARTS
         self._seq = itertools.count()
+        self._checked: dict[str, tuple[tuple[Any, ...], PartCheck]] = {}
 
     # ------------------------------------------------------------------------------------ set-up ----
     def prepare(self, source: str) -> None:
@@ -162,11 +173,17 @@ class ResultsStore:
         robots_path = self.parts / f"{part}{ROBOTS_SUFFIX}"
         runs_path = self.parts / f"{part}{RUNS_SUFFIX}"
         try:
+            written = {}
             if timeseries:
                 _write_table(ts_path, timeseries_table(timeseries), owned=writer is not None)
+                written[TS_SUFFIX] = ts_path
             if robots:
                 _write_table(robots_path, robots_table(robots), owned=writer is not None)
-            _write_table(runs_path, runs_table(runs), owned=writer is not None)
+                written[ROBOTS_SUFFIX] = robots_path
+            table = runs_table(runs)  # recording its companions' size and CRC-32: see .parts
+            table = table.replace_schema_metadata({**(table.schema.metadata or {}),
+                                                   **companion_record(written, table)})
+            _write_table(runs_path, table, owned=writer is not None)
         except OSError as exc:
             if not runs_path.exists():
                 for path in (ts_path, robots_path):
@@ -179,15 +196,74 @@ class ResultsStore:
     def run_files(self) -> list[Path]:
         return sorted(self.parts.glob(f"*{RUNS_SUFFIX}")) if self.parts.exists() else []
 
+    def check(self) -> list[PartCheck]:
+        """Every committed part checked (:func:`swarm.campaign.parts.check_part`), in part order. A part's
+        verdict is kept while its runs file is unchanged (parts are never rewritten)."""
+        out = []
+        for path in self.run_files():
+            part = path.name[: -len(RUNS_SUFFIX)]
+            try:
+                st = path.stat()
+            except OSError:  # gone meanwhile (moved to quarantine by another process)
+                continue
+            stamp = (st.st_size, st.st_mtime_ns, *(_stamp(self.parts / f"{part}{s}") for s in COMPANIONS))
+            cached = self._checked.get(part)
+            if cached is None or cached[0] != stamp:
+                cached = self._checked[part] = (stamp, check_part(self.parts, part))
+            out.append(cached[1])
+        return out
+
+    def damaged(self) -> list[PartCheck]:
+        """The parts that must not be read (:mod:`.parts`)."""
+        return [c for c in self.check() if not c.sound]
+
+    def require_sound(self) -> None:
+        """Raise the one-line :class:`InvalidInput` naming a damaged part, if there is one (report, load)."""
+        bad = self.damaged()
+        if bad:
+            more = f" and {len(bad) - 1} more" if len(bad) > 1 else ""
+            raise InvalidInput("DIR", str(self.folder), f"a results folder whose parts are sound (part "
+                                                        f"{bad[0].describe()}{more}; 'swarm campaign run' on it "
+                                                        f"moves damaged parts to {QUARANTINE}/ and runs their "
+                                                        "runs again)")
+
+    def quarantine(self, parts: Iterable[PartCheck]) -> list[str]:
+        """Move the files of ``parts`` to ``DIR/quarantine/`` (companions first, the runs file last: a kill
+        in between leaves a runs file without its companions, damaged too, moved by the next run). Returns the
+        part ids moved; a file already gone (another process moved it) is skipped."""
+        target = self.folder / QUARANTINE
+        moved = []
+        for check in parts:
+            try:
+                target.mkdir(exist_ok=True)
+                for suffix in (*COMPANIONS, RUNS_SUFFIX):
+                    src = self.parts / f"{check.part}{suffix}"
+                    dst = target / src.name
+                    n = 0
+                    while dst.exists():  # never replace what an earlier quarantine kept
+                        n += 1
+                        dst = target / f"{src.name}.{n}"
+                    with contextlib.suppress(FileNotFoundError):
+                        os.rename(src, dst)
+            except OSError as exc:
+                raise self.folder_error(exc) from None
+            self._checked.pop(check.part, None)
+            moved.append(check.part)
+        return moved
+
     def runs_table(self, columns: Iterable[str] | None = None) -> pa.Table | None:
-        """All runs rows, the latest row per key (``columns``: only these, plus ``part``)."""
-        files = self.run_files()
-        if not files:
-            return None
+        """All runs rows of the sound parts, the latest row per key (``columns``: only these, plus ``part``)."""
+        wanted = None if columns is None else list(columns)
         tables = []
-        for f in files:
-            t = self.read_part(f, None if columns is None else list(columns))
-            tables.append(t.append_column("part", pa.array([f.name[: -len(RUNS_SUFFIX)]] * t.num_rows, pa.string())))
+        for check in self.check():
+            if check.runs is None:
+                continue
+            t = check.runs
+            if wanted is not None:
+                t = t.select([c for c in wanted if c in t.column_names])
+            tables.append(t.append_column("part", pa.array([check.part] * t.num_rows, pa.string())))
+        if not tables:
+            return None
         table = pa.concat_tables(tables, promote_options="permissive")
         return _latest_per_key(table)
 
@@ -212,8 +288,9 @@ class ResultsStore:
         for part in sorted(set(wanted.values())):
             path = self.parts / f"{part}{suffix}"
             if path.exists():
-                t = self.read_part(path)
-                mask = pc.is_in(t.column("key"), value_set=pa.array([k for k, p in wanted.items() if p == part]))
+                t = normalise_companion(self.read_part(path), suffix)
+                mask = pc.is_in(t.column("key"), value_set=pa.array([k for k, p in wanted.items() if p == part],
+                                                                    pa.string()))
                 tables.append(t.filter(mask))
         return pa.concat_tables(tables, promote_options="permissive") if tables else None
 
@@ -228,11 +305,24 @@ class ResultsStore:
                                                         "run the campaign again to redo its runs)") from None
 
     def done_keys(self) -> dict[str, str]:
-        """key -> status ('ok' or 'failed') of every committed run (reads only those two columns)."""
+        """key -> status ('ok' or 'failed') of every committed run of a sound part; a run also held by a
+        damaged part is not done (it is run again: its latest result is the damaged one)."""
         table = self.runs_table(columns=("key", "status"))
         if table is None:
             return {}
-        return dict(zip(table.column("key").to_pylist(), table.column("status").to_pylist()))
+        redo = {k for c in self.damaged() for k in c.keys}
+        return {k: st for k, st in zip(table.column("key").to_pylist(), table.column("status").to_pylist())
+                if k not in redo}
+
+
+def _stamp(path: Path) -> tuple[int, int] | None:
+    """Size and modification time of a file, None if it is not there (a part's verdict is redone when any
+    of its files changes)."""
+    try:
+        st = path.stat()
+    except OSError:
+        return None
+    return st.st_size, st.st_mtime_ns
 
 
 def _write_table(path: Path, table: pa.Table, owned: bool = False) -> None:
@@ -240,7 +330,7 @@ def _write_table(path: Path, table: pa.Table, owned: bool = False) -> None:
     carries the writer id, so the temporary name needs no extra randomness)."""
     tmp = path.with_name(f".{path.name}.tmp" if owned else f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
     try:
-        pq.write_table(table, tmp, compression="zstd")
+        pq.write_table(table, tmp, compression="zstd", write_page_checksum=True)
         with open(tmp, "rb") as f:
             os.fsync(f.fileno())
         os.replace(tmp, path)

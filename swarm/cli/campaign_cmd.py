@@ -230,6 +230,11 @@ def status_cmd(folder: Path) -> None:
                f"of {s['total']} runs ({s['parts']} parts)")
     for error, count in sorted(s["errors"].items(), key=lambda kv: -kv[1])[:10]:
         click.echo(f"  {count} x {error[:200]}")
+    for part in s.get("damaged", [])[:10]:
+        click.echo(f"  damaged part, its runs count as pending: {part}")
+    if s.get("damaged"):
+        click.echo(f"  {len(s['damaged'])} damaged part(s): report and load refuse the folder; 'swarm campaign run' "
+                   "moves them to quarantine/ and runs their runs again")
     for writer in s["writers"] or ():
         click.echo(f"  writing now: {writer.describe()}")
 

@@ -37,7 +37,42 @@ READABLE_VERSIONS = (1, 2, 3)
 CHUNK_HEADER = struct.Struct("<4sII")  # kind, payload length, CRC-32 of the payload
 HEAD, BLOCK, TAIL = b"HEAD", b"BLCK", b"TAIL"
 MAX_CHUNK_BYTES = 1 << 30
-"""No chunk, compressed or not, may exceed 1 GiB: a corrupt length field must not allocate the world."""
+"""No chunk's payload (compressed) may exceed 1 GiB: a corrupt length field must not allocate the world."""
+MAX_RATIO = 200
+"""Past :data:`RATIO_FLOOR`, a chunk may inflate to at most 200 times its size in the file. Real chunks
+inflate 10-14x (a 256-tick block of 64 robots: 1.3 MB -> 13 MB; 61 ticks of 1,000 robots: 136 MB -> 1.9 GB);
+zlib reaches ~1,030x, which is what a decompression bomb uses: 1 MiB asking for a gigabyte."""
+RATIO_FLOOR = 64 << 20
+"""A chunk may always inflate to 64 MiB, however well it compressed (small chunks of repetitive data do)."""
+MAX_FILE_RATIO = 100
+"""All chunks together may inflate to at most 100 times the file's size (or :data:`FILE_FLOOR`): many small
+chunks each under :data:`RATIO_FLOOR` must not add up to a bomb either."""
+FILE_FLOOR = 256 << 20
+MAX_INFLATED_CHUNK = 16 << 30
+"""Whatever its ratio, no chunk may inflate to more than 16 GiB (msgpack holds at most 4 GiB in one array)."""
+MAX_INFLATED_TOTAL = 64 << 30
+"""Whatever its ratio, no file may inflate to more than 64 GiB (the reader holds every stream in memory)."""
+ITEMS_FLOOR = 1 << 20
+"""Array elements plus map entries a chunk may always decode to (1 Mi); beyond, one per two bytes of the
+chunk in the file. msgpack makes a Python object of ~60 bytes from one byte (an empty array), so the
+inflated size alone does not bound memory. Real chunks: 0.001 items a compressed byte (a block holds 3 per
+array field and one per changed action), a TAIL's per-robot lists 0.3."""
+FILE_ITEMS_FLOOR = 1 << 22
+"""Items the whole file may always decode to (4 Mi); beyond, one per two bytes of the file."""
+INFLATE_STEP = 1 << 24
+"""Bytes inflated per step (16 MiB): the limits are checked between steps, so an oversized chunk is refused
+after at most this much more than the limit, whatever it claims to hold."""
+
+
+def chunk_limits(compressed: int) -> tuple[int, int]:
+    """(bytes, items) a chunk of ``compressed`` bytes in the file may inflate and decode to."""
+    return (min(MAX_INFLATED_CHUNK, max(RATIO_FLOOR, MAX_RATIO * compressed)),
+            max(ITEMS_FLOOR, compressed // 2))
+
+
+def file_limits(size: int) -> tuple[int, int]:
+    """(bytes, items) all chunks of a file of ``size`` bytes may inflate and decode to together."""
+    return min(MAX_INFLATED_TOTAL, max(FILE_FLOOR, MAX_FILE_RATIO * size)), max(FILE_ITEMS_FLOOR, size // 2)
 
 DTYPES = ("<f8", "<u4", "<u2", "<i2", "|u1")
 """The only array dtypes the format uses; the JavaScript reader knows exactly these."""
@@ -85,10 +120,24 @@ def encode_chunk(kind: bytes, body: dict[str, Any], level: int = 6) -> bytes:
     return CHUNK_HEADER.pack(kind, len(payload), zlib.crc32(payload)) + payload
 
 
-def iter_chunks(data: bytes, path: str) -> Iterator[tuple[bytes, dict[str, Any]]]:
-    """Yield ``(kind, body)`` for every chunk after the magic; corrupt or truncated data raises."""
+class Budget:
+    """What a file's chunks have inflated and decoded to so far, against :func:`file_limits` (one per file:
+    :func:`iter_chunks` makes it)."""
+
+    def __init__(self, size: int) -> None:
+        self.size = size
+        self.max_inflated, self.max_items = file_limits(size)
+        self.inflated = 0
+        self.items = 0
+
+
+def iter_chunks(data: bytes, path: str, budget: Budget | None = None) -> Iterator[tuple[bytes, dict[str, Any]]]:
+    """Yield ``(kind, body)`` for every chunk after the magic; corrupt, truncated or oversized data raises
+    before the oversized part is allocated (:func:`chunk_limits`, :func:`file_limits`: what a chunk and the
+    file may inflate and decode to follows from their size in the file, docs/recording-format.md#limits)."""
     if data[: len(MAGIC)] != MAGIC:
         raise bad(path, "the file does not start with the .swr magic number")
+    budget = budget if budget is not None else Budget(len(data))
     pos = len(MAGIC)
     index = 0
     while pos < len(data):
@@ -97,27 +146,80 @@ def iter_chunks(data: bytes, path: str) -> Iterator[tuple[bytes, dict[str, Any]]
         kind, length, crc = CHUNK_HEADER.unpack_from(data, pos)
         pos += CHUNK_HEADER.size
         if length > MAX_CHUNK_BYTES:
-            raise bad(path, f"chunk {index} claims {length} bytes")
+            raise bad(path, f"chunk {index} claims {length} bytes (at most {MAX_CHUNK_BYTES})")
+        if length > len(data) - pos:
+            raise bad(path, f"truncated inside chunk {index} ({len(data) - pos} of {length} bytes)")
         payload = data[pos: pos + length]
-        if len(payload) != length:
-            raise bad(path, f"truncated inside chunk {index} ({len(payload)} of {length} bytes)")
         if zlib.crc32(payload) != crc:
             raise bad(path, f"chunk {index} fails its CRC check")
         pos += length
-        yield kind, _decode_body(payload, index, path)
+        yield kind, _decode_body(payload, index, path, budget)
         index += 1
 
 
-def _decode_body(payload: bytes, index: int, path: str) -> dict[str, Any]:
+def _mib(n: int) -> str:
+    return f"{n / (1 << 30):.4g} GiB" if n >= 1 << 30 else f"{n / (1 << 20):.4g} MiB"
+
+
+def inflate(payload: bytes, index: int, path: str, budget: Budget) -> bytearray:
+    """The inflated payload of chunk ``index``, :data:`INFLATE_STEP` bytes at a time: refused as soon as it
+    passes the chunk's limit or takes the file past its own (:func:`chunk_limits`, :func:`file_limits`)."""
+    limit = chunk_limits(len(payload))[0]
+    inflater = zlib.decompressobj()
+    out = bytearray()
+    pending = payload
     try:
-        inflater = zlib.decompressobj()
-        raw = inflater.decompress(payload, MAX_CHUNK_BYTES)
-        if inflater.unconsumed_tail or not inflater.eof:
-            raise zlib.error("incomplete or oversized stream")
-        body = msgpack.unpackb(raw, raw=False, strict_map_key=False, max_bin_len=MAX_CHUNK_BYTES,
-                               max_str_len=MAX_CHUNK_BYTES, max_array_len=1 << 26, max_map_len=1 << 20)
-    except Exception as exc:  # zlib and msgpack raise several unrelated types for corrupt input
+        while not inflater.eof:
+            piece = inflater.decompress(pending, INFLATE_STEP)
+            pending = inflater.unconsumed_tail
+            size = len(out) + len(piece)  # checked before the piece is kept
+            if size > limit:
+                raise bad(path, f"chunk {index} inflates to more than {_mib(limit)} from {len(payload)} bytes (a "
+                                f"chunk may inflate to {MAX_RATIO}x its size or {_mib(RATIO_FLOOR)}, at most "
+                                f"{_mib(MAX_INFLATED_CHUNK)}: docs/recording-format.md#limits)")
+            if budget.inflated + size > budget.max_inflated:
+                raise bad(path, f"its chunks inflate to more than {_mib(budget.max_inflated)} by chunk {index} (a "
+                                f"file may inflate to {MAX_FILE_RATIO}x its size or {_mib(FILE_FLOOR)}, at most "
+                                f"{_mib(MAX_INFLATED_TOTAL)}: docs/recording-format.md#limits)")
+            out += piece
+            if not piece and not pending:
+                raise zlib.error("incomplete stream")
+    except zlib.error:
+        raise bad(path, f"chunk {index} does not inflate (a damaged zlib stream)") from None
+    budget.inflated += len(out)
+    return out
+
+
+class _TooMany(Exception):
+    """Raised from msgpack's hooks once a chunk or the file decodes to too many items."""
+
+
+def _decode_body(payload: bytes, index: int, path: str, budget: Budget) -> dict[str, Any]:
+    raw = inflate(payload, index, path, budget)
+    chunk_items = chunk_limits(len(payload))[1]
+    limit = min(chunk_items, budget.max_items - budget.items)
+    items = 0
+
+    def count(obj: Any) -> Any:  # msgpack calls it for every array and map it builds, innermost first
+        nonlocal items
+        items += len(obj)
+        if items > limit:
+            raise _TooMany
+        return obj
+
+    try:
+        body = msgpack.unpackb(raw, raw=False, strict_map_key=False, max_bin_len=len(raw), max_str_len=len(raw),
+                               max_array_len=limit, max_map_len=limit, max_ext_len=0, list_hook=count,
+                               object_hook=count)
+    except (_TooMany, ValueError) as exc:
+        if not isinstance(exc, _TooMany) and "exceeds max_" not in str(exc):  # msgpack's own length checks
+            raise bad(path, f"chunk {index} does not decode ({type(exc).__name__})") from None
+        raise bad(path, f"chunk {index} decodes to more than {limit} array items and map entries (a chunk may "
+                        f"hold one per 2 bytes it occupies or {ITEMS_FLOOR}, a file one per 2 bytes or "
+                        f"{FILE_ITEMS_FLOOR}: docs/recording-format.md#limits)") from None
+    except Exception as exc:  # msgpack raises several unrelated types for corrupt input
         raise bad(path, f"chunk {index} does not decode ({type(exc).__name__})") from None
+    budget.items += items
     if not isinstance(body, dict):
         raise bad(path, f"chunk {index} is not a map")
     return body

@@ -130,12 +130,14 @@ class Recording:
 
     def __init__(self, data: bytes, path: str = "<bytes>") -> None:
         self.path = path
-        chunks = list(iter_chunks(data, path))
-        if not chunks or chunks[0][0] != HEAD:
+        stream = iter_chunks(data, path)  # chunk by chunk: a bad HEAD is refused before any block is inflated
+        first = next(stream, None)
+        if first is None or first[0] != HEAD:
             raise bad(path, "the first chunk is not HEAD")
+        self.header = self._check_header(first[1])
+        chunks = [first, *stream]
         if chunks[-1][0] != TAIL:
             raise bad(path, "no TAIL chunk: the recording is truncated or was not finished")
-        self.header = self._check_header(chunks[0][1])
         blocks = chunks[1:-1]
         if any(kind != BLOCK for kind, _ in blocks):
             raise bad(path, "unexpected chunk kinds between HEAD and TAIL")

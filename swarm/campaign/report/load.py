@@ -86,6 +86,7 @@ def load(results_dir: str | Path) -> CampaignData:
     store = ResultsStore(folder)
     source = store.spec_source()
     spec, spec_error = _read_spec(source)
+    store.require_sound()
     table = store.runs_table()
     frame = table.to_pandas() if table is not None else None
     columns = frame.columns if frame is not None else ()

@@ -5,6 +5,9 @@ status 2: never a traceback, a hang or unbounded work.
 
 Cases per run (``max_examples``): 300 + 600 + 600 + 300 + 200 + 100 + 250 + 60 + 100 = 2,510 in total
 (~20 s on a 2-core machine); ``--hypothesis-show-statistics`` shows how many were accepted.
+
+Damaged results folders (issue 48): 300 damaged copies of a real folder through status, load and
+load_timeseries, and 40 more through ``campaign report`` and a resume (~2 min): 340 cases.
 """
 
 from __future__ import annotations
@@ -23,6 +26,7 @@ from maps import InvalidInput
 from swarm.campaign import make_executor, parse_campaign, run_campaign
 from swarm.campaign.report.layout import check_layout, parse_layout
 from swarm.cli import main
+from swarm.results.schema import NONDETERMINISTIC_COLUMNS
 
 from .test_campaign import TINY
 
@@ -422,3 +426,155 @@ def report_argv(draw, folders: dict[str, Path]) -> list[str]:
 @given(data=st.data())
 def test_report_flags(folders, capfd, data):
     check_cli(capfd, data.draw(report_argv(folders)))
+
+
+# ------------------------------------------------------------------ damaged results folders (issue 48) ----
+# A real folder of 4 runs (one part each) damaged the way disks, copies and other tools damage files. Every
+# case: status, load and load_timeseries end in a result or one line, agree on whether the folder is sound
+# (status lists a damaged part exactly when load refuses), and what they read of a folder damaged at the
+# byte level equals the undamaged folder (a damaged byte is refused or has no effect: never a changed
+# result). Then resume must leave a sound folder with the undamaged rows.
+SUFFIXES = (".runs.parquet", ".timeseries.parquet", ".robots.parquet")
+
+
+@pytest.fixture(scope="module")
+def pristine_results(tmp_path_factory) -> Iterator[dict]:
+    import resource
+
+    from swarm.campaign import deterministic_rows
+    from swarm.campaign.api import load, load_timeseries
+
+    folder = tmp_path_factory.mktemp("fuzz-results") / "pristine"
+    run_campaign(parse_campaign(SMALL), folder, executor=make_executor(inline=True), progress=False, flush_runs=1,
+                 warmup=False)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    yield {"folder": folder, "runs": load(folder), "series": load_timeseries(folder),
+           "rows": deterministic_rows(folder), "files": sorted(p.name for p in (folder / "parts").iterdir())}
+    grew = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before
+    assert grew < 1 << 20, f"the fuzzing grew the process by {grew // 1024} MB"
+
+
+@st.composite
+def damage(draw, files: list[str]) -> tuple[str, str, object]:
+    """(kind, file name, argument): a byte-level damage of one file, or a crafted rewrite of one column."""
+    name = draw(st.sampled_from(files))
+    kind = draw(st.sampled_from(["flip", "flip", "flip", "byte", "truncate", "delete", "append", "empty",
+                                 "copy", "stray", "column"]))
+    if kind in ("flip", "byte", "truncate"):
+        return kind, name, (draw(st.floats(0, 1, exclude_max=True)), draw(st.integers(0, 255)))
+    if kind == "copy":
+        return kind, name, draw(st.sampled_from([f for f in files if f != name]))
+    if kind == "stray":
+        return kind, name, draw(st.binary(max_size=64))
+    if kind == "column":
+        return kind, name, (draw(st.integers(0, 200)), draw(st.sampled_from(["null", "string", "dict", "int",
+                                                                             "float", "drop"])))
+    return kind, name, None
+
+
+def apply_damage(folder: Path, case: tuple[str, str, object]) -> bool:
+    """Damage ``folder``; True for byte-level damage (whose effect must be nil or a refusal)."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+    import pyarrow.parquet as pq
+
+    kind, name, arg = case
+    path = folder / "parts" / name
+    event(f"{kind} {name.split('.', 2)[-1]}")
+    if kind in ("flip", "byte", "truncate"):
+        data = bytearray(path.read_bytes())
+        at = int(arg[0] * len(data))
+        if kind == "truncate":
+            path.write_bytes(bytes(data[:at]))
+        else:
+            data[at] = data[at] ^ (1 << (arg[1] % 8)) if kind == "flip" else arg[1]
+            path.write_bytes(bytes(data))
+    elif kind == "delete":
+        path.unlink()
+        return not name.endswith(".runs.parquet")  # no runs file: its run was never committed (then redone)
+    elif kind == "append":
+        path.write_bytes(path.read_bytes() + b"PAR1garbage")
+    elif kind == "empty":
+        path.write_bytes(b"")
+    elif kind == "copy":
+        path.write_bytes((folder / "parts" / arg).read_bytes())
+        return False
+    elif kind == "stray":
+        (folder / "parts" / f"{'9' * 20}-000000.stray-1-0123abcd.runs.parquet").write_bytes(arg)
+    else:
+        table = pq.read_table(path)
+        i, how = arg[0] % table.num_columns, arg[1]
+        col = table.column(i)
+        if how == "drop":
+            table = table.remove_column(i)
+        else:
+            new = {"null": lambda: pa.nulls(len(col), col.type if how == "null" else pa.null()),
+                   "string": lambda: pc.cast(col, pa.string()),
+                   "dict": lambda: pc.cast(col, pa.string()).dictionary_encode(),
+                   "int": lambda: pa.array(range(len(col)), pa.int64()),
+                   "float": lambda: pa.array([0.5] * len(col), pa.float64())}[how]()
+            table = table.set_column(i, table.field(i).name, new)
+        pq.write_table(table, path)
+        return False
+    return True
+
+
+def check_folder(folder: Path, pristine: dict, byte_level: bool) -> bool:
+    """status, load and load_timeseries on a damaged folder; True when the folder was found sound."""
+    from swarm.campaign import status
+    from swarm.campaign.api import load, load_timeseries
+
+    outcome = []
+    for read in (status, load, load_timeseries):
+        try:
+            outcome.append(read(folder))
+        except InvalidInput as exc:
+            assert "\n" not in str(exc) and len(str(exc)) < MAX_MESSAGE, str(exc)
+            outcome.append(exc)
+    st_, runs, series = outcome
+    assert isinstance(st_, dict), st_  # status describes any folder with a readable campaign.toml
+    sound = not st_["damaged"]
+    assert sound == (not isinstance(runs, Exception)) == (not isinstance(series, Exception)), (st_, runs, series)
+    event("sound" if sound else "damaged")
+    if sound and byte_level:  # a redone run differs only in its timings, worker and part
+        same = [c for c in runs.columns if c not in NONDETERMINISTIC_COLUMNS]
+        assert runs[same].equals(pristine["runs"][same])
+        assert series.equals(pristine["series"])
+    return sound
+
+
+@pytest.mark.timeout(300)
+@settings(FUZZ, max_examples=300)
+@given(data=st.data())
+def test_damaged_results_folders(pristine_results, tmp_path_factory, data):
+    import shutil
+
+    folder = tmp_path_factory.mktemp("damaged") / "results"
+    shutil.copytree(pristine_results["folder"], folder)
+    case = data.draw(damage(pristine_results["files"]))
+    check_folder(folder, pristine_results, apply_damage(folder, case))
+
+
+@pytest.mark.timeout(600)
+@settings(FUZZ, max_examples=40)
+@given(data=st.data())
+def test_report_and_resume_on_damaged_folders(pristine_results, tmp_path_factory, capfd, data):
+    """The CLI report gives a report or one line; a resume then leaves a sound folder with the undamaged
+    rows whenever the damage was at the byte level (a crafted but well-typed value is a result, kept)."""
+    import shutil
+
+    from swarm.campaign import deterministic_rows
+
+    root = tmp_path_factory.mktemp("resume")
+    folder = root / "results"
+    shutil.copytree(pristine_results["folder"], folder)
+    case = data.draw(damage(pristine_results["files"]))
+    byte_level = apply_damage(folder, case)
+    sound = check_folder(folder, pristine_results, byte_level)
+    code = check_cli(capfd, ["campaign", "report", str(folder), "-o", str(root / "report"), "--no-cell-figures",
+                             "--quiet"])
+    assert code == (0 if sound else 2)
+    run_campaign(parse_campaign(SMALL), folder, executor=make_executor(inline=True), progress=False, warmup=False)
+    assert check_folder(folder, pristine_results, byte_level)
+    if byte_level:
+        assert deterministic_rows(folder) == pristine_results["rows"]
