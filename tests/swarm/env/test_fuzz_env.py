@@ -13,8 +13,6 @@ velocity and parallel envs) = 820 (~15 s on a 2-core machine).
 
 from __future__ import annotations
 
-import resource
-import time
 
 import numpy as np
 import pytest
@@ -26,12 +24,10 @@ pytest.importorskip("pettingzoo")
 
 import swarm.env as senv
 from swarm.base.errors import InvalidInput
+from tests.fuzz_bounds import bounded_memory, check_refusal, timed  # noqa: F401 (bounded_memory: a fixture)
 
 FUZZ = settings(deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
                 database=None)
-MAX_MESSAGE = 500
-MAX_CASE_S = 60.0
-MAX_GROWTH_KB = 1024 * 1024
 SMALL = {"robots": 3, "size": 20, "max_ticks": 40}
 
 ODD = [None, True, False, -1, 2**63, 10**400, 0.5, float("nan"), float("inf"), "", "x" * 300, "1", b"1", [], [1],
@@ -41,28 +37,6 @@ ODD = [None, True, False, -1, 2**63, 10**400, 0.5, float("nan"), float("inf"), "
        np.array([], dtype=float), np.array([1, 2], dtype=object), 1j, Ellipsis, range(2), slice(1)]
 """Actions and arguments of every type and shape."""
 odd = st.sampled_from(ODD)
-
-
-def check_refusal(exc: InvalidInput) -> None:
-    msg = str(exc)
-    assert "\n" not in msg and "\r" not in msg and len(msg) < MAX_MESSAGE, msg
-    event(f"refused: {str(exc.field).split('[')[0][:20]}")
-
-
-@pytest.fixture(scope="module", autouse=True)
-def bounded_memory():
-    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    yield
-    grown = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before
-    assert grown < MAX_GROWTH_KB, f"peak RSS grew by {grown / 1024:.0f} MB"
-
-
-class timed:
-    def __enter__(self) -> None:
-        self.t0 = time.monotonic()
-
-    def __exit__(self, *exc: object) -> None:
-        assert time.monotonic() - self.t0 < MAX_CASE_S, "a case hung"
 
 
 def mostly(good: st.SearchStrategy, bad_in_ten: int = 2) -> st.SearchStrategy:

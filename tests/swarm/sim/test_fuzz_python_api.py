@@ -13,8 +13,6 @@ Cases per run (``max_examples``): 300 (spec builders) + 200 (``swarm.run``) + 10
 
 from __future__ import annotations
 
-import resource
-import time
 from pathlib import Path
 
 import numpy as np
@@ -24,16 +22,12 @@ from hypothesis import strategies as st
 
 import swarm
 from swarm.base.errors import InvalidInput
+from tests.fuzz_bounds import bounded_memory, check_refusal, timed  # noqa: F401 (bounded_memory: a fixture)
 from swarm.results.result import RunResult
 from swarm.sim.spec import RunSpec
 
 FUZZ = settings(deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
                 database=None)
-MAX_MESSAGE = 500
-MAX_CASE_S = 60.0
-"""A case slower than this counts as a hang."""
-MAX_GROWTH_KB = 1024 * 1024
-"""Peak RSS may grow by at most 1 GB over the file (ru_maxrss is in KiB on Linux)."""
 
 ODD = [None, True, False, 0, -1, 2**63, -(2**70), 10**400, 0.5, float("nan"), float("inf"), "", "x" * 500, b"bytes",
        "\x00\n\u2028", [], [1, 2], (1,), {}, {"a": 1}, {1: 2}, set(), object(), print, np.int64(3), np.float32(2.5),
@@ -45,32 +39,6 @@ odd = st.sampled_from(ODD)
 def mostly(good: st.SearchStrategy, in_ten: int = 9) -> st.SearchStrategy:
     """``good`` in ``in_ten`` draws of ten, else an odd value."""
     return st.integers(0, 9).flatmap(lambda k: good if k < in_ten else odd)
-
-
-def check_refusal(exc: InvalidInput) -> None:
-    msg = str(exc)
-    assert "\n" not in msg and "\r" not in msg and len(msg) < MAX_MESSAGE, msg
-    event(f"refused: {str(exc.field).split('.')[0].split('[')[0][:20]}")
-
-
-@pytest.fixture(scope="module", autouse=True)
-def bounded_memory():
-    """The whole file stays within 1 GB more than the process had."""
-    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
-    yield
-    grown = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before
-    assert grown < MAX_GROWTH_KB, f"peak RSS grew by {grown / 1024:.0f} MB"
-
-
-class timed:
-    """A case must not hang: it runs in less than :data:`MAX_CASE_S`."""
-
-    def __enter__(self) -> None:
-        self.t0 = time.monotonic()
-
-    def __exit__(self, *exc: object) -> None:
-        took = time.monotonic() - self.t0
-        assert took < MAX_CASE_S, f"a case took {took:.0f} s"
 
 
 # ----------------------------------------------------------------------------------- run specs ----
