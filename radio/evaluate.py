@@ -113,6 +113,50 @@ def _radio_link_all(blocks, free_ids, xy, params, cross_db, metre_db, per_metre,
     return -1
 
 
+@njit(cache=True)
+def _radio_groups_mutual(blocks, free_ids, xy, params, cross_db, metre_db, per_metre, code, tx, sens,
+                         labels):  # pragma: no cover
+    """The groups of links that hold both ways, into ``labels`` (0, 1, ... by smallest member), by union-find:
+    a pair is judged (:func:`_pair_link`, the same walk) only while its robots are not yet joined, so a
+    gathered swarm judges about n pairs, not n^2 / 2. With one transmit power and one sensitivity every link
+    holds both ways or neither, and these are :func:`radio.models.groups_of`'s strongly connected groups.
+    Returns the first bad row (nothing filled) or -1."""
+    bad = _radio_first_outside(xy, params[WIDTH], params[HEIGHT])
+    if bad >= 0:
+        return bad
+    n = xy.shape[0]
+    run_start, run_end, run_len = _run_buffers(blocks, cross_db.shape[0])
+    rect = _free_rectangles(free_ids, xy, params[CELL])
+    parent = np.arange(n)
+    for i in range(n):
+        for j in range(i + 1, n):
+            a = i
+            while parent[a] != a:
+                parent[a] = parent[parent[a]]
+                a = parent[a]
+            b = j
+            while parent[b] != b:
+                parent[b] = parent[parent[b]]
+                b = parent[b]
+            if a == b:
+                continue
+            ij, ji = _pair_link(blocks, rect[i] != 0 and rect[i] == rect[j], xy, params, cross_db, metre_db,
+                                per_metre, code, tx, sens, i, j, run_start, run_end, run_len)
+            if ij and ji:
+                parent[max(a, b)] = min(a, b)
+    found = 0
+    for i in range(n):
+        a = i
+        while parent[a] != a:
+            a = parent[a]
+        if a == i:  # the smallest member of its group is its root: groups appear in order of it
+            labels[i] = found
+            found += 1
+        else:
+            labels[i] = labels[a]
+    return -1
+
+
 @njit(cache=True, inline="always")
 def _free_rectangles(free_ids, xy, cell):  # pragma: no cover
     """Each robot's free rectangle (:attr:`radio.crossings.WallRaster.free_ids`; 0: none)."""

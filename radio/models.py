@@ -39,7 +39,7 @@ from swarm.base.errors import InvalidInput
 from .config import RadioConfig
 from .crossings import WallCrossing, WallRaster, _radio_clear_within, _radio_price_runs
 from .evaluate import (CHARGED, DISTANCE, PATH_LOSS, RSSI, _radio_distances, _radio_evaluate, _radio_first_outside,
-                       _radio_link_all, _radio_link_columns, _radio_link_columns_only)
+                       _radio_groups_mutual, _radio_link_all, _radio_link_columns, _radio_link_columns_only)
 from .materials import resolve_table
 from .pathloss import GLOBAL, LOS, MAES, MULTIWALL, _radio_link_budget
 from .per import PacketErrorCurve
@@ -297,6 +297,28 @@ class LinkModel:
         if bad >= 0:
             raise self._outside("positions", xy[bad])
         return link
+
+    def groups(self, positions: np.ndarray) -> list[frozenset[int]]:
+        """:meth:`LinkState.groups` of the robots at ``positions``, the same sets. With one transmit power and
+        one sensitivity (links hold both ways or neither) and no shadowing, pairs are judged only until their
+        robots are joined (:func:`radio.evaluate._radio_groups_mutual`): a gathered swarm of 1,000 judges
+        ~1,000 pairs, not 500,000. Otherwise the groups of :meth:`link_matrix`."""
+        xy = np.ascontiguousarray(positions, dtype=np.float64)
+        if xy.ndim != 2 or xy.shape[1] != 2:
+            raise InvalidInput("positions", xy.shape, "an array of shape (R, 2): x, y in metres")
+        tx, sens = self._radio_arrays(xy.shape[0])
+        if (self.shadowing is not None or xy.shape[0] < 2 or np.any(tx != tx[0]) or np.any(sens != sens[0])
+                or (self._last_state is not None and self._last_key == xy.tobytes() + tx.tobytes() + sens.tobytes())):
+            return groups_of(self.link_matrix(xy))  # (a state evaluated for these positions: its link)
+        labels = np.empty(xy.shape[0], dtype=np.int64)
+        bad = _radio_groups_mutual(self.raster.blocks, self.raster.free_ids, xy, self._params, self.cross_db,
+                                   self.metre_db, self.per_metre, self.code, tx, sens, labels)
+        if bad >= 0:
+            raise self._outside("positions", xy[bad])
+        members: list[list[int]] = [[] for _ in range(int(labels.max()) + 1)]
+        for robot, label in enumerate(labels.tolist()):
+            members[label].append(robot)
+        return [frozenset(group) for group in members]
 
     @staticmethod
     def distances(positions: np.ndarray) -> np.ndarray:

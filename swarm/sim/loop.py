@@ -558,7 +558,9 @@ class _TickLinks:
         """The tick's communication groups (:meth:`radio.LinkState.groups`)."""
         if self._state is not None:
             return self._state.groups()
-        return groups_of(self.link_matrix())
+        if self._link is not None:
+            return groups_of(self._link)
+        return self._model.groups(self._xy)  # no link matrix needed: pairs judged only until joined
 
     def mean_distance(self) -> float:
         """The mean of the tick's all-pairs distance matrix (:attr:`radio.LinkState.distance`)."""

@@ -335,3 +335,29 @@ def test_the_link_matrix_alone_is_the_states(config, kind):
         assert np.array_equal(columns, state.link[:, senders])
         assert 0 < state.link.sum() < 30 * 29 or config.get("model") == "global"
         assert np.array_equal(build_link_model(truth).distances(xy), state.distance)
+
+
+@pytest.mark.parametrize("config", [{}, {"model": "los", "max_range_m": 20.0}, {"model": "maes"}, {"model": "global"},
+                                    {"tx_power_overrides": {"3": 5.0}, "sensitivity_overrides": {"7": -70.0}},
+                                    {"shadowing_sigma_db": 4.0}, {"wall_mode": "per_metre"}, {"sensitivity_dbm": -95.0},
+                                    {"sensitivity_dbm": -70.0}])
+@pytest.mark.parametrize("kind", ["building", "cave"])
+@pytest.mark.parametrize("spawn_kind", ["random", "together"])
+def test_the_groups_alone_are_the_states(config, kind, spawn_kind):
+    """LinkModel.groups (pairs judged only until their robots are joined, when links hold both ways) gives
+    evaluate()'s groups: every model, asymmetric radios and shadowing (which take the link matrix), robots
+    spread (many small groups) or gathered (one or a few)."""
+    from maps import generate
+    from radio import build_link_model, config_from_mapping
+    from swarm.world.spawn import spawn
+
+    truth = generate(kind, 150, 3)
+    sizes = set()
+    for seed in range(3):
+        xy = spawn(truth, spawn_kind, 40, np.random.default_rng(seed))[:, :2]
+        alone = build_link_model(truth, config_from_mapping(config), field_seed=1).groups(xy)
+        state = build_link_model(truth, config_from_mapping(config), field_seed=1).evaluate(xy)
+        assert alone == state.groups()
+        sizes.add(len(alone))
+    strong = config.get("model") == "global" or config.get("sensitivity_dbm") == -95.0  # one group anywhere
+    assert sizes != {1} or strong or spawn_kind == "together"
