@@ -122,3 +122,11 @@ def test_variant_is_validated():
 
 def _pose(xy: tuple[float, float]) -> Pose:
     return Pose(xy[0], xy[1], 0.0)
+
+
+def test_maes_variant_passes_the_explorer_checker():
+    from swarm.testing import check_explorer
+
+    report = check_explorer("greed", params={"variant": "maes"})   # raises on a failed check
+    messages = next(r.detail for r in report.results if r.check == "messages")
+    assert messages.startswith("sends no messages of its own"), messages
