@@ -11,7 +11,8 @@ from which an unseen cell is in view (:func:`swarm.grid.nearest_reachable_unseen
 wall is as far as the way around the wall, never as near as the straight line. It is chosen again when
 
 - there is none yet, or the navigator reports it ``reached``;
-- it is *seen*: no unseen cell is left within view reach of it (its own lidar or a merged map did it);
+- it is *seen*: no unseen cell is left within view reach of it (its own lidar or a merged map did it;
+  not with ``variant = "maes"``, which drives on until within 0.5 m, below);
 - the navigator reports it ``unreachable`` or ``blocked`` -- it is then excluded (below);
 - **deadlock**: the robot stayed within ``progress_m`` of one spot for ``deadlock_ticks`` while heading
   for it (MAES: the same coarse tile at 5 position checks 10 ticks apart) -- it is then excluded;

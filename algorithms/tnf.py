@@ -11,7 +11,8 @@ keep. The utility terms are in :mod:`algorithms.tnf_utility`.
 
 **Behaviour.** A robot decides when it has no destination, reached it, its destination was seen (no
 unseen cell left in view reach of it), the navigator reports it ``unreachable`` or ``blocked``, or it
-made no progress for ``deadlock_ticks`` (the last three exclude that destination for ``exclude_ticks``).
+made no progress for ``deadlock_ticks`` (the last three exclude that destination for ``exclude_ticks``;
+``variant = "maes"`` does not decide when its destination is seen, and stops to communicate, see below).
 To decide it clusters the frontier cells of its own map (:func:`swarm.grid.frontier_clusters`), scores
 each reachable cluster with ``U = I + D - C`` and drives to the best one's target. It broadcasts the
 chosen destination (:class:`Destination`) at once and every ``announce_every`` ticks while it pursues it;
