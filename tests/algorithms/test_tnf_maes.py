@@ -220,7 +220,10 @@ START = cell_centre(10, 25)
 MATE = Neighbour(id=1, distance=2.0, bearing=0.0, x=START[0] + 2.0, y=START[1])
 
 
-def at(known, tick, nav=NavStatus(), neighbours=(), collided=False, xy=START):
+IDLE = NavStatus()
+
+
+def at(known, tick, nav=IDLE, neighbours=(), collided=False, xy=START):
     known = known.copy()
     known.flags.writeable = False
     return Observation(tick=tick, robot_id=0, pose=Pose(xy[0], xy[1], math.pi), known=known, nav=nav,
