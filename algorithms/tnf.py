@@ -11,7 +11,8 @@ keep. The utility terms are in :mod:`algorithms.tnf_utility`.
 
 **Behaviour.** A robot decides when it has no destination, reached it, its destination was seen (no
 unseen cell left in view reach of it), the navigator reports it ``unreachable`` or ``blocked``, or it
-made no progress for ``deadlock_ticks`` (the last three exclude that destination for ``exclude_ticks``).
+made no progress for ``deadlock_ticks`` (the last three exclude that destination for ``exclude_ticks``;
+``variant = "maes"`` does not decide when its destination is seen, and stops to communicate, see below).
 To decide it clusters the frontier cells of its own map (:func:`swarm.grid.frontier_clusters`), scores
 each reachable cluster with ``U = I + D - C`` and drives to the best one's target. It broadcasts the
 chosen destination (:class:`Destination`) at once and every ``announce_every`` ticks while it pursues it;
@@ -113,11 +114,36 @@ It does not reproduce, keeping swarm's way:
 - *Who is sensed*: swarm's neighbours (within ``comm.neighbour_range_m``, default the lidar range, in line
   of sight), not ``SenseNearbyRobots``'s range / wall / material-link rules
   (``Robot/CommunicationManager.cs`` lines 313-331), nor its 45-degree angle nudge (lines 152-159).
-- *Everything around the utility*: targets, the navigator, when to decide (MAES re-decides only at the
-  end of its path, after a collision or a message, lines 205-222, 289-291), the exclusions and the
-  watchdog (departure 7; excluded cells and ``min_frontier_cells`` also leave F), the collision
-  mitigation, and the radio (departure 4). ``penalty_radius_m``, ``announce_every``, ``forget_ticks`` and
-  ``yield_on_conflict`` do nothing under ``maes``.
+- *Everything around the utility*: targets, the navigator, the exclusions and the watchdog (departure 7;
+  excluded cells and ``min_frontier_cells`` also leave F), the collision mitigation, and the radio
+  (departure 4). ``penalty_radius_m``, ``announce_every``, ``forget_ticks`` and ``yield_on_conflict`` do
+  nothing under ``maes``.
+
+It also reproduces **when MAES's TNF decides and when it stops** (issue 49 row 11):
+
+- *Decisions only at the end of the path or after a collision.* MAES picks a frontier in state
+  AwaitNextFrontier (lines 206-212) and then only follows its path (213-216, ``DoMovement`` 347-371) until
+  the path is used up (357-361, 367-368), a collision starts the mitigation (186-190, 217-219, 238-266;
+  the random step clears the path, 263) or ``HardReset`` (196-198, 225-236); and an OutOfFrontiers robot
+  looks again after a message (289-291). It does not look at its destination on the way: seeing it
+  changes nothing. Here the ``maes`` robot keeps its destination when it is seen (the ``swarm`` rule
+  above) and decides when the navigator reports it reached, after the collision back-off and random step,
+  and -- where the runtime's navigator has no MAES counterpart -- when it reports the destination
+  unreachable or blocked or the watchdog fires (departure 7).
+- *The communication tick.* Every ``MAES_COMM_EVERY`` (20) ticks (the counter, 167, 180, 183-184, starts
+  at 0, so ticks 0, 20, 40...) MAES senses its neighbours, and if there are any stops its current task
+  (170) and broadcasts; that tick it does nothing else (181). Here a ``maes`` robot that senses a
+  neighbour on such a tick commands (0, 0) for the tick, which is when the runtime's ``maes_sync`` merge
+  (``comm.map_sharing = "maes"``) broadcasts too; an idle robot decides on the next tick (289-291).
+  With no neighbour the tick is still spent without logic (181): the robot carries on, decides nothing,
+  and, as in MAES, where the controller clears the collision flag after the algorithm's tick
+  (``Robot/MonaRobot.cs`` 54-57), a collision reported then is not handled.
+
+Not reproduced (issue 49 row 3, MAES's motion): MAES's stop ends the current ``Move`` or ``Rotate`` task
+and the robot then brakes under Unity's drag (about one tick from 3 m/s) and carries on with the *next*
+path step, turning in place first when it is more than 0.5 degrees off (``DoMovement`` 347-371,
+``StartMoving`` 373-390); here the runtime's motion model brakes within its acceleration limit and the
+navigator resumes the same path.
 """
 
 from __future__ import annotations
@@ -192,6 +218,9 @@ class TNFParams:
         check_int("idle_recheck_ticks", self.idle_recheck_ticks, 1, 1_000_000)
 
 
+MAES_COMM_EVERY = 20
+"""MAES's TNF communicates every 20 ticks (``TnfExplorationAlgorithm.cs`` 167, 183-184)."""
+
 SIDESTEP_CELLS = 2   # MAES steps to a neighbouring 1 m tile: 2 cells here
 _SIDESTEPS = tuple((dr * SIDESTEP_CELLS, dc * SIDESTEP_CELLS)
                    for dr in (-1, 0, 1) for dc in (-1, 0, 1) if (dr, dc) != (0, 0))
@@ -202,7 +231,7 @@ class TNF:
 
     name = "tnf"
     Params = TNFParams
-    maes_map_merge = ("maes_sync", 20)  # comm.map_sharing = "maes": MAES's TNF syncs maps every 20 ticks
+    maes_map_merge = ("maes_sync", MAES_COMM_EVERY)  # comm.map_sharing = "maes": MAES's TNF syncs maps every 20 ticks
 
     def reset(self, robot: RobotInfo, params: TNFParams, rng: np.random.Generator) -> None:
         self.robot = robot
@@ -229,6 +258,8 @@ class TNF:
     # ------------------------------------------------------------------------------------------ act ----
     def act(self, obs: Observation) -> Action:
         self._read_inbox(obs)
+        if self.maes and obs.tick % MAES_COMM_EVERY == 0:
+            return self._maes_communication_tick(obs)
         if self.backoff.active(obs.tick) or self.backoff.start_if_collided(obs):
             self.sidestep_pending = True   # once backed off, sidestep (MAES collision mitigation)
             return Action(velocity=self.backoff.command())
@@ -251,6 +282,21 @@ class TNF:
         if self.target is None:
             return Action(velocity=(0.0, 0.0), clear_goal=True)
         return Action(goal=self.goal, messages=self._announce(obs.tick))
+
+    def _maes_communication_tick(self, obs: Observation) -> Action:
+        """MAES's tick of communication (``TnfExplorationAlgorithm.cs`` 167-182): with a sensed neighbour,
+        stop (170) for the tick; without, carry on. Either way no decision and no collision handling (181)."""
+        if obs.neighbours:
+            if self.target is None and self.sidestep is None:
+                self.decide = True   # OutOfFrontiers looks again after the exchange (289-291)
+            return Action(velocity=(0.0, 0.0))
+        if self.backoff.active(obs.tick):
+            return Action(velocity=self.backoff.command())
+        if self.sidestep is not None:
+            return Action(goal=self.sidestep[0])
+        if self.target is None:
+            return Action(velocity=(0.0, 0.0), clear_goal=True)
+        return Action(goal=self.goal)
 
     # ------------------------------------------------------------------------------------- messages ----
     def _read_inbox(self, obs: Observation) -> None:
@@ -296,8 +342,8 @@ class TNF:
             return "own"
         if self.decide or (nav is not None and nav.state == "reached"):
             return "own"
-        if not unseen_near(obs.known, self.target, self.reach + 1):
-            return "own"
+        if not self.maes and not unseen_near(obs.known, self.target, self.reach + 1):
+            return "own"   # MAES follows its path to the end, seen or not (module docstring, row 11)
         return "yield" if self.yield_now else None
 
     def _decide(self, obs: Observation) -> None:

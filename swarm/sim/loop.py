@@ -138,7 +138,8 @@ class Simulation:
         self.motion = self.spec.motion
         self.lidar_params = self.spec.lidar
         self.start_poses = (np.array(start_poses, dtype=np.float64) if start_poses is not None
-                            else spawn(self.truth, self.spec.robots.spawn, n, self.streams.spawn))
+                            else spawn(self.truth, self.spec.robots.spawn, n, self.streams.spawn,
+                                  self.spec.robots.heading))
         self.world = World(self.truth, self.start_poses, self.motion)
         self.lidar = Lidar(self.truth, self.lidar_params)
         self.tracker = ExplorationTracker(self.truth)

@@ -23,10 +23,11 @@ from typing import Any
 import numpy as np
 
 from swarm.base.errors import InvalidInput
-from swarm.base.params import check_choice, check_float, check_int, from_mapping, to_mapping
+from swarm.base.params import OMIT_DEFAULT, check_choice, check_float, check_int, from_mapping, to_mapping
 from swarm.navigation.spec import NavigationSpec
 
 SPAWN_MODES = ("together", "random")
+HEADING_MODES = ("random", "maes")   # swarm.world.spawn.HEADING_MODES
 TRANSPORTS = ("inprocess", "zenoh")
 MAP_KINDS = ("building", "cave", "file")
 SPEC_VERSION = 1
@@ -72,15 +73,18 @@ class MapSpec:
 @dataclass(frozen=True)
 class RobotsSpec:
     """How many robots and where they start (``together``: packed near one random point, ``random``:
-    spread uniformly over the reachable space)."""
+    spread uniformly over the reachable space), facing random directions or, with ``heading = "maes"``, +y
+    as MAES spawns them (left out of the canonical spec at its default, so earlier specs keep their key)."""
 
     count: int = 4
     spawn: str = "together"
     spawn_seed: int | None = None
+    heading: str = field(default="random", metadata={OMIT_DEFAULT: True})
 
     def __post_init__(self) -> None:
         check_int("robots.count", self.count, 1, MAX_ROBOTS)
         check_choice("robots.spawn", self.spawn, SPAWN_MODES)
+        check_choice("robots.heading", self.heading, HEADING_MODES)
         if self.spawn_seed is not None:
             check_int("robots.spawn_seed", self.spawn_seed, 0, 2**63 - 1)
 

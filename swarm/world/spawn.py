@@ -1,6 +1,7 @@
 """Starting poses: ``together`` (packed around one random point, MAES ``SpawnRobotsTogether``) or ``random``
 (spread uniformly). Both use only cells of the largest region a robot can drive in, keep robots
-``SPACING_M`` apart, and are a pure function of (map, mode, count, rng)."""
+``SPACING_M`` apart, and are a pure function of (map, mode, count, rng, heading). Headings are uniform at
+random, or with ``heading = "maes"`` all +y as MAES spawns them (:data:`HEADING_MODES`)."""
 
 from __future__ import annotations
 
@@ -12,6 +13,12 @@ from scipy import ndimage
 from maps import CELL_M, Map
 from maps.raster import FOUR, robot_space
 from swarm.base.errors import InvalidInput
+
+HEADING_MODES = ("random", "maes")
+"""``random``: uniform in [-pi, pi). ``maes``: pi/2 (+y) for every robot, as MAES spawns them: ``RobotSpawner.cs``
+instantiates the robot prefab (line 333) and sets only its position (350-351), so it keeps the prefab's identity
+rotation (``MaesRobot2D.prefab`` line 496, ``m_LocalRotation {0, 0, 0, 1}``), and the robot's forward is its
+``Transform.up`` (``Robot2DController.cs`` 195-199), world +y."""
 
 SPACING_M = 0.7
 """Centre-to-centre distance between spawned robots: two 0.3 m radii plus 0.1 m."""
@@ -28,8 +35,9 @@ def drivable_region(truth: Map) -> np.ndarray:
     return labels == int(sizes.argmax())
 
 
-def spawn(truth: Map, mode: str, count: int, rng: np.random.Generator) -> np.ndarray:
-    """``float64[count, 3]`` poses (x, y, heading)."""
+def spawn(truth: Map, mode: str, count: int, rng: np.random.Generator, heading: str = "random") -> np.ndarray:
+    """``float64[count, 3]`` poses (x, y, heading). The random headings are drawn under ``heading = "maes"``
+    too, so the generator is left where it is left by a default spawn."""
     region = drivable_region(truth)
     cells = np.argwhere(region)
     if mode == "together":
@@ -45,6 +53,10 @@ def spawn(truth: Map, mode: str, count: int, rng: np.random.Generator) -> np.nda
                            f"at most {len(chosen)} robots fit in this map's drivable space ({SPACING_M} m apart)")
     xy = (np.asarray(chosen, dtype=np.float64)[:, ::-1] + 0.5) * CELL_M
     headings = rng.uniform(-np.pi, np.pi, size=count)
+    if heading == "maes":
+        headings = np.full(count, np.pi / 2)
+    elif heading != "random":
+        raise InvalidInput("robots.heading", heading, " | ".join(repr(m) for m in HEADING_MODES))
     return np.column_stack([xy, headings])
 
 

@@ -18,6 +18,10 @@ from swarm.api import FREE, SOLID, UNSEEN, NavStatus, Neighbour, Observation, Po
 from swarm.sim.loop import Simulation
 from swarm.testing import check_explorer
 
+from .test_tnf import corridor
+
+MAES_MOTION = {"max_speed": 3.0, "max_turn_rate": 4.0, "max_accel": 60.0, "max_turn_accel": 120.0, "substeps": 8}
+
 G0 = 5.0 * math.exp(-12.5)      # G(0), a known cell's share of MAES's Gaussian
 NONE = np.zeros((0, 2), dtype=np.int64)
 
@@ -147,7 +151,7 @@ W_CELLS, E_CELLS = centres(range(1, 19), 4), centres(range(1, 19), 35)
 def observe(heading, neighbours):
     known = mirror()
     known.flags.writeable = False
-    return Observation(tick=0, robot_id=0, pose=Pose(HERE[0], HERE[1], heading), known=known,
+    return Observation(tick=1, robot_id=0, pose=Pose(HERE[0], HERE[1], heading), known=known,
                        neighbours=tuple(neighbours))
 
 
@@ -202,13 +206,128 @@ def test_maes_sends_no_destinations_and_does_not_yield():
     x, y = cell_centre(10, 25)
     t = TNF()
     t.reset(RobotInfo(id=1, n_robots=2, map_shape=(20, 40)), TNFParams(variant="maes"), np.random.default_rng(0))
-    first = t.act(Observation(tick=0, robot_id=1, pose=Pose(x, y, 0.0), known=known))
+    first = t.act(Observation(tick=1, robot_id=1, pose=Pose(x, y, 0.0), known=known))  # 0: MAES's comm tick
     assert first.messages == (), "MAES's plain TNF never reads destinations: nothing to announce"
     # A lower-id robot announcing this very destination changes nothing (swarm would yield).
     heard = Destination(sender=0, x=first.goal[0], y=first.goal[1])
-    later = t.act(Observation(tick=1, robot_id=1, pose=Pose(x, y, 0.0), known=known, inbox=(heard,),
+    later = t.act(Observation(tick=2, robot_id=1, pose=Pose(x, y, 0.0), known=known, inbox=(heard,),
                               nav=NavStatus(goal=first.goal, state="moving")))
     assert later.goal == first.goal and later.messages == ()
+
+
+# ------------------------------------------------ row 11: when MAES's TNF decides, when it stops ----
+START = cell_centre(10, 25)
+MATE = Neighbour(id=1, distance=2.0, bearing=0.0, x=START[0] + 2.0, y=START[1])
+
+
+IDLE = NavStatus()
+
+
+def at(known, tick, nav=IDLE, neighbours=(), collided=False, xy=START):
+    known = known.copy()
+    known.flags.writeable = False
+    return Observation(tick=tick, robot_id=0, pose=Pose(xy[0], xy[1], math.pi), known=known, nav=nav,
+                       neighbours=tuple(neighbours), collided=collided)
+
+
+def decisions(t: TNF) -> list:
+    """Count ``t``'s decisions (each one scores the frontiers afresh)."""
+    calls = []
+    inner = t._decide
+    t._decide = lambda obs: (calls.append(obs.tick), inner(obs))[1]
+    return calls
+
+
+def test_maes_does_not_decide_again_when_its_destination_is_seen_but_at_its_paths_end():
+    t, known = robot("maes", n=1), two_frontiers()
+    first = t.act(at(known, 1)).goal
+    assert first is not None
+    seen = known.copy()
+    seen[seen == UNSEEN] = FREE                       # a merged map revealed everything: nothing left to see
+    moving = NavStatus(goal=first, state="moving")
+    calls = decisions(t)
+    for tick in range(2, 19):
+        assert t.act(at(seen, tick, moving)).goal == first, "MAES follows its path to the end"
+    assert calls == []
+    t.act(at(known, 19, NavStatus(goal=first, state="reached")))
+    assert calls == [19], "at the end of its path it decides"
+    # swarm's TNF decides as soon as its destination is seen (the control)
+    s = robot("swarm", n=1)
+    s_first = s.act(at(known, 1)).goal
+    s_calls = decisions(s)
+    s.act(at(seen, 2, NavStatus(goal=s_first, state="moving")))
+    assert s_calls == [2]
+
+
+def test_maes_decides_again_after_a_collision():
+    t, known = robot("maes", n=1), two_frontiers()
+    first = t.act(at(known, 1)).goal
+    calls = decisions(t)
+    moving = NavStatus(goal=first, state="moving")
+    backing = t.act(at(known, 2, moving, collided=True))
+    assert backing.velocity is not None and backing.velocity[0] < 0, "it backs off (MAES: 0.1 m, line 242)"
+    tick, action = 3, backing
+    while action.velocity is not None:                  # the back-off, then the random step (246-265)
+        action = t.act(at(known, tick, moving))
+        tick += 1
+    step = action.goal
+    assert step != first and math.dist(step, START) < 1.5
+    assert calls == []
+    t.act(at(known, tick, NavStatus(goal=step, state="reached")))
+    assert calls == [tick], "the random step done, it picks a frontier again"
+
+
+def test_maes_stops_every_20_ticks_when_it_senses_a_neighbour():
+    t, known = robot("maes"), two_frontiers()
+    assert t.act(at(known, 0, neighbours=[MATE])).velocity == (0.0, 0.0), "tick 0 is a communication tick"
+    goal = t.act(at(known, 1, neighbours=[MATE])).goal
+    moving = NavStatus(goal=goal, state="moving")
+    stops = [tick for tick in range(2, 61)
+             if t.act(at(known, tick, moving, neighbours=[MATE])).velocity == (0.0, 0.0)]
+    assert stops == [20, 40, 60]
+    # Alone it carries on through the communication ticks (still its goal, no stop).
+    alone = robot("maes")
+    goal = alone.act(at(known, 1)).goal
+    for tick in (20, 40):
+        a = alone.act(at(known, tick, NavStatus(goal=goal, state="moving")))
+        assert a.goal == goal and a.velocity is None
+    # swarm's TNF never stops to communicate (the control).
+    s = robot("swarm")
+    goal = s.act(at(known, 1, neighbours=[MATE])).goal
+    assert all(s.act(at(known, tick, NavStatus(goal=goal, state="moving"), neighbours=[MATE])).velocity is None
+               for tick in (20, 40))
+
+
+def test_maes_communication_tick_does_nothing_else():
+    t, known = robot("maes", n=1), two_frontiers()
+    first = t.act(at(known, 1)).goal
+    calls = decisions(t)
+    reached = NavStatus(goal=first, state="reached")
+    assert t.act(at(known, 20, reached)).goal == first and calls == [], "no decision on tick 20 (line 181)"
+    assert t.act(at(known, 40, NavStatus(goal=first, state="moving"), collided=True)).velocity is None, \
+        "a collision reported on a communication tick is not handled"
+    t.act(at(known, 21, reached))
+    assert calls == [21]
+
+
+def test_maes_stop_shows_in_a_run():
+    """Under MAES's motion preset (3 m/s, 60 m/s^2) the tick's (0, 0) brings a cruising robot to rest."""
+    poses: dict[int, np.ndarray] = {}
+
+    def watch(view):
+        poses[view.tick] = view.poses[:, :2].copy()
+
+    spec = {"seed": 0, "robots": {"count": 2}, "algorithm": {"name": "tnf", "params": {"variant": "maes"}},
+            "motion": MAES_MOTION, "stop": {"max_ticks": 43}}
+    Simulation(spec, truth=corridor(), start_poses=np.array([[30.0, 10.9, 0.0], [30.0, 12.1, 0.0]]),
+               observers=(watch,)).run()
+
+    def moved(tick: int) -> float:   # during tick ``tick``: the command of view ``tick`` moves it to ``tick + 1``
+        return float(np.linalg.norm(poses[tick + 1] - poses[tick], axis=1).max())
+
+    assert moved(39) > 0.2, "cruising at up to 3 m/s before the communication tick"
+    assert moved(40) < 0.4 * moved(39), "braking to rest for the communication tick (0.3 m a tick at 3 m/s)"
+    assert moved(41) > moved(40), "and on its way again"
 
 
 # ------------------------------------------------------------------------------ parameters ----
