@@ -68,9 +68,11 @@ overhead the paper blames for Minotaur's slowness (section 5.2, Figs. 10-11). It
 - **Doorways are verified where they are, not read off the map** (departure 4 off): ``DoorwayDetection``
   (lines 786-849) makes a gap in a wall (lines 795-821) or a crossing of two walls' lines (lines
   825-847) a Door waypoint (mode ``check-door``, placed as lines 815-816 and 838-840 place it) that
-  replaces the robot's current target (lines 817, 842); each candidate cell is tried once
-  (``_previousIntersections``, lines 809-813, 830-836); none is looked for while a Door waypoint is
-  active (lines 251-252). Walls are what 360 rays from the robot hit (lines 769-784,
+  replaces the robot's current target (lines 817, 842); the gap rule runs only when exactly one wall is
+  seen, the crossings otherwise (line 795); each candidate cell is tried once
+  (``_previousIntersections``, lines 809-813, 830-836) and the first one already tried ends the search
+  (``return``, lines 811, 832); none is looked for while a Door waypoint is active (lines 251-252), and
+  otherwise every tick (lines 231-252; ``scan_every`` is ignored). Walls are what 360 rays from the robot hit (lines 769-784,
   ``EdgeDetector.cs`` lines 112-153). On arrival ``AttemptAddDoorway`` (lines 286-289, 851-889) accepts
   the doorway if the crossing is seen and the jambs are ``2 doorWidth`` or ``[3, 2 doorWidth]`` cells
   apart (lines 863-864; ``maes_door_width``), and only then stores and auctions it; else it is dropped.
@@ -93,9 +95,8 @@ following and edges stay swarm's (MAES's ``MoveAlongWall``, lines 393-461, fits 
 7.2), and so do the spiral (departure 2), the spin split (``spin = "ccw"`` is MAES's single direction; the
 corner arc is mirrored for clockwise robots), the paper's auction (departure 8, not MAES's lines 350-372)
 and the paper's explored facts (seen from both sides or passed, not MAES's lines 290-294 and heartbeat
-exit directions); the grid cannot reproduce MAES's line fitting, so candidates are tried as described
-in :mod:`.maes` (both cases every scan, nearest first, each checked as itself), scans follow
-``scan_every`` (1 is MAES's every tick), and a Door waypoint not reached in ``CHECK_TICKS`` is given up
+exit directions); the grid cannot reproduce MAES's line fitting, so candidates are walked as described
+in :mod:`.maes` (nearest first, each checked as itself), and a Door waypoint not reached in ``CHECK_TICKS`` is given up
 (MAES's deadlock timer, lines 204-224, is not reproduced).
 """
 
@@ -201,8 +202,8 @@ class Minotaur:
         if self.travel is None:
             self.travel = (math.cos(obs.pose.theta), math.sin(obs.pose.theta))
         self._read_inbox(obs)
-        if obs.tick % self.p.scan_every == self.id % self.p.scan_every:
-            self._scan(obs)
+        if self.maes or obs.tick % self.p.scan_every == self.id % self.p.scan_every:
+            self._scan(obs)            # MAES scans every tick (MinotaurAlgorithm.cs 231-252, issue 49 row 10)
         self._close_auctions(obs)
         before = self._heading()
         action = self._decide(obs)
@@ -302,17 +303,22 @@ class Minotaur:
             self.outbox.append(self.auctions.start(obs.tick, door, side, own))
 
     def _find_candidate(self, obs: Observation) -> None:
-        """MAES's ``DoorwayDetection`` (MinotaurAlgorithm.cs lines 786-849, run in every state while no Door
-        or NearestDoor waypoint is active, lines 231-252; here not while passing a doorway, the ``door``
-        state, nor in ``start``): the nearest candidate not tried before becomes the Door waypoint,
-        replacing whatever the robot was doing in its room (``StopCurrentTask``, lines 817 and 842)."""
+        """MAES's ``DoorwayDetection`` (MinotaurAlgorithm.cs lines 786-849, run every tick in every state
+        while no Door or NearestDoor waypoint is active, lines 231-252; here not while passing a doorway,
+        the ``door`` state, nor in ``start``): the gap rule when exactly one wall is seen, the crossings
+        otherwise (line 795); the candidates are walked nearest first, and the first one tried before or
+        inside a known doorway ends the search (``return``, lines 809-812 and 830-833, issue 49 row 1).
+        The first new one that is not SOLID (a SOLID one is remembered and passed, lines 834-836) becomes
+        the Door waypoint, replacing whatever the robot was doing in its room (``StopCurrentTask``, lines
+        817 and 842)."""
         if self.check is not None or self.state in ("start", "door"):
             return
         kw, origin = self._window(obs)
         space, _ = self._spaces(obs)
-        for cand in maes.candidates(kw, origin, (obs.pose.x, obs.pose.y), self.vision, self.p.maes_door_width):
+        for cand in maes.candidates(kw, origin, (obs.pose.x, obs.pose.y), self.vision, self.p.maes_door_width,
+                                    by_wall_count=True):
             if cand.key in self.tried or self._in_doorway(cand.key):
-                continue
+                return                                     # MAES lines 809-812, 830-833: stop here
             self.tried.add(cand.key)
             if obs.known[cand.key] == SOLID:
                 continue                                   # remembered and skipped (line 834-836)

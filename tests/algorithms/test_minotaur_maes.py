@@ -51,7 +51,7 @@ def visit(variant: str, known: np.ndarray, at: tuple[float, float], ticks: int =
 
 
 # ---------------------------------------------------------------------------- the check on arrival ----
-def test_swarm_accepts_a_seen_door_from_the_map_maes_only_after_driving_to_it() -> None:
+def test_swarm_accepts_a_seen_door_from_the_map_maes_only_after_checking_it() -> None:
     known = known_of(wall_with_door())
     swarm, debug, _ = visit("swarm", known, (8.0, 6.0))
     assert len(debug[0]["doorways"]) == 1 and swarm.book.doors[0].found_tick == 0   # the first scan, the map
@@ -59,11 +59,12 @@ def test_swarm_accepts_a_seen_door_from_the_map_maes_only_after_driving_to_it() 
 
     a, debug, poses = visit("maes", known, (8.0, 6.0))
     first = next(t for t, d in enumerate(debug) if d["doorways"])
-    assert first > 10 and all(not d["doorways"] for d in debug[:first])
-    before = debug[first - 1]
-    assert before["mode"] == "check-door" and before["check"] is not None     # the goal was the Door waypoint
-    assert poses[first] == before["check"][2] == before["target"]             # and the robot stood on it
-    assert math.hypot(poses[first][0] - 8.0, poses[first][1] - 6.0) > 0.5
+    assert first >= 1 and all(not d["doorways"] for d in debug[:first])
+    # the nearest crossing (the lower jamb's face line meets the upper wall's): its Door waypoint, pulled back
+    # VisionRadius cells towards the robot (lines 838-840), is where the robot stands, so it checks at once;
+    # MAES's frame puts the jambs 2 doorWidth cells apart (lines 519-540, 863-864)
+    ((t, cand, ok),) = a.checks
+    assert (t, ok, cand.kind, cand.key) == (first, True, "cross", (10, 23))
     (door,) = a.book.doors
     assert (door.x, door.y, door.axis, door.width) == pytest.approx((12.5, 6.0, 1, 2.0))
     assert door.found_tick == first and (first, True) in [(t, ok) for t, _, ok in a.checks]
@@ -78,10 +79,9 @@ def test_maes_drives_to_a_gap_too_wide_for_a_door_and_drops_it() -> None:
 
     a, debug, poses = visit("maes", known, (8.0, 6.0))
     assert len(a.book) == 0 and all(not d["doorways"] for d in debug)
-    gaps = [(t, c) for t, c, ok in a.checks if c.kind == "gap"]
-    assert gaps and not any(ok for *_, ok in a.checks)
-    t, cand = gaps[0]
-    assert debug[t - 1]["check"][:2] == ("gap", cand.key) and poses[t] == debug[t - 1]["target"]
+    assert a.checks and not any(ok for *_, ok in a.checks)   # several walls in view: crossings (line 795)
+    t, cand, _ = a.checks[0]
+    assert debug[t - 1]["check"][:2] == (cand.kind, cand.key) and poses[t] == debug[t - 1]["target"]
     assert len({c.key for _, c, _ in a.checks}) == len(a.checks)              # each candidate tried once
     assert all(c.key in a.tried for _, c, _ in a.checks)
 
@@ -92,7 +92,7 @@ def test_a_three_metre_gap_swarm_accepts_is_too_wide_for_maes() -> None:
     swarm, _, _ = visit("swarm", known, (8.0, 6.0))
     assert [d.width for d in swarm.book] == [3.0]
     a, _, _ = visit("maes", known, (8.0, 6.0))
-    assert len(a.book) == 0 and any(c.kind == "gap" for _, c, _ in a.checks)
+    assert len(a.book) == 0 and a.checks
     wide, _, _ = visit("maes", known, (8.0, 6.0), maes_door_width=3)         # doorWidth = 3: up to 3 m
     assert [d.width for d in wide.book] == [3.0]
 
@@ -131,6 +131,59 @@ def test_a_wall_ahead_drops_the_door_waypoint_unchecked() -> None:
     a.check, a.state, a.mode, a.target = cand, "room", "check-door", (8.0, 7.0)
     d = a.act(obs(2, known, 8.0, 3.0)).debug                                 # 8 m to the top wall: go on
     assert d["check"] is not None and a.target == (8.0, 7.0)
+
+
+# ------------------------------------------------------------ which candidates, how often (issue 49) ----
+def two_walls() -> np.ndarray:
+    """A known open floor with a row wall (rows 20-21, cols 10-25) whose ends are unseen (so they show no
+    faces) and a column wall (col 30, rows 5-35): from cell (15, 18) the robot sees both; beyond the row
+    wall's east end its row is FREE again at (20, 28), a gap candidate, and the row wall's face line meets
+    the column wall's at (19, 29), a crossing on the column wall only."""
+    known = np.full((40, 40), FREE, np.uint8)
+    known[20:22, 10:26] = SOLID
+    known[19:23, 26:28] = UNSEEN
+    known[19:23, 8:10] = UNSEEN
+    known[5:36, 30] = SOLID
+    return known
+
+
+def test_maes_single_wall_rule_only_when_exactly_one_wall_is_seen() -> None:
+    """MinotaurAlgorithm.cs 795: the gap rule (796-821) when one wall is in view, else the crossings
+    (825-847). Here the nearest candidate is a gap, but two walls are in view: MAES drives to the crossing."""
+    known = two_walls()
+    cands = maes.candidates(known, (0, 0), (9.25, 7.75), 7, 2)
+    assert cands[0].kind == "gap" and cands[0].key == (20, 28)             # both rules: the gap is nearest
+    a = agent("maes", known.shape)
+    a.act(obs(0, known, 9.25, 7.75))
+    d = a.act(obs(1, known, 9.25, 7.75)).debug
+    assert d["check"][:2] == ("cross", (19, 29))
+    alone = known.copy()
+    alone[5:36, 30] = FREE                                                    # one wall: the gap rule only
+    assert {c.kind for c in maes.candidates(alone, (0, 0), (9.25, 7.75), 7, 2, by_wall_count=True)} == {"gap"}
+
+
+def test_maes_search_stops_at_the_first_tried_candidate() -> None:
+    """MinotaurAlgorithm.cs 830-833 (and 809-812): a candidate already in ``_previousIntersections`` ends the
+    search with ``return``: the next crossing, never tried, is not taken."""
+    known = known_of(wall_with_door())
+    cands = maes.candidates(known, (0, 0), (8.0, 6.0), 7, 2)
+    assert [c.key for c in cands[:2]] == [(10, 23), (13, 23)]                 # two crossings, nearest first
+    a = agent("maes", known.shape)
+    a.tried.add((10, 23))
+    a.act(obs(0, known, 8.0, 6.0))
+    for tick in range(1, 30):
+        d = a.act(obs(tick, known, 8.0, 6.0)).debug
+        assert d["check"] is None and d["mode"] != "check-door"
+    assert a.tried == {(10, 23)} and a.checks == []
+
+
+def test_maes_scans_for_doorways_every_tick() -> None:
+    """MinotaurAlgorithm.cs 231-252: DoorwayDetection runs in every UpdateLogic; ``scan_every`` (10) is
+    swarm's cadence. Robot 0 finds its candidate at tick 1, not at tick 10."""
+    known = two_walls()
+    a = agent("maes", known.shape)
+    a.act(obs(0, known, 9.25, 7.75))
+    assert a.act(obs(1, known, 9.25, 7.75)).debug["check"] is not None
 
 
 # --------------------------------------------------------------------------------- corner coverage ----
