@@ -78,6 +78,9 @@ overhead the paper blames for Minotaur's slowness (section 5.2, Figs. 10-11). It
   apart (lines 863-864; ``maes_door_width``), and only then stores and auctions it; else it is dropped.
   A wall within VisionRadius - 2 tiles on the bearing to a Door or Corner waypoint drops it (lines
   264-283). Swarm's ``inspect`` targets are off (the Door waypoints replace them).
+- **Tried candidates pooled** (issue 49 row 2): with each doorway list the robot sends its tried cells
+  (:class:`.messages.Tried`, the heartbeat's ``previousIntersections``, line 169); a robot hearing two or
+  more in one tick adds all but the first sender's (lines 173-181, HeartbeatMessage.cs 55).
 - **Corner coverage** (``MoveToCornerCoverage``, lines 607-630, ``IsAheadExploreable`` 752-761), tried
   after wall following and before edges, as lines 341-343 order them (mode ``corner``).
 - **The nearest doorway before Greed** (lines 336-338, 344-346, ``MovetoNearestDoorway`` 709-719,
@@ -89,7 +92,7 @@ overhead the paper blames for Minotaur's slowness (section 5.2, Figs. 10-11). It
 It does not reproduce, on purpose: the runtime's map sharing, navigator and messages stay (departures 1
 and 3; MAES's heartbeat merge is the comm option ``map_sharing = "maes"``), so the Door, Corner and
 doorway targets are planned, not driven to in a straight line, a Corner goal is the drivable cell next to
-the unseen one, and the remembered candidates are not shared (MAES unions them in heartbeats); wall
+the unseen one; wall
 following and edges stay swarm's (MAES's ``MoveAlongWall``, lines 393-461, fits segments to ray hits,
 ``GetWalls`` 512-584, and its edge sweep starts behind the robot, lines 645-646: docs/maes.md section
 7.2), and so do the spiral (departure 2), the spin split (``spin = "ccw"`` is MAES's single direction; the
@@ -116,7 +119,7 @@ from .auction import Auctions
 from .cells import clip, line_of_sight, local, mask
 from .detection import Pending, cells, scan
 from .doorways import Doorway, DoorwayBook
-from .messages import AuctionResult, Bid, DoorwayFound, DoorwayList, Heading, valid_heading
+from .messages import AuctionResult, Bid, DoorwayFound, DoorwayList, Heading, Tried, valid_heading
 from .params import MinotaurParams
 from .peers import Peers
 
@@ -210,6 +213,8 @@ class Minotaur:
         if self.robot.n_robots > 1:
             if obs.tick % self.p.share_every == 0:
                 self.outbox.append(DoorwayList(self.id, self.book.wire(), *self._heading()))
+                if self.maes:          # the heartbeat's previousIntersections (MinotaurAlgorithm.cs 169)
+                    self.outbox.append(Tried(self.id, tuple(sorted(self.tried))))
             elif self.announce_now or before != self._heading():
                 self.outbox.append(Heading(self.id, *self._heading()))
         self.announce_now = False
@@ -221,6 +226,7 @@ class Minotaur:
     # ------------------------------------------------------------------------------------- radio ----
     def _read_inbox(self, obs: Observation) -> None:
         tick = obs.tick
+        tried: list[Tried] = []
         for m in obs.inbox:
             if isinstance(m, MapUpdate):
                 self.peers.saw(m.sender, m.pose[0], m.pose[1], tick)
@@ -236,7 +242,20 @@ class Minotaur:
                 door, _ = self.book.add(Doorway.from_wire(m.door, tick))
                 if self.auctions.won(tick, m) and self.state != "door" and not door.explored:
                     self._go_through(door, m.side, "auction")
+            elif isinstance(m, Tried) and self.maes:
+                tried.append(m)
+        self._pool_tried(tried)
         self.auctions.expire(tick)
+
+    def _pool_tried(self, heard: list[Tried]) -> None:
+        """MAES pools tried candidates through heartbeats (issue 49 row 2): only with two or more in one tick
+        (``Count > 1``, MinotaurAlgorithm.cs 174), the first is combined with each later one in turn
+        (176-180), and each ``Combine`` adds the *later* sender's set to the receiver's
+        (``minotaur._previousIntersections.UnionWith(heartbeatMessage.previousIntersections)``,
+        HeartbeatMessage.cs 55): all but the first sender's, in inbox (sender) order. MAES reads the
+        sender's live set; here it is the sender's set as of its heartbeat, a tick older."""
+        for m in heard[1:]:
+            self.tried.update(m.cells)
 
     def _heading(self) -> tuple[tuple[float, float], tuple]:
         """(target or NaNs, the doorway being passed or ()), as heartbeats and headings carry them."""

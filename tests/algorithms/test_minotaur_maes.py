@@ -186,6 +186,28 @@ def test_maes_scans_for_doorways_every_tick() -> None:
     assert a.act(obs(1, known, 9.25, 7.75)).debug["check"] is not None
 
 
+def test_tried_candidates_pool_only_with_the_second_heartbeat_of_a_tick() -> None:
+    """Issue 49 row 2, MinotaurAlgorithm.cs 173-181 and HeartbeatMessage.cs 55: a receiver of two or more
+    heartbeats in one tick adds every later sender's ``previousIntersections`` to its own, never the first
+    sender's; a lone heartbeat adds nothing. The robot then stops its search at a pooled cell."""
+    from algorithms.minotaur.messages import Tried
+
+    known = known_of(wall_with_door())
+    a = Minotaur()
+    a.reset(RobotInfo(id=2, n_robots=3, map_shape=known.shape, lidar_range=7.0),
+            MinotaurParams(variant="maes"), np.random.default_rng(0))
+    at = Pose(8.0, 6.0, 0.0)
+    a.act(Observation(tick=1, robot_id=2, pose=at, known=known, inbox=(Tried(0, ((3, 3),)),)))
+    assert (3, 3) not in a.tried                                             # one heartbeat: nothing
+    a.act(Observation(tick=11, robot_id=2, pose=at, known=known,
+                      inbox=(Tried(0, ((4, 4),)), Tried(1, ((10, 23), (5, 5))))))
+    assert {(10, 23), (5, 5)} <= a.tried and (4, 4) not in a.tried          # all but the first sender's
+    assert a.checks == [] and a.check is None                                # (10, 23), the nearest, was pooled
+    out = a.act(Observation(tick=20, robot_id=2, pose=at, known=known)).messages
+    (mine,) = [m for m in out if isinstance(m, Tried)]                       # and it sends its own set
+    assert mine.sender == 2 and set(mine.cells) == a.tried
+
+
 # --------------------------------------------------------------------------------- corner coverage ----
 def corner_room() -> tuple[np.ndarray, tuple[float, float]]:
     """A known open area with no walls, an unseen patch to the robot's right front, known space ahead."""
