@@ -177,7 +177,8 @@ class Minotaur:
         # what it knows
         self.book = DoorwayBook()
         self.peers = Peers()
-        self.auctions = Auctions(robot.id, params.auction_ticks, params.result_timeout_ticks)
+        self.auctions = Auctions(robot.id, params.auction_ticks, params.result_timeout_ticks,
+                                 maes=params.variant == "maes")
         self.excluded: dict[tuple[int, int], int] = {}           # cells the navigator failed to reach
         self.inspected: set[tuple[int, int]] = set()             # jambs of gaps already looked at
         self.futile: set[tuple[int, int]] = set()                # anchors still unseen after a visit
@@ -240,8 +241,9 @@ class Minotaur:
                 self.auctions.receive_bid(tick, m)
             elif isinstance(m, AuctionResult):
                 door, _ = self.book.add(Doorway.from_wire(m.door, tick))
-                if self.auctions.won(tick, m) and self.state != "door" and not door.explored:
-                    self._go_through(door, m.side, "auction")
+                if self.auctions.won(tick, m) and (self.maes or self.state != "door" and not door.explored):
+                    self._go_through(door, m.side, "auction")   # MAES: winners go whatever they do
+                                                                # (AuctionResultMessage.cs 47-52)
             elif isinstance(m, Tried) and self.maes:
                 tried.append(m)
         self._pool_tried(tried)
@@ -280,8 +282,15 @@ class Minotaur:
 
     def _close_auctions(self, obs: Observation) -> None:
         for auction, result in self.auctions.close_due(obs.tick):
-            self.outbox.append(result)
-            if self.id in result.winners and self.state != "door" and not auction.door.explored:
+            if result is not None:
+                self.outbox.append(result)
+            if self.maes:      # BiddingMessage.cs 71-73, 78-80: the auctioneer goes and marks it explored
+                if auction.go_self:
+                    self._go_through(auction.door, auction.side, "auction")
+                    auction.door.sides = 3
+                    self.book.touch()
+            elif result is not None and self.id in result.winners and self.state != "door" \
+                    and not auction.door.explored:
                 self._go_through(auction.door, auction.side, "auction")
 
     # ---------------------------------------------------------------------------------- doorways ----

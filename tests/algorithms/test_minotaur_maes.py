@@ -335,3 +335,44 @@ def test_variant_is_checked() -> None:
 def test_check_explorer_passes_for_the_maes_variant() -> None:
     report = check_explorer("minotaur", params={"variant": "maes"})    # raises at the first failed check
     assert "determinism" in report.checks and "transports" in report.checks
+
+
+# ------------------------------------------------------------------------------- MAES's auction (row 6) ----
+def auctioneer(n_bids: int) -> tuple[Minotaur, list]:
+    """Robot 0 of 6 (MAES variant) runs an auction for the door of ``wall_with_door`` and hears ``n_bids``
+    bids from robots 1.. (distances 1, 2, ...) before it closes; what it sends at the close."""
+    from algorithms.minotaur.messages import Bid
+
+    known = known_of(wall_with_door())
+    a = Minotaur()
+    a.reset(RobotInfo(id=0, n_robots=6, map_shape=known.shape, lidar_range=7.0),
+            MinotaurParams(variant="maes"), np.random.default_rng(0))
+    door, _ = a.book.add(Doorway(12.5, 6.0, 1, 2.0, 1.0, sides=1))
+    a.state = "room"
+    a.auctions.start(0, door, -1, 4.0)
+    bids = tuple(Bid(k, 0, 1, float(k)) for k in range(1, n_bids + 1))
+    pose = Pose(8.0, 6.0, 0.0)
+    a.act(Observation(tick=2, robot_id=0, pose=pose, known=known, inbox=bids))
+    sent = list(a.act(Observation(tick=3, robot_id=0, pose=pose, known=known)).messages)
+    return a, sent
+
+
+def test_maes_auction_rule_from_bidding_message() -> None:
+    """BiddingMessage.cs 63-86 over the other robots' bids (the auctioneer never bids): three bids send the
+    two lowest and the auctioneer and mark the doorway explored; two send the auctioneer alone, with no
+    result message; one sends nobody. The paper's rule (default variant) would send floor(n/2) of all
+    bids, the auctioneer's included, and always announce."""
+    from algorithms.minotaur.auction import maes_outcome
+    from algorithms.minotaur.messages import AuctionResult
+
+    assert [maes_outcome({k: float(k) for k in range(n)}) for n in range(6)] == [
+        ((), False), ((), False), ((), True), ((0, 1), True), ((0, 1), True), ((0, 1, 2), True)]
+    a, sent = auctioneer(3)
+    (result,) = [m for m in sent if isinstance(m, AuctionResult)]
+    assert result.winners == (1, 2) and a.state == "door" and a.book.doors[0].explored
+    a, sent = auctioneer(2)
+    assert not any(isinstance(m, AuctionResult) for m in sent)
+    assert a.state == "door" and a.mode == "auction" and a.book.doors[0].explored
+    a, sent = auctioneer(1)
+    assert not any(isinstance(m, AuctionResult) for m in sent)
+    assert a.mode != "auction" and not a.book.doors[0].explored             # (its room is done: door-nearest)
