@@ -87,7 +87,15 @@ overhead the paper blames for Minotaur's slowness (section 5.2, Figs. 10-11). It
   ``GetNearestUnexploredDoorway`` 916-931): when the room is done, the unexplored doorway nearest by path,
   in the room or not, always before the nearest unseen cell (``greedy_if_nearer`` is ignored; mode
   ``door-nearest``), without swarm's skips of doorways with nothing new behind them or claimed by others
-  (departures 5 and 9 for doorways; Greed still avoids others' targets, as line 338 does).
+  (departures 5 and 9 for doorways).
+- **MAES's auction** (issue 49 row 6, :func:`.auction.maes_outcome`, ``BiddingMessage.cs`` 58-86): the
+  auctioneer does not bid; with n >= 3 bids the (n + 1) / 2 lowest and the auctioneer go, with n = 2 the
+  auctioneer alone (no result is sent), with n <= 1 nobody; the auctioneer marks the doorway explored as
+  it goes (lines 73, 80); winners go whatever they are doing (``AuctionResultMessage.cs`` 47-52).
+- **Others' destinations as MAES stores them** (issue 49 row 9): a pooled heartbeat records, for each
+  later sender, the robot's *own* waypoint (``HeartbeatMessage.cs`` 54, a bug), and Greed excludes those
+  1 m tiles (lines 209, 338, 346), not others' real targets; the nearest unseen cell in the room excludes
+  nothing (683-707); one wall-following direction (``spin = "split"`` means ``ccw``; no Alg. 2 split).
 
 It does not reproduce, on purpose: the runtime's map sharing, navigator and messages stay (departures 1
 and 3; MAES's heartbeat merge is the comm option ``map_sharing = "maes"``), so the Door, Corner and
@@ -95,10 +103,9 @@ doorway targets are planned, not driven to in a straight line, a Corner goal is 
 the unseen one; wall
 following and edges stay swarm's (MAES's ``MoveAlongWall``, lines 393-461, fits segments to ray hits,
 ``GetWalls`` 512-584, and its edge sweep starts behind the robot, lines 645-646: docs/maes.md section
-7.2), and so do the spiral (departure 2), the spin split (``spin = "ccw"`` is MAES's single direction; the
-corner arc is mirrored for clockwise robots), the paper's auction (departure 8, not MAES's lines 350-372)
-and the paper's explored facts (seen from both sides or passed, not MAES's lines 290-294 and heartbeat
-exit directions); the grid cannot reproduce MAES's line fitting, so candidates are walked as described
+7.2), and so does the spiral (departure 2; an explicit ``spin = "cw"`` mirrors the corner arc), and
+the paper's explored facts (seen from both sides or passed, not MAES's lines 290-294 and heartbeat
+exit directions), which travel in doorway lists (MAES's robots share one Doorway object, issue 49 row 7); the grid cannot reproduce MAES's line fitting, so candidates are walked as described
 in :mod:`.maes` (nearest first, each checked as itself), and a Door waypoint not reached in ``CHECK_TICKS`` is given up
 (MAES's deadlock timer, lines 204-224, is not reproduced).
 """
@@ -190,6 +197,8 @@ class Minotaur:
         self.check: maes.Candidate | None = None                 # the Door waypoint being driven to
         self.check_since = 0
         self.tried: set[tuple[int, int]] = set()                 # MAES's _previousIntersections
+        self.maes_dest: dict[int, tuple[int, int] | None] = {}   # MAES's _otherRobotPositions' destinations
+        self._shape = robot.map_shape
         self.checks: list[tuple[int, maes.Candidate, bool]] = []  # (tick, candidate, accepted) on arrival
         # per tick
         self.outbox: list[Any] = []
@@ -258,6 +267,9 @@ class Minotaur:
         sender's live set; here it is the sender's set as of its heartbeat, a tick older."""
         for m in heard[1:]:
             self.tried.update(m.cells)
+            # the same Combine stores the sender's "destination" as the receiver's own waypoint (a MAES bug,
+            # HeartbeatMessage.cs 54, issue 49 row 9)
+            self.maes_dest[m.sender] = None if self.target is None else clip(cell_of(*self.target), self._shape)
 
     def _heading(self) -> tuple[tuple[float, float], tuple]:
         """(target or NaNs, the doorway being passed or ()), as heartbeats and headings carry them."""
@@ -516,10 +528,14 @@ class Minotaur:
         views = rooms.view_cells(obs.known, space, VIEW_REACH)
         if blocked is not None:
             views &= ~blocked
-        avoid = self.peers.targets_mask(obs.known.shape, tick, TARGET_FRESH_TICKS, TARGET_AVOID_M)
+        if self.maes:          # MAES's "other robots' destinations": its own waypoints (issue 49 row 9)
+            avoid = self._own_destinations(obs.known.shape)
+        else:
+            avoid = self.peers.targets_mask(obs.known.shape, tick, TARGET_FRESH_TICKS, TARGET_AVOID_M)
         start = rooms.snap(cut, here)
-        if start is not None:
-            found = rooms.nearest_in_room(cut, start, views & ~avoid) if avoid is not None else None
+        if start is not None:      # MAES's MoveToNearestUnseenWithinRoom excludes door tiles only (683-707)
+            room_avoid = None if self.maes else avoid
+            found = rooms.nearest_in_room(cut, start, views & ~room_avoid) if room_avoid is not None else None
             if found is None:
                 found = rooms.nearest_in_room(cut, start, views)
             if found is not None:
@@ -554,6 +570,19 @@ class Minotaur:
         self.state, self.mode = "done", "done"
         self.target = None
         self.idle_until = tick + IDLE_RECHECK_TICKS
+
+    def _own_destinations(self, shape: tuple[int, int]) -> np.ndarray | None:
+        """MAES's ``_otherRobotDestinations`` (MinotaurAlgorithm.cs 55-58): HeartbeatMessage.cs 54 stores, for each
+        later sender of a pooled heartbeat, the *receiver's own* waypoint, so the tiles Greed excludes
+        (lines 209, 338, 346) are 1 m tiles where this robot was heading at those heartbeats."""
+        cells = [c for c in self.maes_dest.values() if c is not None]
+        if not cells:
+            return None
+        out = np.zeros(shape, dtype=bool)
+        for r, c in cells:
+            r0, c0 = r - r % 2, c - c % 2                      # the 1 m coarse tile holding the cell
+            out[r0:r0 + 2, c0:c0 + 2] = True
+        return out
 
     def _follow_target(self, obs: Observation) -> walls.FollowTarget | None:
         """Alg. 1 "if wall or explored area in visual range && unexplored area ahead: follow it"."""
@@ -635,8 +664,8 @@ class Minotaur:
     def _choose_spin(self, obs: Observation) -> None:
         """Alg. 2: half the robots in the room counter-clockwise, half clockwise (by rank of id among the
         robots known to be in the same door-bounded space around the robot)."""
-        if self.p.spin != "split":
-            self.spin = 1 if self.p.spin == "ccw" else -1
+        if self.p.spin != "split" or self.maes:   # MAES has one direction, no split (issue 49 row 9)
+            self.spin = -1 if self.p.spin == "cw" else 1
             return
         kw, origin = self._window(obs)
         space_w = rooms.cut_doors(grid.configuration_space(kw, radius_m=self.robot.radius), self.book, origin)

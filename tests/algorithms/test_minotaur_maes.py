@@ -376,3 +376,30 @@ def test_maes_auction_rule_from_bidding_message() -> None:
     a, sent = auctioneer(1)
     assert not any(isinstance(m, AuctionResult) for m in sent)
     assert a.mode != "auction" and not a.book.doors[0].explored             # (its room is done: door-nearest)
+
+
+# ------------------------------------------------------------------ others' destinations, spin (row 9) ----
+def test_maes_stores_its_own_waypoint_as_others_destinations_and_does_not_split_the_spin() -> None:
+    """HeartbeatMessage.cs 54: the "destination" stored for a later sender of pooled heartbeats is the
+    receiver's own waypoint (a MAES bug), so MAES's Greed keeps away from where the robot itself was going,
+    not from where the others go; and MAES has one wall-following direction, no Alg. 2 split."""
+    from algorithms.minotaur.messages import Heading, Tried
+    from swarm.api import Neighbour
+
+    known = np.full((40, 40), FREE, np.uint8)
+    known[30:, :] = UNSEEN                                                   # unseen from y = 15 m up
+    a = Minotaur()
+    a.reset(RobotInfo(id=2, n_robots=3, map_shape=known.shape, lidar_range=7.0),
+            MinotaurParams(variant="maes"), np.random.default_rng(0))
+    a.target = (3.25, 14.75)                                                 # its own waypoint: cell (29, 6)
+    inbox = (Heading(1, (10.25, 14.75), ()), Tried(0, ()), Tried(1, ()))     # robot 1 heads for cell (29, 20)
+    a._read_inbox(Observation(tick=10, robot_id=2, pose=Pose(10.0, 10.0, 0.0), known=known, inbox=inbox))
+    assert a.maes_dest == {1: (29, 6)}                                       # not robot 1's real target
+    own = a._own_destinations(known.shape)
+    assert own is not None and own[28:30, 6:8].all() and own.sum() == 4 and not own[29, 20]
+    near = (Neighbour(id=0, distance=1.0, bearing=0.0, x=11.0, y=10.0),)
+    for variant, spin in (("swarm", -1), ("maes", 1)):                      # robot 2 ranks second of 0 and 2
+        b = agent(variant, known.shape)
+        b.id = 2
+        b._choose_spin(Observation(tick=10, robot_id=2, pose=Pose(10.0, 10.0, 0.0), known=known, neighbours=near))
+        assert b.spin == spin, variant
