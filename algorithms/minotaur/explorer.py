@@ -96,6 +96,10 @@ overhead the paper blames for Minotaur's slowness (section 5.2, Figs. 10-11). It
   later sender, the robot's *own* waypoint (``HeartbeatMessage.cs`` 54, a bug), and Greed excludes those
   1 m tiles (lines 209, 338, 346), not others' real targets; the nearest unseen cell in the room excludes
   nothing (683-707); one wall-following direction (``spin = "split"`` means ``ccw``; no Alg. 2 split).
+- **Reported doorways as MAES takes them** (issue 49 row 8, ``DoorwayFoundMessage.cs`` 52-75): a report
+  whose way passes a known doorway (the reported one included) is ignored, one with a clear way is
+  recorded and bid on from any state, one with no way is only recorded. Doorway lists still merge into
+  the receiver's own book (MAES merges them into the first sender's list, ``HeartbeatMessage.cs`` 59-74).
 
 It does not reproduce, on purpose: the runtime's map sharing, navigator and messages stay (departures 1
 and 3; MAES's heartbeat merge is the comm option ``map_sharing = "maes"``), so the Door, Corner and
@@ -279,7 +283,10 @@ class Minotaur:
 
     def _on_found(self, obs: Observation, m: DoorwayFound) -> None:
         """Alg. 4 on the receiving side: bid if the doorway is reachable on the auctioneer's side without
-        passing another doorway."""
+        passing another doorway (``variant = "maes"``: :meth:`_on_found_maes`)."""
+        if self.maes:
+            self._on_found_maes(obs, m)
+            return
         door, _ = self.book.add(Doorway.from_wire(m.door, obs.tick))
         mine = self.auctions.running_for(door)
         if mine is not None:
@@ -291,6 +298,31 @@ class Minotaur:
         distance = self._door_distance(obs, door, m.side)
         if math.isfinite(distance):
             self.outbox.append(self.auctions.bid(obs.tick, m, distance))
+
+    def _on_found_maes(self, obs: Observation, m: DoorwayFound) -> None:
+        """MAES's ``DoorwayFoundMessage.Process`` (``DoorwayFoundMessage.cs`` 52-75, issue 49 row 8): when the
+        robot has a path to the doorway, it ignores the report (no record, no bid) if the path passes a
+        doorway it knows, the reported one included (its centre is the path's end, lines 58-63), and else
+        records it and bids its path length (65-67); with no path it only records it (69-72). Whatever the
+        robot is doing (MAES bids from any state). The path is the robot's plan to either side of the
+        doorway; it passes a known doorway when only the map with every known doorway open has it."""
+        door = Doorway.from_wire(m.door, obs.tick)
+        space, cut = self._spaces(obs)
+        here = (obs.pose.x, obs.pose.y)
+        if self.book.find(door) is not None:
+            return
+        start_cut, start = rooms.snap(cut, here), rooms.snap(space, here)
+        distance = math.inf
+        if start_cut is not None:
+            distance = min(rooms.door_distance(cut, start_cut, door, side) for side in (-1, 1))
+        if math.isfinite(distance):
+            self.book.add(door)
+            self.outbox.append(self.auctions.bid(obs.tick, m, distance))
+            return
+        reachable = start is not None and any(
+            math.isfinite(rooms.door_distance(space, start, door, side)) for side in (-1, 1))
+        if not reachable:
+            self.book.add(door)
 
     def _close_auctions(self, obs: Observation) -> None:
         for auction, result in self.auctions.close_due(obs.tick):

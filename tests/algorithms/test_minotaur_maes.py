@@ -403,3 +403,36 @@ def test_maes_stores_its_own_waypoint_as_others_destinations_and_does_not_split_
         b.id = 2
         b._choose_spin(Observation(tick=10, robot_id=2, pose=Pose(10.0, 10.0, 0.0), known=known, neighbours=near))
         assert b.spin == spin, variant
+
+
+# ------------------------------------------------------------------------ doorway reports (row 8) ----
+def test_maes_ignores_a_reported_doorway_behind_a_known_one_and_never_bids_on_a_known_one() -> None:
+    """DoorwayFoundMessage.cs 52-75: a receiver whose path to the reported doorway passes a doorway it knows
+    neither records it nor bids (58-63); one with a clear path records it and bids (65-67); one that already
+    knows it never bids (its own centre is on the path). Swarm records every report."""
+    from algorithms.minotaur.messages import Bid, DoorwayFound
+
+    known, doors = three_rooms()
+    known[:, 42:] = FREE                                                      # C known too: every door reachable
+    report = DoorwayFound(5, 1, Doorway(20.5, 6.0, 1, 2.0, 1.0).wire(), 1)   # the B | C door, from C's side
+
+    def hear(variant: str, x: float, knows: list[Doorway]) -> tuple[Minotaur, list]:
+        a = Minotaur()
+        a.reset(RobotInfo(id=0, n_robots=6, map_shape=known.shape, lidar_range=7.0),
+                MinotaurParams(variant=variant), np.random.default_rng(0))
+        for d in knows:
+            a.book.add(Doorway(d.x, d.y, d.axis, d.width, d.depth))
+        a.state = "room"
+        a._read_inbox(Observation(tick=5, robot_id=0, pose=Pose(x, 6.0, 0.0), known=known, inbox=(report,)))
+        return a, [msg for msg in a.outbox if isinstance(msg, Bid)]
+
+    a, bids = hear("maes", 5.0, doors[:1])                                   # in A: the way passes door A | B
+    assert len(a.book) == 1 and bids == []
+    s, _ = hear("swarm", 5.0, doors[:1])
+    assert len(s.book) == 2
+    a, bids = hear("maes", 15.0, doors[:1])                                  # in B: a clear way
+    assert len(a.book) == 2 and len(bids) == 1 and bids[0].distance > 0
+    a, bids = hear("maes", 15.0, doors)                                      # it knows the B | C door already
+    assert bids == []
+    s, sbids = hear("swarm", 25.0, doors)                                    # swarm bids from C's side
+    assert len(sbids) == 1
