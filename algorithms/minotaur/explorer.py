@@ -72,9 +72,9 @@ overhead the paper blames for Minotaur's slowness (section 5.2, Figs. 10-11). It
   seen, the crossings otherwise (line 795); each candidate cell is tried once
   (``_previousIntersections``, lines 809-813, 830-836) and the first one already tried ends the search
   (``return``, lines 811, 832); none is looked for while a Door waypoint is active (lines 251-252), and
-  otherwise every tick (lines 231-252; ``scan_every`` is ignored). Walls are what 360 rays from the robot hit (lines 769-784,
-  ``EdgeDetector.cs`` lines 112-153). On arrival ``AttemptAddDoorway`` (lines 286-289, 851-889) accepts
-  the doorway if the crossing is seen and the jambs are ``2 doorWidth`` or ``[3, 2 doorWidth]`` cells
+  otherwise every tick (lines 231-252; ``scan_every`` is ignored). Walls are what 360 rays from the robot
+  hit (lines 769-784, ``EdgeDetector.cs`` lines 112-153). On arrival ``AttemptAddDoorway`` (lines
+  286-289, 851-889) accepts the doorway if the crossing is seen and the jambs are ``2 doorWidth`` or ``[3, 2 doorWidth]`` cells
   apart (lines 863-864; ``maes_door_width``), and only then stores and auctions it; else it is dropped.
   A wall within VisionRadius - 2 tiles on the bearing to a Door or Corner waypoint drops it (lines
   264-283). Swarm's ``inspect`` targets are off (the Door waypoints replace them).
@@ -109,8 +109,9 @@ following and edges stay swarm's (MAES's ``MoveAlongWall``, lines 393-461, fits 
 ``GetWalls`` 512-584, and its edge sweep starts behind the robot, lines 645-646: docs/maes.md section
 7.2), and so does the spiral (departure 2; an explicit ``spin = "cw"`` mirrors the corner arc), and
 the paper's explored facts (seen from both sides or passed, not MAES's lines 290-294 and heartbeat
-exit directions), which travel in doorway lists (MAES's robots share one Doorway object, issue 49 row 7); the grid cannot reproduce MAES's line fitting, so candidates are walked as described
-in :mod:`.maes` (nearest first, each checked as itself), and a Door waypoint not reached in ``CHECK_TICKS`` is given up
+exit directions), which travel in doorway lists (MAES's robots share one Doorway object, issue 49 row
+7); the grid cannot reproduce MAES's line fitting, so candidates are walked as described in :mod:`.maes`
+(nearest first, each checked as itself), and a Door waypoint not reached in ``CHECK_TICKS`` is given up
 (MAES's deadlock timer, lines 204-224, is not reproduced).
 """
 
