@@ -18,7 +18,8 @@ higher id withdraws and bids in the lower id's auction.
 
 Departures from MAES (docs/maes.md section 7.2): MAES's auctioneer never bids, lets ``ceil(n/2)`` win and
 goes through itself when n = 2; we follow the paper and the issue (the auctioneer bids, ``floor(n/2)``
-win, ties broken by robot id).
+win, ties broken by robot id). ``maes=True`` (Minotaur's ``variant = "maes"``, issue 49 row 6) runs MAES's
+rule instead (:func:`maes_outcome`, ``BiddingMessage.cs`` 58-86).
 """
 
 from __future__ import annotations
@@ -35,6 +36,19 @@ class OpenAuction:
     side: int
     closes: int
     bids: dict[int, float] = field(default_factory=dict)
+    go_self: bool = False          # maes: the auctioneer goes through itself and marks the doorway explored
+
+
+def maes_outcome(bids: dict[int, float]) -> tuple[tuple[int, ...], bool]:
+    """MAES's ``BiddingMessage.Process`` (``BiddingMessage.cs`` 58-86) over the n bids of *other* robots (the
+    auctioneer never bids): ``(n + 1) / 2 > 1`` (n >= 3): the ``(n + 1) / 2`` lowest win and the auctioneer
+    goes too (lines 63-74); ``n / 2 == 1`` (n = 2): the auctioneer alone (76-81); n <= 1: nobody (83-85).
+    Returns (winners, whether the auctioneer goes); ties go to the lower robot id (MAES: bid arrival order)."""
+    n = len(bids)
+    ranked = sorted(bids.items(), key=lambda kv: (kv[1], kv[0]))
+    if (n + 1) // 2 > 1:
+        return tuple(robot for robot, _ in ranked[: (n + 1) // 2]), True
+    return (), n // 2 == 1
 
 
 def winners(bids: dict[int, float]) -> tuple[int, ...]:
@@ -46,8 +60,9 @@ def winners(bids: dict[int, float]) -> tuple[int, ...]:
 class Auctions:
     """One robot's auctions: those it runs and those it bid in."""
 
-    def __init__(self, robot: int, auction_ticks: int, result_timeout_ticks: int) -> None:
+    def __init__(self, robot: int, auction_ticks: int, result_timeout_ticks: int, maes: bool = False) -> None:
         self.robot = robot
+        self.maes = maes
         self.auction_ticks = auction_ticks
         self.result_timeout = result_timeout_ticks
         self.open: dict[int, OpenAuction] = {}
@@ -58,7 +73,8 @@ class Auctions:
     # ---------------------------------------------------------------------------- as auctioneer ----
     def start(self, tick: int, door: Doorway, side: int, own_distance: float) -> DoorwayFound:
         self.next_id += 1
-        auction = OpenAuction(door, side, tick + self.auction_ticks, {self.robot: own_distance})
+        own = {} if self.maes else {self.robot: own_distance}      # MAES's auctioneer never bids
+        auction = OpenAuction(door, side, tick + self.auction_ticks, own)
         self.open[self.next_id] = auction
         self.log.append((tick, "start", {"auction": self.next_id, "door": door.wire(), "side": side}))
         return DoorwayFound(self.robot, self.next_id, door.wire(), side)
@@ -80,13 +96,19 @@ class Auctions:
         a.bids[bid.sender] = float(bid.distance)
         self.log.append((tick, "bid", {"auction": bid.auction, "from": bid.sender, "distance": bid.distance}))
 
-    def close_due(self, tick: int) -> list[tuple[OpenAuction, AuctionResult]]:
-        out = []
+    def close_due(self, tick: int) -> list[tuple[OpenAuction, AuctionResult | None]]:
+        """The auctions due now, each with the result to broadcast (None: MAES announces nothing, when fewer
+        than three bids came, ``BiddingMessage.cs`` 76-86)."""
+        out: list[tuple[OpenAuction, AuctionResult | None]] = []
         for aid in [aid for aid, a in self.open.items() if tick >= a.closes]:
             a = self.open.pop(aid)
-            won = winners(a.bids)
+            if self.maes:
+                won, a.go_self = maes_outcome(a.bids)
+            else:
+                won = winners(a.bids)
             self.log.append((tick, "close", {"auction": aid, "bids": dict(a.bids), "winners": won}))
-            out.append((a, AuctionResult(self.robot, aid, a.door.wire(), a.side, won)))
+            announce = not self.maes or len(a.bids) >= 3
+            out.append((a, AuctionResult(self.robot, aid, a.door.wire(), a.side, won) if announce else None))
         return out
 
     # -------------------------------------------------------------------------------- as bidder ----

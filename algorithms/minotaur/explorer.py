@@ -68,34 +68,50 @@ overhead the paper blames for Minotaur's slowness (section 5.2, Figs. 10-11). It
 - **Doorways are verified where they are, not read off the map** (departure 4 off): ``DoorwayDetection``
   (lines 786-849) makes a gap in a wall (lines 795-821) or a crossing of two walls' lines (lines
   825-847) a Door waypoint (mode ``check-door``, placed as lines 815-816 and 838-840 place it) that
-  replaces the robot's current target (lines 817, 842); each candidate cell is tried once
-  (``_previousIntersections``, lines 809-813, 830-836); none is looked for while a Door waypoint is
-  active (lines 251-252). Walls are what 360 rays from the robot hit (lines 769-784,
-  ``EdgeDetector.cs`` lines 112-153). On arrival ``AttemptAddDoorway`` (lines 286-289, 851-889) accepts
-  the doorway if the crossing is seen and the jambs are ``2 doorWidth`` or ``[3, 2 doorWidth]`` cells
+  replaces the robot's current target (lines 817, 842); the gap rule runs only when exactly one wall is
+  seen, the crossings otherwise (line 795); each candidate cell is tried once
+  (``_previousIntersections``, lines 809-813, 830-836) and the first one already tried ends the search
+  (``return``, lines 811, 832); none is looked for while a Door waypoint is active (lines 251-252), and
+  otherwise every tick (lines 231-252; ``scan_every`` is ignored). Walls are what 360 rays from the robot
+  hit (lines 769-784, ``EdgeDetector.cs`` lines 112-153). On arrival ``AttemptAddDoorway`` (lines
+  286-289, 851-889) accepts the doorway if the crossing is seen and the jambs are ``2 doorWidth`` or ``[3, 2 doorWidth]`` cells
   apart (lines 863-864; ``maes_door_width``), and only then stores and auctions it; else it is dropped.
   A wall within VisionRadius - 2 tiles on the bearing to a Door or Corner waypoint drops it (lines
   264-283). Swarm's ``inspect`` targets are off (the Door waypoints replace them).
+- **Tried candidates pooled** (issue 49 row 2): with each doorway list the robot sends its tried cells
+  (:class:`.messages.Tried`, the heartbeat's ``previousIntersections``, line 169); a robot hearing two or
+  more in one tick adds all but the first sender's (lines 173-181, HeartbeatMessage.cs 55).
 - **Corner coverage** (``MoveToCornerCoverage``, lines 607-630, ``IsAheadExploreable`` 752-761), tried
   after wall following and before edges, as lines 341-343 order them (mode ``corner``).
 - **The nearest doorway before Greed** (lines 336-338, 344-346, ``MovetoNearestDoorway`` 709-719,
   ``GetNearestUnexploredDoorway`` 916-931): when the room is done, the unexplored doorway nearest by path,
   in the room or not, always before the nearest unseen cell (``greedy_if_nearer`` is ignored; mode
   ``door-nearest``), without swarm's skips of doorways with nothing new behind them or claimed by others
-  (departures 5 and 9 for doorways; Greed still avoids others' targets, as line 338 does).
+  (departures 5 and 9 for doorways).
+- **MAES's auction** (issue 49 row 6, :func:`.auction.maes_outcome`, ``BiddingMessage.cs`` 58-86): the
+  auctioneer does not bid; with n >= 3 bids the (n + 1) / 2 lowest and the auctioneer go, with n = 2 the
+  auctioneer alone (no result is sent), with n <= 1 nobody; the auctioneer marks the doorway explored as
+  it goes (lines 73, 80); winners go whatever they are doing (``AuctionResultMessage.cs`` 47-52).
+- **Others' destinations as MAES stores them** (issue 49 row 9): a pooled heartbeat records, for each
+  later sender, the robot's *own* waypoint (``HeartbeatMessage.cs`` 54, a bug), and Greed excludes those
+  1 m tiles (lines 209, 338, 346), not others' real targets; the nearest unseen cell in the room excludes
+  nothing (683-707); one wall-following direction (``spin = "split"`` means ``ccw``; no Alg. 2 split).
+- **Reported doorways as MAES takes them** (issue 49 row 8, ``DoorwayFoundMessage.cs`` 52-75): a report
+  whose way passes a known doorway (the reported one included) is ignored, one with a clear way is
+  recorded and bid on from any state, one with no way is only recorded. Doorway lists still merge into
+  the receiver's own book (MAES merges them into the first sender's list, ``HeartbeatMessage.cs`` 59-74).
 
 It does not reproduce, on purpose: the runtime's map sharing, navigator and messages stay (departures 1
 and 3; MAES's heartbeat merge is the comm option ``map_sharing = "maes"``), so the Door, Corner and
 doorway targets are planned, not driven to in a straight line, a Corner goal is the drivable cell next to
-the unseen one, and the remembered candidates are not shared (MAES unions them in heartbeats); wall
+the unseen one; wall
 following and edges stay swarm's (MAES's ``MoveAlongWall``, lines 393-461, fits segments to ray hits,
 ``GetWalls`` 512-584, and its edge sweep starts behind the robot, lines 645-646: docs/maes.md section
-7.2), and so do the spiral (departure 2), the spin split (``spin = "ccw"`` is MAES's single direction; the
-corner arc is mirrored for clockwise robots), the paper's auction (departure 8, not MAES's lines 350-372)
-and the paper's explored facts (seen from both sides or passed, not MAES's lines 290-294 and heartbeat
-exit directions); the grid cannot reproduce MAES's line fitting, so candidates are tried as described
-in :mod:`.maes` (both cases every scan, nearest first, each checked as itself), scans follow
-``scan_every`` (1 is MAES's every tick), and a Door waypoint not reached in ``CHECK_TICKS`` is given up
+7.2), and so does the spiral (departure 2; an explicit ``spin = "cw"`` mirrors the corner arc), and
+the paper's explored facts (seen from both sides or passed, not MAES's lines 290-294 and heartbeat
+exit directions), which travel in doorway lists (MAES's robots share one Doorway object, issue 49 row
+7); the grid cannot reproduce MAES's line fitting, so candidates are walked as described in :mod:`.maes`
+(nearest first, each checked as itself), and a Door waypoint not reached in ``CHECK_TICKS`` is given up
 (MAES's deadlock timer, lines 204-224, is not reproduced).
 """
 
@@ -115,7 +131,7 @@ from .auction import Auctions
 from .cells import clip, line_of_sight, local, mask
 from .detection import Pending, cells, scan
 from .doorways import Doorway, DoorwayBook
-from .messages import AuctionResult, Bid, DoorwayFound, DoorwayList, Heading, valid_heading
+from .messages import AuctionResult, Bid, DoorwayFound, DoorwayList, Heading, Tried, valid_heading
 from .params import MinotaurParams
 from .peers import Peers
 
@@ -173,7 +189,8 @@ class Minotaur:
         # what it knows
         self.book = DoorwayBook()
         self.peers = Peers()
-        self.auctions = Auctions(robot.id, params.auction_ticks, params.result_timeout_ticks)
+        self.auctions = Auctions(robot.id, params.auction_ticks, params.result_timeout_ticks,
+                                 maes=params.variant == "maes")
         self.excluded: dict[tuple[int, int], int] = {}           # cells the navigator failed to reach
         self.inspected: set[tuple[int, int]] = set()             # jambs of gaps already looked at
         self.futile: set[tuple[int, int]] = set()                # anchors still unseen after a visit
@@ -185,6 +202,8 @@ class Minotaur:
         self.check: maes.Candidate | None = None                 # the Door waypoint being driven to
         self.check_since = 0
         self.tried: set[tuple[int, int]] = set()                 # MAES's _previousIntersections
+        self.maes_dest: dict[int, tuple[int, int] | None] = {}   # MAES's _otherRobotPositions' destinations
+        self._shape = robot.map_shape
         self.checks: list[tuple[int, maes.Candidate, bool]] = []  # (tick, candidate, accepted) on arrival
         # per tick
         self.outbox: list[Any] = []
@@ -201,14 +220,16 @@ class Minotaur:
         if self.travel is None:
             self.travel = (math.cos(obs.pose.theta), math.sin(obs.pose.theta))
         self._read_inbox(obs)
-        if obs.tick % self.p.scan_every == self.id % self.p.scan_every:
-            self._scan(obs)
+        if self.maes or obs.tick % self.p.scan_every == self.id % self.p.scan_every:
+            self._scan(obs)            # MAES scans every tick (MinotaurAlgorithm.cs 231-252, issue 49 row 10)
         self._close_auctions(obs)
         before = self._heading()
         action = self._decide(obs)
         if self.robot.n_robots > 1:
             if obs.tick % self.p.share_every == 0:
                 self.outbox.append(DoorwayList(self.id, self.book.wire(), *self._heading()))
+                if self.maes:          # the heartbeat's previousIntersections (MinotaurAlgorithm.cs 169)
+                    self.outbox.append(Tried(self.id, tuple(sorted(self.tried))))
             elif self.announce_now or before != self._heading():
                 self.outbox.append(Heading(self.id, *self._heading()))
         self.announce_now = False
@@ -220,6 +241,7 @@ class Minotaur:
     # ------------------------------------------------------------------------------------- radio ----
     def _read_inbox(self, obs: Observation) -> None:
         tick = obs.tick
+        tried: list[Tried] = []
         for m in obs.inbox:
             if isinstance(m, MapUpdate):
                 self.peers.saw(m.sender, m.pose[0], m.pose[1], tick)
@@ -233,9 +255,26 @@ class Minotaur:
                 self.auctions.receive_bid(tick, m)
             elif isinstance(m, AuctionResult):
                 door, _ = self.book.add(Doorway.from_wire(m.door, tick))
-                if self.auctions.won(tick, m) and self.state != "door" and not door.explored:
-                    self._go_through(door, m.side, "auction")
+                if self.auctions.won(tick, m) and (self.maes or self.state != "door" and not door.explored):
+                    self._go_through(door, m.side, "auction")   # MAES: winners go whatever they do
+                                                                # (AuctionResultMessage.cs 47-52)
+            elif isinstance(m, Tried) and self.maes:
+                tried.append(m)
+        self._pool_tried(tried)
         self.auctions.expire(tick)
+
+    def _pool_tried(self, heard: list[Tried]) -> None:
+        """MAES pools tried candidates through heartbeats (issue 49 row 2): only with two or more in one tick
+        (``Count > 1``, MinotaurAlgorithm.cs 174), the first is combined with each later one in turn
+        (176-180), and each ``Combine`` adds the *later* sender's set to the receiver's
+        (``minotaur._previousIntersections.UnionWith(heartbeatMessage.previousIntersections)``,
+        HeartbeatMessage.cs 55): all but the first sender's, in inbox (sender) order. MAES reads the
+        sender's live set; here it is the sender's set as of its heartbeat, a tick older."""
+        for m in heard[1:]:
+            self.tried.update(m.cells)
+            # the same Combine stores the sender's "destination" as the receiver's own waypoint (a MAES bug,
+            # HeartbeatMessage.cs 54, issue 49 row 9)
+            self.maes_dest[m.sender] = None if self.target is None else clip(cell_of(*self.target), self._shape)
 
     def _heading(self) -> tuple[tuple[float, float], tuple]:
         """(target or NaNs, the doorway being passed or ()), as heartbeats and headings carry them."""
@@ -245,7 +284,10 @@ class Minotaur:
 
     def _on_found(self, obs: Observation, m: DoorwayFound) -> None:
         """Alg. 4 on the receiving side: bid if the doorway is reachable on the auctioneer's side without
-        passing another doorway."""
+        passing another doorway (``variant = "maes"``: :meth:`_on_found_maes`)."""
+        if self.maes:
+            self._on_found_maes(obs, m)
+            return
         door, _ = self.book.add(Doorway.from_wire(m.door, obs.tick))
         mine = self.auctions.running_for(door)
         if mine is not None:
@@ -258,10 +300,42 @@ class Minotaur:
         if math.isfinite(distance):
             self.outbox.append(self.auctions.bid(obs.tick, m, distance))
 
+    def _on_found_maes(self, obs: Observation, m: DoorwayFound) -> None:
+        """MAES's ``DoorwayFoundMessage.Process`` (``DoorwayFoundMessage.cs`` 52-75, issue 49 row 8): when the
+        robot has a path to the doorway, it ignores the report (no record, no bid) if the path passes a
+        doorway it knows, the reported one included (its centre is the path's end, lines 58-63), and else
+        records it and bids its path length (65-67); with no path it only records it (69-72). Whatever the
+        robot is doing (MAES bids from any state). The path is the robot's plan to either side of the
+        doorway; it passes a known doorway when only the map with every known doorway open has it."""
+        door = Doorway.from_wire(m.door, obs.tick)
+        space, cut = self._spaces(obs)
+        here = (obs.pose.x, obs.pose.y)
+        if self.book.find(door) is not None:
+            return
+        start_cut, start = rooms.snap(cut, here), rooms.snap(space, here)
+        distance = math.inf
+        if start_cut is not None:
+            distance = min(rooms.door_distance(cut, start_cut, door, side) for side in (-1, 1))
+        if math.isfinite(distance):
+            self.book.add(door)
+            self.outbox.append(self.auctions.bid(obs.tick, m, distance))
+            return
+        reachable = start is not None and any(
+            math.isfinite(rooms.door_distance(space, start, door, side)) for side in (-1, 1))
+        if not reachable:
+            self.book.add(door)
+
     def _close_auctions(self, obs: Observation) -> None:
         for auction, result in self.auctions.close_due(obs.tick):
-            self.outbox.append(result)
-            if self.id in result.winners and self.state != "door" and not auction.door.explored:
+            if result is not None:
+                self.outbox.append(result)
+            if self.maes:      # BiddingMessage.cs 71-73, 78-80: the auctioneer goes and marks it explored
+                if auction.go_self:
+                    self._go_through(auction.door, auction.side, "auction")
+                    auction.door.sides = 3
+                    self.book.touch()
+            elif result is not None and self.id in result.winners and self.state != "door" \
+                    and not auction.door.explored:
                 self._go_through(auction.door, auction.side, "auction")
 
     # ---------------------------------------------------------------------------------- doorways ----
@@ -302,17 +376,22 @@ class Minotaur:
             self.outbox.append(self.auctions.start(obs.tick, door, side, own))
 
     def _find_candidate(self, obs: Observation) -> None:
-        """MAES's ``DoorwayDetection`` (MinotaurAlgorithm.cs lines 786-849, run in every state while no Door
-        or NearestDoor waypoint is active, lines 231-252; here not while passing a doorway, the ``door``
-        state, nor in ``start``): the nearest candidate not tried before becomes the Door waypoint,
-        replacing whatever the robot was doing in its room (``StopCurrentTask``, lines 817 and 842)."""
+        """MAES's ``DoorwayDetection`` (MinotaurAlgorithm.cs lines 786-849, run every tick in every state
+        while no Door or NearestDoor waypoint is active, lines 231-252; here not while passing a doorway,
+        the ``door`` state, nor in ``start``): the gap rule when exactly one wall is seen, the crossings
+        otherwise (line 795); the candidates are walked nearest first, and the first one tried before or
+        inside a known doorway ends the search (``return``, lines 809-812 and 830-833, issue 49 row 1).
+        The first new one that is not SOLID (a SOLID one is remembered and passed, lines 834-836) becomes
+        the Door waypoint, replacing whatever the robot was doing in its room (``StopCurrentTask``, lines
+        817 and 842)."""
         if self.check is not None or self.state in ("start", "door"):
             return
         kw, origin = self._window(obs)
         space, _ = self._spaces(obs)
-        for cand in maes.candidates(kw, origin, (obs.pose.x, obs.pose.y), self.vision, self.p.maes_door_width):
+        for cand in maes.candidates(kw, origin, (obs.pose.x, obs.pose.y), self.vision, self.p.maes_door_width,
+                                    by_wall_count=True):
             if cand.key in self.tried or self._in_doorway(cand.key):
-                continue
+                return                                     # MAES lines 809-812, 830-833: stop here
             self.tried.add(cand.key)
             if obs.known[cand.key] == SOLID:
                 continue                                   # remembered and skipped (line 834-836)
@@ -482,10 +561,14 @@ class Minotaur:
         views = rooms.view_cells(obs.known, space, VIEW_REACH)
         if blocked is not None:
             views &= ~blocked
-        avoid = self.peers.targets_mask(obs.known.shape, tick, TARGET_FRESH_TICKS, TARGET_AVOID_M)
+        if self.maes:          # MAES's "other robots' destinations": its own waypoints (issue 49 row 9)
+            avoid = self._own_destinations(obs.known.shape)
+        else:
+            avoid = self.peers.targets_mask(obs.known.shape, tick, TARGET_FRESH_TICKS, TARGET_AVOID_M)
         start = rooms.snap(cut, here)
-        if start is not None:
-            found = rooms.nearest_in_room(cut, start, views & ~avoid) if avoid is not None else None
+        if start is not None:      # MAES's MoveToNearestUnseenWithinRoom excludes door tiles only (683-707)
+            room_avoid = None if self.maes else avoid
+            found = rooms.nearest_in_room(cut, start, views & ~room_avoid) if room_avoid is not None else None
             if found is None:
                 found = rooms.nearest_in_room(cut, start, views)
             if found is not None:
@@ -520,6 +603,19 @@ class Minotaur:
         self.state, self.mode = "done", "done"
         self.target = None
         self.idle_until = tick + IDLE_RECHECK_TICKS
+
+    def _own_destinations(self, shape: tuple[int, int]) -> np.ndarray | None:
+        """MAES's ``_otherRobotDestinations`` (MinotaurAlgorithm.cs 55-58): HeartbeatMessage.cs 54 stores, for each
+        later sender of a pooled heartbeat, the *receiver's own* waypoint, so the tiles Greed excludes
+        (lines 209, 338, 346) are 1 m tiles where this robot was heading at those heartbeats."""
+        cells = [c for c in self.maes_dest.values() if c is not None]
+        if not cells:
+            return None
+        out = np.zeros(shape, dtype=bool)
+        for r, c in cells:
+            r0, c0 = r - r % 2, c - c % 2                      # the 1 m coarse tile holding the cell
+            out[r0:r0 + 2, c0:c0 + 2] = True
+        return out
 
     def _follow_target(self, obs: Observation) -> walls.FollowTarget | None:
         """Alg. 1 "if wall or explored area in visual range && unexplored area ahead: follow it"."""
@@ -601,8 +697,8 @@ class Minotaur:
     def _choose_spin(self, obs: Observation) -> None:
         """Alg. 2: half the robots in the room counter-clockwise, half clockwise (by rank of id among the
         robots known to be in the same door-bounded space around the robot)."""
-        if self.p.spin != "split":
-            self.spin = 1 if self.p.spin == "ccw" else -1
+        if self.p.spin != "split" or self.maes:   # MAES has one direction, no split (issue 49 row 9)
+            self.spin = -1 if self.p.spin == "cw" else 1
             return
         kw, origin = self._window(obs)
         space_w = rooms.cut_doors(grid.configuration_space(kw, radius_m=self.robot.radius), self.book, origin)

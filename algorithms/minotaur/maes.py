@@ -26,12 +26,22 @@ SLAM cells are 0.5 m too, its coarse tiles 1 m):
   cell: the outside corner of a wall's end is a corner, not a crossing) that is not SOLID (SOLID ones are remembered and skipped, line 834-836).
   The Door waypoint is the crossing pulled back VisionRadius SLAM cells towards the robot (lines
   838-840; literally, so a crossing nearer than that sends the robot *away* from it).
+- **Which rule** (line 795, issue 49 row 1): the gap rule when exactly one wall is seen, the crossings
+  otherwise (``candidates(..., by_wall_count=True)``). On the grid a door's jambs are short walls of their
+  own, so a door in the middle of a wall seen head-on is a crossing of a jamb's face line with the other
+  part of the wall.
 - Each candidate cell is remembered (``_previousIntersections``, lines 809-813 and 830-834) and never
-  tried again, nor a cell inside a known doorway.
+  tried again; the first candidate already remembered or inside a known doorway **ends the search**
+  (``return``, lines 809-812 and 830-833, issue 49 row 1), so a robot that has tried the nearest
+  crossing in view tries no other from there.
 - **The check on arrival** (``AttemptAddDoorway``, lines 851-884): the jambs are the points of the two
   walls nearest to the crossing (``GetClosestPoints``, lines 886-889); the doorway is accepted if the
   crossing is seen (not UNSEEN) and the jamb distance ``d`` (SLAM cells) is ``2 doorWidth`` or in
-  ``[3, 2 doorWidth]`` (line 863-864): 1.5-2 m for ``doorWidth = 2``. For a gap candidate the two walls
+  ``[3, 2 doorWidth]`` (line 863-864): 1.5-2 m for ``doorWidth = 2``. The crossing and jambs are measured
+  where MAES's fitted lines lie (issue 49): ``GetWalls`` moves a wall cell onto its open neighbour to the
+  east or north (lines 519-540), so a face towards +col/+row lies on its FREE line and a face towards
+  -col/-row on its SOLID cells (MAES's asymmetry: of the two crossings of a head-on 2 m door one measures
+  4 cells, accepted, the other 5, dropped). For a gap candidate the two walls
   are the wall before the gap and its continuation in line (the paper's single-wall case, Alg. 3 "if
   wall continues after doorway width"): the jamb distance is the gap's width, and a gap whose far side
   is not seen, or that ends in no wall of two cells or more in line, is dropped.
@@ -44,15 +54,14 @@ SLAM cells are 0.5 m too, its coarse tiles 1 m):
   a SOLID cell within VisionRadius - 2 tiles along the bearing to it ends the waypoint (a Door waypoint
   then is forgotten unchecked, as in MAES).
 
-Departures (the explorer's module docstring lists them with the rest): the candidate rules run on every
-scan, both of them (MAES runs the one-wall rule only when exactly one wall is seen and the crossings
-otherwise, line 795; the paper's Alg. 3 runs both, and on the grid a wall broken by a door is two walls
-in line whose lines never cross, so the crossings alone would never find a door in the middle of a
-wall); the check is made for the candidate the robot drove to (MAES checks the first crossing of the
-walls it sees on arrival, line 859, which need not be the same one); candidates are tried nearest first
-and every one is tried (MAES stops at the first remembered crossing in its wall order, ``return`` at
-line 832); the remembered cells are not shared (MAES unions them in heartbeats; swarm's messages carry
-no such field).
+Departures (the explorer's module docstring lists them with the rest): candidates are walked nearest
+first (MAES walks them in the order its line fitting gives, ``GetIntersectionPoints`` lines 586-605,
+which the grid cannot reproduce), so "the first tried candidate" is the nearest one; the gap rule walks
+from both ends of the wall, stopped by SOLID (MAES walks one way from the wall cell nearest the robot
+and takes the first Open cell, lines 798-805); the check is made for the candidate the robot drove to
+(MAES checks the first crossing of the walls it sees on arrival, line 859, which need not be the same
+one); a candidate with no drivable cell near its Door waypoint is remembered and passed (MAES drives
+towards it regardless).
 """
 
 from __future__ import annotations
@@ -195,10 +204,12 @@ def walls(known: np.ndarray, hits: np.ndarray) -> tuple[list[tuple[int, int, int
 
 # ------------------------------------------------------------------------------------- candidates ----
 def candidates(known: np.ndarray, origin: tuple[int, int], xy: tuple[float, float], vision: int,
-               door_width: int) -> list[Candidate]:
+               door_width: int, by_wall_count: bool = False) -> list[Candidate]:
     """Gap and crossing candidates around the robot at ``xy`` (m) in ``known`` (a window whose cell
     (0, 0) is map cell ``origin``), nearest first, in map cells; SOLID crossings included (the caller
-    remembers and skips them)."""
+    remembers and skips them). ``by_wall_count``: MAES's choice of rule (line 795, issue 49 row 1): gap
+    candidates only when exactly one wall is seen, crossings only otherwise (none with no wall, line
+    788); False: both rules on every call."""
     h, w = known.shape
     pr, pc = xy[1] / CELL_M - origin[0], xy[0] / CELL_M - origin[1]          # the robot, window cells
     cell = (min(max(int(pr), 0), h - 1), min(max(int(pc), 0), w - 1))
@@ -206,7 +217,10 @@ def candidates(known: np.ndarray, origin: tuple[int, int], xy: tuple[float, floa
     row_walls, col_walls = walls(known, hits)
     radius = 2 * vision                                                   # SLAM cells (MAES line 803, 827)
     found: list[tuple[float, Candidate]] = []
+    one_wall = len(row_walls) + len(col_walls) == 1
     for axis, faces in ((0, row_walls), (1, col_walls)):
+        if by_wall_count and not one_wall:
+            break
         g = known if axis == 0 else known.T
         p_line, p_along = (pr, pc) if axis == 0 else (pc, pr)
         lo_line, lo_along = (origin[0], origin[1]) if axis == 0 else (origin[1], origin[0])
@@ -228,7 +242,7 @@ def candidates(known: np.ndarray, origin: tuple[int, int], xy: tuple[float, floa
                                       Candidate("gap", key, goal, axis, line + lo_line, side, end + lo_along, step)))
                         break
                     j += step
-    for rl, rs, c0, c1 in row_walls:
+    for rl, rs, c0, c1 in (row_walls if not (by_wall_count and one_wall) else []):
         xr = rl + rs
         for cl, cs, r0, r1 in col_walls:
             xc = cl + cs
@@ -315,6 +329,11 @@ def check(known: np.ndarray, cand: Candidate, door_width: int) -> Doorway | None
     xr, xc = cand.key
     if known[xr, xc] == UNSEEN:
         return None
+    # the jambs are measured in MAES's frame (issue 49): GetWalls moves a wall cell onto its open neighbour
+    # to the east or north (lines 519-540), so a face towards +col/+row lies on its FREE line, a face
+    # towards -col/-row on its own SOLID cells; a door in the middle of a wall seen head-on is then 2 doorWidth
+    # cells from one jamb's face to the other wall's end on one side of it, as MAES measures it
+    xr, xc = cand.line + max(cand.side, 0), cand.line2 + max(cand.side2, 0)
     ch = _jamb(known, cand.line, cand.side, cand.span, xc)                  # jamb on the row wall
     rv = _jamb(known.T, cand.line2, cand.side2, cand.span2, xr)             # jamb on the column wall
     if ch is None or rv is None:

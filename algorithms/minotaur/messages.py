@@ -13,6 +13,8 @@
   the auctioneer's side without passing another doorway.
 - :class:`AuctionResult`: the winners, the lowest half of the bids (rounded down, the auctioneer's own
   bid included).
+- :class:`Tried` (``variant = "maes"`` only): with each doorway list, the candidate doorway cells the
+  sender has tried, MAES's heartbeat field ``previousIntersections`` (HeartbeatMessage.cs 39, 47).
 
 Every message validates itself when decoded (a malformed one is dropped and counted by the runtime),
 and receivers check again what they use: messages come from other robots. Doorways travel as plain tuples (:data:`.doorways.Wire`, spelled out in the annotations because the
@@ -120,3 +122,18 @@ class AuctionResult:
         _check(_int(self.auction) and valid_wire(self.door) and self.side in (-1, 1)
                and isinstance(self.winners, tuple) and all(_int(w) for w in self.winners),
                "minotaur.auction_result: bad fields")
+
+
+@message("minotaur.tried")
+@dataclass(frozen=True)
+class Tried:
+    """MAES's heartbeat's ``previousIntersections`` (MinotaurAlgorithm.cs 169, HeartbeatMessage.cs 39-47):
+    the candidate cells (row, col) the sender has tried, sent by the MAES variant with its doorway list."""
+
+    sender: int
+    cells: tuple[tuple[int, int], ...]
+
+    def validate(self) -> None:
+        _check(isinstance(self.cells, tuple) and len(self.cells) <= 1_000_000
+               and all(isinstance(c, tuple) and len(c) == 2 and _int(c[0]) and _int(c[1]) for c in self.cells),
+               "minotaur.tried: bad cells")

@@ -34,6 +34,7 @@ class MinotaurParams:
       the default.
     - ``scan_every``: ticks between doorway scans of the map around the robot (1 m of travel; MAES scans every tick
       while no door waypoint is active; the scan is a few microseconds, the cadence only bounds the cost).
+      ``variant = "maes"`` ignores it and scans every tick, as MAES does (issue 49 row 10).
     - ``inspect_doorways``: go and look when a wall ends in unseen space within a door width (Alg. 3
       "move forward doorway width" / "move towards intersection point until it is explored").
 

@@ -3,10 +3,17 @@
 MAES robots broadcast their live ``SlamMap`` *object*, so a "merge" (``SlamMap.Synchronize``) overwrites
 every participating map with the union, by reference (docs/maes.md sections 2 item 4, 5.4, 7.2-7.4):
 
-* **heartbeat** (Greed ``Greed.cs`` line 112, Minotaur ``MinotaurAlgorithm.cs`` line 174): every
+* **heartbeat** (Greed ``Greed.cs`` lines 105-119, Minotaur ``MinotaurAlgorithm.cs`` lines 167-181): every
   ``share_every`` (10) ticks each robot broadcasts a heartbeat; a robot that receives **two or more** in
-  one tick synchronises the **senders'** maps with each other. Its own map is not part of the merge, and
-  a robot that hears only one heartbeat (always, with two robots) merges nothing.
+  one tick synchronises the **senders'** maps. Its own map is not part of the merge, and a robot that
+  hears only one heartbeat (always, with two robots) merges nothing. The merge is **pairwise and in
+  order** (issue 49 row 12): the first heartbeat's message is combined with each later one in turn
+  (``combinedMessage.Combine(message)``, Greed.cs 114-118, MinotaurAlgorithm.cs 176-180), each
+  ``Combine`` synchronising two maps, the later sender's and the first sender's (``SlamMap.Synchronize``
+  of ``{other.map, map}``, Greed.cs 254-255, HeartbeatMessage.cs 56-57; ``Combine`` returns ``this``, so
+  the first sender's stays the partner). With senders s0 < s1 < s2 (inbox order is broadcast order,
+  ``CommunicationManager.cs`` 124-125, 190-191): s0 and s1 get s0 | s1, then s0 and s2 get s0 | s1 | s2;
+  s1 keeps a part of the union. Every pair is one synchronisation (``merges``).
 * **sync** (TNF, ``TnfExplorationAlgorithm.cs`` ``UpdateLogic`` lines 166-182, ``AwaitCommunication``
   lines 268-293): every ``share_every`` (20) ticks each robot that senses another robot broadcasts its map;
   next tick each of those broadcasters reads what it received and, if no sender has a higher id,
@@ -71,7 +78,7 @@ class MaesMerge:
             raise ValueError(f"mode {mode!r}; allowed: {', '.join(MODES)}")
         self.n, self.mode, self.share_every = n, mode, share_every
         self.ages = ages
-        self.merges = 0  # synchronisations performed (a receiver's merge of two or more maps)
+        self.merges = 0  # synchronisations performed (heartbeat: one per pair merged; sync: one per receiver)
         self._broadcast: set[int] = set()  # sync: who broadcast in the last round (only they read next tick)
 
     def outgoing(self, tick: int, near: Any) -> list[list[MapHeartbeat]]:
@@ -99,17 +106,16 @@ class MaesMerge:
         changed: set[int] = set()
         for r, senders in enumerate(heard):
             senders = sorted(set(s for s in senders if live[s]))
-            if self.mode == "maes_heartbeat":
-                group = senders if len(senders) >= 2 else []
+            if self.mode == "maes_heartbeat":  # the first sender's map with each later one's, in turn
+                groups = [[senders[0], s] for s in senders[1:]]
             else:  # only a robot that broadcast reads; the one with no higher-id sender merges
-                group = [r, *senders] if senders and r in self._broadcast and max(senders) < r else []
-            if not group:
-                continue
-            union = np.maximum.reduce(known[group])
-            for g in group:
-                known[g] = union
-            changed.update(group)
-            self.merges += 1
-            if self.ages is not None:
-                self.ages.group(group, tick)
+                groups = [[r, *senders]] if senders and r in self._broadcast and max(senders) < r else []
+            for group in groups:
+                union = np.maximum.reduce(known[group])
+                for g in group:
+                    known[g] = union
+                changed.update(group)
+                self.merges += 1
+                if self.ages is not None:
+                    self.ages.group(group, tick)
         return changed

@@ -15,6 +15,7 @@ from algorithms.minotaur.messages import (
     Bid,
     DoorwayFound,
     DoorwayList,
+    Tried,
     Heading,
 )
 from swarm import grid
@@ -54,6 +55,8 @@ WIRE = (16.5, 6.0, 1, 2.0, 1.0, 1, 0)
     DoorwayFound(0, 7, WIRE, -1),
     Bid(3, 0, 7, 12.5),
     AuctionResult(0, 7, WIRE, -1, (3, 1)),
+    Tried(4, ((10, 23), (13, 23))),
+    Tried(4, ()),
 ])
 def test_messages_survive_the_wire(msg: object) -> None:
     assert decode(encode(msg)) == msg
@@ -185,6 +188,7 @@ BAD_MESSAGES = [
     DoorwayList(0, ([1, 2],), (1.0, 2.0), ()), DoorwayList(0, ((1.0,) * 7, ("a",) * 7), (math.nan, 1.0), ()),
     DoorwayList(0, "x", (1, 2), ()), Heading(0, [1, 2], ()), DoorwayFound(0, [1], WIRE, -1),
     Bid(0, 1, [3], 2.0), Bid(0, 1, 3, "far"), AuctionResult(0, 1, WIRE, 1, 5), DoorwayFound(0, 1, WIRE, 0),
+    Tried(0, ((1, 2.5),)), Tried(0, ((1, 2, 3),)),
 ]
 
 

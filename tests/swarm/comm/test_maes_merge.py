@@ -43,6 +43,21 @@ def test_one_heartbeat_merges_nothing_two_merge_the_senders_not_the_receiver():
     assert (known[2] == before[2]).all(), "the receiver's map is unchanged"
 
 
+def test_heartbeat_merge_is_pairwise_in_order_so_a_middle_sender_gets_part_of_the_union():
+    """Issue 49 row 12: MinotaurAlgorithm.cs 176-180 (Greed.cs 114-118) combine the first heartbeat with each
+    later one in turn, each Combine synchronising two maps (HeartbeatMessage.cs 56-57, Greed.cs 254-255):
+    with senders 0, 1, 2 heard by robot 3, robots 0 and 2 end with the union, robot 1 with 0 | 1 only."""
+    merge = MaesMerge(4, "maes_heartbeat", 10)
+    known = maps(4)
+    before = known.copy()
+    changed = merge.receive(beats((0, [3]), (1, [3]), (2, [3])), known, np.ones(4, bool))
+    assert changed == {0, 1, 2} and merge.merges == 2
+    union = np.maximum.reduce(before[[0, 1, 2]])
+    assert (known[0] == union).all() and (known[2] == union).all()
+    assert (known[1] == np.maximum(before[0], before[1])).all() and known[1, 2, 2] == 0, "sender 1 misses 2's cell"
+    assert (known[3] == before[3]).all()
+
+
 def test_tnf_sync_the_highest_id_broadcaster_merges_everyone():
     """MAES TnfExplorationAlgorithm.AwaitCommunication: a broadcaster none of whose senders has a higher id
     synchronises its own map with the senders' maps; others do nothing; a robot that did not broadcast
