@@ -36,6 +36,7 @@ _ARRAYS_V1 = ("pose", "metrics", "known_gap", "known_val", "seen_gap", "link_idx
 _BLOCK_ARRAYS = (*_ARRAYS_V1, "msg_via", "msg_lost_n", "msg_lost", "msg_lost_cause", "group_robot", "group_id",
                  "aoi_idx", "aoi_val", "contact_robot", "team_free", "group_n", "aoi_n", "contact_n")
 _GAPPED_V3 = ("link_idx", "rssi_idx", "aoi_idx")
+_U32 = 1 << 32
 """Index streams that version 3 stores as per-tick gaps under ``*_gap`` (read back as indices here)."""
 
 
@@ -108,13 +109,18 @@ def _absolute(gaps: np.ndarray, offsets: np.ndarray) -> np.ndarray:
 
 
 def _last_wins(size: int, idx: np.ndarray, values: np.ndarray, fill: Any, dtype: Any) -> np.ndarray:
-    """A flat array of ``size`` with ``values`` written at ``idx`` in order (later writes win)."""
+    """A flat array of ``size`` with ``values`` written at ``idx`` in order (later writes win), a slice of
+    :data:`_LAST_WINS_STEP` entries at a time (a swarm's stream has hundreds of millions: sorting it whole
+    took gigabytes)."""
     out = np.full(size, fill, dtype=dtype)
-    if len(idx):
-        rev = idx[::-1]
+    for a in range(0, len(idx), _LAST_WINS_STEP):
+        rev = idx[a:a + _LAST_WINS_STEP][::-1]
         unique, first = np.unique(rev, return_index=True)
-        out[unique] = values[::-1][first]
+        out[unique] = values[a:a + _LAST_WINS_STEP][::-1][first]
     return out
+
+
+_LAST_WINS_STEP = 1 << 24
 
 
 def dequantise_rssi(q: np.ndarray, quantum_db: float) -> np.ndarray:
@@ -135,19 +141,29 @@ class Recording:
         if first is None or first[0] != HEAD:
             raise bad(path, "the first chunk is not HEAD")
         self.header = self._check_header(first[1])
-        chunks = [first, *stream]
-        if chunks[-1][0] != TAIL:
-            raise bad(path, "no TAIL chunk: the recording is truncated or was not finished")
-        blocks = chunks[1:-1]
-        if any(kind != BLOCK for kind, _ in blocks):
-            raise bad(path, "unexpected chunk kinds between HEAD and TAIL")
-        self._load_blocks([body for _, body in blocks])
-        tail = chunks[-1][1]
+        ending: list[dict[str, Any]] = []  # the TAIL, once the blocks before it are read
+        self._load_blocks(self._blocks(stream, ending))
+        tail = ending[0]
         if tail.get("ticks") != self.ticks:
             raise bad(path, f"TAIL says {tail.get('ticks')!r} ticks, the blocks hold {self.ticks}")
         summary, events = tail.get("summary"), tail.get("events")
         self.summary: dict[str, Any] = summary if isinstance(summary, dict) else {}
         self.events: list[Any] = events if isinstance(events, list) else []
+
+    def _blocks(self, stream: Any, ending: list[dict[str, Any]]) -> Any:
+        """The BLCK bodies after HEAD, one at a time (a swarm's file inflates to gigabytes: each block is
+        decoded into its arrays and dropped before the next is inflated); the TAIL goes into ``ending``."""
+        for kind, body in stream:
+            if ending:
+                raise bad(self.path, "unexpected chunk kinds between HEAD and TAIL")
+            if kind == TAIL:
+                ending.append(body)
+            elif kind == BLOCK:
+                yield body
+            else:
+                raise bad(self.path, "unexpected chunk kinds between HEAD and TAIL")
+        if not ending:
+            raise bad(self.path, "no TAIL chunk: the recording is truncated or was not finished")
 
     # -------------------------------------------------------------------------------- validation ----
     def _check_header(self, h: dict[str, Any]) -> dict[str, Any]:
@@ -193,13 +209,21 @@ class Recording:
             if stored not in body:
                 raise bad(self.path, f"block {index} has no {stored!r}")
             out[name] = unpack_array(body[stored], f"block {index}.{stored}", self.path)
+        # Per-tick gaps become absolute indices here, block by block, kept as uint32 (the recorder's flat
+        # indices are below 2**32): a 1,000-robot, 3,000-tick file holds hundreds of millions of them
+        gap_streams = [("known_gap", "known"), ("seen_gap", "seen")]
         if gapped:
-            for name in _GAPPED_V3:
-                counts = out[name.replace("_idx", "_n")]
-                if int(counts.sum(dtype=np.int64)) != out[name].size:
-                    raise bad(self.path, f"block {index}: {name.replace('_idx', '_gap')} has {out[name].size} "
-                                         f"entries, its counts say {int(counts.sum(dtype=np.int64))}")
-                out[name] = _absolute(out[name].astype(np.int64), _offsets(counts.astype(np.int64)))
+            gap_streams += [(name, name[:-4]) for name in _GAPPED_V3]
+        for name, stream in gap_streams:
+            stored = name.replace("_idx", "_gap")
+            counts = out[f"{stream}_n"]
+            total = int(counts.sum(dtype=np.int64))
+            if total != out[name].size:
+                raise bad(self.path, f"block {index}: {stored} has {out[name].size} entries, its counts say {total}")
+            absolute = _absolute(out[name].astype(np.int64), _offsets(counts.astype(np.int64)))
+            if absolute.size and int(absolute.max()) >= _U32:
+                raise bad(self.path, f"block {index}: a {stream} index is outside the map or robot range")
+            out[name] = absolute.astype(np.uint32)
         if not self.has_comm:  # version 1: no communication streams, every message its sender's own
             n, msgs = body.get("n"), len(out["msg_sender"])
             zeros = np.zeros(n if isinstance(n, int) and n > 0 else 0, dtype=np.uint32)
@@ -261,17 +285,19 @@ class Recording:
         if tick == 0:
             raise bad(path, "no ticks recorded")
         self.ticks: int = tick
-        cat = {name: _cat(p, "f8") for name, p in parts.items()}
+        cat = {name: _cat(parts.pop(name), "f8") for name in list(parts)}  # each list freed once joined
         self.poses: np.ndarray = cat["pose"].reshape(tick, r, 3)
         self.explored: np.ndarray = cat["metrics"].reshape(tick, 2)[:, 0].copy()
         self.coverage: np.ndarray = cat["metrics"].reshape(tick, 2)[:, 1].copy()
         self._off = {s: _offsets(cat[f"{s}_n"].astype(np.int64)) for s in STREAMS}
-        self._known_idx = _absolute(cat["known_gap"].astype(np.int64), self._off["known"])
-        self._known_val = cat["known_val"].astype(np.uint8)
-        self._seen_idx = _absolute(cat["seen_gap"].astype(np.int64), self._off["seen"])
-        self._link_idx = cat["link_idx"].astype(np.int64)
-        self._rssi_idx = cat["rssi_idx"].astype(np.int64)
-        self._rssi_val = cat["rssi_val"].astype(np.int16)
+        # The big streams keep their stored widths (uint32 indices, small values): widened copies of a
+        # swarm's streams took tens of gigabytes
+        self._known_idx = cat["known_gap"]  # absolute since _arrays
+        self._known_val = cat["known_val"].astype(np.uint8, copy=False)
+        self._seen_idx = cat["seen_gap"]
+        self._link_idx = cat["link_idx"].astype(np.uint32, copy=False)
+        self._rssi_idx = cat["rssi_idx"].astype(np.uint32, copy=False)
+        self._rssi_val = cat["rssi_val"].astype(np.int16, copy=False)
         for name, values, limit in (("knowledge", self._known_idx, r * h * w), ("seen", self._seen_idx, h * w),
                                     ("link", self._link_idx, r * r), ("rssi", self._rssi_idx, r * r),
                                     ("message sender", cat["msg_sender"], r), ("receiver", cat["msg_recv"], r),
@@ -284,45 +310,45 @@ class Recording:
                 raise bad(path, f"a {name} index is outside the map or robot range")
         if len(self._known_val) and int(self._known_val.max()) > 2:
             raise bad(path, "a knowledge value is not UNSEEN, FREE or SOLID")
-        self._msg = {k: cat[f"msg_{k}"].astype(np.int64)
-                     for k in ("sender", "seq", "size", "recv_n", "recv", "via", "lost_n", "lost", "lost_cause")}
+        self._msg = {k: cat[f"msg_{k}"].astype(np.int64) for k in ("sender", "seq", "size", "recv_n", "via", "lost_n")}
+        for k in ("recv", "lost", "lost_cause"):  # per receiver or lost delivery: narrow as stored
+            self._msg[k] = cat[f"msg_{k}"].astype(np.uint16 if k != "lost_cause" else np.uint8, copy=False)
         self._msg_lost_off = _offsets(self._msg["lost_n"])
         self._group_robot = cat["group_robot"].astype(np.int64)
         self._group_id = cat["group_id"].astype(np.int64)
-        self._aoi_idx = cat["aoi_idx"].astype(np.int64)
-        self._aoi_val = cat["aoi_val"].astype(np.int64)
+        self._aoi_idx = cat["aoi_idx"].astype(np.uint32, copy=False)
+        self._aoi_val = cat["aoi_val"].astype(np.uint32, copy=False)
         self._contact_robot = cat["contact_robot"].astype(np.int64)
         self._contact_tick = np.repeat(np.arange(tick, dtype=np.int64), np.diff(self._off["contact"]))
         self.team_free: np.ndarray = cat["team_free"].astype(np.int64)
         """Per tick: the team's known free cells (0 in a version 1 file)."""
         self._msg["type"] = _cat(types, "i8")
         self._msg_recv_off = _offsets(self._msg["recv_n"])
-        msg_rssi = cat["msg_rssi"].astype(np.int16)
-        if self.version >= 3:
-            msg_rssi = self._undelta_msg_rssi(msg_rssi)
-        self._msg_rssi = dequantise_rssi(msg_rssi, self.quantum)
+        msg_rssi = cat["msg_rssi"].astype(np.int16, copy=False)
+        self._msg_rssi = self._undelta_msg_rssi(msg_rssi) if self.version >= 3 else msg_rssi  # quantised
         self.message_types: tuple[str, ...] = tuple(type_names)
         self._act_robot = cat["act_robot"].astype(np.int64)
         self._acts: list[bytes] = acts
 
     def _undelta_msg_rssi(self, delta: np.ndarray) -> np.ndarray:
         """Version 3 stores each receiver's RSSI as its difference (mod 2**16) from the RSSI stream's value of
-        the pair at the sending tick: add that value back, for all messages at once (the stream's last update
-        of each pair at or before the tick, found by sorting the updates by pair and tick)."""
-        r, ticks = self.n_robots, self.ticks
-        update_tick = np.repeat(np.arange(ticks, dtype=np.int64), np.diff(self._off["rssi"]))
-        keys = self._rssi_idx * ticks + update_tick
-        order = np.argsort(keys, kind="stable")
-        keys, values = keys[order], self._rssi_val[order]
-        msg_tick = np.repeat(np.arange(ticks, dtype=np.int64), np.diff(self._off["msg"]))
-        per_receiver = np.repeat(np.arange(len(msg_tick)), self._msg["recv_n"])
-        pair = self._msg["recv"] * r + self._msg["via"][per_receiver]
-        pos = np.searchsorted(keys, pair * ticks + msg_tick[per_receiver], side="right") - 1
-        known = pos >= 0
-        known[known] = keys[pos[known]] // ticks == pair[known]
-        base = np.full(len(pair), RSSI_NAN, dtype=np.int32)
-        base[known] = values[pos[known]]
-        return (base + delta.astype(np.int32)).astype(np.int16)
+        the pair at the sending tick: add that value back, replaying the stream tick by tick into one R x R
+        matrix (memory: the matrix and one tick's receivers)."""
+        r = self.n_robots
+        current = np.full(r * r, RSSI_NAN, dtype=np.int16)
+        out = np.empty(len(delta), dtype=np.int16)
+        rssi_off, msg_off, recv_off = self._off["rssi"], self._off["msg"], self._msg_recv_off
+        for t in range(self.ticks):
+            a, b = rssi_off[t], rssi_off[t + 1]
+            if b > a:  # one update per pair and tick
+                current[self._rssi_idx[a:b]] = self._rssi_val[a:b]
+            m0, m1 = msg_off[t], msg_off[t + 1]
+            lo, hi = recv_off[m0], recv_off[m1]
+            if hi > lo:
+                via = np.repeat(self._msg["via"][m0:m1], self._msg["recv_n"][m0:m1])
+                pair = self._msg["recv"][lo:hi].astype(np.int64) * r + via
+                out[lo:hi] = (current[pair].astype(np.int32) + delta[lo:hi]).astype(np.int16)
+        return out
 
     # ------------------------------------------------------------------------------ reconstruction ----
     def _check_tick(self, tick: int) -> int:
@@ -410,7 +436,8 @@ class Recording:
                                                                               m["lost_cause"][c:d].tolist()))
         return MessageRecord(tick=tick, sender=int(m["sender"][k]), seq=int(m["seq"][k]),
                              type=self.message_types[int(m["type"][k])], size=int(m["size"][k]),
-                             receivers=tuple(m["recv"][a:b].tolist()), rssi_dbm=tuple(self._msg_rssi[a:b].tolist()),
+                             receivers=tuple(m["recv"][a:b].tolist()),
+                             rssi_dbm=tuple(dequantise_rssi(self._msg_rssi[a:b], self.quantum).tolist()),
                              transmitter=int(m["via"][k]), lost=lost)
 
     def comm_at(self, tick: int) -> CommState:

@@ -8,7 +8,6 @@ identical bytes), then an empty final block and the Adler-32 of the whole conten
 
 from __future__ import annotations
 
-import resource
 import struct
 import subprocess
 import sys
@@ -68,16 +67,19 @@ def test_the_zero_bomb_is_a_valid_zlib_stream():
     assert len(raw) == 3 * MIB + 5 and msgpack.unpackb(raw) == {"x": b"\0" * (3 * MIB - 3)}
 
 
-def _child(code: str, timeout: float) -> tuple[subprocess.CompletedProcess, float, float]:
-    """Run ``code`` in a fresh Python; its completed process, wall seconds and peak RSS in MB."""
-    before = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
+def _child(code: str, timeout: float, tmp_path: Path) -> tuple[subprocess.CompletedProcess, float, float]:
+    """Run ``code`` in a fresh Python; its completed process, wall seconds and its own peak RSS in MB (the
+    child writes it at exit: RUSAGE_CHILDREN would give the largest child this test process ever ran)."""
+    peak_file = tmp_path / "peak.txt"
+    wrapped = ("import atexit, os, resource\n"
+               "atexit.register(lambda: open(os.environ['PEAK_FILE'], 'w').write("
+               "str(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)))\n" + code)
     t0 = time.monotonic()
-    proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=timeout,
-                          check=False, cwd=ROOT, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"})
+    proc = subprocess.run([sys.executable, "-c", wrapped], capture_output=True, text=True, timeout=timeout,
+                          check=False, cwd=ROOT, env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin",
+                                                      "PEAK_FILE": str(peak_file)})
     wall = time.monotonic() - t0
-    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss
-    assert peak >= before
-    return proc, wall, peak / 1024  # ru_maxrss is in KiB on Linux; the maximum over all children so far
+    return proc, wall, int(peak_file.read_text()) / 1024  # ru_maxrss is in KiB on Linux
 
 
 @pytest.mark.timeout(120)
@@ -90,7 +92,7 @@ def test_a_gigabyte_bomb_is_refused_in_seconds_and_little_memory(tmp_path):
             "from swarm.base.errors import InvalidInput\n"
             f"try:\n    load_recording({str(path)!r})\n"
             "except InvalidInput as exc:\n    print(exc)\n")
-    proc, wall, peak_mb = _child(code, timeout=60)
+    proc, wall, peak_mb = _child(code, timeout=60, tmp_path=tmp_path)
     assert proc.returncode == 0, proc.stderr
     assert "chunk 0 inflates to more than" in proc.stdout, proc.stdout
     assert wall < 20, wall
@@ -102,7 +104,7 @@ def test_swarm_view_refuses_the_bomb_in_one_line(tmp_path):
     path = tmp_path / "bomb.swr"
     path.write_bytes(bomb_file())
     code = f"import sys\nfrom swarm.cli import main\nsys.exit(main(['view', {str(path)!r}, '-o', {str(tmp_path / 'v.html')!r}]))\n"
-    proc, wall, peak_mb = _child(code, timeout=60)
+    proc, wall, peak_mb = _child(code, timeout=60, tmp_path=tmp_path)
     assert proc.returncode == 2, proc.stderr
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("swarm: error: recording") and "inflates to more than" in lines[0]
