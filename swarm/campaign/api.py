@@ -107,6 +107,9 @@ def run(spec: Any, out: str | os.PathLike[str], *, workers: int | None = None, d
     from .executors import check_dask_address, make_executor
     from .runner import parse_shard, run_campaign
 
+    for flag, value in (("--retry-failed", retry_failed), ("--inline", inline), ("progress", progress)):
+        if not isinstance(value, bool):  # a set or a string would reach the results folder's JSON
+            raise InvalidInput(flag, value, "True or False")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or not 1 <= workers <= 1024):
         raise InvalidInput("--workers", workers, "an integer from 1 to 1024")
     if inline and (dask is not None or workers):

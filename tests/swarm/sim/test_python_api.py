@@ -221,7 +221,9 @@ def test_observers_that_are_not_a_list_of_callables_are_one_line_errors(observer
 
 
 @pytest.mark.parametrize("kwargs, field", [({"shard": (1, 2)}, "--shard"), ({"shard": 1}, "--shard"),
-                                           ({"out": 5}, "-o"), ({"out": ""}, "-o")])
+                                           ({"out": 5}, "-o"), ({"out": ""}, "-o"),
+                                           ({"retry_failed": set()}, "--retry-failed"),  # found by the fuzz
+                                           ({"retry_failed": "yes"}, "--retry-failed"), ({"progress": 1}, "progress")])
 def test_campaign_run_arguments_of_the_wrong_type_are_one_line_errors(kwargs, field, tmp_path):
     args = {"out": tmp_path / "x", "inline": True, **kwargs}
     with pytest.raises(InvalidInput) as exc:
