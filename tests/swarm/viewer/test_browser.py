@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from maps.materials import colour_of
-from swarm.record import Recorder, load_recording
+from swarm.record import Recorder, load_recording, record_run
 from swarm.record.animation import ROBOT_COLOURS
 from swarm.sim.loop import Simulation
 from swarm.viewer import write_html
@@ -54,11 +54,8 @@ V1_FILE = Path(__file__).parents[1] / "record" / "data" / "v1-building20.swr"
 @pytest.fixture(scope="module")
 def recording(tmp_path_factory):
     folder = tmp_path_factory.mktemp("browser")
-    sim = Simulation(SPEC)
-    recorder = Recorder.attach(sim)
-    result = sim.run()
-    recorder.finish(sim, result)
-    path = recorder.save(folder / "run.swr")
+    path = folder / "run.swr"
+    result = record_run(Simulation(SPEC), path)
     html = write_html(path, folder / "run.html")
     return load_recording(path), html, result
 
@@ -411,11 +408,7 @@ def test_a_version_2_recording_plays_as_version_3_of_the_same_run(browser, tmp_p
     """Version 3 stores link toggles, RSSI updates and merges as per-tick gaps: the page shows the run
     recorded before that change exactly as the same run recorded now."""
     from tests.swarm.record.test_record_comm import V2_FILE, V2_SPEC
-    sim = Simulation(V2_SPEC)
-    recorder = Recorder.attach(sim)
-    result = sim.run()
-    recorder.finish(sim, result)
-    recorder.save(tmp_path / "v3.swr")
+    record_run(Simulation(V2_SPEC), tmp_path / "v3.swr")
     shown = []
     for path in (V2_FILE, tmp_path / "v3.swr"):
         html = write_html(path, tmp_path / (path.stem + ".html"))
@@ -441,11 +434,8 @@ SWARM_TICK = 20
 @pytest.fixture(scope="module")
 def swarm_recording(tmp_path_factory):
     folder = tmp_path_factory.mktemp("swarm")
-    sim = Simulation(SWARM_SPEC)
-    recorder = Recorder.attach(sim)
-    result = sim.run()
-    recorder.finish(sim, result)
-    path = recorder.save(folder / "swarm.swr")
+    path = folder / "swarm.swr"
+    result = record_run(Simulation(SWARM_SPEC), path)
     return load_recording(path), write_html(path, folder / "swarm.html"), result
 
 
