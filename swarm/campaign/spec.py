@@ -81,7 +81,7 @@ from typing import Any
 
 from swarm.base.errors import InvalidInput
 
-from swarm.sim.spec import RunSpec, derive_seed
+from swarm.sim.spec import RobotsSpec, RunSpec, derive_seed
 from . import cells as cellgrid
 from .files import read_user_file
 from .limits import MAX_RUNS
@@ -89,7 +89,7 @@ from .text import clip
 
 DIMENSIONS = ("map", "size", "robots", "spawn", "algorithm", "radio", "comm", "transport")
 REQUIRED = ("map", "size", "robots", "spawn", "algorithm", "radio")
-AXIS_SECTIONS = ("radio", "comm")
+AXIS_SECTIONS = ("radio", "comm", "motion", "robots")
 """Run-spec sections whose parameters may be grid axes (``radio.sensitivity_dbm``, ``comm.loss``)."""
 DEFAULT_ROBOT_SERIES_EVERY = 10
 """``output.robot_series_every`` defaults to this many time-series rows."""
@@ -399,7 +399,7 @@ class CampaignSpec:
         spec: dict[str, Any] = json.loads(json.dumps(self.run))
         spec["seed"] = seeds["run_seed"]
         spec["map"] = {**kind_opt.value, "size": size, "seed": seeds["map_seed"]}
-        spec["robots"] = {"count": cell["robots"].value, "spawn": cell["spawn"].value,
+        spec["robots"] = {**spec.get("robots", {}), "count": cell["robots"].value, "spawn": cell["spawn"].value,
                           "spawn_seed": seeds["spawn_seed"]}
         spec["algorithm"] = cell["algorithm"].value
         spec["radio"] = dict(cell["radio"].value)
@@ -408,7 +408,7 @@ class CampaignSpec:
         for axis in (dim for dim in cell if is_axis(dim)):
             section, name = axis.split(".", 1)
             dim_opt = cell.get(section)
-            if dim_opt is not None and name in dim_opt.value:
+            if dim_opt is not None and isinstance(dim_opt.value, Mapping) and name in dim_opt.value:
                 raise InvalidInput(f"grid.{section}", dim_opt.label, f"an entry without '{name}' ({axis} is a grid "
                                                                       "axis: set it in one place)")
             spec[section] = {**spec.get(section, {}), name: cell[axis].value}
@@ -528,8 +528,13 @@ def campaign_from_mapping(raw: Mapping[str, Any]) -> CampaignSpec:
         grid[dim] = options
     run_base = _table(raw, "run")
     for key in ("seed", "map", "robots", "algorithm", "radio", "transport", "stop", "record_every"):
+        if key == "robots" and isinstance(run_base.get(key), Mapping) and set(run_base[key]) <= {"heading"}:
+            RobotsSpec(**run_base[key])   # robots.heading may be set for every run; count and spawn are dimensions
+            continue
         if key in run_base:
-            raise InvalidInput(f"run.{key}", run_base[key], "not in [run]: set it in [grid], [stop] or [output]")
+            raise InvalidInput(f"run.{key}", run_base[key], "not in [run]: set it in [grid], [stop] or [output]"
+                                                            if key != "robots" else "only {heading = ...} in [run]: "
+                                                            "robot counts and spawns are [grid] dimensions")
     stop = _table(raw, "stop")
     output = _table(raw, "output")
     for key in output:
@@ -570,19 +575,23 @@ def _rules(raw: Mapping[str, Any], name: str, grid: Mapping[str, Any]) -> list[d
 
 
 def is_axis(dim: str) -> bool:
-    """A radio or comm parameter axis (``radio.sensitivity_dbm``), not a fixed dimension."""
+    """A radio, comm or motion parameter axis (``radio.sensitivity_dbm``, ``motion.model``) or
+    ``robots.heading``, not a fixed dimension."""
     return dim.partition(".")[0] in AXIS_SECTIONS and "." in dim
 
 
 def axis_fields(section: str) -> tuple[str, ...]:
     """The parameters of a section that may be axes: every field of its dataclass (radio: but ``model``,
-    the radio dimension itself)."""
+    the radio dimension itself; robots: ``heading`` only, count and spawn being dimensions)."""
     from radio import RadioConfig
     from swarm.comm.medium import CommSpec
+    from swarm.world.motion import MotionParams
 
-    cls = RadioConfig if section == "radio" else CommSpec
+    if section == "robots":
+        return ("heading",)
+    cls = {"radio": RadioConfig, "comm": CommSpec, "motion": MotionParams}[section]
     return tuple(f.name for f in dataclasses.fields(cls)  # tables (materials, overrides) are not plain values
-                 if f.name != "model" and f.default_factory is dataclasses.MISSING)
+                 if not (section == "radio" and f.name == "model") and f.default_factory is dataclasses.MISSING)
 
 
 def _flatten_axes(table: Mapping[str, Any], where: str, default_model: bool = False) -> dict[str, Any]:
@@ -640,11 +649,17 @@ def _parse_axis(axis: str, value: Any, where: str, radio: tuple[Option, ...] | N
                                                         f"{', '.join(axis_fields(section))}{hint}")
     if isinstance(value, (list, dict)) or value is None:
         raise InvalidInput(where, value, f"a plain value of {axis} (a number, string or boolean)")
-    tables = [{}] if section == "comm" else [opt.value for opt in radio or ()] or [{}]
+    tables = [{}] if section != "radio" else [opt.value for opt in radio or ()] or [{}]
     for k, table in enumerate(tables):
         try:
             if section == "comm":
                 from_mapping(CommSpec, {name: value}, prefix="comm.")
+            elif section == "motion":
+                from swarm.world.motion import MotionParams
+
+                from_mapping(MotionParams, {name: value}, prefix="motion.")
+            elif section == "robots":
+                from_mapping(RobotsSpec, {name: value}, prefix="robots.")
             else:
                 config_from_mapping({**table, name: value})
             break

@@ -251,11 +251,12 @@ def summarise(pairs: pd.DataFrame, by: Sequence[str], *, units: Sequence[str] = 
 
 def talk_only(dim: str) -> bool:
     """A dimension that only changes how robots talk (:data:`COMM_DIMS` or a radio/comm parameter axis)."""
-    return dim in COMM_DIMS or is_axis(dim)
+    return dim in COMM_DIMS or (is_axis(dim) and dim.partition(".")[0] in ("radio", "comm"))
 
 
 def dims_of(frame: pd.DataFrame) -> list[str]:
-    """The grid dimensions a frame of runs has: :data:`.load.DIMS` and any radio/comm parameter axes."""
+    """The grid dimensions a frame of runs has: :data:`.load.DIMS` and any parameter axes (radio, comm,
+    motion, robots.heading)."""
     return [*DIMS, *(c for c in frame.columns if is_axis(c))]
 
 

@@ -130,3 +130,38 @@ def test_axis_labels_and_comm_metrics_reach_the_parquet_results(tmp_path):
     finals = dict(zip(runs["key"], runs["ticks"]))
     for key, ticks in per_run.items():
         assert all(t % 10 == 0 for t in ticks[:-1]) and ticks[-1] == finals[key]
+
+
+MOTION = HEAD + """
+radio = ["global"]
+motion.model = ["continuous", "maes"]
+"robots.heading" = ["random", "maes"]
+
+[run]
+motion = {max_speed = 3.0, max_turn_rate = 4.0, max_accel = 60.0, max_turn_accel = 120.0}
+
+[stop]
+max_ticks = 30
+"""
+
+
+def test_the_motion_model_and_the_spawn_heading_are_axes():
+    """Issue 49: MAES's motion and MAES's spawn heading can be switched per cell (the ablation's departures)."""
+    runs = parse_campaign(MOTION).runs()
+    assert len(runs) == 4
+    for run in runs:
+        assert run.spec.motion.model == run.cell["motion.model"]
+        assert run.spec.robots.heading == run.cell["robots.heading"]
+        assert run.spec.motion.max_speed == 3.0      # the axis joins [run]'s motion table
+    assert len({r.spec.robots.spawn_seed for r in runs}) == 1   # the same worlds in every cell
+
+
+def test_run_may_set_the_heading_but_not_the_robot_count():
+    text = HEAD + 'radio = ["global"]\n[run]\nrobots = {heading = "maes"}\n[stop]\nmax_ticks = 30\n'
+    assert {r.spec.robots.heading for r in parse_campaign(text).runs()} == {"maes"}
+    err = error_of(text.replace('robots = {heading = "maes"}', "robots = {count = 4}"))
+    assert err.field == "run.robots" and "only {heading = ...}" in str(err)
+    err = error_of(MOTION.replace('motion.model = ["continuous", "maes"]', 'motion.model = ["continuous", "unity"]'))
+    assert err.field == "grid.motion.model[1]" and "'maes'" in str(err)
+    err = error_of(MOTION.replace('"robots.heading" = ["random", "maes"]', '"robots.count" = [3]'))
+    assert err.field == "grid.robots.count" and "heading" in str(err)
