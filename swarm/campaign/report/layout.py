@@ -111,19 +111,22 @@ def parse_layout(text: str, source: str = "<string>") -> tuple[FigureLayout, ...
 def _panel(raw: Any, where: str) -> Panel:
     if not isinstance(raw, dict):
         raise InvalidInput(where, raw, "a table")
+    from ..spec import is_axis
+
     for key in raw:
-        if key not in PANEL_KEYS:
-            raise InvalidInput(f"{where}.{clip(key)}", raw[key], ", ".join(PANEL_KEYS))
+        if key not in PANEL_KEYS and not is_axis(key):
+            raise InvalidInput(f"{where}.{clip(key)}", raw[key], ", ".join(PANEL_KEYS) + " or a grid axis "
+                                                                 "(\"motion.model\", \"radio.sensitivity_dbm\", ...)")
     compare = raw.get("compare")
-    if not isinstance(compare, str) or compare not in COMPARABLE:
-        raise InvalidInput(f"{where}.compare", compare, ", ".join(COMPARABLE))
+    if not isinstance(compare, str) or not (compare in COMPARABLE or is_axis(compare)):
+        raise InvalidInput(f"{where}.compare", compare, ", ".join(COMPARABLE) + " or a grid axis")
     if compare in raw:
         raise InvalidInput(f"{where}.{compare}", raw[compare], f"nothing: '{compare}' is the compared dimension")
     title = raw.get("title")
     if title is not None and not isinstance(title, str):
         raise InvalidInput(f"{where}.title", title, "a string")
     fixed = []
-    for key in PANEL_KEYS[2:]:
+    for key in [*PANEL_KEYS[2:], *sorted(k for k in raw if is_axis(k))]:
         if key in raw:
             value = raw[key]
             if isinstance(value, bool) or not isinstance(value, (str, int)):

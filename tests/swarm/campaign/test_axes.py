@@ -165,3 +165,32 @@ def test_run_may_set_the_heading_but_not_the_robot_count():
     assert err.field == "grid.motion.model[1]" and "'maes'" in str(err)
     err = error_of(MOTION.replace('"robots.heading" = ["random", "maes"]', '"robots.count" = [3]'))
     assert err.field == "grid.robots.count" and "heading" in str(err)
+
+
+def test_figure_panels_may_fix_or_compare_an_axis(tmp_path):
+    """The ablation's figures hold MAES's motion fixed, and one compares the motion models."""
+    from pathlib import Path
+
+    from swarm.campaign.report.layout import check_layout, load_layout, parse_layout
+
+    layout = parse_layout('[[figure]]\nname = "f"\ntitle = "t"\n[[figure.panel]]\ncompare = "algorithm"\n'
+                          '"motion.model" = "maes"\n[[figure.panel]]\ncompare = "motion.model"\nmap = "cave"\n')
+    assert layout[0].panels[0].fixed == (("motion.model", "maes"),)
+    assert layout[0].panels[1].compare == "motion.model"
+    check_layout(layout, {"algorithm": ["greed"], "map": ["cave"], "motion.model": ["maes", "continuous"]})
+    with pytest.raises(InvalidInput) as info:
+        check_layout(layout, {"algorithm": ["greed"], "map": ["cave"], "motion.model": ["continuous"]})
+    assert info.value.field == "figure[0].panel[0].motion.model"
+    with pytest.raises(InvalidInput, match="grid axis"):
+        parse_layout('[[figure]]\nname = "f"\ntitle = "t"\n[[figure.panel]]\ncompare = "algorithm"\nmotor = 1\n')
+    root = Path(__file__).resolve().parents[3]
+    figures = load_layout(root / "examples" / "minotaur-ablation-figures.toml")
+    spec = parse_campaign((root / "examples" / "minotaur-ablation.toml").read_text())
+    orders = {dim: [o.label for o in opts] for dim, opts in spec.grid.items()}
+    for rule in spec.include:   # labels the includes add
+        for dim, value in rule.items():
+            for v in value if isinstance(value, list) else [value]:
+                label = v.get("label") if isinstance(v, dict) else str(v)
+                if label not in orders.setdefault(dim, []):
+                    orders[dim].append(label)
+    check_layout(figures, orders)

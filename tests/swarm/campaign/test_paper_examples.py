@@ -111,6 +111,27 @@ def test_comm_sweep_example_sweeps_sensitivity_and_loss_from_the_best_radio() ->
     assert flood and flood < plain, "every relaying run has its pair without relaying"
 
 
+def test_ablation_example_is_full_maes_parity_with_one_departure_per_slice() -> None:
+    """examples/minotaur-ablation.toml (issue 49): at least 20 maps per cell, every algorithm's MAES variant,
+    MAES's motion and heading under full parity, and each departure (swarm's motion among them) a slice
+    that differs from parity in that one setting, on the same maps."""
+    spec = load_campaign(ROOT / "examples" / "minotaur-ablation.toml")
+    assert spec.replicates >= 20
+    runs = spec.runs()
+    parity = [r for r in runs if r.cell["radio"] == "materials" and r.cell["comm"] == "MAES"
+              and r.cell["motion.model"] == "maes" and "(swarm)" not in r.cell["algorithm"]]
+    assert {r.spec.algorithm.params["variant"] for r in parity} == {"maes"}
+    assert {r.spec.robots.heading for r in runs} == {"maes"}
+    assert {r.spec.motion.max_speed for r in runs} == {3.0}
+    smooth = [r for r in runs if r.cell["motion.model"] == "continuous"]
+    assert {r.cell["algorithm"] for r in smooth} == {"Greed", "TNF", "Minotaur"}
+    assert {r.cell["radio"] for r in smooth} == {"materials"} and {r.cell["comm"] for r in smooth} == {"MAES"}
+    def world(r):
+        return (r.cell["map"], r.cell["size"], r.cell["robots"], r.cell["spawn"], r.cell["algorithm"], r.replicate)
+    assert {world(r) for r in smooth} == {world(r) for r in parity}, "each departure run has its parity pair"
+    assert {r.cell["algorithm"] for r in runs} >= {"Greed (swarm)", "TNF (swarm)", "Minotaur (swarm)"}
+
+
 def test_swarm_sizes_example_runs_16_to_1024_robots_and_reports(tmp_path: Path) -> None:
     """Issue 47: a campaign grid of 16 to 1,024 robots works end to end, report included (cut to 3 ticks a
     run and a 150-tile building here; the example's 100 ticks on 300 tiles take ~1.5 min)."""
