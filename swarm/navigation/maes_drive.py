@@ -27,22 +27,22 @@ the same for the goal the algorithm last set: the goal counts as ``reached`` onc
 
 Departures (docs/maes.md section 4.1):
 
-- The two tasks use swarm's controls (brake at half the drive's deceleration, end within 2 cm of the
-  distance and 0.002 rad of the angle), not MAES's force and drag arithmetic (its moves end within 0.1 m
-  and then coast, its rotations within 0.1 degrees). Speeds and accelerations are ``MotionParams``'s;
-  ``MotionParams.maes()`` holds MAES's.
-- A task that ends during a tick hands over to the next in that tick; MAES starts the next at the first
-  logic tick after the robot's wheels drop below 1 m/s (``UpdateMotorPhysics``, 149-162), which with its
-  drag is the next tick. Both spend whole ticks per task.
+- The two tasks end where MAES's do (a move with less than 0.1 m left, a rotation within 0.1 degrees) but
+  brake differently: MAES cuts its force at an over-estimated stop distance and coasts, acting every
+  10 ms; this controller acts once per tick, so it commands the fastest rate after which stopping lands on
+  the target, with the world's drive modelled as it is (:meth:`MaesDrive._rate`). Ticks per task are
+  within one of MAES's own arithmetic (``benchmarks/experiments/maes_task_timing.py``). Speeds and
+  accelerations are ``MotionParams``'s (``MotionParams.maes()`` holds MAES's).
+- The next task starts at the first tick the robot is idle, slower than 1 m/s over the last tick, as MAES
+  (``UpdateMotorPhysics`` 149-162, wheels under 0.01 tiles per physics step); MAES samples the wheels every
+  10 ms, here the tick's displacement counts.
 - Goals are points in metres; their tile is the 1 m tile holding them, or the nearest open tile within
   2 tiles when that one is not open (MAES's algorithms pick open coarse tiles themselves). The robot's
   own tile counts as open for planning.
 - Safety nets MAES has not: a task that makes no progress for 1 s ends (MAES's pushes on against a wall
-  until its algorithm's deadlock rule reacts); without progress for ``navigation.stuck_ticks`` the task
-  ends and the path
-  is planned again, and after ``navigation.max_replans`` plans (for a straight move: at once) the goal is
-  ``blocked``, as with swarm's navigator (a MAES robot may push against a wall until its algorithm's own
-  deadlock rule reacts).
+  until its algorithm's own deadlock rule reacts); without progress for ``navigation.stuck_ticks`` the
+  task ends and the path is planned again, and after ``navigation.max_replans`` plans (for a straight
+  move: at once) the goal is ``blocked``, as with swarm's navigator.
 """
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ import numpy as np
 
 from swarm import grid
 from swarm.base.types import CELL_M, FREE, SOLID, NavStatus, Pose, frozen_builder
-from swarm.world.motion import TICK_S, Follower, MotionParams, wrap_angle
+from swarm.world.motion import TICK_S, MotionParams, wrap_angle
 from .spec import NavigationSpec
 
 TILE_M = 1.0
@@ -69,8 +69,14 @@ RUN_SKIP_M = 0.3
 """TNF skips a path step whose end is nearer than 0.3 m (``MinimumMoveDistance``, line 76)."""
 SNAP_TILES = 2
 """A goal in a tile that is not open moves to the nearest open tile within this many tiles."""
-ARRIVE_M = 0.02
-"""A straight move ends this close to its distance."""
+MOVE_END_M = 0.1
+"""A straight move ends when less than 0.1 m is left (``FiniteMovementTask`` line 51); the robot then stops
+within a few centimetres (MAES: coasts, ending 0.05-0.07 m short, benchmarks/experiments/maes_task_timing.py)."""
+ROTATION_END_RAD = math.radians(0.1)
+"""A rotation ends within 0.1 degrees (``FiniteRotationTask``: ``targetDelta < 0.1f``)."""
+IDLE_BELOW_MPS = 1.0
+"""MAES's robot is idle, and may start a task, once its wheels move less than 0.01 tiles per 10 ms physics
+step (``UpdateMotorPhysics`` 154-162), i.e. 1 m/s; here the centre's speed over the last tick."""
 PROGRESS_M = 0.05
 TASK_STALL_TICKS = 10
 """A task that gains less than :data:`TASK_PROGRESS_M` (a move) or :data:`TASK_PROGRESS_RAD` (a rotation)
@@ -135,6 +141,28 @@ def _snap(space: np.ndarray, tile: tuple[int, int]) -> tuple[int, int]:
     return best
 
 
+def _ramp(w: float, command: float, substeps: int, dw: float) -> float:
+    """The drive's turn rate after ``substeps`` sub-steps toward ``command`` from ``w``, at most ``dw`` per
+    sub-step (:mod:`swarm.world.physics`)."""
+    for _ in range(substeps):
+        w = min(w + dw, command) if command > w else max(w - dw, command)
+    return w
+
+
+def _coast(w: float, command: float, substeps: int, dw: float) -> float:
+    """The turn, in sub-steps of rate, of ``substeps`` sub-steps toward ``command`` from ``w`` (each sub-step
+    moves at the rate before it); ``substeps = 0``: until the rate reaches ``command`` (0: stopping)."""
+    total = 0.0
+    k = 0
+    while (k < substeps) if substeps else (w != command):
+        total += w
+        w = min(w + dw, command) if command > w else max(w - dw, command)
+        k += 1
+        if k > 10_000:
+            break
+    return total
+
+
 class MaesDrive:
     """One robot's MAES controller: the goal and drive its algorithm set, the path (tiles, or the ends of
     its straight runs) and the task under way. Has :class:`~swarm.navigation.navigator.Navigator`'s
@@ -143,9 +171,16 @@ class MaesDrive:
     def __init__(self, spec: NavigationSpec, motion: MotionParams) -> None:
         self.spec = spec
         self.motion = motion
-        self._turner = Follower(motion)   # its turn_to: rotation in place that brakes onto a heading
-        c = self._turner._consts
-        self._max_speed, self._two_brake, self._gain = float(c[0]), float(c[3]), float(c[9])
+        self._max_speed, self._max_turn_rate = motion.max_speed, motion.max_turn_rate
+        self._last_xy: tuple[float, float, float] | None = None   # the pose of the last tick
+        self._speed = 0.0                 # m/s over the last tick, for MAES's idle rule
+        self._wheel_w = 0.0               # the world's drive turn rate as the last command left it (rad/s)
+        self._wheel_known = False         # whether the last tick's command was this controller's
+        self._substeps = motion.substeps or 1
+        self._dsub = TICK_S / self._substeps
+        self._dw = motion.max_turn_accel * self._dsub   # the most the turn rate changes per sub-step
+        self._wheel_v = 0.0               # and its forward speed (m/s)
+        self._dv = motion.max_accel * self._dsub
         self.goal: tuple[float, float] | None = None
         self.drive = "path"
         self.state = "idle"
@@ -189,16 +224,34 @@ class MaesDrive:
         """End the task under way (a collision, or the algorithm driving by velocity this tick)."""
         self._task = None
 
+    def skipped(self) -> None:
+        """This tick's command was not this controller's (the algorithm drove by velocity, or did not act)."""
+        self._task = None
+        self._wheel_known = False
+
     def command(self, pose: Pose, known: np.ndarray) -> tuple[float, float]:
         """This tick's (v, omega): the task under way, or, when the robot is idle, the next task toward the
         goal (and its first command)."""
+        last, self._last_xy = self._last_xy, (pose.x, pose.y, pose.theta)
+        self._speed = 0.0 if last is None else math.hypot(pose.x - last[0], pose.y - last[1]) / TICK_S
+        if not self._wheel_known:   # the robot was driven by velocity (or not at all): its rates then
+            self._wheel_w = 0.0 if last is None else wrap_angle(pose.theta - last[2]) / TICK_S
+            self._wheel_v = 0.0 if last is None else ((pose.x - last[0]) * math.cos(pose.theta)
+                                                      + (pose.y - last[1]) * math.sin(pose.theta)) / TICK_S
+        v, omega = self._command(pose, known)
+        self._wheel_w = _ramp(self._wheel_w, omega, self._substeps, self._dw)
+        self._wheel_v = _ramp(self._wheel_v, v, self._substeps, self._dv)
+        self._wheel_known = True
+        return v, omega
+
+    def _command(self, pose: Pose, known: np.ndarray) -> tuple[float, float]:
         if self._task is not None:
             step = self._step_task(pose)
             if step is not None:
                 self._track(pose, known)
                 return step
-        if self.goal is None or self.state != "moving":
-            return 0.0, 0.0
+        if self.goal is None or self.state != "moving" or self._speed >= IDLE_BELOW_MPS:
+            return 0.0, 0.0   # (still stopping: not idle yet)
         self._decide(pose, known)
         if self._task is None:
             return 0.0, 0.0
@@ -225,23 +278,42 @@ class MaesDrive:
         task = self._task
         assert task is not None
         if task[0] == 0.0:   # rotation in place onto a heading
-            v, omega = self._turner.turn_to(pose, task[1])
-            if omega == 0.0:
+            err = wrap_angle(task[1] - pose.theta)
+            if abs(err) <= ROTATION_END_RAD:
                 self._task = None
                 return None
-            if self._task_stalled_on(abs(wrap_angle(task[1] - pose.theta)), TASK_PROGRESS_RAD):
+            if self._task_stalled_on(abs(err), TASK_PROGRESS_RAD):
                 return None
-            return v, omega
+            sign = 1.0 if err > 0 else -1.0
+            return 0.0, sign * self._rate(abs(err), sign * self._wheel_w, self._max_turn_rate, self._dw)
         _, x0, y0, cos, sin, distance = task   # straight move along the heading it started on
         along = (pose.x - x0) * cos + (pose.y - y0) * sin
         rem = distance - along
-        if rem <= ARRIVE_M:
+        if rem <= MOVE_END_M:
             self._task = None
             return None
         if self._task_stalled_on(rem, TASK_PROGRESS_M):
             return None
-        v = min(self._max_speed, math.sqrt(self._two_brake * rem), max(self._gain * rem, min(0.05, rem / TICK_S)))
-        return v, 0.0
+        return self._rate(rem, self._wheel_v, self._max_speed, self._dv), 0.0
+
+    def _rate(self, left: float, w0: float, top: float, dw: float) -> float:
+        """The fastest rate (turn or forward) for this tick, toward a target ``left`` away, after which
+        commanding 0 stops the robot no further than the target; ``w0``: the drive's rate now (signed toward
+        the target), ``dw`` the most it changes per sub-step. MAES's controller acts every 10 ms physics
+        step, this one once per tick, so it must brake a tick ahead. The drive is modelled as the world has
+        it (:mod:`swarm.world.physics`): per sub-step the rate moves toward the command by at most ``dw``,
+        and the body moves at the rate of the sub-step before."""
+        n, dsub = self._substeps, self._dsub
+        if w0 > 0 and (_coast(w0, w0, n, dw) + _coast(_ramp(w0, w0, n, dw), 0.0, 0, dw)) * dsub > left:
+            return 0.0
+        lo, hi = 0.0, top
+        for _ in range(24):
+            mid = 0.5 * (lo + hi)
+            if (_coast(w0, mid, n, dw) + _coast(_ramp(w0, mid, n, dw), 0.0, 0, dw)) * dsub <= left:
+                lo = mid
+            else:
+                hi = mid
+        return lo
 
     def _task_stalled_on(self, left: float, step: float) -> bool:
         """Count a tick of the task with ``left`` still to go; True (and the task ended) after
@@ -407,7 +479,9 @@ class MaesDriveFleet:
         ``rows``)."""
         steered = set(rows)
         for i, nav in enumerate(self.navigators):
-            if nav._task is not None and (i not in steered or (began is not None and began[i])):
+            if i not in steered:
+                nav.skipped()
+            elif nav._task is not None and began is not None and began[i]:
                 nav.interrupt()
         for i in rows:
             out[i] = self.navigators[i].command(pose_tuples[i], known[i])
