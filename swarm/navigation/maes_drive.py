@@ -50,6 +50,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numba import njit
 
 from swarm import grid
 from swarm.base.types import CELL_M, FREE, SOLID, NavStatus, Pose, frozen_builder
@@ -141,26 +142,43 @@ def _snap(space: np.ndarray, tile: tuple[int, int]) -> tuple[int, int]:
     return best
 
 
-def _ramp(w: float, command: float, substeps: int, dw: float) -> float:
-    """The drive's turn rate after ``substeps`` sub-steps toward ``command`` from ``w``, at most ``dw`` per
+@njit(cache=True)
+def _ramp(w: float, command: float, substeps: int, dw: float) -> float:  # pragma: no cover - compiled
+    """The drive's rate after ``substeps`` sub-steps toward ``command`` from ``w``, at most ``dw`` per
     sub-step (:mod:`swarm.world.physics`)."""
     for _ in range(substeps):
         w = min(w + dw, command) if command > w else max(w - dw, command)
     return w
 
 
-def _coast(w: float, command: float, substeps: int, dw: float) -> float:
-    """The turn, in sub-steps of rate, of ``substeps`` sub-steps toward ``command`` from ``w`` (each sub-step
-    moves at the rate before it); ``substeps = 0``: until the rate reaches ``command`` (0: stopping)."""
+@njit(cache=True)
+def _coast(w: float, command: float, substeps: int, dw: float) -> float:  # pragma: no cover - compiled
+    """The travel, in sub-steps times rate, of ``substeps`` sub-steps toward ``command`` from ``w`` (each
+    sub-step moves at the rate before it); ``substeps = 0``: until the rate reaches ``command``."""
     total = 0.0
     k = 0
-    while (k < substeps) if substeps else (w != command):
+    while (k < substeps) if substeps else (w != command and k < 100_000):
         total += w
         w = min(w + dw, command) if command > w else max(w - dw, command)
         k += 1
-        if k > 10_000:
-            break
     return total
+
+
+@njit(cache=True)
+def _fastest(left: float, w0: float, top: float, dw: float, substeps: int,
+             dsub: float) -> float:  # pragma: no cover - compiled
+    """:meth:`MaesDrive._rate`: the largest command in [0, top] (bisection) after which stopping travels no
+    further than ``left``; 0 when even stopping now overshoots."""
+    if w0 > 0 and (_coast(w0, w0, substeps, dw) + _coast(_ramp(w0, w0, substeps, dw), 0.0, 0, dw)) * dsub > left:
+        return 0.0
+    lo, hi = 0.0, top
+    for _ in range(24):
+        mid = 0.5 * (lo + hi)
+        if (_coast(w0, mid, substeps, dw) + _coast(_ramp(w0, mid, substeps, dw), 0.0, 0, dw)) * dsub <= left:
+            lo = mid
+        else:
+            hi = mid
+    return lo
 
 
 class MaesDrive:
@@ -303,17 +321,7 @@ class MaesDrive:
         step, this one once per tick, so it must brake a tick ahead. The drive is modelled as the world has
         it (:mod:`swarm.world.physics`): per sub-step the rate moves toward the command by at most ``dw``,
         and the body moves at the rate of the sub-step before."""
-        n, dsub = self._substeps, self._dsub
-        if w0 > 0 and (_coast(w0, w0, n, dw) + _coast(_ramp(w0, w0, n, dw), 0.0, 0, dw)) * dsub > left:
-            return 0.0
-        lo, hi = 0.0, top
-        for _ in range(24):
-            mid = 0.5 * (lo + hi)
-            if (_coast(w0, mid, n, dw) + _coast(_ramp(w0, mid, n, dw), 0.0, 0, dw)) * dsub <= left:
-                lo = mid
-            else:
-                hi = mid
-        return lo
+        return _fastest(left, w0, top, dw, self._substeps, self._dsub)
 
     def _task_stalled_on(self, left: float, step: float) -> bool:
         """Count a tick of the task with ``left`` still to go; True (and the task ended) after
