@@ -11,7 +11,12 @@ size, robots, spawn and replicate; each map counts once with the mean log ratio 
 pooled); median ratio a/b with a 95 % bootstrap interval, rank-biserial r, two-sided Wilcoxon p. Holm's
 correction runs over the conditions of one finding (the family: "does this finding hold, and under which
 set-up"); with 10 maps the smallest p is 0.002, so a family of all ~60 rows (threshold 0.05 / 60) could
-never reject anything on a per-cell finding.
+never reject anything on a per-cell finding (the campaign now runs 20 maps per cell).
+
+Conditions: full parity (MAES's radio, comm, algorithms and, where the runs table has a ``motion.model``
+column, MAES's motion), then one departure at a time: swarm's radio, links judged at send, swarm's map
+sharing, swarm's continuous motion, swarm's TNF, Minotaur and Greed. A runs table from before the motion
+axis (issue 49) has no MAES motion: its parity is the continuous motion and the motion condition is left out.
 
 Verdict: *holds* when the ratio is on the paper's side of 1 and Holm's p < 0.05, *reversed* when on the
 other side with Holm's p < 0.05, else *not established*.
@@ -48,6 +53,7 @@ class Condition:
     radio: str = "materials"
     comm: str = "MAES"
     algs: dict[str, str] = field(default_factory=lambda: dict(PARITY_ALGS))
+    motion: str = "maes"
 
 
 CONDITIONS = (
@@ -55,9 +61,12 @@ CONDITIONS = (
     Condition("swarm's radio (multiwall)", radio="materials (swarm)"),
     Condition("links judged at send", comm="MAES merge, links at send"),
     Condition("swarm's map sharing", comm="swarm sharing, links at receipt"),
+    Condition("swarm's motion (continuous)", motion="continuous"),
     Condition("swarm's TNF", algs={**PARITY_ALGS, "TNF": "TNF (swarm)"}),
     Condition("swarm's Minotaur", algs={**PARITY_ALGS, "Minotaur": "Minotaur (swarm)"}),
+    Condition("swarm's Greed", algs={**PARITY_ALGS, "Greed": "Greed (swarm)"}),
 )
+MOTION = "motion.model"
 
 
 @dataclass(frozen=True)
@@ -105,13 +114,21 @@ FINDINGS = (
 def filters(f: Finding, c: Condition) -> tuple[dict[str, Any], dict[str, Any]] | None:
     """The (A, B) filters of finding ``f`` under condition ``c``, or None when the campaign has no such runs."""
     if f.dim == "radio":
-        if c.comm != PARITY["comm"] or any(c.algs[k] != k for k in PARITY_ALGS):
+        if c.comm != PARITY["comm"] or any(c.algs[k] != k for k in PARITY_ALGS) or c.motion != "maes":
             return None                                   # global and LOS were run under MAES comm only
         radio = {"materials": c.radio}
-        base = {**f.scope, "comm": c.comm}
+        base = {**f.scope, "comm": c.comm, MOTION: c.motion}
         return {**base, "radio": radio.get(f.a, f.a)}, {**base, "radio": radio.get(f.b, f.b)}
-    base = {**f.scope, "radio": c.radio, "comm": c.comm}
+    base = {**f.scope, "radio": c.radio, "comm": c.comm, MOTION: c.motion}
     return {**base, "algorithm": c.algs[f.a]}, {**base, "algorithm": c.algs[f.b]}
+
+
+def with_motion(runs: pd.DataFrame) -> pd.DataFrame:
+    """``runs`` with its ``motion.model`` column; a table from before the axis ran swarm's continuous motion
+    everywhere, which plays MAES's part here (the motion condition then has no runs and is left out)."""
+    if MOTION in runs.columns:
+        return runs
+    return runs.assign(**{MOTION: "maes"})
 
 
 def verdict(r: pd.Series) -> str:
@@ -148,6 +165,8 @@ def analyse(runs: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
         parity_filters = filters(f, CONDITIONS[0])
         for c in CONDITIONS:
             fl = filters(f, c)
+            if fl is not None and not all(_matches(runs, x) for x in fl):
+                fl = None                                                     # a departure this campaign did not run
             if fl is not None and (c is CONDITIONS[0] or fl != parity_filters):   # skip departures it does not touch
                 comps.append((c.name, *fl))
                 conds.append(c)
@@ -162,6 +181,15 @@ def analyse(runs: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
             sf["p_holm"] = effects.holm(sf["p_value"].to_numpy(float))
             shifts.append(sf)
     return pd.concat(rows, ignore_index=True), pd.concat(shifts, ignore_index=True)
+
+
+def _matches(runs: pd.DataFrame, fl: dict[str, Any]) -> bool:
+    """Whether any run matches filter ``fl`` (a value or a list of values per column)."""
+    mask = np.ones(len(runs), dtype=bool)
+    for col, value in fl.items():
+        values = [str(v) for v in (value if isinstance(value, list) else [value])]
+        mask &= runs[col].astype(str).isin(values).to_numpy()
+    return bool(mask.any())
 
 
 def _ratio(r: pd.Series) -> str:
@@ -202,7 +230,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("runs_csv", type=Path, help="the ablation report's tables/runs.csv")
     ap.add_argument("-o", "--output", type=Path, help="Markdown file to write (and a .csv beside it)")
     args = ap.parse_args(argv)
-    runs = effects.read_runs_csv(args.runs_csv)
+    runs = with_motion(effects.read_runs_csv(args.runs_csv))
     res, shifts = analyse(runs)
     text = render(res, shifts, str(args.runs_csv))
     if args.output:
