@@ -240,6 +240,8 @@ class TNF:
         self.reach = default_view_reach_cells(robot.radius, DEFAULT_MARGIN_M)
         self.penalty_radius = params.penalty_radius_m or robot.lidar_range
         self.maes = params.variant == "maes"   # MAES's utility; no destinations sent or used (module docstring)
+        # MAES drives TNF's path run by run (TnfExplorationAlgorithm.cs 347-389; under motion.model = "maes")
+        self.drive = "runs" if self.maes else "path"
         self.destinations: dict[int, tuple[tuple[int, int], int]] = {}   # sender -> (cell, tick heard)
         self.target: tuple[int, int] | None = None
         self.goal: tuple[float, float] | None = None
@@ -267,12 +269,12 @@ class TNF:
             self.sidestep_pending = False
             self.sidestep = self._sidestep(obs)
             if self.sidestep is not None:
-                return Action(goal=self.sidestep[0])
+                return Action(drive=self.drive, goal=self.sidestep[0])
         if self.sidestep is not None:
             goal, until = self.sidestep
             done = obs.nav.goal == goal and obs.nav.state in ("reached", "unreachable", "blocked")
             if obs.tick < until and not done:
-                return Action(goal=goal)
+                return Action(drive=self.drive, goal=goal)
             self.sidestep = None
             self.decide = True
         why = self._must_decide(obs)
@@ -281,7 +283,7 @@ class TNF:
             self._decide(obs)
         if self.target is None:
             return Action(velocity=(0.0, 0.0), clear_goal=True)
-        return Action(goal=self.goal, messages=self._announce(obs.tick))
+        return Action(drive=self.drive, goal=self.goal, messages=self._announce(obs.tick))
 
     def _maes_communication_tick(self, obs: Observation) -> Action:
         """MAES's tick of communication (``TnfExplorationAlgorithm.cs`` 167-182): with a sensed neighbour,
@@ -293,10 +295,10 @@ class TNF:
         if self.backoff.active(obs.tick):
             return Action(velocity=self.backoff.command())
         if self.sidestep is not None:
-            return Action(goal=self.sidestep[0])
+            return Action(drive=self.drive, goal=self.sidestep[0])
         if self.target is None:
             return Action(velocity=(0.0, 0.0), clear_goal=True)
-        return Action(goal=self.goal)
+        return Action(drive=self.drive, goal=self.goal)
 
     # ------------------------------------------------------------------------------------- messages ----
     def _read_inbox(self, obs: Observation) -> None:

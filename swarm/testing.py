@@ -59,6 +59,7 @@ from swarm.base.errors import InvalidInput, one_line, short_repr, shorten
 from swarm.base.params import annotation_allows, field_annotations
 
 from swarm.api import Action, NavStatus, NoParams, Observation, RobotInfo
+from swarm.base.types import DRIVES
 from swarm.plugins import explorers as registry
 
 CHECKS = ("contract", "params", "actions", "determinism", "messages", "observation", "robustness", "transports")
@@ -499,6 +500,8 @@ def action_problem(action: Any) -> str | None:
         return f"Action.clear_goal is {short_repr(action.clear_goal, 60)}; allowed: True or False"
     if action.debug is not None and not isinstance(action.debug, Mapping):
         return f"Action.debug is a {type(action.debug).__name__}; allowed: None or a mapping"
+    if action.drive not in DRIVES:
+        return f"Action.drive is {short_repr(action.drive, 60)}; allowed: {', '.join(map(repr, DRIVES))}"
     return None
 
 

@@ -236,7 +236,16 @@ class Minotaur:
         debug = self._debug()
         self._tick_cache = {}  # its two map-sized spaces would live until the next tick: 43 MB for 64 robots
         return Action(goal=action.goal, velocity=action.velocity, clear_goal=action.clear_goal,
-                      messages=tuple(self.outbox), debug=debug)
+                      messages=tuple(self.outbox), debug=debug, drive=self._drive())
+
+    def _drive(self) -> str:
+        """How MAES drives to the target (it matters under ``motion.model = "maes"``): waypoints with
+        ``UsePathing`` (greedy targets and doorway passages) along a path, ``PathAndMoveTo``
+        (MinotaurAlgorithm.cs 255-262, 701, 715, 738); wall, corner, edge and door-check waypoints in one
+        straight move, ``MoveTo`` (284, 493, 625, 657, 818, 843). The default variant plans every target."""
+        if not self.maes or self.state == "door" or self.mode in ("room-greedy", "greedy"):
+            return "path"
+        return "straight"
 
     # ------------------------------------------------------------------------------------- radio ----
     def _read_inbox(self, obs: Observation) -> None:

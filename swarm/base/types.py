@@ -150,18 +150,28 @@ class Observation:
     energy_used: float = 0.0                # moves + rotations, see swarm.world.physics
 
 
+DRIVES: tuple[str, ...] = ("path", "runs", "straight")
+"""The ways :attr:`Action.drive` may ask to be driven to a goal."""
+
+
 @dataclass(frozen=True)
 class Action:
     """A decision. ``goal`` (x, y) in metres: the runtime plans and drives there on the robot's own map.
     ``velocity`` (v m/s, omega rad/s): direct control, overrides navigation for this tick. Neither: keep
     doing what it was doing (follow the current goal, if any). ``messages`` are broadcast this tick and
-    delivered next tick to every robot the radio reaches. ``debug`` is free-form (shown by the viewer)."""
+    delivered next tick to every robot the radio reaches. ``debug`` is free-form (shown by the viewer).
+    ``drive`` says how to drive to ``goal`` under MAES's motion model (``motion.model = "maes"``, see
+    :mod:`swarm.navigation.maes_drive`): ``"path"`` tile by tile along a planned path (MAES's
+    ``PathAndMoveTo``), ``"runs"`` along the straight runs of a planned path (TNF's path steps) or
+    ``"straight"`` in one straight move (MAES's ``MoveTo``); the continuous model plans and follows a
+    smooth path whatever it says."""
 
     goal: tuple[float, float] | None = None
     velocity: tuple[float, float] | None = None
     messages: tuple[Any, ...] = ()
     debug: Mapping[str, Any] | None = None
     clear_goal: bool = False
+    drive: str = "path"
 
 
 def frozen_builder(cls: type) -> Callable[..., Any]:
@@ -202,6 +212,6 @@ class NoParams:
 
 
 __all__ = [
-    "Action", "CELL_M", "Explorer", "FREE", "NavStatus", "Neighbour", "Neighbours", "NoParams", "Observation", "Pose",
+    "Action", "CELL_M", "DRIVES", "Explorer", "FREE", "NavStatus", "Neighbour", "Neighbours", "NoParams", "Observation", "Pose",
     "ROBOT_RADIUS_M", "RobotInfo", "SOLID", "UNSEEN", "cell_centre", "cell_of",
 ]

@@ -70,8 +70,10 @@ class Navigator:
         self._status = NavStatus(goal=None, state="idle", path_length=0.0, ticks_since_progress=0)
 
     # ------------------------------------------------------------------------------------ control ----
-    def set_goal(self, goal: tuple[float, float] | None) -> None:
-        """A new goal (or None to stop). The same goal again changes nothing."""
+    def set_goal(self, goal: tuple[float, float] | None, drive: str = "path") -> None:
+        """A new goal (or None to stop). The same goal again changes nothing. ``drive`` (how MAES's motion
+        model would drive there, :attr:`swarm.api.Action.drive`) does not matter here: every goal is
+        planned and followed as a smooth path."""
         if goal is not None:
             goal = (float(goal[0]), float(goal[1]))
         if goal == self.goal:
@@ -224,10 +226,11 @@ class NavigationFleet:
         self._flags = np.zeros(n, dtype=np.int8)
 
     def command(self, rows: list[int], poses: np.ndarray, pose_tuples: list[Pose], known: np.ndarray,
-                out: np.ndarray) -> None:
+                out: np.ndarray, began: np.ndarray | None = None) -> None:
         """``out[i] = navigators[i].command(pose_tuples[i], known[i])`` for every robot ``i`` in ``rows``
         (ascending); ``poses`` (float64[R, 3]) holds the same poses, ``known`` (uint8[R, H, W], C-contiguous)
-        is the robots' maps, ``out`` (float64[R, 2]) has zero rows for them."""
+        is the robots' maps, ``out`` (float64[R, 2]) has zero rows for them. ``began`` (contacts begun this
+        tick) is for MAES's controller (:class:`swarm.navigation.maes_drive.MaesDriveFleet`); not used here."""
         navs = self.navigators
         moving: list[int] = []
         python: list[int] = []  # planning: all of it in Python (other states command (0, 0))

@@ -42,6 +42,7 @@ from swarm.grid._validate import vouch_known
 from swarm.knowledge.maps import sync_boxes_flat, sync_changes
 from swarm.knowledge.planes import KnowledgePlanes
 from swarm.knowledge.planes import wanted as planes_wanted
+from swarm.navigation.maes_drive import MaesDriveFleet
 from swarm.navigation.navigator import NavigationFleet
 from swarm.plugins import explorers as registry
 from swarm.results.metrics import CommMetrics, FreeCounts, InfoAges, Metrics
@@ -145,8 +146,8 @@ class Simulation:
         self.tracker = ExplorationTracker(self.truth)
         self.known = lazy_zeros((n, *self.truth.shape), np.uint8)  # memory where the maps hold something
         self._views = [self._read_only(i) for i in range(n)]
-        self.fleet = NavigationFleet(self.spec.navigation, self.motion,
-                                     [planner_rng(self.spec.seed, i) for i in range(n)])
+        fleet = MaesDriveFleet if self.motion.model == "maes" else NavigationFleet
+        self.fleet = fleet(self.spec.navigation, self.motion, [planner_rng(self.spec.seed, i) for i in range(n)])
         self.navigators = self.fleet.navigators
         self.links = build_link_model(self.truth, self.spec.radio, field_seed=self.streams.map_seed)
         self.comm = self.spec.comm
@@ -295,7 +296,7 @@ class Simulation:
         next tick: send, navigate, stall count, observers."""
         poses = state.poses
         sent = self._send(state.tick, poses, actions, state.links)
-        commands = self._commands(actions, poses, state.pose_tuples)
+        commands = self._commands(actions, poses, state.pose_tuples, state.began)
         moving = np.count_nonzero(commands) > 0 or any(nav.state in ("moving", "planning") for nav, action
                                                        in zip(self.navigators, actions) if action is not None)
         state.stalled_for = 0 if moving else state.stalled_for + 1
@@ -304,9 +305,11 @@ class Simulation:
         state.commands = commands
         state.tick += 1
 
-    def _commands(self, actions: list[Action | None], poses: np.ndarray, pose_tuples: list[Pose]) -> np.ndarray:
+    def _commands(self, actions: list[Action | None], poses: np.ndarray, pose_tuples: list[Pose],
+                  began: np.ndarray | None = None) -> np.ndarray:
         """The tick's (v, omega) per robot: an action's velocity, else its navigator's command toward the
-        goal the action set (all navigators at once, :class:`NavigationFleet`); (0, 0) without an action."""
+        goal the action set (all navigators at once, :class:`NavigationFleet`, or MAES's controllers,
+        which a contact begun this tick, ``began``, interrupts); (0, 0) without an action."""
         commands = np.zeros((len(actions), 2), dtype=np.float64)
         steered: list[int] = []
         for i, action in enumerate(actions):
@@ -316,13 +319,13 @@ class Simulation:
             if action.clear_goal:
                 nav.set_goal(None)
             if action.goal is not None:
-                nav.set_goal(action.goal)
+                nav.set_goal(action.goal, action.drive)
             if action.velocity is not None:
                 v, w = action.velocity
                 commands[i] = v, w
             else:
                 steered.append(i)
-        self.fleet.command(steered, poses, pose_tuples, self.known, commands)
+        self.fleet.command(steered, poses, pose_tuples, self.known, commands, began)
         return commands
 
     # ---------------------------------------------------------------------------------- messaging ----

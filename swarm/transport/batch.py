@@ -41,8 +41,14 @@ CELLS, INBOX, NEIGHBOURS = range(COUNTS)
 
 ACT_FIXED = struct.Struct("<4dB")
 """An ``act_batch`` record per robot: goal x, goal y, velocity v, omega (float64), flags (uint8)."""
-ACT_GOAL, ACT_VELOCITY, ACT_CLEAR_GOAL, ACT_EXTRAS = 1, 2, 4, 8
-ACT_FLAGS = ACT_GOAL | ACT_VELOCITY | ACT_CLEAR_GOAL | ACT_EXTRAS
+ACT_GOAL, ACT_VELOCITY, ACT_CLEAR_GOAL, ACT_EXTRAS, ACT_RUNS, ACT_STRAIGHT = 1, 2, 4, 8, 16, 32
+ACT_FLAGS = ACT_GOAL | ACT_VELOCITY | ACT_CLEAR_GOAL | ACT_EXTRAS | ACT_RUNS | ACT_STRAIGHT
+_DRIVE_FLAG = {"path": 0, "runs": ACT_RUNS, "straight": ACT_STRAIGHT}
+"""``Action.drive`` as flags (neither: "path"; a record with both is malformed)."""
+
+
+def _drive(flags: int) -> str:
+    return "straight" if flags & ACT_STRAIGHT else "runs" if flags & ACT_RUNS else "path"
 
 _action = frozen_builder(Action)
 _tuple_new = tuple.__new__
@@ -377,7 +383,7 @@ class ActBatchEncoder:
 def _act_record(action: Action) -> tuple[bytes, list[Any] | None]:
     """An action's ACT_FIXED record and its extras entry (None without messages or debug)."""
     goal, velocity = action.goal, action.velocity
-    flags = ACT_CLEAR_GOAL if action.clear_goal else 0
+    flags = (ACT_CLEAR_GOAL if action.clear_goal else 0) | _DRIVE_FLAG[action.drive]
     gx = gy = v = w = 0.0
     if goal is not None:
         gx, gy = goal
@@ -433,7 +439,7 @@ class ActBatchDecoder:
         extra_at = 0
         for k, (gx, gy, v, w, flags) in enumerate(ACT_FIXED.iter_unpack(fixed)):
             robot = ids[k]
-            if flags & ~ACT_FLAGS or (flags & ACT_GOAL and not (math.isfinite(gx) and math.isfinite(gy))) or (
+            if flags & ~ACT_FLAGS or flags & (ACT_RUNS | ACT_STRAIGHT) == ACT_RUNS | ACT_STRAIGHT or (flags & ACT_GOAL and not (math.isfinite(gx) and math.isfinite(gy))) or (
                     flags & ACT_VELOCITY and not (math.isfinite(v) and math.isfinite(w))):
                 out.append((None, 0))
                 if flags & ACT_EXTRAS:
@@ -447,7 +453,7 @@ class ActBatchDecoder:
                     continue
                 action = _action(goal=(gx, gy) if flags & ACT_GOAL else None,
                                  velocity=(v, w) if flags & ACT_VELOCITY else None, messages=(), debug=None,
-                                 clear_goal=bool(flags & ACT_CLEAR_GOAL))
+                                 clear_goal=bool(flags & ACT_CLEAR_GOAL), drive=_drive(flags))
                 last[robot] = (record, action)
                 out.append((action, 0))
                 continue
@@ -467,7 +473,7 @@ class ActBatchDecoder:
                     continue
             action = Action(goal=(gx, gy) if flags & ACT_GOAL else None,
                             velocity=(v, w) if flags & ACT_VELOCITY else None, messages=tuple(decoded),
-                            debug=extra[1], clear_goal=bool(flags & ACT_CLEAR_GOAL))
+                            debug=extra[1], clear_goal=bool(flags & ACT_CLEAR_GOAL), drive=_drive(flags))
             last.pop(robot, None)
             out.append((action, len(extra[0]) - len(decoded)))
         if extra_at != len(extras):

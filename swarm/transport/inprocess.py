@@ -11,7 +11,8 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from swarm.base.types import Action, Neighbours, Observation, frozen_builder
+from swarm.base.errors import short_repr
+from swarm.base.types import DRIVES, Action, Neighbours, Observation, frozen_builder
 from swarm.comm.medium import Inboxes
 from swarm.plugins import explorers as registry
 from .base import HostStats, TickBatch
@@ -109,4 +110,7 @@ class _Lazy:
 def check_action(action: object, robot: int) -> Action:
     if not isinstance(action, Action):
         raise TypeError(f"robot {robot}: act() returned {type(action).__name__}, expected swarm.api.Action")
+    if action.drive not in DRIVES:
+        raise TypeError(f"robot {robot}: Action.drive is {short_repr(action.drive, 40)}; allowed: "
+                        f"{', '.join(map(repr, DRIVES))}")
     return action

@@ -335,9 +335,26 @@ def decode_obs(data: bytes, map_cells: int, n_robots: int = 1) -> ObsPacket:
 def encode_act(tick: int, robot_id: int, action: Action) -> bytes:
     messages = [encode(m) for m in action.messages] if action.messages else []
     goal, velocity, debug = action.goal, action.velocity, action.debug
+    drive = DRIVE_CODES[action.drive]
+    clear: bool | int = bool(action.clear_goal) if not drive else int(bool(action.clear_goal)) | drive << 1
     return _pack(["act", WIRE_VERSION, tick, robot_id, list(goal) if goal is not None else None,
-                  list(velocity) if velocity is not None else None, bool(action.clear_goal), messages,
+                  list(velocity) if velocity is not None else None, clear, messages,
                   dict(debug) if debug is not None else None])
+
+
+DRIVE_CODES: dict[str, int] = {"path": 0, "runs": 1, "straight": 2}
+"""``Action.drive`` in an ``act`` packet's ``clear_goal`` field: a bool for "path" (as before drives existed),
+else the integer ``clear_goal | code << 1``."""
+_DRIVE_NAMES = {code: name for name, code in DRIVE_CODES.items()}
+
+
+def _clear_and_drive(field: Any) -> tuple[bool, str]:
+    """An ``act`` packet's ``clear_goal`` field: a bool, or an integer ``clear_goal | drive << 1``."""
+    if type(field) is bool:
+        return field, "path"
+    if type(field) is int and 0 <= field < 2 * (len(DRIVE_CODES)):
+        return bool(field & 1), _DRIVE_NAMES[field >> 1]
+    raise WireError("act: clear_goal must be a bool or an integer clear_goal | drive << 1 (drive 0..2)")
 
 
 def _pair(v: Any, what: str) -> tuple[float, float] | None:
@@ -354,12 +371,13 @@ def decode_act(data: bytes) -> ActPacket:
     _, _, tick, robot, goal, velocity, clear_goal, messages, debug = _unpack(data, "act", 7)
     tick, robot = _int(tick, "tick"), _int(robot, "robot")
     goal, velocity = _pair(goal, "goal"), _pair(velocity, "velocity")
+    clear, drive = _clear_and_drive(clear_goal)
     if type(messages) is not list:
         raise WireError("act: messages must be a list of byte strings")
     if debug is not None and not isinstance(debug, dict):
         raise WireError("act: debug must be a map")
     if not messages:
-        action = _action(goal=goal, velocity=velocity, messages=(), debug=debug, clear_goal=bool(clear_goal))
+        action = _action(goal=goal, velocity=velocity, messages=(), debug=debug, clear_goal=clear, drive=drive)
         return _tuple_new(ActPacket, (tick, robot, action, (), 0, ()))
     if not all(isinstance(m, bytes) for m in messages):
         raise WireError("act: messages must be a list of byte strings")
@@ -375,6 +393,6 @@ def decode_act(data: bytes) -> ActPacket:
             problems.append(f"does not decode ({str(exc)[:80]})")
             continue
         kept.append(m)
-    action = Action(goal=goal, velocity=velocity, messages=tuple(decoded), debug=debug, clear_goal=bool(clear_goal))
+    action = Action(goal=goal, velocity=velocity, messages=tuple(decoded), debug=debug, clear_goal=clear, drive=drive)
     return ActPacket(tick=tick, robot_id=robot, action=action, message_bytes=tuple(kept),
                      bad_messages=len(messages) - len(kept), problems=tuple(problems))

@@ -14,14 +14,14 @@ were; ``tests/swarm/world/test_motion.py`` keeps those formulas in Python as the
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any, Sequence
 
 import numpy as np
 from numba import njit
 
 from swarm.base.errors import InvalidInput
-from swarm.base.params import check_float, check_int
+from swarm.base.params import OMIT_DEFAULT, check_choice, check_float, check_int
 
 from swarm.util.arena import Arena
 from swarm.util.pymath import py_hypot
@@ -34,6 +34,10 @@ Contacts are discrete, so a robot can overlap a wall by up to one sub-step's tra
 pushes it back; keeping that far below the wall thickness is what makes tunnelling impossible."""
 DEFAULT_SUBSTEPS: int = 5
 """Physics sub-steps per tick at the default speed (more only where ``max_speed`` needs them)."""
+
+
+MOTION_MODELS: tuple[str, ...] = ("continuous", "maes")
+"""How a robot drives to its goal (:attr:`MotionParams.model`)."""
 
 
 @dataclass(frozen=True)
@@ -63,6 +67,12 @@ class MotionParams:
 
     MAES robots are much faster (about 3 tiles/s and 4 rad/s, reached within ~0.1 s); use
     :meth:`maes` for parity campaigns.
+
+    ``model`` says how a goal is driven to. ``"continuous"`` (the default): the navigator plans on the
+    robot's configuration space, shortcuts the path into straight segments and follows it without
+    stopping at bends under 40 degrees (:class:`Follower`). ``"maes"``: MAES's controller
+    (``Robot2DController.cs``, :mod:`swarm.navigation.maes_drive`): 1 m tiles one at a time, turning in
+    place and stopping at each, or one straight move, as the algorithm's ``Action.drive`` asks.
     """
 
     max_speed: float = 1.0
@@ -71,8 +81,10 @@ class MotionParams:
     max_turn_accel: float = 4.0
     radius: float = 0.3
     substeps: int | None = None
+    model: str = field(default="continuous", metadata={OMIT_DEFAULT: True})
 
     def __post_init__(self) -> None:
+        check_choice("model", self.model, MOTION_MODELS)
         check_float("max_speed", self.max_speed, 0.0, 10.0, lo_open=True)
         check_float("max_turn_rate", self.max_turn_rate, 0.0, 20.0, lo_open=True)
         check_float("max_accel", self.max_accel, 0.0, 1000.0, lo_open=True)
@@ -406,5 +418,5 @@ def _follow_step_unless(grid: np.ndarray, cells: np.ndarray, limit: int, path: n
     return True, v, omega, index, remaining, done
 
 
-__all__ = ["FollowParams", "Follower", "FollowerSlots", "MAX_SUBSTEP_MOVE_M", "MOTION_PRESETS", "MotionParams",
+__all__ = ["FollowParams", "Follower", "FollowerSlots", "MAX_SUBSTEP_MOVE_M", "MOTION_MODELS", "MOTION_PRESETS", "MotionParams",
            "TICK_S", "wrap_angle"]

@@ -247,6 +247,16 @@ def test_a_bad_record_costs_its_robot_and_a_bad_message_only_itself():
     assert got[0] == (None, 0) and got[1][0] == Action()
 
 
+def test_act_batch_carries_the_drive_and_refuses_two_drives_at_once():
+    actions = [Action(goal=(1.0, 2.0), drive="runs"), Action(goal=(1.0, 2.0), clear_goal=True, drive="straight"),
+               Action(goal=(1.0, 2.0))]
+    got = ActBatchDecoder()(ActBatchEncoder()(3, [0, 1, 2], actions), 3, [0, 1, 2])
+    assert [a for a, _ in got] == actions
+    got = ActBatchDecoder()(act_fields(records=[(1.0, 2.0, 0.0, 0.0, 1 | 16 | 32), (1.0, 2.0, 0.0, 0.0, 1 | 32)]),
+                            7, [0, 1])
+    assert got[0] == (None, 0) and got[1][0] == Action(goal=(1.0, 2.0), drive="straight")
+
+
 # -------------------------------------------------------------------------------------- live run ----
 def test_local_agents_that_refuse_their_batch_fail_and_the_run_goes_on(monkeypatch):
     """A batch the group cannot take (here: our encoder made to corrupt tick 40's) marks the local robots

@@ -238,6 +238,8 @@ def act_fields(**change) -> list:
 @pytest.mark.parametrize("action", [
     Action(), Action(goal=(1.5, -2.0)), Action(goal=(-0.0, 0.0)), Action(velocity=(0.5, -1.0), clear_goal=True),
     Action(goal=(3.0, 4.0), messages=(Heartbeat(sender=2, tick=11, x=1.0, y=2.0, theta=0.5),), debug={"k": [1, 2]}),
+    Action(goal=(1.0, 2.0), drive="straight"), Action(goal=(1.0, 2.0), clear_goal=True, drive="runs"),
+    Action(goal=(1.0, 2.0), drive="runs", messages=(Heartbeat(sender=2, tick=11, x=1.0, y=2.0, theta=0.5),)),
 ])
 def test_act_round_trips_exactly(action):
     p = decode_act(encode_act(12, 2, action))
@@ -307,3 +309,13 @@ def test_frozen_builder_builds_the_constructors_objects():
             assert self.x > 0
 
     assert frozen_builder(Checked) is Checked
+
+
+def test_the_drive_rides_in_clear_goal_and_a_path_drive_keeps_the_old_bool():
+    """``Action.drive`` (MAES's motion model) shares the ``clear_goal`` field: a bool as before for "path",
+    else the integer clear_goal | drive << 1; anything else is refused."""
+    assert msgpack.unpackb(encode_act(1, 0, Action(goal=(1.0, 2.0))))[6] is False
+    assert msgpack.unpackb(encode_act(1, 0, Action(goal=(1.0, 2.0), clear_goal=True, drive="straight")))[6] == 5
+    for bad in (6, -1, 1.0, "runs", None):
+        with pytest.raises(WireError, match="clear_goal"):
+            decode_act(msgpack.packb(act_fields(clear_goal=bad)))
