@@ -47,7 +47,8 @@ def test_grid_is_maes_experiment_grid(full) -> None:
         assert spec.algorithm.name == alg and spec.algorithm.params["variant"] == "maes"
         assert spec.radio.model == {"Global": "global", "LOS": "los", "Material": "maes"}[radio]
         assert (spec.comm.map_sharing, spec.comm.link_at) == ("maes", "receive")
-        assert spec.lidar.range_m == 7.0 and spec.motion.max_speed == 3.0  # slamRayTraceRange 7, MAES drive
+        assert spec.lidar.range_m == 7.0  # slamRayTraceRange 7
+        assert (spec.motion.model, spec.motion.max_speed) == ("maes", 3.0)  # MAES's controller and speed
         # the 2024 buildings: rooms between halls never split (docs/maes.md section 2 item 5)
         assert kind != "building" or spec.map.params["room_split_percent"] == 0
     tnf = run[("building", "tnf", "Global")].algorithm.params
