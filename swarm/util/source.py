@@ -14,8 +14,9 @@ import subprocess
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-"""The directory the ``swarm`` package lives in: a checkout's root when swarm runs from one."""
+ROOT = Path(__file__).resolve().parents[2]
+"""The directory the ``swarm`` package lives in (this file is ``swarm/util/source.py``): a checkout's root
+when swarm runs from one."""
 
 
 @functools.cache

@@ -56,3 +56,12 @@ def test_outside_a_checkout_only_the_version_is_known(tmp_path, monkeypatch):
         assert source.version_label() == (source.package_version() or "unknown")
     finally:
         source.source_commit.cache_clear()
+
+
+def test_root_is_where_the_swarm_package_lives():
+    """ROOT must be the directory holding ``swarm/`` (a checkout's root), wherever this module sits in the
+    package: after the issue-46 move to ``swarm/util/`` it pointed at ``swarm/`` and no run recorded a commit."""
+    import swarm
+
+    assert source.ROOT == Path(swarm.__file__).resolve().parent.parent
+    assert (source.ROOT / "swarm" / "util" / "source.py").is_file()
