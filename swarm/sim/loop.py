@@ -52,6 +52,8 @@ from swarm.transport.auth import RunSecret
 from swarm.transport.base import ACT_COUNTS
 from swarm.transport.wire import ResetPacket
 from swarm.util.memory import lazy_zeros
+from swarm.world.localization import Localizer
+from swarm.world.motion import TICK_S
 from swarm.world.physics import World
 from swarm.world.sensing import ExplorationTracker, Lidar
 from swarm.world.spawn import spawn
@@ -116,6 +118,8 @@ class LoopState:
     poses: Any = None                       # float64[R, 3] of this tick (the world's array: moved in place)
     collided: Any = None                    # bool[R]: in contact now
     began: Any = None                       # bool[R]: contacts that began this tick
+    believed: Any = None                    # float64[R, 3]: where the robots believe they are (``poses`` when
+                                            # there is no localisation error)
     active: Any = None                      # bool[R]: robots not failed
     links: Any = None                       # the tick's radio picture (evaluated on first use)
     inboxes: list = field(default_factory=list)
@@ -155,9 +159,16 @@ class Simulation:
                              packet_errors=self.links.packet_errors, error_rng=self.streams.channel)
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         self.ages = InfoAges(n)  # who last merged whose map, when (age of information)
-        self.free = FreeCounts(n, exact=self.lidar_params.mode == "ternary")  # each map's FREE cells
+        # With a localisation error robots map from where they believe they are (swarm.world.localization),
+        # so a cell may turn from FREE to SOLID: maps are then not monotone, as under the log-odds lidar.
+        loc = self.spec.localization
+        self.localizer = (Localizer(loc, self.spec.seed, self.start_poses, TICK_S, (self.truth.width_m,
+                                                                                    self.truth.height_m))
+                          if loc.on else None)
+        self.off_map_scans = 0   # robot-ticks whose lidar wrote nothing for believing itself off the map
+        monotone = self.lidar_params.mode == "ternary" and self.localizer is None
+        self.free = FreeCounts(n, exact=monotone)  # each map's FREE cells
         merge = resolve_maes_merge(self.comm.map_sharing, self.comm.share_every, registry.load(self.spec.algorithm.name))
-        monotone = self.lidar_params.mode == "ternary"
         self.planes = (KnowledgePlanes(n, self.truth.shape[0] * self.truth.shape[1])  # who knows which cell
                        if planes_wanted(n, monotone, merge is None and self.comm.map_sharing in ("delta", "full"))
                        else None)
@@ -256,11 +267,20 @@ class Simulation:
         state.began = began
         state.was_colliding = collided
         active = ~self.failed
-        self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker, measure=False,
-                        freed=self.free.freed, planes=self.planes)
-        self.sharing.scanned(poses)
+        if self.localizer is None:
+            believed = poses
+            self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker,
+                            measure=False, freed=self.free.freed, planes=self.planes)
+        else:   # the lidar measures from the true pose and writes from the believed one
+            if state.tick > 0:
+                self.localizer.update(poses, active)
+            believed = self.localizer.estimates.copy()
+            ranges = self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker,
+                                     write=False)
+            self.off_map_scans += self.lidar.write_from(believed, ranges, self.known)
+        self.sharing.scanned(believed)
         self.tracker.update_coverage(poses[:, :2], active=active)
-        state.poses, state.collided, state.active = poses, collided, active
+        state.poses, state.collided, state.active, state.believed = poses, collided, active, believed
 
     def communicate(self, state: LoopState) -> bool:
         """Steps 3-4 and 8: the tick's radio picture, inboxes and merges, thresholds, the stop test and the
@@ -288,15 +308,16 @@ class Simulation:
 
     def observe(self, state: LoopState) -> TickBatch:
         """Step 5's input: the tick's observations for a host."""
-        state.pose_tuples = [_pose(Pose, row) for row in state.poses.tolist()]  # shared by observations and navigation
-        return self._batch(state.tick, state.poses, state.pose_tuples, state.collided, state.inboxes, state.merged)
+        state.pose_tuples = [_pose(Pose, row) for row in state.believed.tolist()]  # shared by observations and navigation
+        return self._batch(state.tick, state.believed, state.pose_tuples, state.collided, state.inboxes, state.merged,
+                           state.poses)
 
     def apply(self, state: LoopState, actions: list[Action | None]) -> None:
         """Steps 6-7 of tick ``state.tick`` for the robots' ``actions`` (None: no action), then on to the
         next tick: send, navigate, stall count, observers."""
         poses = state.poses
-        sent = self._send(state.tick, poses, actions, state.links)
-        commands = self._commands(actions, poses, state.pose_tuples, state.began)
+        sent = self._send(state.tick, state.believed, actions, state.links, poses)
+        commands = self._commands(actions, state.believed, state.pose_tuples, state.began)
         moving = np.count_nonzero(commands) > 0 or any(nav.state in ("moving", "planning") for nav, action
                                                        in zip(self.navigators, actions) if action is not None)
         state.stalled_for = 0 if moving else state.stalled_for + 1
@@ -350,11 +371,15 @@ class Simulation:
                 self.free.dirty[robot] = True
         return inboxes, merged
 
-    def _send(self, tick: int, poses: np.ndarray, actions: list[Action | None], links: Any) -> list[list[Envelope]]:
-        """Collect this tick's broadcasts (map sharing + algorithms) and deliver them for next tick."""
+    def _send(self, tick: int, poses: np.ndarray, actions: list[Action | None], links: Any,
+              true_poses: np.ndarray | None = None) -> list[list[Envelope]]:
+        """Collect this tick's broadcasts (map sharing + algorithms) and deliver them for next tick. ``poses``:
+        where the robots believe they are (their map updates say so); ``true_poses`` (default: the same) decide
+        who senses whom."""
+        truth = poses if true_poses is None else true_poses
         service = self.sharing.outgoing(tick, self.known, poses)
         if self.maes_merge is not None:
-            service = self.maes_merge.outgoing(tick, lambda: self._sight(poses)[1])
+            service = self.maes_merge.outgoing(tick, lambda: self._sight(truth)[1])
         outboxes: list[list[Envelope]] = []
         for i, action in enumerate(actions):
             if self.failed[i]:
@@ -402,18 +427,22 @@ class Simulation:
         return self.links.in_sight(poses[:, :2], self.neighbour_range)
 
     def _batch(self, tick: int, poses: np.ndarray, pose_tuples: list[Pose], collided: np.ndarray,
-               inboxes: list[list[Envelope]], merged: list[list[np.ndarray | None]]) -> TickBatch:
+               inboxes: list[list[Envelope]], merged: list[list[np.ndarray | None]],
+               true_poses: np.ndarray | None = None) -> TickBatch:
         """The tick's observations as arrays, for any host: neighbours (and, for a host with mirrors, the
-        knowledge cells changed since each robot's last observation) are computed when first read."""
+        knowledge cells changed since each robot's last observation) are computed when first read. ``poses``:
+        where the robots believe they are (what they observe, and where their lidars wrote); ``true_poses``
+        (default: the same) decide who senses whom and how far apart they are."""
         live = ~self.failed
         navs = [nav.status() if ok else None for nav, ok in zip(self.navigators, live.tolist())]
         at = poses.copy()  # the world moves these in place next tick; a late read must see this tick's
+        seen_from = at if true_poses is None else true_poses.copy()
         changed = None
         if self._mirror is not None:
             cast = self.lidar.cast.copy()  # whose lidar may have written this tick (the next scan overwrites it)
             changed = lambda: self._changed_cells(at, cast, merged)  # noqa: E731
         return TickBatch(tick, live, poses, pose_tuples, collided, self.world.distance, self.world.rotation, navs,
-                         self.known, self._views, inboxes, lambda: self._sight(at), changed)
+                         self.known, self._views, inboxes, lambda: self._sight(seen_from), changed)
 
     def _changed_cells(self, poses: np.ndarray, cast: np.ndarray,
                        merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:
@@ -478,6 +507,20 @@ class Simulation:
                             mean_pair_distance_m=links.mean_distance() if n > 1 else 0.0)
         self.comm_metrics.record(tick, stats, self.known, self.tracker.seen_free_cells, groups, self.ages)
 
+    def _localization_summary(self) -> dict[str, Any]:
+        """With a localisation model: each robot's final pose error and the quality of the maps it built
+        (:func:`swarm.results.mapquality.map_quality`); nothing without one, so summaries stay as they were."""
+        if self.localizer is None:
+            return {}
+        from swarm.results.mapquality import map_quality
+
+        err = self.localizer.errors(self.world.poses)
+        return {"localization": {"model": self.spec.localization.model,
+                                 "final_position_error_m": [float(e) for e in err[:, 0]],
+                                 "final_heading_error_rad": [float(e) for e in err[:, 1]],
+                                 "off_map_scans": self.off_map_scans,
+                                 **map_quality(self.known, self.truth.solid)}}
+
     def _message_counts(self, host: AgentHost) -> dict[str, Any]:
         """The medium's counts, with the messages a remote agent sent that did not decode counted as malformed
         like those the medium dropped."""
@@ -502,6 +545,7 @@ class Simulation:
             "acts": {kind: host.stats.per_robot(kind, n) for kind in ACT_COUNTS},
             "failed_robots": [int(i) for i in np.flatnonzero(self.failed)],
             "final_poses": [[float(v) for v in p] for p in self.world.poses],
+            **self._localization_summary(),
             "map_seed": int(self.streams.map_seed) if self.spec.map.kind != "file" else None,
             "wall_time_s": wall,
             "setup_time_s": self.setup_time_s,

@@ -25,6 +25,7 @@ import numpy as np
 from swarm.base.errors import InvalidInput
 from swarm.base.params import OMIT_DEFAULT, check_choice, check_float, check_int, from_mapping, to_mapping
 from swarm.navigation.spec import NavigationSpec
+from swarm.world.localization import LocalizationSpec
 
 SPAWN_MODES = ("together", "random")
 HEADING_MODES = ("random", "maes")   # swarm.world.spawn.HEADING_MODES
@@ -146,6 +147,7 @@ class RunSpec:
     transport: str = "inprocess"
     stop: StopSpec = field(default_factory=StopSpec)
     record_every: int = 10
+    localization: LocalizationSpec = field(default_factory=LocalizationSpec, metadata={OMIT_DEFAULT: True})
 
     def __post_init__(self) -> None:
         check_int("seed", self.seed, 0, 2**63 - 1)
@@ -154,6 +156,7 @@ class RunSpec:
         object.__setattr__(self, "algorithm", _section(AlgorithmSpec, "algorithm", self.algorithm))
         object.__setattr__(self, "navigation", _section(NavigationSpec, "navigation", self.navigation))
         object.__setattr__(self, "stop", _section(StopSpec, "stop", self.stop))
+        object.__setattr__(self, "localization", _section(LocalizationSpec, "localization", self.localization))
         for name in _EXTERNAL_SECTIONS:
             object.__setattr__(self, name, _typed_section(name, getattr(self, name)))
         check_choice("transport", self.transport, TRANSPORTS)
@@ -188,6 +191,8 @@ class RunSpec:
         out: dict[str, Any] = {"version": SPEC_VERSION}
         for f in fields(self):
             value = getattr(self, f.name)
+            if f.metadata.get(OMIT_DEFAULT) and value == f.default_factory():  # type: ignore[misc]
+                continue   # a section added later, left out at its default: older specs keep their key
             out[f.name] = _plain(to_mapping(value)) if hasattr(value, "__dataclass_fields__") else _plain(value)
         return json.dumps(out, sort_keys=True, separators=(",", ":"))
 

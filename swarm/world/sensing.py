@@ -311,6 +311,90 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     return new
 
 
+@njit(cache=True)
+def _lidar_measure_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarray, cos_a: np.ndarray,
+                          sin_a: np.ndarray, range_m: float, cell: float, seen: np.ndarray,
+                          ranges: np.ndarray) -> int:
+    """The ternary lidar's ranges and ``seen`` cells for every active robot, nothing written into a map (a
+    robot with a localisation error writes them from its estimated pose: :func:`_lidar_belief_kernel`).
+    Returns the newly seen free cells, or ``-(r + 1)`` if robot r's pose is invalid."""
+    rows, cols = solid.shape
+    bad = _lidar_first_bad_pose(poses, active, rows, cols, cell)
+    if bad >= 0:
+        return -(bad + 1)
+    solid_flat, seen_flat = solid.reshape(solid.size), seen.reshape(seen.size)
+    unused = np.zeros(1, dtype=np.uint8)
+    p_none = np.zeros((0, 1), dtype=np.uint64)
+    new = 0
+    for r in range(poses.shape[0]):
+        if not active[r]:
+            for i in range(cos_a.shape[0]):
+                ranges[r, i] = np.nan
+            continue
+        ch = math.cos(poses[r, 2])
+        sh = math.sin(poses[r, 2])
+        for i in range(cos_a.shape[0]):
+            dx = ch * cos_a[i] - sh * sin_a[i]
+            dy = sh * cos_a[i] + ch * sin_a[i]
+            t_hit, n_new, _ = _lidar_walk_visible(solid_flat, cols, unused, 0, False, seen_flat, poses[r, 0],
+                                                  poses[r, 1], dx, dy, range_m, cell, p_none, p_none, r)
+            new += n_new
+            ranges[r, i] = t_hit
+    return new
+
+
+@njit(cache=True)
+def _lidar_belief_kernel(poses: np.ndarray, ranges: np.ndarray, cos_a: np.ndarray, sin_a: np.ndarray,
+                         range_m: float, cell: float, known: np.ndarray) -> int:
+    """Write measured ``ranges`` into each robot's map from the pose it believes it has (``poses``): along
+    each ray (its angle relative to the believed heading), the cells entered before the range whose centre
+    is within ``range_m`` become at least FREE and the cell holding the range point SOLID; with no return
+    (inf) every cell entered within range with its centre within range becomes at least FREE; a NaN range
+    (robot not active) writes nothing. Rays stop at the map's edge. A robot whose believed position is off
+    the map writes nothing. From the true pose this writes exactly what the ternary lidar writes (the same
+    walk, the same crossing distances). Returns the number of robots that wrote nothing for being off the
+    map."""
+    n_robots, rows, cols = known.shape
+    off = 0
+    for r in range(n_robots):
+        x = poses[r, 0]
+        y = poses[r, 1]
+        if not (x >= 0.0 and x < cols * cell and y >= 0.0 and y < rows * cell and np.isfinite(poses[r, 2])):
+            if not np.isnan(ranges[r, 0]):
+                off += 1
+            continue
+        ch = math.cos(poses[r, 2])
+        sh = math.sin(poses[r, 2])
+        mine = known[r]
+        r2 = range_m * range_m
+        for i in range(cos_a.shape[0]):
+            z = ranges[r, i]
+            if np.isnan(z):
+                continue
+            dx = ch * cos_a[i] - sh * sin_a[i]
+            dy = sh * cos_a[i] + ch * sin_a[i]
+            row, col, step_r, step_c, t_x, t_y, d_x, d_y = _lidar_ray_start(x, y, dx, dy, cell)
+            t_entry = 0.0
+            while 0 <= row < rows and 0 <= col < cols:
+                t_exit = min(t_x, t_y)
+                if t_entry > range_m:
+                    break
+                if z <= t_entry or (z < t_exit and np.isfinite(z)):
+                    mine[row, col] = SOLID       # the cell whose extent along the ray holds the range point
+                    break
+                cx = (col + 0.5) * cell - x
+                cy = (row + 0.5) * cell - y
+                if cx * cx + cy * cy <= r2 and mine[row, col] < FREE:
+                    mine[row, col] = FREE
+                in_x, t_x, t_y = _lidar_advance(t_x, t_y, d_x, d_y)
+                t_entry = t_exit
+                if in_x:
+                    col += step_c
+                else:
+                    row += step_r
+    return off
+
+
 @njit(cache=True, inline="always")
 def _lidar_settled(required: np.ndarray, known: np.ndarray, known_base: int, seen: np.ndarray, rows: int,
                    cols: int, row0: int, col0: int, half_widths: np.ndarray) -> bool:
@@ -517,7 +601,7 @@ class Lidar:
     def scan(self, poses: np.ndarray, known: np.ndarray, rng: np.random.Generator | None = None,
              active: np.ndarray | None = None, tracker: ExplorationTracker | None = None, *,
              measure: bool = True, freed: np.ndarray | None = None,
-             planes: KnowledgePlanes | None = None) -> np.ndarray | None:
+             planes: KnowledgePlanes | None = None, write: bool = True) -> np.ndarray | None:
         """Cast every active robot's rays from ``poses`` (``float64[R, 3]``: x, y, theta) and write what
         they observe into ``known`` (``uint8[R, H, W]``, C-contiguous, modified in place) and into the
         tracker (``tracker`` if given, else :attr:`tracker`). Returns the measured ranges
@@ -536,7 +620,11 @@ class Lidar:
         maps (:class:`swarm.results.metrics.FreeCounts`).
 
         ``planes`` (ternary mode): the knowledge planes of ``known`` (:mod:`swarm.knowledge.planes`), which the
-        scan keeps up to date with every cell it raises."""
+        scan keeps up to date with every cell it raises.
+
+        ``write=False`` (ternary mode): measure only (the ranges, as float64, and the tracker's seen cells),
+        every active robot cast, ``known`` untouched: for robots that write from an estimated pose
+        (:meth:`write_from`)."""
         trk = self.tracker if tracker is None else self._check_tracker(tracker)
         pose = np.ascontiguousarray(poses, dtype=np.float64)
         if pose.ndim != 2 or pose.shape[1] != 3:
@@ -551,7 +639,14 @@ class Lidar:
             self._freed = np.zeros(n, dtype=np.int64)
         if freed is not None and (freed.dtype != np.int64 or freed.shape != (n,)):
             raise InvalidInput("freed", (freed.dtype, freed.shape), f"an int64 array of shape ({n},)")
-        if p.mode == "ternary":
+        if not write:
+            if p.mode != "ternary" or planes is not None:
+                raise InvalidInput("write", write, "True unless the lidar is ternary and no planes are given")
+            ranges = np.empty((n, self.n_rays), dtype=np.float64)   # exact: write_from walks to these distances
+            new = _lidar_measure_kernel(self._solid, pose, act, self._cos, self._sin, p.range_m, CELL_M,
+                                        trk.seen_buffer, ranges)
+            self._cast[:] = act
+        elif p.mode == "ternary":
             required = _CAST_EVERY_ROBOT
             if not measure:
                 if self._required.shape[0] == 0:
@@ -585,6 +680,18 @@ class Lidar:
                                f"0 <= y < {self.truth.height_m:g} m)")
         trk.add_seen(new)
         return ranges if measure else None
+
+    def write_from(self, poses: np.ndarray, ranges: np.ndarray, known: np.ndarray) -> int:
+        """Write measured ``ranges`` (``float64[R, n_rays]``, from :meth:`scan` with ``write=False``) into
+        ``known`` from the poses the robots believe they have (``float64[R, 3]``): what a robot with a
+        localisation error maps (:func:`_lidar_belief_kernel`; from the true poses, exactly what a ternary
+        scan writes). Returns how many robots believed themselves off the map and wrote nothing."""
+        pose = np.ascontiguousarray(poses, dtype=np.float64)
+        if pose.ndim != 2 or pose.shape[1] != 3 or ranges.shape != (pose.shape[0], self.n_rays):
+            raise InvalidInput("poses", pose.shape, f"(R, 3) poses with ranges of shape (R, {self.n_rays})")
+        self._check_known(known, pose.shape[0])
+        return int(_lidar_belief_kernel(pose, np.ascontiguousarray(ranges, dtype=np.float64), self._cos, self._sin,
+                                        self.params.range_m, CELL_M, known))
 
     @property
     def cast(self) -> np.ndarray:
