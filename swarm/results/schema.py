@@ -201,6 +201,14 @@ def comm_columns(summary: Summary | Mapping[str, Any] | None, comm: Mapping[str,
 
 
 # ------------------------------------------------------------------------------------- runs table ----
+LOCALIZATION_RUN_COLUMNS: dict[str, tuple[ArrowType, str]] = {
+    "pose_error_m": ("float64", "mean over robots of the final position error of the pose estimate (m)"),
+    "false_free_share": ("float64", "share of the cells the robots know that their maps say free where the truth "
+                                    "is solid"),
+    "false_occupied_share": ("float64", "share of the cells the robots know that their maps say solid where the "
+                                        "truth is free"),
+}
+"""Runs-table columns of a run with a localisation model (``[localization]``; null without one)."""
 RUNS: dict[str, ArrowType] = {
     "key": "string", "campaign": "string", "index": "int64", "replicate": "int64",
     "map": "string", "size": "string", "robots": "int64", "spawn": "string", "algorithm": "string",
@@ -213,7 +221,7 @@ RUNS: dict[str, ArrowType] = {
     "bytes_delivered": "int64", "msgs_dropped": "int64", "failed_robots": "int64", "spec_json": "string",
     "wall_time_s": "float64", "cpu_time_s": "float64", "jit_time_s": "float64", "worker_pid": "int64",
     "worker_rss_mb": "float64", "swarm_version": "string", "algorithm_dist": "string",
-    "algorithm_version": "string", **COMM_RUN_COLUMNS,
+    "algorithm_version": "string", **COMM_RUN_COLUMNS, **{c: t for c, (t, _) in LOCALIZATION_RUN_COLUMNS.items()},
 }
 """One row per run (``*.runs.parquet``); the store adds ``part`` (the file a row came from) when reading.
 ``wall_time_s`` and ``cpu_time_s`` time the whole run in its worker, ``jit_time_s`` the part of it in numba's
@@ -229,15 +237,19 @@ def summary_columns(summary: Summary | Mapping[str, Any] | None) -> dict[str, An
         return {"ticks": None, "stop_reason": "error", "explored": None, "coverage": None,
                 **{col: None for col in THRESHOLD_COLUMNS.values()}, "distance_m": None, "collisions": None,
                 "msgs_sent": None, "bytes_sent": None, "msgs_delivered": None, "bytes_delivered": None,
-                "msgs_dropped": None, "failed_robots": None}
+                "msgs_dropped": None, "failed_robots": None, **{c: None for c in LOCALIZATION_RUN_COLUMNS}}
     msgs = summary["messages"]
+    loc = summary.get("localization")   # only with a localisation model (Simulation._localization_summary)
     return {"ticks": summary["ticks"], "stop_reason": summary["stop_reason"], "explored": summary["explored"],
             "coverage": summary["coverage"],
             **{col: summary["ticks_to"].get(t) for t, col in THRESHOLD_COLUMNS.items()},
             "distance_m": float(sum(summary["distance_m"])), "collisions": summary["collisions"],
             "msgs_sent": msgs["sent"], "bytes_sent": msgs["bytes_sent"], "msgs_delivered": msgs["delivered"],
             "bytes_delivered": msgs["bytes_delivered"], "msgs_dropped": dropped(msgs),
-            "failed_robots": len(summary["failed_robots"])}
+            "failed_robots": len(summary["failed_robots"]),
+            "pose_error_m": (sum(loc["final_position_error_m"]) / len(loc["final_position_error_m"])) if loc else None,
+            "false_free_share": loc["false_free_share"] if loc else None,
+            "false_occupied_share": loc["false_occupied_share"] if loc else None}
 
 
 def timeseries_table(rows: list[dict[str, Any]]) -> "pa.Table":

@@ -194,3 +194,23 @@ def test_figure_panels_may_fix_or_compare_an_axis(tmp_path):
                 if label not in orders.setdefault(dim, []):
                     orders[dim].append(label)
     check_layout(figures, orders)
+
+
+def test_localization_axes_and_map_quality_reach_the_runs_table_and_report(tmp_path):
+    """Issue 50: a drift sweep is a grid axis; runs with a localisation model fill the pose-error and
+    map-quality columns, runs without leave them null, and the report's runs table carries them."""
+    from swarm.campaign.report import build_report
+
+    text = HEAD + 'radio = ["global"]\n"localization.model" = ["perfect", "odometry"]\n' \
+                  '"localization.drift_per_m" = [0.05]\n[stop]\nmax_ticks = 60\n'
+    spec = parse_campaign(text)
+    assert {r.spec.localization.model for r in spec.runs()} == {"perfect", "odometry"}
+    run_campaign(spec, tmp_path / "res", executor=make_executor(inline=True), progress=False)
+    runs = ResultsStore(tmp_path / "res").runs_table().to_pandas().set_index("localization.model")
+    assert runs.loc["perfect", ["pose_error_m", "false_free_share", "false_occupied_share"]].isna().all()
+    assert runs.loc["odometry", "pose_error_m"] >= 0 and runs.loc["odometry", "false_occupied_share"] >= 0
+    build_report(tmp_path / "res", tmp_path / "report")
+    header = (tmp_path / "report" / "tables" / "runs.csv").read_text().splitlines()[0].split(",")
+    assert {"localization.model", "pose_error_m", "false_free_share", "false_occupied_share"} <= set(header)
+    err = error_of(text.replace('"localization.drift_per_m" = [0.05]', '"localization.drift_per_m" = [2]'))
+    assert err.field == "grid.localization.drift_per_m[0]"
