@@ -118,6 +118,7 @@ exit directions), which travel in doorway lists (MAES's robots share one Doorway
 from __future__ import annotations
 
 import math
+import weakref
 from typing import Any
 
 import numpy as np
@@ -397,8 +398,8 @@ class Minotaur:
             return
         kw, origin = self._window(obs)
         space, _ = self._spaces(obs)
-        for cand in maes.candidates(kw, origin, (obs.pose.x, obs.pose.y), self.vision, self.p.maes_door_width,
-                                    by_wall_count=True):
+        for cand in maes.iter_candidates(kw, origin, (obs.pose.x, obs.pose.y), self.vision, self.p.maes_door_width,
+                                         by_wall_count=True):
             if cand.key in self.tried or self._in_doorway(cand.key):
                 return                                     # MAES lines 809-812, 830-833: stop here
             self.tried.add(cand.key)
@@ -823,11 +824,23 @@ def _well_formed(m: Any) -> bool:
     check = getattr(m, "validate", None)
     if check is None:
         return False
+    if isinstance(m, Tried):   # one object reaches every receiver in the process: check its cells once
+        seen = _VALID_TRIED.get(id(m))
+        if seen is not None and seen() is m:
+            return True
     try:
         check()
     except (MessageError, TypeError, ValueError, AttributeError):
         return False
+    if isinstance(m, Tried):
+        key = id(m)
+        _VALID_TRIED[key] = weakref.ref(m, lambda _ref, key=key: _VALID_TRIED.pop(key, None))
     return True
+
+
+_VALID_TRIED: dict[int, weakref.ref] = {}
+"""Tried messages already found well formed, by identity (frozen: they cannot change after the check); an
+entry leaves when its message is collected."""
 
 
 def _bit(side: int) -> int:

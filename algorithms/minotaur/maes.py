@@ -67,7 +67,9 @@ towards it regardless).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 from dataclasses import dataclass
+from typing import Any
 
 import numba
 import numpy as np
@@ -153,9 +155,9 @@ def wall_hits(known: np.ndarray, cell: tuple[int, int], vision: int) -> np.ndarr
     out = np.empty((360, 2), dtype=np.int64)
     n = _cast(k, cell[0], cell[1], 0.0, 0, 360, 1, 2 * (vision + 2), False, out)
     hits = np.zeros(k.shape, dtype=np.bool_)
-    for r, c in out[:n].tolist():
-        if k[r, c] == SOLID:
-            hits[r, c] = True
+    rows, cols = out[:n, 0], out[:n, 1]
+    solid = k[rows, cols] == SOLID
+    hits[rows[solid], cols[solid]] = True
     return hits
 
 
@@ -210,13 +212,20 @@ def candidates(known: np.ndarray, origin: tuple[int, int], xy: tuple[float, floa
     remembers and skips them). ``by_wall_count``: MAES's choice of rule (line 795, issue 49 row 1): gap
     candidates only when exactly one wall is seen, crossings only otherwise (none with no wall, line
     788); False: both rules on every call."""
+    return list(iter_candidates(known, origin, xy, vision, door_width, by_wall_count))
+
+
+def iter_candidates(known: np.ndarray, origin: tuple[int, int], xy: tuple[float, float], vision: int,
+                    door_width: int, by_wall_count: bool = False) -> Iterator[Candidate]:
+    """:func:`candidates` one at a time, each built only when asked for: the MAES variant stops at the
+    first tried one, and on caves a window holds hundreds of wall crossings."""
     h, w = known.shape
     pr, pc = xy[1] / CELL_M - origin[0], xy[0] / CELL_M - origin[1]          # the robot, window cells
     cell = (min(max(int(pr), 0), h - 1), min(max(int(pc), 0), w - 1))
     hits = wall_hits(known, cell, vision)
     row_walls, col_walls = walls(known, hits)
     radius = 2 * vision                                                   # SLAM cells (MAES line 803, 827)
-    found: list[tuple[float, Candidate]] = []
+    found: list[tuple[float, tuple[int, int], str, Any]] = []   # (distance, key, kind, what makes it)
     one_wall = len(row_walls) + len(col_walls) == 1
     for axis, faces in ((0, row_walls), (1, col_walls)):
         if by_wall_count and not one_wall:
@@ -238,7 +247,7 @@ def candidates(known: np.ndarray, origin: tuple[int, int], xy: tuple[float, floa
                         across_m = (p_line + lo_line) * CELL_M
                         goal = (along_m, across_m) if axis == 0 else (across_m, along_m)
                         key = (line + lo_line, j + lo_along) if axis == 0 else (j + lo_along, line + lo_line)
-                        found.append((math.hypot(line + 0.5 - p_line, j + 0.5 - p_along),
+                        found.append((math.hypot(line + 0.5 - p_line, j + 0.5 - p_along), key, "gap",
                                       Candidate("gap", key, goal, axis, line + lo_line, side, end + lo_along, step)))
                         break
                     j += step
@@ -253,14 +262,19 @@ def candidates(known: np.ndarray, origin: tuple[int, int], xy: tuple[float, floa
             d = math.hypot(xr + 0.5 - pr, xc + 0.5 - pc)
             if d > radius:
                 continue
-            scale = (d - vision) / d if d > 0 else 0.0                    # pulled back `vision` cells (line 839-840)
-            gr, gc = pr + (xr + 0.5 - pr) * scale, pc + (xc + 0.5 - pc) * scale
-            goal = ((gc + origin[1]) * CELL_M, (gr + origin[0]) * CELL_M)
-            found.append((d, Candidate("cross", (xr + origin[0], xc + origin[1]), goal, 0, rl + origin[0], rs,
-                                       line2=cl + origin[1], side2=cs, span=(c0 + origin[1], c1 + origin[1]),
-                                       span2=(r0 + origin[0], r1 + origin[0]))))
-    found.sort(key=lambda t: (t[0], t[1].key, t[1].kind))
-    return [c for _, c in found]
+            found.append((d, (xr + origin[0], xc + origin[1]), "cross", (rl, rs, c0, c1, cl, cs, r0, r1)))
+    found.sort(key=lambda t: (t[0], t[1], t[2]))
+    for d, key, kind, made in found:
+        if kind == "gap":
+            yield made
+            continue
+        rl, rs, c0, c1, cl, cs, r0, r1 = made
+        xr, xc = key[0] - origin[0], key[1] - origin[1]
+        scale = (d - vision) / d if d > 0 else 0.0                        # pulled back `vision` cells (line 839-840)
+        gr, gc = pr + (xr + 0.5 - pr) * scale, pc + (xc + 0.5 - pc) * scale
+        goal = ((gc + origin[1]) * CELL_M, (gr + origin[0]) * CELL_M)
+        yield Candidate("cross", key, goal, 0, rl + origin[0], rs, line2=cl + origin[1], side2=cs,
+                        span=(c0 + origin[1], c1 + origin[1]), span2=(r0 + origin[0], r1 + origin[0]))
 
 
 # ------------------------------------------------------------------------------------------ check ----

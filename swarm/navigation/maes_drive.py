@@ -181,6 +181,18 @@ def _fastest(left: float, w0: float, top: float, dw: float, substeps: int,
     return lo
 
 
+def _snap_near(known: np.ndarray, tile: tuple[int, int]) -> tuple[int, int]:
+    """:func:`_snap` on the coarse map of the tiles within :data:`SNAP_TILES` of ``tile`` only (a straight
+    move needs no more of the map)."""
+    k = CELLS_PER_TILE
+    r0, c0 = max(tile[0] - SNAP_TILES, 0), max(tile[1] - SNAP_TILES, 0)
+    window = known[r0 * k:(tile[0] + SNAP_TILES + 1) * k, c0 * k:(tile[1] + SNAP_TILES + 1) * k]
+    if window.size == 0:
+        return tile
+    r, c = _snap(coarse_open(window), (tile[0] - r0, tile[1] - c0))
+    return r + r0, c + c0
+
+
 class MaesDrive:
     """One robot's MAES controller: the goal and drive its algorithm set, the path (tiles, or the ends of
     its straight runs) and the task under way. Has :class:`~swarm.navigation.navigator.Navigator`'s
@@ -360,7 +372,7 @@ class MaesDrive:
     def _decide_straight(self, pose: Pose, known: np.ndarray) -> None:
         """``MoveTo`` (Robot2DController.cs 403-409)."""
         if self._goal_tile is None or self._path is None:
-            self._goal_tile = _snap(coarse_open(known), tile_of(*self.goal))  # type: ignore[misc]
+            self._goal_tile = _snap_near(known, tile_of(*self.goal))  # type: ignore[misc]
             self._path = np.array([tile_centre(self._goal_tile)])
             self._suffix = np.zeros(1)
             self.path_length = math.hypot(self._path[0, 0] - pose.x, self._path[0, 1] - pose.y)
