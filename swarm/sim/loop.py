@@ -42,6 +42,7 @@ from swarm.grid._validate import vouch_known
 from swarm.knowledge.maps import sync_boxes_flat, sync_changes
 from swarm.knowledge.planes import KnowledgePlanes
 from swarm.knowledge.planes import wanted as planes_wanted
+from swarm.navigation.avoidance import Avoidance
 from swarm.navigation.maes_drive import MaesDriveFleet
 from swarm.navigation.navigator import NavigationFleet
 from swarm.plugins import explorers as registry
@@ -152,6 +153,9 @@ class Simulation:
         self._views = [self._read_only(i) for i in range(n)]
         fleet = MaesDriveFleet if self.motion.model == "maes" else NavigationFleet
         self.fleet = fleet(self.spec.navigation, self.motion, [planner_rng(self.spec.seed, i) for i in range(n)])
+        nav = self.spec.navigation
+        self.avoidance = (Avoidance(nav.avoidance, self.motion, n, nav.avoidance_range_m)
+                          if nav.avoidance != "none" else None)
         self.navigators = self.fleet.navigators
         self.links = build_link_model(self.truth, self.spec.radio, field_seed=self.streams.map_seed)
         self.comm = self.spec.comm
@@ -317,7 +321,7 @@ class Simulation:
         next tick: send, navigate, stall count, observers."""
         poses = state.poses
         sent = self._send(state.tick, state.believed, actions, state.links, poses)
-        commands = self._commands(actions, state.believed, state.pose_tuples, state.began)
+        commands = self._commands(actions, state.believed, state.pose_tuples, state.began, poses)
         moving = np.count_nonzero(commands) > 0 or any(nav.state in ("moving", "planning") for nav, action
                                                        in zip(self.navigators, actions) if action is not None)
         state.stalled_for = 0 if moving else state.stalled_for + 1
@@ -327,7 +331,7 @@ class Simulation:
         state.tick += 1
 
     def _commands(self, actions: list[Action | None], poses: np.ndarray, pose_tuples: list[Pose],
-                  began: np.ndarray | None = None) -> np.ndarray:
+                  began: np.ndarray | None = None, true_poses: np.ndarray | None = None) -> np.ndarray:
         """The tick's (v, omega) per robot: an action's velocity, else its navigator's command toward the
         goal the action set (all navigators at once, :class:`NavigationFleet`, or MAES's controllers,
         which a contact begun this tick, ``began``, interrupts); (0, 0) without an action."""
@@ -347,6 +351,8 @@ class Simulation:
             else:
                 steered.append(i)
         self.fleet.command(steered, poses, pose_tuples, self.known, commands, began)
+        if self.avoidance is not None:   # among the robots as they are, not as they believe they are
+            self.avoidance.adjust(commands, steered, poses if true_poses is None else true_poses)
         return commands
 
     # ---------------------------------------------------------------------------------- messaging ----
