@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from swarm.base.types import FREE, SOLID
+from swarm.base.types import CELL_M, FREE, SOLID
 
 
 @njit(cache=True)
@@ -36,18 +36,36 @@ def _counts(known: np.ndarray, solid: np.ndarray, out: np.ndarray) -> None:  # p
 
 
 def map_quality(known: np.ndarray, truth_solid: np.ndarray) -> dict[str, Any]:
-    """Per robot and over all robots: the known cells and the shares of them that are false free and false
-    occupied (``known``: ``uint8[R, H, W]`` maps; ``truth_solid``: ``bool[H, W]``)."""
+    """Per robot and over all robots (``known``: ``uint8[R, H, W]`` maps; ``truth_solid``: ``bool[H, W]``):
+
+    - the known cells and the shares of them that are false free and false occupied;
+    - ``wall_offset_m``: the mean distance from a cell a map holds SOLID to the nearest truly solid cell, a
+      map-alignment error (0 for a map whose walls are all where they are; a map shifted by d metres
+      scores about d);
+    - ``explored_correct``: the share of the truly free cells some robot's map holds FREE where they are,
+      the explored fraction counting only correctly known cells."""
+    from scipy import ndimage
+
+    solid = np.ascontiguousarray(truth_solid, dtype=np.bool_)
     out = np.zeros((known.shape[0], 3), dtype=np.int64)
-    _counts(known, np.ascontiguousarray(truth_solid, dtype=np.bool_), out)
+    _counts(known, solid, out)
     known_cells = out[:, 0]
     total = max(int(known_cells.sum()), 1)
     per = np.maximum(known_cells, 1)
+    to_wall = ndimage.distance_transform_edt(~solid) * CELL_M          # metres to the nearest solid cell
+    offsets = [float(to_wall[m == SOLID].mean()) if (m == SOLID).any() else 0.0 for m in known]
+    correct = np.zeros(solid.shape, dtype=np.bool_)
+    for m in known:
+        correct |= m == FREE
+    correct &= ~solid
     return {"known_cells": [int(v) for v in known_cells],
             "false_free": [float(v) for v in out[:, 1] / per],
             "false_occupied": [float(v) for v in out[:, 2] / per],
             "false_free_share": float(out[:, 1].sum() / total),
-            "false_occupied_share": float(out[:, 2].sum() / total)}
+            "false_occupied_share": float(out[:, 2].sum() / total),
+            "wall_offset_m": offsets,
+            "wall_offset_mean_m": float(np.mean(offsets)) if offsets else 0.0,
+            "explored_correct": float(correct.sum() / max(int((~solid).sum()), 1))}
 
 
 __all__ = ["map_quality"]

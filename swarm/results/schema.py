@@ -207,6 +207,10 @@ LOCALIZATION_RUN_COLUMNS: dict[str, tuple[ArrowType, str]] = {
                                     "is solid"),
     "false_occupied_share": ("float64", "share of the cells the robots know that their maps say solid where the "
                                         "truth is free"),
+    "wall_offset_m": ("float64", "mean over robots of the mean distance from a wall cell of the map to the nearest "
+                                 "true wall (m): a map-alignment error"),
+    "explored_correct": ("float64", "share of the free cells some robot's map holds free where they are (the "
+                                    "explored fraction counting only correctly known cells)"),
 }
 """Runs-table columns of a run with a localisation model (``[localization]``; null without one)."""
 RUNS: dict[str, ArrowType] = {
@@ -249,7 +253,9 @@ def summary_columns(summary: Summary | Mapping[str, Any] | None) -> dict[str, An
             "failed_robots": len(summary["failed_robots"]),
             "pose_error_m": (sum(loc["final_position_error_m"]) / len(loc["final_position_error_m"])) if loc else None,
             "false_free_share": loc["false_free_share"] if loc else None,
-            "false_occupied_share": loc["false_occupied_share"] if loc else None}
+            "false_occupied_share": loc["false_occupied_share"] if loc else None,
+            "wall_offset_m": loc["wall_offset_mean_m"] if loc else None,
+            "explored_correct": loc["explored_correct"] if loc else None}
 
 
 def timeseries_table(rows: list[dict[str, Any]]) -> "pa.Table":

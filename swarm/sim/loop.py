@@ -170,6 +170,7 @@ class Simulation:
                                                                                     self.truth.height_m))
                           if loc.on else None)
         self.off_map_scans = 0   # robot-ticks whose lidar wrote nothing for believing itself off the map
+        self._pose_errors: dict[str, list[Any]] = {"tick": [], "position_m": [], "heading_rad": []}
         monotone = self.lidar_params.mode == "ternary" and self.localizer is None
         self.free = FreeCounts(n, exact=monotone)  # each map's FREE cells
         merge = resolve_maes_merge(self.comm.map_sharing, self.comm.share_every, registry.load(self.spec.algorithm.name))
@@ -279,9 +280,13 @@ class Simulation:
             if state.tick > 0:
                 self.localizer.update(poses, active)
             believed = self.localizer.estimates.copy()
-            ranges = self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker,
-                                     write=False)
-            self.off_map_scans += self.lidar.write_from(believed, ranges, self.known)
+            if self.lidar_params.mode == "ternary":
+                ranges = self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker,
+                                         write=False)
+                self.off_map_scans += self.lidar.write_from(believed, ranges, self.known)
+            else:   # log-odds: evidence from where it believes it is, so later scans can undo a misplaced wall
+                self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker,
+                                measure=False, write_poses=believed)
         self.sharing.scanned(believed)
         self.tracker.update_coverage(poses[:, :2], active=active)
         state.poses, state.collided, state.active, state.believed = poses, collided, active, believed
@@ -502,6 +507,11 @@ class Simulation:
         n = self.spec.robots.count
         if self.observers:
             links.state()  # observers read the whole radio picture: evaluate it once, for the groups too
+        if self.localizer is not None:   # each robot's pose error at every recorded tick
+            err = self.localizer.errors(self.world.poses)
+            self._pose_errors["tick"].append(tick)
+            self._pose_errors["position_m"].append([round(float(e), 4) for e in err[:, 0]])
+            self._pose_errors["heading_rad"].append([round(float(e), 5) for e in err[:, 1]])
         groups = links.groups() if n > 1 else [frozenset({0})]
         self.metrics.record(tick, explored=explored, coverage=self.tracker.coverage,
                             distance_m=float(self.world.distance.sum()), collisions=collisions,
@@ -525,6 +535,7 @@ class Simulation:
                                  "final_position_error_m": [float(e) for e in err[:, 0]],
                                  "final_heading_error_rad": [float(e) for e in err[:, 1]],
                                  "off_map_scans": self.off_map_scans,
+                                 "pose_error_series": self._pose_errors,
                                  **map_quality(self.known, self.truth.solid)}}
 
     def _message_counts(self, host: AgentHost) -> dict[str, Any]:

@@ -473,9 +473,11 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
                           noise_std: float, noise_per_metre: float, logodds: np.ndarray, hit: float,
                           miss: float, lo: float, hi: float, occupied_above: float, free_below: float,
                           known: np.ndarray, seen: np.ndarray, ranges: np.ndarray, votes: np.ndarray,
-                          mark: np.ndarray, touched: np.ndarray) -> int:
+                          mark: np.ndarray, touched: np.ndarray, vote_poses: np.ndarray) -> int:
     """One tick of the log-odds lidar for every robot and ray (``noise``: standard normals [R, n_rays],
-    ignored when both noise parameters are 0). Returns newly seen free cells or ``-(r + 1)``."""
+    ignored when both noise parameters are 0). Returns newly seen free cells or ``-(r + 1)``. Ranges are
+    measured from ``poses`` and voted along rays from ``vote_poses`` (where the robots believe they are:
+    ``poses`` itself without a localisation error); a robot that believes itself off the map votes nothing."""
     rows, cols = solid.shape
     bad = _lidar_first_bad_pose(poses, active, rows, cols, cell)
     if bad >= 0:
@@ -498,6 +500,11 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
         y = poses[r, 1]
         ch = math.cos(poses[r, 2])
         sh = math.sin(poses[r, 2])
+        bx = vote_poses[r, 0]
+        by = vote_poses[r, 1]
+        bch = math.cos(vote_poses[r, 2])
+        bsh = math.sin(vote_poses[r, 2])
+        votes_on = bx >= 0.0 and bx < cols * cell and by >= 0.0 and by < rows * cell and np.isfinite(vote_poses[r, 2])
         n_touched = 0
         for i in range(cos_a.shape[0]):
             dx = ch * cos_a[i] - sh * sin_a[i]
@@ -513,8 +520,10 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
                 if z > range_m:
                     z = np.inf
             ranges[r, i] = z
-            n_touched = _lidar_walk_votes(solid, x, y, dx, dy, z, t_hit, range_m, cell, votes, mark,
-                                          touched, n_touched)
+            if votes_on:
+                n_touched = _lidar_walk_votes(solid, bx, by, bch * cos_a[i] - bsh * sin_a[i],
+                                              bsh * cos_a[i] + bch * sin_a[i], z, t_hit, range_m, cell, votes, mark,
+                                              touched, n_touched)
         for k in range(n_touched):
             row = touched[k] // cols
             col = touched[k] % cols
@@ -601,7 +610,8 @@ class Lidar:
     def scan(self, poses: np.ndarray, known: np.ndarray, rng: np.random.Generator | None = None,
              active: np.ndarray | None = None, tracker: ExplorationTracker | None = None, *,
              measure: bool = True, freed: np.ndarray | None = None,
-             planes: KnowledgePlanes | None = None, write: bool = True) -> np.ndarray | None:
+             planes: KnowledgePlanes | None = None, write: bool = True,
+             write_poses: np.ndarray | None = None) -> np.ndarray | None:
         """Cast every active robot's rays from ``poses`` (``float64[R, 3]``: x, y, theta) and write what
         they observe into ``known`` (``uint8[R, H, W]``, C-contiguous, modified in place) and into the
         tracker (``tracker`` if given, else :attr:`tracker`). Returns the measured ranges
@@ -624,7 +634,8 @@ class Lidar:
 
         ``write=False`` (ternary mode): measure only (the ranges, as float64, and the tracker's seen cells),
         every active robot cast, ``known`` untouched: for robots that write from an estimated pose
-        (:meth:`write_from`)."""
+        (:meth:`write_from`). ``write_poses`` (log-odds mode): vote along the rays from these poses instead,
+        where the robots believe they are (the ranges are still measured from ``poses``)."""
         trk = self.tracker if tracker is None else self._check_tracker(tracker)
         pose = np.ascontiguousarray(poses, dtype=np.float64)
         if pose.ndim != 2 or pose.shape[1] != 3:
@@ -666,12 +677,15 @@ class Lidar:
             else:
                 noise = self._no_noise
             grid = self._logodds_for(n)
+            voting = pose if write_poses is None else np.ascontiguousarray(write_poses, dtype=np.float64)
+            if voting.shape != pose.shape:
+                raise InvalidInput("write_poses", voting.shape, f"an array of shape {pose.shape}")
             new = _lidar_logodds_kernel(self._solid, pose, act, self._cos, self._sin, p.range_m, CELL_M,
                                         noise, p.noise_std, p.noise_per_metre, grid.values, p.logodds_hit,
                                         p.logodds_miss, p.logodds_min, p.logodds_max,
                                         p.logodds_occupied_above, p.logodds_free_below, known,
                                         trk.seen_buffer, ranges, self._votes, self._mark,
-                                        self._touched)
+                                        self._touched, voting)
             self._cast[:] = act
         if new < 0:
             r = -new - 1

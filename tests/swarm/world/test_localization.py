@@ -178,3 +178,20 @@ def test_a_run_with_drift_maps_worse_and_reports_its_errors():
     assert loc["false_free_share"] + loc["false_occupied_share"] > 0.0
     again = swarm.run({**base, "localization": {"model": "odometry", "drift_per_m": 0.05}}).summary
     assert again["localization"] == loc and again["ticks"] == drift["ticks"]
+
+
+def test_the_log_odds_lidar_unlearns_walls_a_pose_error_misplaced():
+    """With the ternary lidar a cell once written SOLID stays SOLID, so every wall a momentary pose error
+    misplaced stays; the log-odds lidar votes from the believed pose too, and later scans from better
+    estimates vote the misplaced cells free again: fewer false-occupied cells and more of the map right."""
+    base = {"map": {"kind": "building", "size": 30, "seed": 3}, "robots": {"count": 3, "spawn": "together",
+                                                                             "spawn_seed": 1},
+            "seed": 5, "algorithm": {"name": "frontier"}, "stop": {"explored": 0.9, "max_ticks": 1500},
+            "localization": {"model": "bounded", "sigma_m": 0.1}}
+    ternary = swarm.run(base).summary["localization"]
+    logodds = swarm.run({**base, "lidar": {"mode": "logodds"}}).summary["localization"]
+    assert logodds["false_occupied_share"] < 0.75 * ternary["false_occupied_share"]
+    assert logodds["explored_correct"] > ternary["explored_correct"]
+    assert 0.0 < logodds["wall_offset_mean_m"] < 1.0
+    series = logodds["pose_error_series"]
+    assert series["tick"][:2] == [0, 10] and len(series["position_m"][0]) == 3
