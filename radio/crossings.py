@@ -48,6 +48,8 @@ from maps.rects import merge_rectangles
 
 from .blocks import single_cell_blocks, uniform_blocks
 
+_NO_DB = np.zeros(2, dtype=np.float64)
+"""The material prices :func:`_radio_walk_segment` passes to the shared walk, which does not read them."""
 DEFAULT_GRAZE_TOLERANCE_M = 0.05
 """Solid runs and free gaps at most this long (metres along the segment) are ignored / bridged."""
 
@@ -70,120 +72,8 @@ def _radio_walk_segment(blocks, cell, x0, y0, x1, y1, tol, run_start, run_end, r
     :func:`radio.blocks.single_cell_blocks`: plain Amanatides-Woo) and moves to the cell the segment enters
     next. Boundaries are recomputed from integer indices every time, so no rounding accumulates.
     """
-    rows = blocks.shape[1]
-    cols = blocks.shape[2]
-    dx = x1 - x0
-    dy = y1 - y0
-    length = math.sqrt(dx * dx + dy * dy)
-    if length == 0.0:
-        return 0
-    inv_cell = 1.0 / cell
-    xs = x0 * inv_cell  # the walk runs in cell units
-    ys = y0 * inv_cell
-    dxs = dx * inv_cell
-    dys = dy * inv_cell
-    col = min(max(int(math.floor(xs)), 0), cols - 1)
-    row = min(max(int(math.floor(ys)), 0), rows - 1)
-    step_x = 1 if dx > 0.0 else (-1 if dx < 0.0 else 0)
-    step_y = 1 if dy > 0.0 else (-1 if dy < 0.0 else 0)
-    # the segment meets grid column line i at t = i * sx + cx (never, t = inf, if dx = 0); same for rows
-    sx = 1.0 / dxs if dx != 0.0 else 0.0
-    sy = 1.0 / dys if dy != 0.0 else 0.0
-    cx = -xs * sx if dx != 0.0 else np.inf
-    cy = -ys * sy if dy != 0.0 else np.inf
-    off_x = 0 if step_x > 0 else 1  # the far side of a block w cells wide is grid line col + step_x * w + off_x
-    off_y = 0 if step_y > 0 else 1
-    # A segment lying on a grid line is inside a wall only where the cells on both sides are solid; such
-    # segments walk cell by cell, comparing both neighbours.
-    on_row_line = dy == 0.0 and ys == math.floor(ys) and row > 0
-    on_col_line = dx == 0.0 and xs == math.floor(xs) and col > 0
-    on_line = on_row_line or on_col_line
-    q = (2 if step_x < 0 else 0) + (1 if step_y < 0 else 0)  # indexed, not sliced: views cost refcounting
-    n_mat = run_len.shape[1]
-    n = 0
-    in_run = False
-    gap = 0.0
-    solid_len = 0.0
-    t = 0.0
-    while True:
-        m = int(blocks[q, row, col, 0])
-        if on_line:
-            k = 1
-            wide = 1
-            tall = 1
-            if m != 0 and on_row_line and blocks[q, row - 1, col, 0] == 0:
-                m = 0
-            if m != 0 and on_col_line and blocks[q, row, col - 1, 0] == 0:
-                m = 0
-        else:
-            k = int(blocks[q, row, col, 1])
-            wide = int(blocks[q, row, col, 2])
-            tall = int(blocks[q, row, col, 3])
-        # where the segment leaves rectangle A (wide x k) and rectangle B (k x tall); leap through the one
-        # it stays in longer
-        ax = (col + step_x * wide + off_x) * sx + cx
-        bx = (col + step_x * k + off_x) * sx + cx
-        ay = (row + step_y * k + off_y) * sy + cy
-        by = (row + step_y * tall + off_y) * sy + cy
-        t_a = min(ax, ay)
-        t_b = min(bx, by)
-        if t_a >= t_b:
-            w = wide
-            h = k
-            ex = ax
-            ey = ay
-            t_next = t_a
-        else:
-            w = k
-            h = tall
-            ex = bx
-            ey = by
-            t_next = t_b
-        if t_next > 1.0:
-            t_next = 1.0
-        if t_next < t:
-            t_next = t
-        seg = (t_next - t) * length
-        if m != 0:
-            if not in_run:
-                in_run = True
-                run_start[n] = t * length
-                for j in range(n_mat):
-                    run_len[n, j] = 0.0
-                solid_len = 0.0
-            gap = 0.0
-            run_len[n, m] += seg
-            solid_len += seg
-            run_end[n] = t_next * length
-        elif in_run:
-            gap += seg
-            if gap > tol:
-                n = _radio_close_run(n, solid_len, tol)
-                in_run = False
-        if t_next >= 1.0:
-            break
-        # the next cell: across the rectangle's x side, its y side, or exactly its corner. Coordinates are
-        # >= 0 inside the map, so int() truncation is floor() (and cheaper); the clamp keeps the cell on
-        # the rectangle's side whatever the rounding.
-        if ex < ey:
-            if h > 1:
-                lo_r = row - h + 1 if step_y < 0 else row
-                row = min(max(int(ys + t_next * dys), lo_r), lo_r + h - 1)
-            col += step_x * w
-        elif ey < ex:
-            if w > 1:
-                lo_c = col - w + 1 if step_x < 0 else col
-                col = min(max(int(xs + t_next * dxs), lo_c), lo_c + w - 1)
-            row += step_y * h
-        else:
-            col += step_x * w
-            row += step_y * h
-        t = t_next
-        if col < 0 or col >= cols or row < 0 or row >= rows:
-            break
-    if in_run:
-        n = _radio_close_run(n, solid_len, tol)
-    return n
+    return _radio_walk(blocks, cell, x0, y0, x1, y1, tol, run_start, run_end, run_len, _NO_DB, _NO_DB, False,
+                       0.0, 0.0, 0.0, 0.0, False)[0]
 
 
 @njit(cache=True, inline="always")
@@ -221,6 +111,16 @@ def _radio_walk_until(blocks, cell, x0, y0, x1, y1, tol, run_start, run_end, run
     the walk and these tests only fail more as they grow, so a stopped walk's links are the whole walk's.
     Returns (kept runs so far, dB so far, stopped early). A long segment through a building (most pairs of
     a spread-out swarm) stops after the few walls that exhaust its budget."""
+    return _radio_walk(blocks, cell, x0, y0, x1, y1, tol, run_start, run_end, run_len, cross_db, metre_db, per_metre,
+                       a1, s1, a2, s2, True)
+
+
+@njit(cache=True, inline="always")
+def _radio_walk(blocks, cell, x0, y0, x1, y1, tol, run_start, run_end, run_len, cross_db, metre_db, per_metre,
+                a1, s1, a2, s2, price):  # pragma: no cover
+    """The one traversal behind :func:`_radio_walk_segment` (``price`` False: every kept run, no pricing)
+    and :func:`_radio_walk_until` (``price`` True: runs priced as they close, the walk stopped once neither
+    direction can link). Returns (kept runs, dB priced, stopped early)."""
     rows = blocks.shape[1]
     cols = blocks.shape[2]
     dx = x1 - x0
@@ -313,7 +213,7 @@ def _radio_walk_until(blocks, cell, x0, y0, x1, y1, tol, run_start, run_end, run
             if gap > tol:
                 n = _radio_close_run(n, solid_len, tol)
                 in_run = False
-                if n > priced:
+                if price and n > priced:
                     db = _radio_price_run(db, priced, run_len, tol, cross_db, metre_db, per_metre)
                     priced = n
                     if a1 - db < s1 and a2 - db < s2:
@@ -341,7 +241,7 @@ def _radio_walk_until(blocks, cell, x0, y0, x1, y1, tol, run_start, run_end, run
             break
     if in_run:
         n = _radio_close_run(n, solid_len, tol)
-        if n > priced:
+        if price and n > priced:
             db = _radio_price_run(db, priced, run_len, tol, cross_db, metre_db, per_metre)
     return n, db, False
 
