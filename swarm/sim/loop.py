@@ -171,7 +171,8 @@ class Simulation:
                           if loc.on else None)
         self.off_map_scans = 0   # robot-ticks whose lidar wrote nothing for believing itself off the map
         self._pose_errors: dict[str, list[Any]] = {"tick": [], "position_m": [], "heading_rad": []}
-        monotone = self.lidar_params.mode == "ternary" and self.localizer is None
+        self.occlude = self.lidar_params.robots_occlude   # robots hide what is behind them from each other's lidar
+        monotone = self.lidar_params.mode == "ternary" and self.localizer is None and not self.occlude
         self.free = FreeCounts(n, exact=monotone)  # each map's FREE cells
         merge = resolve_maes_merge(self.comm.map_sharing, self.comm.share_every, registry.load(self.spec.algorithm.name))
         self.planes = (KnowledgePlanes(n, self.truth.shape[0] * self.truth.shape[1])  # who knows which cell
@@ -272,18 +273,20 @@ class Simulation:
         state.began = began
         state.was_colliding = collided
         active = ~self.failed
-        if self.localizer is None:
-            believed = poses
-            self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker,
-                            measure=False, freed=self.free.freed, planes=self.planes)
-        else:   # the lidar measures from the true pose and writes from the believed one
+        believed = poses
+        if self.localizer is not None:
             if state.tick > 0:
                 self.localizer.update(poses, active)
             believed = self.localizer.estimates.copy()
+        if self.localizer is None and not self.occlude:
+            self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker,
+                            measure=False, freed=self.free.freed, planes=self.planes)
+        else:   # the lidar measures from the true pose and writes from the believed one
             if self.lidar_params.mode == "ternary":
+                limits = self.lidar.occlusion(poses, self.motion.radius, active) if self.occlude else None
                 ranges = self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker,
-                                         write=False)
-                self.off_map_scans += self.lidar.write_from(believed, ranges, self.known)
+                                         write=False, limits=limits)
+                self.off_map_scans += self.lidar.write_from(believed, ranges, self.known, limits)
             else:   # log-odds: evidence from where it believes it is, so later scans can undo a misplaced wall
                 self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker,
                                 measure=False, write_poses=believed)

@@ -54,7 +54,7 @@ exact noise-free rule above.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
@@ -62,7 +62,7 @@ from scipy import ndimage
 
 from maps import Map
 from swarm.base.errors import InvalidInput
-from swarm.base.params import check_choice, check_float, check_int
+from swarm.base.params import OMIT_DEFAULT, check_choice, check_float, check_int
 from swarm.base.types import CELL_M, FREE, SOLID
 from swarm.knowledge.maps import ExplorationTracker, LogOddsGrid, active_flags
 from swarm.knowledge.planes import KnowledgePlanes, no_planes, note_raise
@@ -111,6 +111,9 @@ class LidarParams:
     probabilities): +0.85 per hit and -0.4 per miss, i.e. log(0.7/0.3) and log(0.4/0.6) rounded, the usual
     inverse sensor model with p(occupied | hit) = 0.7 and p(occupied | miss) = 0.4; clamped at +-5;
     thresholds 0 as in the paper's Eq. 8 (log-odds 0 is the prior p = 0.5).
+
+    ``robots_occlude`` (ternary mode): other robots' discs stop the rays (a robot hides what is behind it)
+    without entering the map: a ray that ends on a robot writes the free cells before it and nothing else.
     """
 
     range_m: float = 7.0
@@ -125,6 +128,7 @@ class LidarParams:
     logodds_max: float = 5.0
     logodds_occupied_above: float = 0.0
     logodds_free_below: float = 0.0
+    robots_occlude: bool = field(default=False, metadata={OMIT_DEFAULT: True})
 
     def __post_init__(self) -> None:
         def put(name: str, value: object) -> None:
@@ -146,6 +150,11 @@ class LidarParams:
                                               self.logodds_min, self.logodds_max, lo_open=True, hi_open=True))
         put("logodds_occupied_above", check_float("logodds_occupied_above", self.logodds_occupied_above,
                                                   self.logodds_free_below, self.logodds_max, hi_open=True))
+        if not isinstance(self.robots_occlude, bool):
+            raise InvalidInput("robots_occlude", self.robots_occlude, "true or false")
+        if self.robots_occlude and self.mode != "ternary":
+            raise InvalidInput("robots_occlude", True, "false with mode = 'logodds' (robots occlude the ternary "
+                                                       "lidar only)")
         if self.mode == "ternary":
             for name in ("noise_std", "noise_per_metre"):
                 if getattr(self, name) != 0.0:
@@ -314,10 +323,11 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
 @njit(cache=True)
 def _lidar_measure_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarray, cos_a: np.ndarray,
                           sin_a: np.ndarray, range_m: float, cell: float, seen: np.ndarray,
-                          ranges: np.ndarray) -> int:
+                          ranges: np.ndarray, limits: np.ndarray) -> int:
     """The ternary lidar's ranges and ``seen`` cells for every active robot, nothing written into a map (a
     robot with a localisation error writes them from its estimated pose: :func:`_lidar_belief_kernel`).
-    Returns the newly seen free cells, or ``-(r + 1)`` if robot r's pose is invalid."""
+    ``limits`` (``float64[R, n_rays]``, or empty: none): a ray reaches no further than its limit (another
+    robot in the way). Returns the newly seen free cells, or ``-(r + 1)`` if robot r's pose is invalid."""
     rows, cols = solid.shape
     bad = _lidar_first_bad_pose(poses, active, rows, cols, cell)
     if bad >= 0:
@@ -325,6 +335,7 @@ def _lidar_measure_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     solid_flat, seen_flat = solid.reshape(solid.size), seen.reshape(seen.size)
     unused = np.zeros(1, dtype=np.uint8)
     p_none = np.zeros((0, 1), dtype=np.uint64)
+    limited = limits.shape[0] > 0
     new = 0
     for r in range(poses.shape[0]):
         if not active[r]:
@@ -336,8 +347,9 @@ def _lidar_measure_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
         for i in range(cos_a.shape[0]):
             dx = ch * cos_a[i] - sh * sin_a[i]
             dy = sh * cos_a[i] + ch * sin_a[i]
+            reach = min(range_m, limits[r, i]) if limited else range_m
             t_hit, n_new, _ = _lidar_walk_visible(solid_flat, cols, unused, 0, False, seen_flat, poses[r, 0],
-                                                  poses[r, 1], dx, dy, range_m, cell, p_none, p_none, r)
+                                                  poses[r, 1], dx, dy, reach, cell, p_none, p_none, r)
             new += n_new
             ranges[r, i] = t_hit
     return new
@@ -345,16 +357,17 @@ def _lidar_measure_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
 
 @njit(cache=True)
 def _lidar_belief_kernel(poses: np.ndarray, ranges: np.ndarray, cos_a: np.ndarray, sin_a: np.ndarray,
-                         range_m: float, cell: float, known: np.ndarray) -> int:
+                         range_m: float, cell: float, known: np.ndarray, limits: np.ndarray) -> int:
     """Write measured ``ranges`` into each robot's map from the pose it believes it has (``poses``): along
     each ray (its angle relative to the believed heading), the cells entered before the range whose centre
     is within ``range_m`` become at least FREE and the cell holding the range point SOLID; with no return
     (inf) every cell entered within range with its centre within range becomes at least FREE; a NaN range
     (robot not active) writes nothing. Rays stop at the map's edge. A robot whose believed position is off
     the map writes nothing. From the true pose this writes exactly what the ternary lidar writes (the same
-    walk, the same crossing distances). Returns the number of robots that wrote nothing for being off the
-    map."""
+    walk, the same crossing distances). ``limits`` (as :func:`_lidar_measure_kernel`'s) shorten rays that
+    ended on another robot. Returns the number of robots that wrote nothing for being off the map."""
     n_robots, rows, cols = known.shape
+    limited = limits.shape[0] > 0
     off = 0
     for r in range(n_robots):
         x = poses[r, 0]
@@ -366,18 +379,19 @@ def _lidar_belief_kernel(poses: np.ndarray, ranges: np.ndarray, cos_a: np.ndarra
         ch = math.cos(poses[r, 2])
         sh = math.sin(poses[r, 2])
         mine = known[r]
-        r2 = range_m * range_m
         for i in range(cos_a.shape[0]):
             z = ranges[r, i]
             if np.isnan(z):
                 continue
+            reach = min(range_m, limits[r, i]) if limited else range_m
+            r2 = reach * reach
             dx = ch * cos_a[i] - sh * sin_a[i]
             dy = sh * cos_a[i] + ch * sin_a[i]
             row, col, step_r, step_c, t_x, t_y, d_x, d_y = _lidar_ray_start(x, y, dx, dy, cell)
             t_entry = 0.0
             while 0 <= row < rows and 0 <= col < cols:
                 t_exit = min(t_x, t_y)
-                if t_entry > range_m:
+                if t_entry > reach:
                     break
                 if z <= t_entry or (z < t_exit and np.isfinite(z)):
                     mine[row, col] = SOLID       # the cell whose extent along the ray holds the range point
@@ -545,6 +559,44 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     return new
 
 
+_NO_LIMITS = np.zeros((0, 0), dtype=np.float64)
+"""The ``limits`` that limit nothing (robots do not occlude)."""
+
+
+@njit(cache=True)
+def _lidar_occlusion_kernel(poses: np.ndarray, active: np.ndarray, pairs: np.ndarray, cos_a: np.ndarray,
+                            sin_a: np.ndarray, radius: float, out: np.ndarray) -> None:  # pragma: no cover
+    """For each pair (a, b) both ways: where each of a's rays first meets b's disc (the smaller root of
+    ``|p + t d - c|^2 = radius^2``, t > 0), kept in ``out[a, i]`` if nearer than what is there. Inactive
+    robots still occlude (a failed robot stands where it stopped)."""
+    r2 = radius * radius
+    for k in range(pairs.shape[0]):
+        for side in range(2):
+            a = pairs[k, side]
+            b = pairs[k, 1 - side]
+            if not active[a]:
+                continue
+            ox = poses[b, 0] - poses[a, 0]
+            oy = poses[b, 1] - poses[a, 1]
+            c = ox * ox + oy * oy - r2
+            if c <= 0.0:
+                continue   # overlapping discs (a collision): no ray of a starts outside b
+            ch = math.cos(poses[a, 2])
+            sh = math.sin(poses[a, 2])
+            for i in range(cos_a.shape[0]):
+                dx = ch * cos_a[i] - sh * sin_a[i]
+                dy = sh * cos_a[i] + ch * sin_a[i]
+                bb = dx * ox + dy * oy
+                if bb <= 0.0:
+                    continue
+                disc = bb * bb - c
+                if disc < 0.0:
+                    continue
+                t = bb - math.sqrt(disc)
+                if t < out[a, i]:
+                    out[a, i] = t
+
+
 _CAST_EVERY_ROBOT = np.zeros((0, 0), dtype=np.uint8)
 """The ``required`` raster that asks the ternary kernel to cast every active robot (``measure=True``)."""
 
@@ -611,7 +663,7 @@ class Lidar:
              active: np.ndarray | None = None, tracker: ExplorationTracker | None = None, *,
              measure: bool = True, freed: np.ndarray | None = None,
              planes: KnowledgePlanes | None = None, write: bool = True,
-             write_poses: np.ndarray | None = None) -> np.ndarray | None:
+             write_poses: np.ndarray | None = None, limits: np.ndarray | None = None) -> np.ndarray | None:
         """Cast every active robot's rays from ``poses`` (``float64[R, 3]``: x, y, theta) and write what
         they observe into ``known`` (``uint8[R, H, W]``, C-contiguous, modified in place) and into the
         tracker (``tracker`` if given, else :attr:`tracker`). Returns the measured ranges
@@ -635,7 +687,8 @@ class Lidar:
         ``write=False`` (ternary mode): measure only (the ranges, as float64, and the tracker's seen cells),
         every active robot cast, ``known`` untouched: for robots that write from an estimated pose
         (:meth:`write_from`). ``write_poses`` (log-odds mode): vote along the rays from these poses instead,
-        where the robots believe they are (the ranges are still measured from ``poses``)."""
+        where the robots believe they are (the ranges are still measured from ``poses``). ``limits``
+        (``write=False``): how far each ray may reach (:meth:`occlusion`)."""
         trk = self.tracker if tracker is None else self._check_tracker(tracker)
         pose = np.ascontiguousarray(poses, dtype=np.float64)
         if pose.ndim != 2 or pose.shape[1] != 3:
@@ -655,7 +708,7 @@ class Lidar:
                 raise InvalidInput("write", write, "True unless the lidar is ternary and no planes are given")
             ranges = np.empty((n, self.n_rays), dtype=np.float64)   # exact: write_from walks to these distances
             new = _lidar_measure_kernel(self._solid, pose, act, self._cos, self._sin, p.range_m, CELL_M,
-                                        trk.seen_buffer, ranges)
+                                        trk.seen_buffer, ranges, _NO_LIMITS if limits is None else limits)
             self._cast[:] = act
         elif p.mode == "ternary":
             required = _CAST_EVERY_ROBOT
@@ -695,7 +748,8 @@ class Lidar:
         trk.add_seen(new)
         return ranges if measure else None
 
-    def write_from(self, poses: np.ndarray, ranges: np.ndarray, known: np.ndarray) -> int:
+    def write_from(self, poses: np.ndarray, ranges: np.ndarray, known: np.ndarray,
+                   limits: np.ndarray | None = None) -> int:
         """Write measured ``ranges`` (``float64[R, n_rays]``, from :meth:`scan` with ``write=False``) into
         ``known`` from the poses the robots believe they have (``float64[R, 3]``): what a robot with a
         localisation error maps (:func:`_lidar_belief_kernel`; from the true poses, exactly what a ternary
@@ -705,7 +759,24 @@ class Lidar:
             raise InvalidInput("poses", pose.shape, f"(R, 3) poses with ranges of shape (R, {self.n_rays})")
         self._check_known(known, pose.shape[0])
         return int(_lidar_belief_kernel(pose, np.ascontiguousarray(ranges, dtype=np.float64), self._cos, self._sin,
-                                        self.params.range_m, CELL_M, known))
+                                        self.params.range_m, CELL_M, known, _NO_LIMITS if limits is None else limits))
+
+    def occlusion(self, poses: np.ndarray, radius: float, active: np.ndarray | None = None) -> np.ndarray:
+        """How far each robot's rays reach before another robot's disc of ``radius`` (``float64[R, n_rays]``,
+        inf where no robot is in the way within range): what ``robots_occlude`` hides. Only pairs closer than
+        the range plus a diameter are examined (a k-d tree finds them)."""
+        from scipy.spatial import cKDTree
+
+        pose = np.ascontiguousarray(poses, dtype=np.float64)
+        n = pose.shape[0]
+        out = np.full((n, self.n_rays), np.inf)
+        if n < 2:
+            return out
+        pairs = cKDTree(pose[:, :2]).query_pairs(self.params.range_m + 2 * radius, output_type="ndarray")
+        act = active_flags(n, active)
+        _lidar_occlusion_kernel(pose, act, np.ascontiguousarray(pairs, dtype=np.int64), self._cos, self._sin,
+                                radius, out)
+        return out
 
     @property
     def cast(self) -> np.ndarray:

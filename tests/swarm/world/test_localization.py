@@ -195,3 +195,30 @@ def test_the_log_odds_lidar_unlearns_walls_a_pose_error_misplaced():
     assert 0.0 < logodds["wall_offset_mean_m"] < 1.0
     series = logodds["pose_error_series"]
     assert series["tick"][:2] == [0, 10] and len(series["position_m"][0]) == 3
+
+
+def test_a_robot_hides_what_is_behind_it_and_does_not_enter_the_map():
+    """lidar.robots_occlude: robot 0 looks east along a corridor at a wall 6 m away, robot 1 stands 2 m in
+    front of it. The ray straight east ends 0.3 m before robot 1's centre; robot 0 maps no wall behind
+    robot 1 and no SOLID cell where robot 1 stands, and the cells between them are FREE."""
+    truth = wall_room(40, 20)
+    solid = truth.solid.copy()
+    solid[:, 24] = True                                   # a wall across the room at x = 12-12.5 m
+    truth = Map(solid=solid, material=solid.astype(np.uint8), materials=("air", "concrete"))
+    lidar = Lidar(truth, LidarParams(range_m=7.0, robots_occlude=True))
+    poses = np.array([[6.25, 5.25, 0.0], [8.25, 5.25, np.pi]])
+    limits = lidar.occlusion(poses, 0.3)
+    east = int(np.argmin(np.abs(np.angle(np.exp(1j * lidar.angles)))))   # the ray along +x
+    assert limits[0, east] == pytest.approx(2.0 - 0.3, abs=1e-9)
+    known = np.zeros((2, *truth.shape), dtype=np.uint8)
+    ranges = lidar.scan(poses, known, write=False, limits=limits)
+    lidar.write_from(poses, ranges, known, limits)
+    row = int(5.25 / CELL_M)
+    assert (known[0, row, 13:16] == FREE).all()           # x 6.5-8 m: between the robots
+    assert known[0, row, 16] != SOLID and known[0, row, 24] == 0   # robot 1's cell, and the hidden wall
+    open_view = np.zeros_like(known)
+    plain = Lidar(truth, LidarParams(range_m=7.0))
+    plain.write_from(poses, plain.scan(poses, open_view, write=False), open_view)
+    assert open_view[0, row, 24] == SOLID                 # without occlusion the wall is seen through robot 1
+    with pytest.raises(InvalidInput, match="robots_occlude"):
+        LidarParams(mode="logodds", robots_occlude=True)
