@@ -89,7 +89,7 @@ from .text import clip
 
 DIMENSIONS = ("map", "size", "robots", "spawn", "algorithm", "radio", "comm", "transport")
 REQUIRED = ("map", "size", "robots", "spawn", "algorithm", "radio")
-AXIS_SECTIONS = ("radio", "comm", "motion", "robots", "localization")
+AXIS_SECTIONS = ("radio", "comm", "motion", "robots", "localization", "navigation")
 """Run-spec sections whose parameters may be grid axes (``radio.sensitivity_dbm``, ``comm.loss``)."""
 DEFAULT_ROBOT_SERIES_EVERY = 10
 """``output.robot_series_every`` defaults to this many time-series rows."""
@@ -575,8 +575,9 @@ def _rules(raw: Mapping[str, Any], name: str, grid: Mapping[str, Any]) -> list[d
 
 
 def is_axis(dim: str) -> bool:
-    """A radio, comm, motion or localisation parameter axis (``radio.sensitivity_dbm``, ``motion.model``,
-    ``localization.drift_per_m``) or ``robots.heading``, not a fixed dimension."""
+    """A radio, comm, motion, localisation or navigation parameter axis (``radio.sensitivity_dbm``,
+    ``motion.model``, ``localization.drift_per_m``, ``navigation.avoidance``) or ``robots.heading``, not a
+    fixed dimension."""
     return dim.partition(".")[0] in AXIS_SECTIONS and "." in dim
 
 
@@ -589,9 +590,11 @@ def axis_fields(section: str) -> tuple[str, ...]:
 
     if section == "robots":
         return ("heading",)
+    from swarm.navigation.spec import NavigationSpec
     from swarm.world.localization import LocalizationSpec
 
-    cls = {"radio": RadioConfig, "comm": CommSpec, "motion": MotionParams, "localization": LocalizationSpec}[section]
+    cls = {"radio": RadioConfig, "comm": CommSpec, "motion": MotionParams, "localization": LocalizationSpec,
+           "navigation": NavigationSpec}[section]
     return tuple(f.name for f in dataclasses.fields(cls)  # tables (materials, overrides) are not plain values
                  if not (section == "radio" and f.name == "model") and f.default_factory is dataclasses.MISSING)
 
@@ -666,6 +669,10 @@ def _parse_axis(axis: str, value: Any, where: str, radio: tuple[Option, ...] | N
                 from swarm.world.localization import LocalizationSpec
 
                 from_mapping(LocalizationSpec, {name: value}, prefix="localization.")
+            elif section == "navigation":
+                from swarm.navigation.spec import NavigationSpec
+
+                from_mapping(NavigationSpec, {name: value}, prefix="navigation.")
             else:
                 config_from_mapping({**table, name: value})
             break
