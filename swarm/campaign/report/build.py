@@ -131,6 +131,7 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
         _comm(rep, out)
         _communication(rep, out, ok.assign(cell=cell_id), store)
     _run_tables(rep, out)
+    _map_quality(rep, out)
     _notes(rep)
     if maes_csv:
         from ..maes_csv import write_runs
@@ -514,6 +515,39 @@ def _over_time_figures(rep: Report, out: ReportWriter, ok: pd.DataFrame, store: 
         title = describe(values)
         out.write(name, comm_figures.over_time_figure(panels, title, rep.fmt))
         rep.communication.over_time.append((title, name))
+
+
+MAP_QUALITY = (("pose_error_m", "Pose error (m)", "{:.2f}"), ("false_free_share", "False free (%)", "pct"),
+               ("false_occupied_share", "False occupied (%)", "pct"), ("wall_offset_m", "Wall offset (m)", "{:.2f}"),
+               ("explored_correct", "Explored correctly (%)", "pct"))
+
+
+def _map_quality(rep: Report, out: ReportWriter) -> None:
+    """With a localisation model on some runs: per cell, the medians of the pose error and the map-quality
+    columns over its runs (docs/localization.md), in ``tables/map_quality``."""
+    data = rep.data
+    runs = data.runs[data.runs["status"] == "ok"]
+    columns = [c for c, _, _ in MAP_QUALITY if c in runs and runs[c].notna().any()]
+    if not columns:
+        return
+    dims = [d for d in data.all_dims if runs[d].nunique() > 1] or list(data.all_dims[:1])
+    df = runs.groupby(dims, observed=True, sort=True)[columns].median().reset_index()
+    df.insert(len(dims), "runs", runs.groupby(dims, observed=True, sort=True).size().to_numpy())
+    fmt = {c: f for c, _, f in MAP_QUALITY}
+    names = {c: n for c, n, _ in MAP_QUALITY}
+
+    def show(c: str, v: Any) -> str:
+        if pd.isna(v):
+            return "–"
+        return f"{100 * v:.1f}" if fmt[c] == "pct" else fmt[c].format(v)
+
+    table = tables.Table([*(tables.header(d) for d in dims), "Runs", *(names[c] for c in columns)],
+                         [[*(str(r[d]) for d in dims), str(int(r["runs"])), *(show(c, r[c]) for c in columns)]
+                          for _, r in df.iterrows()],
+                         [False] * len(dims) + [True] * (1 + len(columns)))
+    _write_table(out, "map_quality", df, table, "Localisation and map quality: medians over each cell's runs "
+                                                "(runs without a localisation model show –)")
+    rep.map_quality, rep.map_quality_rows = table, len(df)
 
 
 def _write_table(out: ReportWriter, name: str, df: pd.DataFrame, table: tables.Table, caption: str) -> None:

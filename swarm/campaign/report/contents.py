@@ -99,6 +99,8 @@ class Report:
     comm_compared: int = 0
     comm_single: int = 0
     maes: dict[str, Any] | None = None
+    map_quality: tables.Table | None = None
+    map_quality_rows: int = 0
     communication: CommSection | None = None
     notes: list[str] = field(default_factory=list)
     written: list[str] = field(default_factory=list)

@@ -14,6 +14,7 @@ EMBED_FIGURES = 24
 """Up to this many curve figures are shown inline; more are listed as links."""
 FAILED_SHOWN = 50
 FILE_NOTES = {"tables/runs.csv": ": every committed run with its cell, stop reason and ticks to target",
+              "tables/map_quality.csv": ": pose error and map quality per cell (runs with a localisation model)",
               "tables/pairs.csv": ": every pair of runs compared", "tables/failed.csv": ": failed runs and errors"}
 SECTION = {"algorithm": "Algorithms compared", "radio": "Radio models compared", "comm": "Comm settings compared",
            None: "Every cell"}
@@ -26,7 +27,7 @@ def section(compare: str | None) -> str:
 
 def render(rep: Report) -> str:
     parts = [_head(rep), _runs(rep), _campaign(rep), _layout(rep), _summary(rep), _curves(rep), _cactus(rep), _paired(rep),
-             _comm(rep), _communication(rep), _failed(rep), _maes(rep), _method(rep), _files(rep)]
+             _comm(rep), _communication(rep), _map_quality(rep), _failed(rep), _maes(rep), _method(rep), _files(rep)]
     return "\n".join(p for p in parts if p).rstrip() + "\n"
 
 
@@ -249,6 +250,19 @@ def _communication(rep: Report) -> str:
                   "t-interval band):", ""]
         lines += [f"- [{title}]({path})" for title, path in sec.over_time] + [""]
     return "\n".join(lines)
+
+
+def _map_quality(rep: Report) -> str:
+    if rep.map_quality is None:
+        return ""
+    lines = ["## Localisation and map quality", "",
+             "Runs with a localisation model (`[localization]`, docs/localization.md) map in the frame they believe "
+             "they are in. Per cell, medians over its runs: the final position error of the pose estimate; the "
+             "shares of the known cells that are false free and false occupied; the mean distance from a mapped "
+             "wall cell to the nearest true wall; and the share of the free cells some map holds free where they "
+             "are. **The explored fraction of the other tables counts what the lidars have seen; *Explored "
+             "correctly* counts only correctly known cells.**", ""]
+    return "\n".join(lines + _inline(rep.map_quality, rep.map_quality_rows, "map_quality"))
 
 
 def _failed(rep: Report) -> str:

@@ -211,6 +211,10 @@ def test_localization_axes_and_map_quality_reach_the_runs_table_and_report(tmp_p
     assert runs.loc["odometry", "pose_error_m"] >= 0 and runs.loc["odometry", "false_occupied_share"] >= 0
     build_report(tmp_path / "res", tmp_path / "report")
     header = (tmp_path / "report" / "tables" / "runs.csv").read_text().splitlines()[0].split(",")
-    assert {"localization.model", "pose_error_m", "false_free_share", "false_occupied_share"} <= set(header)
+    assert {"localization.model", "pose_error_m", "false_free_share", "false_occupied_share", "wall_offset_m",
+            "explored_correct"} <= set(header)
+    quality = (tmp_path / "report" / "tables" / "map_quality.csv").read_text().splitlines()
+    assert quality[0].startswith("localization.model,runs,pose_error_m") and len(quality) == 3
+    assert "## Localisation and map quality" in (tmp_path / "report" / "README.md").read_text()
     err = error_of(text.replace('"localization.drift_per_m" = [0.05]', '"localization.drift_per_m" = [2]'))
     assert err.field == "grid.localization.drift_per_m[0]"
