@@ -117,7 +117,10 @@ def test_ablation_example_is_full_maes_parity_with_one_departure_per_slice() -> 
     that differs from parity in that one setting, on the same maps."""
     spec = load_campaign(ROOT / "examples" / "minotaur-ablation.toml")
     assert spec.replicates >= 20
-    runs = spec.runs()
+    # the first two replicates of every cell (building all 7,040 specs takes half a minute; every replicate
+    # of a cell is built from the same template)
+    runs = [spec.run_at(i) for i in spec.indices() if i % spec.replicates < 2]
+    assert len(runs) == 2 * len(spec.indices()) // spec.replicates
     parity = [r for r in runs if r.cell["radio"] == "materials" and r.cell["comm"] == "MAES"
               and r.cell["motion.model"] == "maes" and "(swarm)" not in r.cell["algorithm"]]
     assert {r.spec.algorithm.params["variant"] for r in parity} == {"maes"}
