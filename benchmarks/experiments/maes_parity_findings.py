@@ -111,24 +111,21 @@ FINDINGS = (
 )
 
 
-def filters(f: Finding, c: Condition) -> tuple[dict[str, Any], dict[str, Any]] | None:
-    """The (A, B) filters of finding ``f`` under condition ``c``, or None when the campaign has no such runs."""
+def filters(f: Finding, c: Condition, motion: bool = True) -> tuple[dict[str, Any], dict[str, Any]] | None:
+    """The (A, B) filters of finding ``f`` under condition ``c``, or None when the campaign has no such runs.
+    ``motion``: the runs table has a ``motion.model`` column; a table from before the axis (swarm's continuous
+    motion everywhere) has none, its parity is that motion and the motion condition is left out."""
+    if not motion and c.motion != "maes":
+        return None
+    pick = {MOTION: c.motion} if motion else {}
     if f.dim == "radio":
         if c.comm != PARITY["comm"] or any(c.algs[k] != k for k in PARITY_ALGS) or c.motion != "maes":
             return None                                   # global and LOS were run under MAES comm only
         radio = {"materials": c.radio}
-        base = {**f.scope, "comm": c.comm, MOTION: c.motion}
+        base = {**f.scope, "comm": c.comm, **pick}
         return {**base, "radio": radio.get(f.a, f.a)}, {**base, "radio": radio.get(f.b, f.b)}
-    base = {**f.scope, "radio": c.radio, "comm": c.comm, MOTION: c.motion}
+    base = {**f.scope, "radio": c.radio, "comm": c.comm, **pick}
     return {**base, "algorithm": c.algs[f.a]}, {**base, "algorithm": c.algs[f.b]}
-
-
-def with_motion(runs: pd.DataFrame) -> pd.DataFrame:
-    """``runs`` with its ``motion.model`` column; a table from before the axis ran swarm's continuous motion
-    everywhere, which plays MAES's part here (the motion condition then has no runs and is left out)."""
-    if MOTION in runs.columns:
-        return runs
-    return runs.assign(**{MOTION: "maes"})
 
 
 def verdict(r: pd.Series) -> str:
@@ -160,11 +157,12 @@ def shift_row(f: Finding, c: Condition, parity: pd.Series, other: pd.Series) -> 
 
 def analyse(runs: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
     rows, shifts = [], []
+    motion = MOTION in runs.columns
     for f in FINDINGS:
         comps, conds = [], []
-        parity_filters = filters(f, CONDITIONS[0])
+        parity_filters = filters(f, CONDITIONS[0], motion)
         for c in CONDITIONS:
-            fl = filters(f, c)
+            fl = filters(f, c, motion)
             if fl is not None and not all(_matches(runs, x) for x in fl):
                 fl = None                                                     # a departure this campaign did not run
             if fl is not None and (c is CONDITIONS[0] or fl != parity_filters):   # skip departures it does not touch
@@ -174,8 +172,8 @@ def analyse(runs: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
         df.insert(0, "finding", f.key)
         df["verdict"] = [verdict(r) for _, r in df.iterrows()]
         rows.append(df)
-        parity = unit_log_ratios(runs, *filters(f, conds[0]))
-        fs = [shift_row(f, c, parity, unit_log_ratios(runs, *filters(f, c))) for c in conds[1:]]
+        parity = unit_log_ratios(runs, *filters(f, conds[0], motion))
+        fs = [shift_row(f, c, parity, unit_log_ratios(runs, *filters(f, c, motion))) for c in conds[1:]]
         if fs:
             sf = pd.DataFrame(fs)
             sf["p_holm"] = effects.holm(sf["p_value"].to_numpy(float))
@@ -230,7 +228,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("runs_csv", type=Path, help="the ablation report's tables/runs.csv")
     ap.add_argument("-o", "--output", type=Path, help="Markdown file to write (and a .csv beside it)")
     args = ap.parse_args(argv)
-    runs = with_motion(effects.read_runs_csv(args.runs_csv))
+    runs = effects.read_runs_csv(args.runs_csv)
     res, shifts = analyse(runs)
     text = render(res, shifts, str(args.runs_csv))
     if args.output:

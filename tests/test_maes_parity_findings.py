@@ -1,0 +1,34 @@
+"""benchmarks/experiments/maes_parity_findings.py: the MAES-parity findings are a pure function of a runs
+table. On the committed ablation report's runs table (from before the motion axis) it writes the committed
+findings unchanged, and leaves out the departures that campaign did not run."""
+
+from __future__ import annotations
+
+import importlib.util
+import sys
+from pathlib import Path
+
+_ROOT = Path(__file__).resolve().parents[1]
+_SPEC = importlib.util.spec_from_file_location("maes_parity_findings",
+                                               _ROOT / "benchmarks" / "experiments" / "maes_parity_findings.py")
+findings = importlib.util.module_from_spec(_SPEC)
+sys.modules["maes_parity_findings"] = findings   # its dataclasses look their module up
+_SPEC.loader.exec_module(findings)  # type: ignore[union-attr]
+REPORT = _ROOT / "docs" / "results" / "maes-parity"
+
+
+def test_the_committed_findings_are_rewritten_byte_for_byte(tmp_path):
+    out = tmp_path / "findings.md"
+    assert findings.main([str(REPORT / "report" / "tables" / "runs.csv"), "-o", str(out)]) == 0
+    written = out.read_text().splitlines()
+    committed = (REPORT / "findings.md").read_text().splitlines()
+    assert written[3:] == committed[3:]          # all but the header naming the runs table's path
+    assert (tmp_path / "findings.csv").read_text() == (REPORT / "findings.csv").read_text()
+
+
+def test_departures_the_campaign_did_not_run_are_left_out():
+    runs = findings.effects.read_runs_csv(REPORT / "report" / "tables" / "runs.csv")
+    res, shifts = findings.analyse(runs)
+    names = set(res["name"]) | set(shifts["condition"])
+    assert "full MAES parity" in names and "swarm's Minotaur" in names
+    assert "swarm's motion (continuous)" not in names and "swarm's Greed" not in names
