@@ -248,7 +248,9 @@ def check_float(name: str, value: Any, lo: float | None = None, hi: float | None
 
 
 def check_choice(name: str, value: Any, choices: tuple[str, ...]) -> str:
-    if value not in choices:
+    """``value`` if it is one of the strings ``choices``; anything else (an array, a list, a number) is a
+    one-line InvalidInput, never the error its own comparison would raise."""
+    if not isinstance(value, str) or value not in choices:
         raise InvalidInput(name, value, " | ".join(repr(c) for c in choices))
     return value
 
