@@ -165,16 +165,23 @@ def _coast(w: float, command: float, substeps: int, dw: float) -> float:  # prag
 
 
 @njit(cache=True)
+def _travel(w0: float, command: float, substeps: int, dw: float, dsub: float) -> float:  # pragma: no cover
+    """How far (m or rad) the drive goes from rate ``w0`` under ``command`` for a tick, then commanded 0
+    until it stops."""
+    return (_coast(w0, command, substeps, dw) + _coast(_ramp(w0, command, substeps, dw), 0.0, 0, dw)) * dsub
+
+
+@njit(cache=True)
 def _fastest(left: float, w0: float, top: float, dw: float, substeps: int,
              dsub: float) -> float:  # pragma: no cover - compiled
     """:meth:`MaesDrive._rate`: the largest command in [0, top] (bisection) after which stopping travels no
     further than ``left``; 0 when even stopping now overshoots."""
-    if w0 > 0 and (_coast(w0, w0, substeps, dw) + _coast(_ramp(w0, w0, substeps, dw), 0.0, 0, dw)) * dsub > left:
+    if w0 > 0 and _travel(w0, w0, substeps, dw, dsub) > left:
         return 0.0
     lo, hi = 0.0, top
     for _ in range(24):
         mid = 0.5 * (lo + hi)
-        if (_coast(w0, mid, substeps, dw) + _coast(_ramp(w0, mid, substeps, dw), 0.0, 0, dw)) * dsub <= left:
+        if _travel(w0, mid, substeps, dw, dsub) <= left:
             lo = mid
         else:
             hi = mid

@@ -127,13 +127,15 @@ class Localizer:
         return self.estimates
 
     def _odometry(self, true_poses: np.ndarray, active: np.ndarray | None) -> None:
+        from .motion import wrap_angle   # here: the run spec imports this module, and motion loads numba
+
         spec = self.spec
         last = self._last_true
         for i, rng in enumerate(self.rngs):
             if active is not None and not active[i]:
                 continue
             dx, dy = true_poses[i, 0] - last[i, 0], true_poses[i, 1] - last[i, 1]
-            dth = _wrap_scalar(true_poses[i, 2] - last[i, 2])
+            dth = wrap_angle(true_poses[i, 2] - last[i, 2])
             mid = last[i, 2] + 0.5 * dth
             ds = dx * math.cos(mid) + dy * math.sin(mid)          # signed distance along the heading
             noise = rng.standard_normal(2)
@@ -144,7 +146,7 @@ class Localizer:
             heading = est[2] + 0.5 * dth_m
             est[0] += ds_m * math.cos(heading)
             est[1] += ds_m * math.sin(heading)
-            est[2] = _wrap_scalar(est[2] + dth_m)
+            est[2] = wrap_angle(est[2] + dth_m)
 
     def _error(self, true_poses: np.ndarray) -> np.ndarray:
         """The bounded model's error at the true poses: the temporal part plus the spatial field there."""
@@ -166,11 +168,8 @@ class Localizer:
 
 
 def _wrap(a: np.ndarray) -> np.ndarray:
+    """:func:`swarm.world.motion.wrap_angle` on an array."""
     return np.pi - (np.pi - a) % (2.0 * np.pi)
-
-
-def _wrap_scalar(a: float) -> float:
-    return math.pi - (math.pi - a) % (2.0 * math.pi)
 
 
 __all__ = ["LOCALIZATION_MODELS", "LOCALIZATION_STREAM", "LocalizationSpec", "Localizer"]

@@ -9,21 +9,15 @@ import json
 import numpy as np
 import pytest
 
-from maps import Map
 from swarm.base.errors import InvalidInput
 from swarm.sim.spec import RunSpec
 from swarm.world.motion import MotionParams
 from swarm.world.physics import World
+from tests.swarm.world.test_motion import open_room
 
 pytest.importorskip("navground.core")
 
 from swarm.navigation.avoidance import Avoidance  # noqa: E402
-
-
-def open_room(cells: int = 60) -> Map:
-    solid = np.ones((cells, cells), dtype=bool)
-    solid[1:-1, 1:-1] = False
-    return Map(solid=solid, material=solid.astype(np.uint8), materials=("air", "concrete"))
 
 
 def head_on(kind: str | None, offset: float = 0.05, ticks: int = 120) -> tuple[bool, np.ndarray]:

@@ -125,8 +125,6 @@ def test_a_straight_wall_is_mapped_bent_the_way_the_heading_drift_says():
 def test_a_map_written_from_a_known_offset_is_merged_there():
     """A robot that believes itself (1.0, 0.5) m from where it is maps everything shifted by that offset,
     and a robot merging its map gets the shifted cells: where the sender believed it was."""
-    from swarm.knowledge.maps import merge_cells_many_changed  # noqa: F401 - the runtime's merge (max) is used below
-
     truth = wall_room(60, 40)
     lidar = Lidar(truth, LidarParams(range_m=5.0))
     pose = np.array([[10.25, 8.25, 0.3]])
