@@ -132,6 +132,12 @@ def env_spec(spec: Any = None, overrides: Mapping[str, Any] | None = None) -> Ru
 
 
 
+def check_render_mode(render_mode: Any, modes: list[str]) -> None:
+    """``render_mode`` is None or one of ``modes``; anything else (an array too) is one line naming it."""
+    if render_mode is not None and not (isinstance(render_mode, str) and render_mode in modes):
+        raise InvalidInput("render_mode", render_mode, "None or " + " | ".join(repr(m) for m in modes))
+
+
 def episode_seed(seed: int | None, rng: "np.random.Generator | None", spec_seed: int) -> tuple[int, "np.random.Generator"]:
     """``(run seed, generator)`` for ``reset(seed=...)``: a given seed is the run's master seed and restarts
     the generator from it; without one, the first episode runs the spec's own seed and later ones draw
@@ -146,4 +152,4 @@ def episode_seed(seed: int | None, rng: "np.random.Generator | None", spec_seed:
     return int(rng.integers(0, 2**63 - 1)), rng
 
 
-__all__ = ["ACTIONS", "ENV_DEFAULTS", "EnvConfig", "Reward", "SECTORS", "env_spec", "episode_seed"]
+__all__ = ["ACTIONS", "ENV_DEFAULTS", "EnvConfig", "Reward", "SECTORS", "check_render_mode", "env_spec", "episode_seed"]

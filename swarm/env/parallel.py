@@ -10,7 +10,7 @@ from pettingzoo import ParallelEnv
 
 from swarm.base.errors import InvalidInput
 
-from .config import EnvConfig, Reward, env_spec, episode_seed
+from .config import EnvConfig, Reward, check_render_mode, env_spec, episode_seed
 from .core import ExplorationCore
 from .spaces import action_space, observation_space, render_rgb
 
@@ -33,8 +33,7 @@ class SwarmParallelEnv(ParallelEnv):
         config = EnvConfig(learners=learners, action=action, delegate=delegate, ticks_per_step=ticks_per_step,
                            crop_cells=crop_cells, observe_all=observe_all, margin_db=margin_db,
                            reward=Reward() if reward is None else reward)
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise InvalidInput("render_mode", render_mode, "None or 'rgb_array'")
+        check_render_mode(render_mode, self.metadata["render_modes"])
         self.core = ExplorationCore(env_spec(spec, overrides), config)
         self.render_mode = render_mode
         self.possible_agents = [f"robot_{i}" for i in self.core.learners]

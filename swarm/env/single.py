@@ -7,10 +7,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from swarm.base.errors import InvalidInput
 
 from swarm.api import check_int
-from .config import EnvConfig, Reward, env_spec
+from .config import EnvConfig, Reward, check_render_mode, env_spec
 from .core import ExplorationCore
 from .spaces import action_space, observation_space, render_rgb
 
@@ -32,8 +31,7 @@ class SwarmEnv(gym.Env):
         config = EnvConfig(learners=(learner,), action=action, delegate=delegate, ticks_per_step=ticks_per_step,
                            crop_cells=crop_cells, observe_all=observe_all, margin_db=margin_db,
                            reward=Reward() if reward is None else reward)
-        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise InvalidInput("render_mode", render_mode, "None or 'rgb_array'")
+        check_render_mode(render_mode, self.metadata["render_modes"])
         self.core = ExplorationCore(env_spec(spec, overrides), config)
         self.learner = learner
         self.render_mode = render_mode
