@@ -308,7 +308,7 @@ class ExplorationCore:
     def result(self) -> RunResult:
         """The run's :class:`RunResult` so far (as :func:`swarm.run` would report it at this tick)."""
         sim = self.sim
-        return sim._result(self.state.tick, self.state.stop_reason, self.state.collisions, 0.0, self.host)
+        return sim._result(self.state, 0.0, self.host)
 
 
 __all__ = ["CELL_AREA_M2", "ExplorationCore", "INBOX_FIELDS", "KEEP", "NEIGHBOUR_FIELDS", "POSE_FIELDS"]

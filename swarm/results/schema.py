@@ -92,7 +92,9 @@ class Summary(TypedDict):
     coverage: float                 # fraction of the free cells some robot's disc has covered
     ticks_to: dict[str, int | None]  # threshold_key -> first tick explored reached it
     distance_m: list[float]         # per robot
-    collisions: int
+    collisions: int                 # contacts begun: a robot starting to touch anything, once per robot
+    collisions_wall: int            # a robot starting to touch a wall (counted per robot)
+    collisions_robot: int           # a robot starting to touch another robot (counted for each of the two)
     plans: list[int]                # per robot: path plans made
     messages: MessageCounts
     acts: ActCounts
@@ -221,7 +223,7 @@ RUNS: dict[str, ArrowType] = {
     "run_seed": "int64", "status": "string", "error": "string", "explored_target": "float64",
     "max_ticks": "int64", "ticks": "int64", "stop_reason": "string", "explored": "float64",
     "coverage": "float64", **{col: "int64" for col in THRESHOLD_COLUMNS.values()}, "distance_m": "float64",
-    "collisions": "int64", "msgs_sent": "int64", "bytes_sent": "int64", "msgs_delivered": "int64",
+    "collisions": "int64", "collisions_wall": "int64", "collisions_robot": "int64", "msgs_sent": "int64", "bytes_sent": "int64", "msgs_delivered": "int64",
     "bytes_delivered": "int64", "msgs_dropped": "int64", "failed_robots": "int64", "spec_json": "string",
     "wall_time_s": "float64", "cpu_time_s": "float64", "jit_time_s": "float64", "worker_pid": "int64",
     "worker_rss_mb": "float64", "swarm_version": "string", "algorithm_dist": "string",
@@ -240,7 +242,7 @@ def summary_columns(summary: Summary | Mapping[str, Any] | None) -> dict[str, An
     if summary is None:
         return {"ticks": None, "stop_reason": "error", "explored": None, "coverage": None,
                 **{col: None for col in THRESHOLD_COLUMNS.values()}, "distance_m": None, "collisions": None,
-                "msgs_sent": None, "bytes_sent": None, "msgs_delivered": None, "bytes_delivered": None,
+                "collisions_wall": None, "collisions_robot": None, "msgs_sent": None, "bytes_sent": None, "msgs_delivered": None, "bytes_delivered": None,
                 "msgs_dropped": None, "failed_robots": None, **{c: None for c in LOCALIZATION_RUN_COLUMNS}}
     msgs = summary["messages"]
     loc = summary.get("localization")   # only with a localisation model (Simulation._localization_summary)
@@ -248,6 +250,7 @@ def summary_columns(summary: Summary | Mapping[str, Any] | None) -> dict[str, An
             "coverage": summary["coverage"],
             **{col: summary["ticks_to"].get(t) for t, col in THRESHOLD_COLUMNS.items()},
             "distance_m": float(sum(summary["distance_m"])), "collisions": summary["collisions"],
+            "collisions_wall": summary.get("collisions_wall"), "collisions_robot": summary.get("collisions_robot"),
             "msgs_sent": msgs["sent"], "bytes_sent": msgs["bytes_sent"], "msgs_delivered": msgs["delivered"],
             "bytes_delivered": msgs["bytes_delivered"], "msgs_dropped": dropped(msgs),
             "failed_robots": len(summary["failed_robots"]),

@@ -113,7 +113,9 @@ class LoopState:
     commands: np.ndarray                    # float64[R, 2]: last tick's (v, omega), applied by the next move
     was_colliding: np.ndarray               # bool[R]: in contact at the last tick
     tick: int = 0
-    collisions: int = 0                     # contacts begun so far
+    collisions: int = 0                     # contacts begun so far (a robot touching anything)
+    collisions_with: Any = None             # int64[2]: contacts begun with a wall [0] / a robot [1]
+    was_colliding_with: Any = None          # bool[2, R]: in contact with a wall / robot at the last tick
     stalled_for: int = 0
     stop_reason: str = ""
     poses: Any = None                       # float64[R, 3] of this tick (the world's array: moved in place)
@@ -246,14 +248,15 @@ class Simulation:
             actions = host.act(self.observe(state))
             self._note_failures(state.tick, host)
             self.apply(state, actions)
-        return self._result(state.tick, state.stop_reason, state.collisions, time.perf_counter() - t0, host)
+        return self._result(state, time.perf_counter() - t0, host)
 
     # The loop's body in three steps, so that a stepping driver (:mod:`swarm.env`) runs exactly the ticks
     # :meth:`run` runs: ``sense`` (steps 1-4 and 8), ``observe`` (the batch for step 5), ``apply`` (6-7).
     def start_state(self) -> LoopState:
         """The state before tick 0 (no command yet)."""
         n = self.spec.robots.count
-        return LoopState(commands=np.zeros((n, 2), dtype=np.float64), was_colliding=np.zeros(n, dtype=bool))
+        return LoopState(commands=np.zeros((n, 2), dtype=np.float64), was_colliding=np.zeros(n, dtype=bool),
+                         collisions_with=np.zeros(2, dtype=np.int64), was_colliding_with=np.zeros((2, n), dtype=bool))
 
     def sense(self, state: LoopState) -> bool:
         """Steps 1-4 and 8 of tick ``state.tick``: move (after tick 0), scan, receive, metrics; True when the
@@ -272,6 +275,9 @@ class Simulation:
         state.collisions += int(np.count_nonzero(began))
         state.began = began
         state.was_colliding = collided
+        with_kind = self.world.collided_with.copy()
+        state.collisions_with += np.count_nonzero(with_kind > state.was_colliding_with, axis=1)
+        state.was_colliding_with = with_kind
         active = ~self.failed
         believed = poses
         if self.localizer is not None:
@@ -550,16 +556,18 @@ class Simulation:
         counts["malformed_by_robot"] = [a + b for a, b in zip(counts["malformed_by_robot"], undecodable)]
         return counts
 
-    def _result(self, tick: int, stop_reason: str, collisions: int, wall: float, host: AgentHost) -> RunResult:
+    def _result(self, state: LoopState, wall: float, host: AgentHost) -> RunResult:
         n = self.spec.robots.count
         summary = {
-            "ticks": tick,
-            "stop_reason": stop_reason,
+            "ticks": state.tick,
+            "stop_reason": state.stop_reason,
             "explored": float(self.tracker.explored),
             "coverage": float(self.tracker.coverage),
             "ticks_to": dict(self.metrics.ticks_to),
             "distance_m": [float(d) for d in self.world.distance],
-            "collisions": collisions,
+            "collisions": state.collisions,
+            "collisions_wall": int(state.collisions_with[0]),
+            "collisions_robot": int(state.collisions_with[1]),
             "plans": [nav.plans for nav in self.navigators],
             "messages": self._message_counts(host),
             "acts": {kind: host.stats.per_robot(kind, n) for kind in ACT_COUNTS},

@@ -119,6 +119,8 @@ class World:
         self._contacts: set[tuple[int, int]] = set()   # (robot, other): other >= 0 robot, < 0 wall
         self._touching = np.zeros(n, dtype=np.int64)
         self._hit = np.zeros(n, dtype=bool)
+        self._touching_kind = np.zeros((2, n), dtype=np.int64)   # open contacts: [0] with walls, [1] robots
+        self._hit_kind = np.zeros((2, n), dtype=bool)
         self._disabled = np.zeros(n, dtype=bool)
         self._wheel_v = np.zeros(n)                    # drive state: last sub-step's commanded speeds
         self._wheel_w = np.zeros(n)
@@ -126,6 +128,7 @@ class World:
         self._poses = start.copy()
         self._poses[:, 2] = _wrap(self._poses[:, 2])
         self._collided = np.zeros(n, dtype=bool)
+        self._collided_kind = np.zeros((2, n), dtype=bool)
         self._distance = np.zeros(n)
         self._rotation = np.zeros(n)
         self._ticks = 0
@@ -154,16 +157,20 @@ class World:
 
     def _on_begin(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: Any) -> None:
         for key in self._pair(arbiter):
+            kind = int(key[1] >= 0)
             if key not in self._contacts:
                 self._contacts.add(key)
                 self._touching[key[0]] += 1
+                self._touching_kind[kind, key[0]] += 1
             self._hit[key[0]] = True
+            self._hit_kind[kind, key[0]] = True
 
     def _on_separate(self, arbiter: pymunk.Arbiter, space: pymunk.Space, data: Any) -> None:
         for key in self._pair(arbiter):
             if key in self._contacts:
                 self._contacts.remove(key)
                 self._touching[key[0]] -= 1
+                self._touching_kind[int(key[1] >= 0), key[0]] -= 1
 
     # ------------------------------------------------------------------------------------------- step ----
     def step(self, commands: Any) -> None:
@@ -176,6 +183,7 @@ class World:
         if not _drive_forces(cmd, self._disabled, self._wheel_v, self._wheel_w, self._angle, self._rows,
                              self._limits, self._drive, self._touching, self._hit):
             raise InvalidInput("commands", "non-finite values", "finite (v m/s, omega rad/s) per robot")
+        np.greater(self._touching_kind, 0, out=self._hit_kind)
         self._io.drive(self._dt)
         state = self._io.read_poses()
         poses = np.empty_like(self._poses)
@@ -185,6 +193,7 @@ class World:
                      poses, distance, rotation)
         self._poses, self._distance, self._rotation = poses, distance, rotation
         self._collided = self._hit.copy()
+        self._collided_kind = self._hit_kind.copy()
         self._ticks += 1
 
     # ----------------------------------------------------------------------------------------- robots ----
@@ -225,6 +234,12 @@ class World:
         """``bool[R]``: touched a wall or another robot during the last tick (including a contact that
         lasted from the previous tick); read-only."""
         return _read_only(self._collided)
+
+    @property
+    def collided_with(self) -> np.ndarray:
+        """``bool[2, R]``: :attr:`collided` split by what was touched, row 0 a wall, row 1 another robot
+        (a robot touching both has both set); read-only."""
+        return _read_only(self._collided_kind)
 
     @property
     def distance(self) -> np.ndarray:

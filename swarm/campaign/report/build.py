@@ -132,6 +132,7 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
         _communication(rep, out, ok.assign(cell=cell_id), store)
     _run_tables(rep, out)
     _map_quality(rep, out)
+    _collisions(rep, out)
     _notes(rep)
     if maes_csv:
         from ..maes_csv import write_runs
@@ -548,6 +549,36 @@ def _map_quality(rep: Report, out: ReportWriter) -> None:
     _write_table(out, "map_quality", df, table, "Localisation and map quality: medians over each cell's runs "
                                                 "(runs without a localisation model show –)")
     rep.map_quality, rep.map_quality_rows = table, len(df)
+
+
+COLLISIONS = (("collisions_wall", "Robot-wall"), ("collisions_robot", "Robot-robot"))
+
+
+def _collisions(rep: Report, out: ReportWriter) -> None:
+    """Per cell, the medians of the contacts begun with walls and with other robots per robot-hour of simulated
+    time (``tables/collisions``); skipped for results older than the split (no columns) and for runs without a
+    contact."""
+    from swarm.world.motion import TICK_S
+
+    data = rep.data
+    runs = data.runs[data.runs["status"] == "ok"]
+    columns = [c for c, _ in COLLISIONS if c in runs and runs[c].notna().any()]
+    if not columns or not runs[columns].fillna(0).to_numpy().any():
+        return
+    hours = pd.to_numeric(runs["robots"], errors="coerce") * runs["ticks"] * TICK_S / 3600
+    rates = pd.DataFrame({c: runs[c] / hours.where(hours > 0) for c in columns})
+    dims = [d for d in data.all_dims if runs[d].nunique() > 1] or list(data.all_dims[:1])
+    rates[dims] = runs[dims]
+    df = rates.groupby(dims, observed=True, sort=True)[columns].median().reset_index()
+    df.insert(len(dims), "runs", rates.groupby(dims, observed=True, sort=True).size().to_numpy())
+    names = dict(COLLISIONS)
+    table = tables.Table([*(tables.header(d) for d in dims), "Runs", *(names[c] for c in columns)],
+                         [[*(str(r[d]) for d in dims), str(int(r["runs"])),
+                           *("–" if pd.isna(r[c]) else f"{r[c]:.0f}" for c in columns)] for _, r in df.iterrows()],
+                         [False] * len(dims) + [True] * (1 + len(columns)))
+    _write_table(out, "collisions", df, table, "Contacts begun per robot-hour of simulated time: medians over "
+                                               "each cell's runs (a robot-robot contact counts for both robots)")
+    rep.collisions, rep.collisions_rows = table, len(df)
 
 
 def _write_table(out: ReportWriter, name: str, df: pd.DataFrame, table: tables.Table, caption: str) -> None:

@@ -101,6 +101,8 @@ class Report:
     maes: dict[str, Any] | None = None
     map_quality: tables.Table | None = None
     map_quality_rows: int = 0
+    collisions: tables.Table | None = None
+    collisions_rows: int = 0
     communication: CommSection | None = None
     notes: list[str] = field(default_factory=list)
     written: list[str] = field(default_factory=list)

@@ -29,10 +29,10 @@ ALWAYS_SHOWN = ("map", "size", "robots", "spawn", "algorithm", "radio")
 """Shown in names and tables even when constant, so a figure name says which world it shows."""
 RUN_COLUMNS = ("key", *DIMS, "replicate", "map_kind", "radio_model", "map_seed", "status", "error", "stop_reason",
                "ticks", "max_ticks", "explored_target", "explored", "coverage", *THRESHOLD_COLUMNS.values(), "part",
-               "msgs_sent", "bytes_sent", "msgs_delivered", "bytes_delivered", "msgs_dropped", *COMM_RUN_COLUMNS,
-               *LOCALIZATION_RUN_COLUMNS)
+               "msgs_sent", "bytes_sent", "msgs_delivered", "bytes_delivered", "msgs_dropped", "collisions_wall",
+               "collisions_robot", *COMM_RUN_COLUMNS, *LOCALIZATION_RUN_COLUMNS)
 """The runs-table columns the report reads (:data:`swarm.results.schema.RUNS`, plus the store's ``part``); results of
-older versions lack the communication and localisation columns (they read as missing)."""
+older versions lack the communication, localisation and collision-split columns (they read as missing)."""
 assert set(RUN_COLUMNS) <= {*RUNS, "part"}
 
 
@@ -141,7 +141,8 @@ def _runs_frame(df: pd.DataFrame | None, axes: tuple[str, ...] = ()) -> pd.DataF
         df[dim] = df[dim].astype(str)
     for col in ("ticks", "max_ticks", "explored_target", "explored", "coverage", "t50", "t75", "t90", "t95",
                 "t98", "t99", "replicate", "map_seed", "msgs_sent", "bytes_sent", "msgs_delivered",
-                "bytes_delivered", "msgs_dropped", *COMM_RUN_COLUMNS, *LOCALIZATION_RUN_COLUMNS):
+                "bytes_delivered", "msgs_dropped", "collisions_wall", "collisions_robot", *COMM_RUN_COLUMNS,
+                *LOCALIZATION_RUN_COLUMNS):
         df[col] = pd.to_numeric(df[col], errors="coerce")
     df["error"] = df["error"].fillna("").astype(str)
     df["status"] = df["status"].fillna("failed").astype(str)

@@ -15,6 +15,7 @@ EMBED_FIGURES = 24
 FAILED_SHOWN = 50
 FILE_NOTES = {"tables/runs.csv": ": every committed run with its cell, stop reason and ticks to target",
               "tables/map_quality.csv": ": pose error and map quality per cell (runs with a localisation model)",
+              "tables/collisions.csv": ": robot-wall and robot-robot contacts per robot-hour per cell",
               "tables/pairs.csv": ": every pair of runs compared", "tables/failed.csv": ": failed runs and errors"}
 SECTION = {"algorithm": "Algorithms compared", "radio": "Radio models compared", "comm": "Comm settings compared",
            None: "Every cell"}
@@ -27,7 +28,7 @@ def section(compare: str | None) -> str:
 
 def render(rep: Report) -> str:
     parts = [_head(rep), _runs(rep), _campaign(rep), _layout(rep), _summary(rep), _curves(rep), _cactus(rep), _paired(rep),
-             _comm(rep), _communication(rep), _map_quality(rep), _failed(rep), _maes(rep), _method(rep), _files(rep)]
+             _comm(rep), _communication(rep), _map_quality(rep), _collisions(rep), _failed(rep), _maes(rep), _method(rep), _files(rep)]
     return "\n".join(p for p in parts if p).rstrip() + "\n"
 
 
@@ -263,6 +264,16 @@ def _map_quality(rep: Report) -> str:
              "are. **The explored fraction of the other tables counts what the lidars have seen; *Explored "
              "correctly* counts only correctly known cells.**", ""]
     return "\n".join(lines + _inline(rep.map_quality, rep.map_quality_rows, "map_quality"))
+
+
+def _collisions(rep: Report) -> str:
+    if rep.collisions is None:
+        return ""
+    lines = ["## Collisions", "",
+             ("Contacts begun per robot-hour of simulated time, split by what was touched: a robot starting to touch "
+              "a wall, and a robot starting to touch another robot (counted for both). Local avoidance "
+              "(`navigation.avoidance`) acts on the second. Per cell, medians over its runs."), ""]
+    return "\n".join(lines + _inline(rep.collisions, rep.collisions_rows, "collisions"))
 
 
 def _failed(rep: Report) -> str:

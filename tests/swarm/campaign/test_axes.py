@@ -218,3 +218,22 @@ def test_localization_axes_and_map_quality_reach_the_runs_table_and_report(tmp_p
     assert "## Localisation and map quality" in (tmp_path / "report" / "README.md").read_text()
     err = error_of(text.replace('"localization.drift_per_m" = [0.05]', '"localization.drift_per_m" = [2]'))
     assert err.field == "grid.localization.drift_per_m[0]"
+
+
+def test_collisions_split_reaches_the_runs_table_and_report(tmp_path):
+    """Issue 50: robot-wall and robot-robot contacts are runs-table columns, and the report tabulates them per
+    robot-hour per cell."""
+    from swarm.campaign.report import build_report
+
+    text = HEAD.replace("robots = [2]", "robots = [2, 8]") + 'radio = ["global"]\n[stop]\nmax_ticks = 150\n'
+    run_campaign(parse_campaign(text), tmp_path / "res", executor=make_executor(inline=True), progress=False)
+    runs = ResultsStore(tmp_path / "res").runs_table().to_pandas().set_index("robots")
+    assert runs["collisions_robot"].dtype.kind == "i" and runs.loc[8, "collisions_robot"] > 0
+    assert (runs["collisions"] <= runs["collisions_wall"] + runs["collisions_robot"]).all()
+    build_report(tmp_path / "res", tmp_path / "report")
+    table = (tmp_path / "report" / "tables" / "collisions.csv").read_text().splitlines()
+    assert table[0] == "robots,runs,collisions_wall,collisions_robot" and len(table) == 3
+    row8 = dict(zip(table[0].split(","), table[2].split(",")))
+    hours = 8 * runs.loc[8, "ticks"] * 0.1 / 3600
+    assert float(row8["collisions_robot"]) == pytest.approx(runs.loc[8, "collisions_robot"] / hours)
+    assert "## Collisions" in (tmp_path / "report" / "README.md").read_text()

@@ -93,6 +93,45 @@ def test_module_class_algorithm_with_velocity_control():
     assert r.summary["explored"] > 0
 
 
+class Charger:
+    """Drives straight ahead until the run ends."""
+
+    name = "charger"
+
+    def reset(self, robot, params, rng):
+        pass
+
+    def act(self, obs):
+        return Action(velocity=(1.0, 0.0))
+
+
+class Gatherer:
+    """Every robot drives to where robot 0 started (robot 0 stays there)."""
+
+    name = "gatherer"
+    meet: tuple = ()
+
+    def reset(self, robot, params, rng):
+        self.robot = robot
+
+    def act(self, obs):
+        if obs.robot_id == 0 and obs.tick == 0:
+            Gatherer.meet = (obs.pose.x, obs.pose.y)
+        return Action(goal=Gatherer.meet)
+
+
+def test_collisions_are_counted_apart_for_walls_and_robots():
+    alone = Simulation(small_spec(robots={"count": 1}, algorithm={"name": "tests.swarm.sim.test_simulation:Charger"},
+                                  stop={"max_ticks": 300})).run().summary
+    assert alone["collisions_wall"] >= 1 and alone["collisions_robot"] == 0
+    assert alone["collisions"] >= 1
+    crowd = Simulation(small_spec(robots={"count": 6, "spawn": "together"}, stop={"max_ticks": 200},
+                                  algorithm={"name": "tests.swarm.sim.test_simulation:Gatherer"})).run().summary
+    assert crowd["collisions_robot"] >= 5, "five robots pile onto robot 0"
+    # a robot starting to touch anything starts touching a wall or a robot
+    assert 0 < crowd["collisions"] <= crowd["collisions_wall"] + crowd["collisions_robot"]
+
+
 class Pacer:
     """Reports what it sees so the test can check the observation contract."""
 

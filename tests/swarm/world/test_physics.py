@@ -275,6 +275,19 @@ def test_robot_robot_collisions_are_reported_to_both_and_nobody_else() -> None:
     assert closest >= 2 * params.radius - 2 * params.max_speed * params.substep_s - 0.002
 
 
+def test_collided_with_says_whether_a_wall_or_a_robot_was_touched() -> None:
+    # robots 0 and 1 drive head-on into each other; robot 2 drives up into the top wall; robot 3 stays put
+    world = World(make_map(room(40, 20)), [[3.0, 5.0, 0.0], [6.0, 5.0, math.pi], [15.0, 7.0, math.pi / 2],
+                                           [15.0, 3.0, 0.0]])
+    seen = np.zeros((2, 4), dtype=bool)
+    for _ in range(40):
+        world.step([[1.0, 0.0], [1.0, 0.0], [1.0, 0.0], [0.0, 0.0]])
+        assert (world.collided_with.any(axis=0) == world.collided).all()
+        seen |= world.collided_with
+    assert seen[0].tolist() == [False, False, True, False]      # walls
+    assert seen[1].tolist() == [True, True, False, False]       # robots
+
+
 def test_a_robot_pushes_a_stopped_robot() -> None:
     world = World(make_map(room(40, 20)), [[3.0, 5.0, 0.0], [4.0, 5.0, 0.0]])
     run_cmd = np.array([[1.0, 0.0], [0.0, 0.0]])
