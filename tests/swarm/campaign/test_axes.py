@@ -237,3 +237,5 @@ def test_collisions_split_reaches_the_runs_table_and_report(tmp_path):
     hours = 8 * runs.loc[8, "ticks"] * 0.1 / 3600
     assert float(row8["collisions_robot"]) == pytest.approx(runs.loc[8, "collisions_robot"] / hours)
     assert "## Collisions" in (tmp_path / "report" / "README.md").read_text()
+    header = (tmp_path / "report" / "tables" / "runs.csv").read_text().splitlines()[0].split(",")
+    assert {"collisions_wall", "collisions_robot"} <= set(header)
