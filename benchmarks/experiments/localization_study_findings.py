@@ -1,0 +1,187 @@
+"""How Greed, TNF and Minotaur degrade with localisation error, with and without avoidance (issue 50; reads
+the report of ``examples/localization-study.toml``).
+
+    python benchmarks/experiments/localization_study_findings.py \
+        docs/results/localization-study/report/tables/runs.csv -o docs/results/localization-study/findings.md
+
+Three tables:
+
+1. **Time cost of each error model**, per algorithm: the paired ratio of ticks to the target under the error
+   model over ticks with perfect localisation (pairs share map, robots, spawn, avoidance and replicate; each
+   map counts once; median ratio with a 95 % bootstrap interval, Wilcoxon p, Holm over all rows). DNF runs
+   count at the tick limit (``ttt_or_max``), so a ratio near ``max_ticks / perfect`` says runs stopped short.
+2. **Map quality**, per algorithm and error model: share of runs reaching the target, medians of the final
+   pose error, false free and false occupied shares, wall offset and the explored fraction counting only
+   correctly known cells (``explored_correct``; docs/localization.md).
+3. **Avoidance**: per algorithm and robot count, the paired ratio of ticks with ORCA over ticks without, and
+   the median robot-robot and robot-wall contacts per robot-hour with and without.
+
+The robustness ranking orders algorithms by the largest median time ratio over the error models, then by
+the largest drop of ``explored_correct``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from swarm.campaign.report import effects
+from swarm.campaign.report.tables import Table, markdown, p_value
+
+MODEL = "localization.model"
+LOC_AXES = (MODEL, "localization.drift_per_m", "localization.turn_drift_per_rad", "localization.sigma_m")
+AVOID = "navigation.avoidance"
+TICK_S = 0.1
+
+
+def conditions(runs: pd.DataFrame) -> list[tuple[str, dict[str, str]]]:
+    """(label, the localisation axes' labels) of every error model in the runs, perfect first."""
+    axes = [a for a in LOC_AXES if a in runs]
+    cells = runs[axes].astype(str).drop_duplicates()
+    out = []
+    for _, c in cells.iterrows():
+        model = c[MODEL]
+        if model == "perfect":
+            label = "perfect"
+        elif model == "odometry":
+            label = f"odometry {100 * float(c['localization.drift_per_m']):g} %/m"
+        else:
+            label = f"bounded sigma {float(c['localization.sigma_m']):g} m"
+        out.append((label, dict(c)))
+    order = {"perfect": 0, "odometry": 1, "bounded": 2}
+    return sorted(out, key=lambda lc: (order.get(lc[1][MODEL], 3), lc[0]))
+
+
+def select(runs: pd.DataFrame, flt: dict[str, str]) -> pd.DataFrame:
+    mask = np.ones(len(runs), dtype=bool)
+    for col, value in flt.items():
+        mask &= (runs[col].astype(str) == value).to_numpy()
+    return runs[mask]
+
+
+def time_costs(runs: pd.DataFrame, conds: list[tuple[str, dict[str, str]]]) -> pd.DataFrame:
+    perfect = dict(conds[0][1])
+    comparisons = [(f"{alg} | {label}", {"algorithm": alg, **c}, {"algorithm": alg, **perfect})
+                   for alg in sorted(runs["algorithm"].astype(str).unique()) for label, c in conds[1:]]
+    out = effects.compare_runs(runs, comparisons)
+    out[["algorithm", "condition"]] = out["name"].str.split(" | ", n=1, expand=True, regex=False)
+    return out
+
+
+def quality(runs: pd.DataFrame, conds: list[tuple[str, dict[str, str]]]) -> pd.DataFrame:
+    rows = []
+    ok = runs[runs["status"] == "ok"]
+    for alg in sorted(ok["algorithm"].astype(str).unique()):
+        for label, c in conds:
+            sel = select(ok, {"algorithm": alg, **c})
+            rows.append({"algorithm": alg, "condition": label, "runs": len(sel),
+                         "success": float(sel["success"].astype(bool).mean()) if len(sel) else np.nan,
+                         **{col: float(sel[col].median()) if col in sel and sel[col].notna().any() else np.nan
+                            for col in ("pose_error_m", "false_free_share", "false_occupied_share", "wall_offset_m",
+                                        "explored_correct")}})
+    return pd.DataFrame(rows)
+
+
+def avoidance(runs: pd.DataFrame) -> pd.DataFrame | None:
+    if AVOID not in runs or runs[AVOID].nunique() < 2:
+        return None
+    labels = sorted(runs[AVOID].astype(str).unique())
+    off, on = ("none", next(v for v in labels if v != "none")) if "none" in labels else labels[:2]
+    comparisons = [(f"{alg} | {n}", {"algorithm": alg, "robots": n, AVOID: on},
+                    {"algorithm": alg, "robots": n, AVOID: off})
+                   for alg in sorted(runs["algorithm"].astype(str).unique())
+                   for n in sorted(runs["robots"].astype(str).unique(), key=int)]
+    out = effects.compare_runs(runs, comparisons)
+    ok = runs[runs["status"] == "ok"].copy()
+    hours = pd.to_numeric(ok["robots"]) * ok["ticks"] * TICK_S / 3600
+    for kind in ("robot", "wall"):
+        if f"collisions_{kind}" in ok:
+            ok[f"{kind}_rh"] = ok[f"collisions_{kind}"] / hours
+    for side, label in (("off", off), ("on", on)):
+        for kind in ("robot", "wall"):
+            col = f"{kind}_rh"
+            out[f"{kind}_{side}"] = [float(select(ok, {"algorithm": a, "robots": n, AVOID: label})[col].median())
+                                     if col in ok else np.nan
+                                     for a, n in (name.split(" | ") for name in out["name"])]
+    out.attrs["labels"] = (off, on)
+    return out
+
+
+def fmt(v: float, pct: bool = False, digits: int = 2) -> str:
+    if pd.isna(v):
+        return "–"
+    return f"{100 * v:.1f}" if pct else f"{v:.{digits}f}"
+
+
+def ranking(costs: pd.DataFrame, qual: pd.DataFrame) -> list[tuple[str, float, float]]:
+    """(algorithm, worst median time ratio over the error models, worst drop of explored_correct)."""
+    out = []
+    for alg, grp in costs.groupby("algorithm"):
+        q = qual[qual["algorithm"] == alg].set_index("condition")["explored_correct"]
+        drop = float((q.get("perfect", np.nan) - q.drop("perfect", errors="ignore")).max()) if len(q) else np.nan
+        out.append((str(alg), float(grp["ratio"].max()), drop))
+    return sorted(out, key=lambda t: (t[1], t[2]))
+
+
+def render(costs: pd.DataFrame, qual: pd.DataFrame, avoid: pd.DataFrame | None, source: Path) -> str:
+    lines = ["# Localisation error and avoidance: findings", "",
+             f"Generated by `python benchmarks/experiments/localization_study_findings.py {source}` from the "
+             "campaign report's runs table; do not edit by hand.", "",
+             "## 1. Time to the target under each error model (ratio over perfect localisation)", "",
+             "Paired by map, robots, spawn, avoidance and replicate; each map counts once; DNF at the tick limit. "
+             "A ratio above 1 means slower with the error.", ""]
+    t = Table(["Algorithm", "Error model", "Pairs", "Maps", "Ratio [95 % CI]", "p (Holm)"],
+              [[r["algorithm"], r["condition"], str(int(r["pairs"])), str(int(r["maps"])), effects.ratio_text(r),
+                p_value(r["p_holm"])] for _, r in costs.iterrows()], [False, False, True, True, True, True])
+    lines += [markdown(t), "", "## 2. Map quality (medians over runs)", ""]
+    t = Table(["Algorithm", "Error model", "Runs", "Reached target (%)", "Pose error (m)", "False free (%)",
+               "False occupied (%)", "Wall offset (m)", "Explored correctly (%)"],
+              [[r["algorithm"], r["condition"], str(int(r["runs"])), fmt(r["success"], True), fmt(r["pose_error_m"]),
+                fmt(r["false_free_share"], True), fmt(r["false_occupied_share"], True), fmt(r["wall_offset_m"]),
+                fmt(r["explored_correct"], True)] for _, r in qual.iterrows()],
+              [False, False] + [True] * 7)
+    lines += [markdown(t), ""]
+    if avoid is not None:
+        off, on = avoid.attrs["labels"]
+        lines += [f"## 3. Avoidance: `{on}` against `{off}`", "",
+                  "Time ratio paired as above (pooled over error models); contacts per robot-hour, medians over "
+                  "runs (a robot-robot contact counts for both robots).", ""]
+        t = Table(["Algorithm", "Robots", "Pairs", "Time ratio [95 % CI]", "p (Holm)", f"Robot-robot ({off})",
+                   f"Robot-robot ({on})", f"Robot-wall ({off})", f"Robot-wall ({on})"],
+                  [[*r["name"].split(" | "), str(int(r["pairs"])), effects.ratio_text(r), p_value(r["p_holm"]),
+                    fmt(r["robot_off"], digits=0), fmt(r["robot_on"], digits=0), fmt(r["wall_off"], digits=0),
+                    fmt(r["wall_on"], digits=0)] for _, r in avoid.iterrows()], [False, True] + [True] * 7)
+        lines += [markdown(t), ""]
+    lines += ["## Robustness ranking", "",
+              "Ordered by the worst median time ratio over the error models, then by the worst drop of the "
+              "correctly explored share against perfect localisation:", ""]
+    for i, (alg, worst, drop) in enumerate(ranking(costs, qual), 1):
+        lines.append(f"{i}. **{alg}**: worst time ratio {worst:.2f}, worst drop of correctly explored "
+                     f"{fmt(drop, True)} points")
+    return "\n".join(lines) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("runs_csv", type=Path, help="the study report's tables/runs.csv")
+    ap.add_argument("-o", "--output", type=Path, help="Markdown file to write (default: print)")
+    args = ap.parse_args(argv)
+    runs = effects.read_runs_csv(args.runs_csv)
+    if MODEL not in runs:
+        print(f"error: {args.runs_csv}: no {MODEL} column; not a localisation study", file=sys.stderr)
+        return 2
+    conds = conditions(runs)
+    text = render(time_costs(runs, conds), quality(runs, conds), avoidance(runs), args.runs_csv)
+    if args.output:
+        args.output.write_text(text)
+    else:
+        print(text, end="")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
