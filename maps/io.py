@@ -21,7 +21,7 @@ import tempfile
 import tomllib
 import zipfile
 from pathlib import Path
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
@@ -383,6 +383,29 @@ def import_pgm(path: str | Path, material: str = "concrete", threshold: int = 12
 
 
 # --------------------------------------------------------------------------------- image+legend ----
+def decode_image(path: Path, field: str, check_size: Callable[[int, int], None],
+                 mode_of: Callable[[Any], str]) -> np.ndarray:
+    """The pixels of an image file Pillow reads, converted to the Pillow mode ``mode_of(image)`` chooses.
+
+    The size is checked from the header before any pixel is decoded: at most ``MAX_CELLS`` pixels, then
+    ``check_size(rows, cols)`` (the caller's bound on the map it will build). Any decoding failure is one
+    :class:`InvalidInput` naming ``field``; shared by the importers of pictures.
+    """
+    from PIL import Image
+
+    data = read_file_bytes(path, field)
+    try:
+        with Image.open(io.BytesIO(data)) as im:
+            if im.width * im.height > MAX_CELLS:
+                raise InvalidInput(field, str(path), f"an image of at most {MAX_CELLS} pixels")
+            check_size(im.height, im.width)
+            return np.asarray(im.convert(mode_of(im)))
+    except InvalidInput:
+        raise
+    except Exception as exc:  # Pillow raises OSError, SyntaxError, ValueError, struct.error, zlib.error...
+        raise InvalidInput(field, str(path), f"an image Pillow can read ({type(exc).__name__})") from None
+
+
 def _parse_colour(text: Any, field: str) -> tuple[int, int, int]:
     if isinstance(text, str) and _COLOUR_RE.fullmatch(text):
         return int(text[1:3], 16), int(text[3:5], 16), int(text[5:7], 16)
@@ -491,25 +514,13 @@ def import_image(path: str | Path, legend: Mapping[str, Any], border: int = 0,
 
     The top image row is the top (north) of the map.
     """
-    from PIL import Image
-
     _check_border(border, border_material)
     if not isinstance(legend, Mapping) or any(isinstance(k, str) for k in legend.get("colours") or {"": 0}):
         legend = check_legend(legend if isinstance(legend, Mapping) else {})  # raw TOML form: validate it
     path = Path(path)
     k = int(round(legend["metres_per_pixel"] / CELL_M))
-    data = read_file_bytes(path, "map file")
-    try:
-        with Image.open(io.BytesIO(data)) as im:
-            if im.width * im.height > MAX_CELLS:
-                raise _bad(path, f"an image of at most {MAX_CELLS} pixels")
-            _check_final_size((im.height, im.width), k, border, str(path))  # before decoding the pixels
-            rgb = np.asarray(im.convert("RGB"), dtype=np.int16)
-    except InvalidInput:
-        raise
-    except Exception as exc:  # Pillow raises OSError, SyntaxError, ValueError, struct.error, zlib.error...
-        raise _bad(path, f"an image Pillow can read ({type(exc).__name__})") from None
-    del data
+    rgb = decode_image(path, "map file", lambda rows, cols: _check_final_size((rows, cols), k, border, str(path)),
+                       lambda im: "RGB").astype(np.int16)
     colours = legend["colours"]
     keys = np.array(list(colours), dtype=np.int16)                # (k, 3)
     names = list(colours.values())
