@@ -1,4 +1,5 @@
-"""Map files: the lossless ``.npz`` format, and importers for images with a legend, MAES PGM and xBOA CSV.
+"""Map files: the lossless ``.npz`` format, and importers for images with a legend, MAES PGM and xBOA CSV
+(ROS map_server YAML files: :mod:`maps.ros`).
 
 Every reader turns anything malformed into one :class:`InvalidInput` naming the file and what is wrong;
 every writer writes to a temporary file and renames it, so an existing file is never left half-written.
@@ -21,12 +22,13 @@ import tempfile
 import tomllib
 import zipfile
 from pathlib import Path
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
 from swarm.base.errors import InvalidInput, field_name, short_repr, shorten
+from . import ros
 from .materials import AIR, DEFAULT_TABLE, check_known_material, check_material_name
 from .model import CELL_M, CELLS_PER_TILE, Map, graph_from_json, graph_to_json
 
@@ -383,6 +385,29 @@ def import_pgm(path: str | Path, material: str = "concrete", threshold: int = 12
 
 
 # --------------------------------------------------------------------------------- image+legend ----
+def decode_image(path: Path, field: str, check_size: Callable[[int, int], None],
+                 mode_of: Callable[[Any], str]) -> np.ndarray:
+    """The pixels of an image file Pillow reads, converted to the Pillow mode ``mode_of(image)`` chooses.
+
+    The size is checked from the header before any pixel is decoded: at most ``MAX_CELLS`` pixels, then
+    ``check_size(rows, cols)`` (the caller's bound on the map it will build). Any decoding failure is one
+    :class:`InvalidInput` naming ``field``; shared by the legend and the ROS map_server importers.
+    """
+    from PIL import Image
+
+    data = read_file_bytes(path, field)
+    try:
+        with Image.open(io.BytesIO(data)) as im:
+            if im.width * im.height > MAX_CELLS:
+                raise InvalidInput(field, str(path), f"an image of at most {MAX_CELLS} pixels")
+            check_size(im.height, im.width)
+            return np.asarray(im.convert(mode_of(im)))
+    except InvalidInput:
+        raise
+    except Exception as exc:  # Pillow raises OSError, SyntaxError, ValueError, struct.error, zlib.error...
+        raise InvalidInput(field, str(path), f"an image Pillow can read ({type(exc).__name__})") from None
+
+
 def _parse_colour(text: Any, field: str) -> tuple[int, int, int]:
     if isinstance(text, str) and _COLOUR_RE.fullmatch(text):
         return int(text[1:3], 16), int(text[3:5], 16), int(text[5:7], 16)
@@ -491,25 +516,13 @@ def import_image(path: str | Path, legend: Mapping[str, Any], border: int = 0,
 
     The top image row is the top (north) of the map.
     """
-    from PIL import Image
-
     _check_border(border, border_material)
     if not isinstance(legend, Mapping) or any(isinstance(k, str) for k in legend.get("colours") or {"": 0}):
         legend = check_legend(legend if isinstance(legend, Mapping) else {})  # raw TOML form: validate it
     path = Path(path)
     k = int(round(legend["metres_per_pixel"] / CELL_M))
-    data = read_file_bytes(path, "map file")
-    try:
-        with Image.open(io.BytesIO(data)) as im:
-            if im.width * im.height > MAX_CELLS:
-                raise _bad(path, f"an image of at most {MAX_CELLS} pixels")
-            _check_final_size((im.height, im.width), k, border, str(path))  # before decoding the pixels
-            rgb = np.asarray(im.convert("RGB"), dtype=np.int16)
-    except InvalidInput:
-        raise
-    except Exception as exc:  # Pillow raises OSError, SyntaxError, ValueError, struct.error, zlib.error...
-        raise _bad(path, f"an image Pillow can read ({type(exc).__name__})") from None
-    del data
+    rgb = decode_image(path, "map file", lambda rows, cols: _check_final_size((rows, cols), k, border, str(path)),
+                       lambda im: "RGB").astype(np.int16)
     colours = legend["colours"]
     keys = np.array(list(colours), dtype=np.int16)                # (k, 3)
     names = list(colours.values())
@@ -522,15 +535,63 @@ def import_image(path: str | Path, legend: Mapping[str, Any], border: int = 0,
                           {"format": "image", "metres_per_pixel": legend["metres_per_pixel"], "border": border})
 
 
+# --------------------------------------------------------------------------------- ROS map_server ----
+def import_ros(path: str | Path, material: str = "concrete", border: int = 0,
+               border_material: str = "concrete") -> Map:
+    """A ROS map_server YAML and its image as a swarm map (the rules: :mod:`maps.ros`).
+
+    Walls get ``material``: a map_server image has occupancy, not materials. A ``border`` (tiles) moves the
+    lower-left corner, and the recorded origin with it.
+    """
+    check_known_material(material)
+    _check_border(border, border_material)
+    path = Path(path)
+    info = ros.parse_ros_yaml(read_file_bytes(path, "map file", ros.MAX_YAML_BYTES), path)
+    field = ros.field_in("image", path)
+
+    def check_size(rows: int, cols: int) -> None:
+        cells = (ros.cell_count(rows, info.resolution), ros.cell_count(cols, info.resolution))
+        _check_final_size(cells, 1, border, str(path))
+
+    pixels = decode_image(info.image, field, check_size, ros.pillow_mode(info.image, field))
+    free = ros.pixel_classes(pixels, info)[::-1] == ros.FREE  # image rows run top-down, map rows bottom-up
+    solid = ~ros.resample_free(free, info.resolution)
+    shift = border * CELLS_PER_TILE * CELL_M
+    origin = [info.origin[0] - shift, info.origin[1] - shift, 0.0]
+    return _finish_import(solid, solid.astype(np.uint8), (AIR, material), 1, border, border_material, str(path),
+                          {"format": ros.FORMAT, "image": info.image.name, "resolution": info.resolution,
+                           "mode": info.mode, "origin": origin, "material": material, "border": border})
+
+
+def save_ros(m: Map, yaml_path: str | Path) -> tuple[Path, Path]:
+    """Write ``m`` as ROS map_server files, as map_saver writes a trinary map: ``yaml_path`` and the image next
+    to it (same name, ``.pgm``). Both or neither: if the YAML cannot be written, the new image is removed."""
+    yaml_path = Path(yaml_path)
+    image_path = ros.ros_image_path(yaml_path)
+    text = ros.yaml_text(m, image_path.name)
+    atomic_write_bytes(image_path, ros.pgm_bytes(m))
+    try:
+        atomic_write_bytes(yaml_path, text.encode())
+    except BaseException:
+        image_path.unlink(missing_ok=True)
+        raise
+    return yaml_path, image_path
+
+
 def load_map(path: str | Path, legend: str | Path | None = None, **options: Any) -> Map:
-    """Open any supported map file by its suffix: ``.npz``, ``.csv``, ``.pgm`` (ASCII P2, or an image with a
-    legend), or an image with a legend."""
+    """Open any supported map file by its suffix: ``.npz``, ``.csv``, ``.yaml``/``.yml`` (ROS map_server),
+    ``.pgm`` (ASCII P2, or an image with a legend), or an image with a legend."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".npz":
         return load_npz(path)
     if suffix == ".csv":
         return import_csv(path, **options)
+    if suffix in (".yaml", ".yml"):
+        if legend is not None:
+            raise InvalidInput("legend", str(legend), "no legend for a ROS map YAML (its thresholds decide free "
+                                                      "and wall; walls take the material option)")
+        return import_ros(path, **options)
     if suffix == ".pgm" and legend is None:
         return import_pgm(path, **options)
     if legend is None:

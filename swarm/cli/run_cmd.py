@@ -39,7 +39,7 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
 @click.option("--spec", "spec_file", type=click.Path(exists=True, dir_okay=False, path_type=Path),
               help="A run spec TOML; flags below override it.")
 @click.option("--map", "map_", default=None, metavar="building|cave|FILE",
-              help="Generated map kind, or a map file (.npz, .pgm, .csv). [default: building]")
+              help="Generated map kind, or a map file (.npz, .pgm, .csv, ROS .yaml). [default: building]")
 @click.option("--size", default=None, metavar="N|WxH", help="Map size in tiles (1 m). [default: 50]")
 @click.option("--map-seed", type=click.IntRange(0, 2**63 - 1), default=None, help="Map seed (default: from --seed).")
 @click.option("--map-param", "map_params", multiple=True, metavar="KEY=VALUE", help="Generator parameter.")

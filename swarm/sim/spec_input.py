@@ -26,7 +26,7 @@ TOP_FLAGS = ("seed", "transport")
 SECTIONS = ("map", "robots", "algorithm", "lidar", "motion", "navigation", "radio", "comm", "stop")
 """Spec sections an override may give as a table, merged into the spec's (``lidar={"range_m": 4}``)."""
 GENERATED_KINDS = ("building", "cave")
-MAP_FILE_SUFFIXES = (".npz", ".pgm", ".csv")
+MAP_FILE_SUFFIXES = (".npz", ".pgm", ".csv", ".yaml", ".yml")
 """Map files a run reads (:func:`maps.io.load_map` without a legend)."""
 
 

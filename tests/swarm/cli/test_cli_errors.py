@@ -89,7 +89,8 @@ def map_file(tmp_path) -> Path:
 @pytest.mark.parametrize("argv, message", [
     (["--map", "{file}", "--size", "200"], "--size: got '200'; allowed: no size with a map file"),
     (["--spec", "{spec}", "--size", "200"], "--size: got '200'; allowed: no size with a map file"),
-    (["--map", "cavee"], "--map: got 'cavee'; allowed: a map kind (building | cave) or a map file (.npz, .pgm, .csv)"),
+    (["--map", "cavee"],
+     "--map: got 'cavee'; allowed: a map kind (building | cave) or a map file (.npz, .pgm, .csv, .yaml, .yml)"),
     (["--map", "{folder}"], "--map: got '{folder}'; allowed: a map kind (building | cave) or a map file"),
 ])
 def test_map_flags_that_do_not_fit_are_refused(argv, message, map_file, capsys):

@@ -36,6 +36,8 @@ CASES = {
     "map import -o": (["map", "import", "{csv}", "-o", "{out}/i.npz"], "i.npz", "--output"),
     "map import --png": (["map", "import", "{csv}", "-o", "{out}/i.npz", "--png", "{out}/i.png"], "i.png", "--png"),
     "map show -o": (["map", "show", "{npz}", "-o", "{out}/s.png"], "s.png", "--output"),
+    "map export --ros (image)": (["map", "export", "{npz}", "--ros", "{out}/e.yaml"], "e.pgm", "--ros"),
+    "map export --ros (yaml)": (["map", "export", "{npz}", "--ros", "{out}/e.yaml"], "e.yaml", "--ros"),
     "radio heatmap -o": (["radio", "heatmap", "{npz}", "--tx", "5,5", "-o", "{out}/h.png"], "h.png", "--output"),
     "plan -o": (["plan", "{npz}", "--from", "3,3", "--to", "15,15", "--planner", "astar", "-o", "{out}/p.png"],
                 "p.png", "--output"),
