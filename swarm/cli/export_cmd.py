@@ -9,14 +9,15 @@ import click
 from .checks import check_output_path, writing
 from .group import cli
 
-MAP_EVERY_HELP = "Ticks between robot map (and doorway) messages; a map is sent only when it changed."
+MAP_EVERY_HELP = "ticks between robot map (and doorway) messages; a map is sent only if it changed"
 
 
 @cli.command("export")
 @click.argument("recording", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("-o", "--output", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Where to write the MCAP file. [default: RECORDING with .mcap]")
-@click.option("--map-every", type=click.IntRange(1, 1_000_000), default=10, show_default=True, help=MAP_EVERY_HELP)
+@click.option("--map-every", type=click.IntRange(1, 1_000_000), default=10, show_default=True,
+              help=f"The {MAP_EVERY_HELP}.")
 def export_cmd(recording: Path, output: Path | None, map_every: int) -> None:
     """Export RECORDING (from 'swarm run --record') as MCAP with ROS 2 messages: open it in Foxglove with
     docs/foxglove-layout.json, or play it with 'ros2 bag play' (docs/ros2.md)."""

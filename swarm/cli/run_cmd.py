@@ -75,7 +75,7 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
               help="Write the run as MCAP with ROS 2 messages, for Foxglove and 'ros2 bag play' (needs the 'ros' "
                    "extra; docs/ros2.md).")
 @click.option("--mcap-map-every", type=click.IntRange(1, 1_000_000), default=None,
-              help="With --mcap: " + MAP_EVERY_HELP + " [default: 10]")
+              help=f"With --mcap: the {MAP_EVERY_HELP}. [default: 10]")
 @click.option("--print-spec", is_flag=True,
               help="Print the fully-resolved spec as a TOML run spec (every default filled in) and exit; "
                    "--spec reads it back to the same run.")
