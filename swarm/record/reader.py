@@ -486,14 +486,25 @@ class Recording:
                          actions=self.actions_at(t))
 
     @cached_property
+    def run_spec(self) -> Any:
+        """HEAD's spec as a :class:`swarm.sim.spec.RunSpec`; :class:`InvalidInput` naming the file if it is not
+        a run's (the reader checks only that it is a map)."""
+        from swarm.sim.spec import RunSpec
+
+        try:
+            return RunSpec.from_mapping(self.spec)
+        except InvalidInput as exc:
+            raise bad(self.path, f"HEAD spec is not a run spec ({exc})") from None
+
+    @cached_property
     def link_model(self) -> Any:
-        """The run's radio (a :class:`radio.LinkModel`), rebuilt from its map and radio spec."""
-        from radio import build_link_model, config_from_mapping
+        """The run's radio (a :class:`radio.LinkModel`), rebuilt from its map and spec as the run built it."""
+        from radio import build_link_model
 
         from swarm.sim.spec import run_map_seed
 
-        field_seed = run_map_seed(self.spec["seed"], self.spec["map"].get("seed"))  # the shadowing field's, as the run's
-        return build_link_model(self.truth, config_from_mapping(self.spec.get("radio", {})), field_seed=field_seed)
+        spec = self.run_spec
+        return build_link_model(self.truth, spec.radio, field_seed=run_map_seed(spec.seed, spec.map.seed))
 
     def link_state(self, tick: int) -> Any:
         """The exact radio picture at ``tick`` (a :class:`radio.models.LinkState`), recomputed from the exact

@@ -70,19 +70,18 @@ def _groups(links: Any, n: int) -> list[frozenset[int]]:
 
 # -------------------------------------------------------------------------------------- recordings ----
 def recording_info(rec: Recording) -> RunInfo:
-    """A recorded run's fixed facts: its map, robots, lidar (from the spec) and radios (from HEAD)."""
-    from swarm.base.params import from_mapping
+    """A recorded run's fixed facts: its map, robots, lidar (from the spec) and radios (from HEAD); a file
+    whose HEAD cannot be a run's raises :class:`swarm.base.errors.InvalidInput` naming the file."""
     from swarm.record.container import bad
-    from swarm.world.sensing import LidarParams
 
-    lidar = rec.spec.get("lidar", {})
-    if not isinstance(lidar, dict):
-        raise bad(rec.path, "HEAD spec field 'lidar' is not a map")
+    spec = rec.run_spec
+    sensitivity = rec.header["sensitivity_dbm"]
+    if not all(_number(v) for v in sensitivity):
+        raise bad(rec.path, "HEAD sensitivity_dbm is not a list of numbers")
     if rec.truth.shape != rec.shape:
         raise bad(rec.path, f"HEAD map is {rec.truth.shape}, its shape says {rec.shape}")
-    return RunInfo(truth=rec.truth, n_robots=rec.n_robots, lidar=from_mapping(LidarParams, lidar, prefix="lidar."),
-                   robot_radius_m=rec.header["robot_radius_m"],
-                   sensitivity_dbm=np.array(rec.header["sensitivity_dbm"], dtype=np.float64), tick_s=TICK_S)
+    return RunInfo(truth=rec.truth, n_robots=rec.n_robots, lidar=spec.lidar, robot_radius_m=rec.header["robot_radius_m"],
+                   sensitivity_dbm=np.array(sensitivity, dtype=np.float64), tick_s=TICK_S)
 
 
 def recording_frames(rec: Recording) -> Iterator[TickFrame]:

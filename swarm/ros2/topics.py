@@ -51,6 +51,7 @@ from typing import Any
 import numpy as np
 
 from maps import CELL_M, Map
+from swarm.base.errors import InvalidInput
 
 from . import messages as msg
 
@@ -180,8 +181,6 @@ class RunTopics:
         from swarm.world.sensing import Lidar, LidarParams
 
         if not isinstance(map_every, int) or map_every < 1:
-            from swarm.base.errors import InvalidInput
-
             raise InvalidInput("map_every", map_every, "an integer >= 1 (ticks between robot map messages)")
         self.info = info
         self.map_every = map_every

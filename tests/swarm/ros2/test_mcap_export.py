@@ -29,6 +29,7 @@ from maps import Map  # noqa: E402
 from swarm.cli import main  # noqa: E402
 from swarm.record import Recorder, load_recording  # noqa: E402
 from swarm.record.animation import ROBOT_COLOURS  # noqa: E402
+from swarm.record.container import MAGIC, encode_chunk, iter_chunks  # noqa: E402
 from swarm.ros2.frames import recording_frames, recording_info, robot_action  # noqa: E402
 from swarm.ros2.mcap_export import McapRecorder, export_recording  # noqa: E402
 from swarm.ros2.topics import (CAUSE_COLOURS, KNOWN_TO_OCCUPANCY, LOST_TICKS, RAMP, RunInfo, RunTopics,  # noqa: E402
@@ -316,6 +317,22 @@ def test_export_refuses_bad_recordings_in_one_line(case, swr, tmp_path, capsys):
     code, _, err = cli(capsys, "export", str(bad), "-o", str(tmp_path / "out.mcap"))
     one_line_error(code, err, "bad.swr")
     assert not (tmp_path / "out.mcap").exists()
+
+
+@pytest.mark.parametrize("edit", [
+    lambda head: head["spec"].update(seed=-1),
+    lambda head: head["spec"].update(lidar={"range_m": -1.0}),
+    lambda head: head["spec"].update(radio="loud"),
+    lambda head: head.update(sensitivity_dbm=["-82"] * 3),
+])
+def test_export_refuses_a_recording_whose_head_is_not_a_runs(edit, swr, tmp_path, capsys):
+    """A file that loads (the reader checks HEAD's fields' types) but whose spec or radios cannot be a run's."""
+    chunks = list(iter_chunks(swr.read_bytes(), str(swr)))
+    edit(chunks[0][1])
+    bad = tmp_path / "edited.swr"
+    bad.write_bytes(MAGIC + b"".join(encode_chunk(kind, body) for kind, body in chunks))
+    code, _, err = cli(capsys, "export", str(bad), "-o", str(tmp_path / "out.mcap"))
+    one_line_error(code, err, "edited.swr")
 
 
 @pytest.mark.parametrize("argv,needle", [
