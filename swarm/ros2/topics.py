@@ -46,6 +46,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from itertools import pairwise
 from typing import Any
 
 import numpy as np
@@ -147,7 +148,7 @@ def ramp_colour(margin: float) -> tuple[int, int, int]:
     """The viewer's colour of an RSSI margin (dB): red at 0 or below, through yellow, to green at 40."""
     if not margin > RAMP[0][0]:
         return RAMP[0][1]
-    for (a, ca), (b, cb) in zip(RAMP, RAMP[1:]):
+    for (a, ca), (b, cb) in pairwise(RAMP):
         if margin <= b:
             f = (margin - a) / (b - a)
             return tuple(math.floor(c + f * (d - c) + 0.5) for c, d in zip(ca, cb))  # type: ignore[return-value]
@@ -339,7 +340,7 @@ class RunTopics:
             first = min(members)
             hull = convex_hull([(float(frame.poses[r, 0]) + dx, float(frame.poses[r, 1]) + dy)
                                 for r in sorted(members) for dx, dy in ring])
-            fan = [v for a, b in zip(hull[1:], hull[2:]) for v in (hull[0], a, b)]
+            fan = [v for a, b in pairwise(hull[1:]) for v in (hull[0], a, b)]
             markers[("groups", first)] = msg.marker(MAP_FRAME, ns, "groups", first, msg.TRIANGLE_LIST, fan,
                                                     rgb=self._colours[first], alpha=0.3, width=1.0, z=0.01)
         return self._replace("/comm/groups", ns, markers)

@@ -21,21 +21,28 @@ pytest.importorskip("rosbags")
 
 with warnings.catch_warnings():   # mcap_ros2.reader warns on import that mcap_ros1.reader is deprecated
     warnings.simplefilter("ignore", DeprecationWarning)
-    from mcap_ros2.reader import read_ros2_messages  # noqa: E402
-from rosbags.highlevel import AnyReader  # noqa: E402
-from rosbags.typesys import Stores, get_typestore  # noqa: E402
+    from mcap_ros2.reader import read_ros2_messages
+from rosbags.highlevel import AnyReader
+from rosbags.typesys import Stores, get_typestore
 
-from maps import Map  # noqa: E402
-from swarm.cli import main  # noqa: E402
-from swarm.record import Recorder, load_recording  # noqa: E402
-from swarm.record.animation import ROBOT_COLOURS  # noqa: E402
-from swarm.record.container import MAGIC, encode_chunk, iter_chunks  # noqa: E402
-from swarm.ros2.frames import recording_frames, recording_info, robot_action  # noqa: E402
-from swarm.ros2.mcap_export import McapRecorder, export_recording  # noqa: E402
-from swarm.ros2.topics import (CAUSE_COLOURS, KNOWN_TO_OCCUPANCY, LOST_TICKS, RAMP, RunInfo, RunTopics,  # noqa: E402
-                               ramp_colour)
-from swarm.sim.loop import Simulation  # noqa: E402
-from swarm.world.sensing import LidarParams  # noqa: E402
+from maps import Map
+from swarm.cli import main
+from swarm.record import Recorder, load_recording
+from swarm.record.animation import ROBOT_COLOURS
+from swarm.record.container import MAGIC, encode_chunk, iter_chunks
+from swarm.ros2.frames import recording_frames, recording_info, robot_action
+from swarm.ros2.mcap_export import McapRecorder, export_recording
+from swarm.ros2.topics import (
+    CAUSE_COLOURS,
+    KNOWN_TO_OCCUPANCY,
+    LOST_TICKS,
+    RAMP,
+    RunInfo,
+    RunTopics,
+    ramp_colour,
+)
+from swarm.sim.loop import Simulation
+from swarm.world.sensing import LidarParams
 
 ROOT = Path(__file__).resolve().parents[3]
 TICK_NS = 100_000_000
@@ -205,7 +212,7 @@ def test_markers_for_links_groups_losses_and_doorways(run):
     lost = [(t, m) for t in range(rec.ticks - 1) for m in rec.messages_at(t) if m.lost]
     assert lost
     t, message = lost[0]
-    robot, cause = message.lost[0]
+    _, cause = message.lost[0]
     marker = next(m for m in at(ours["/comm/lost"], t + 1).markers if m.ns == f"lost/{cause}")
     sx, sy = rec.poses[t + 1, message.transmitter, :2]
     assert (marker.points[0].x, marker.points[0].y) == (sx, sy)
@@ -216,8 +223,8 @@ def test_markers_for_links_groups_losses_and_doorways(run):
                 if a and a["debug"] and a["debug"].get("doorways")]
     assert recorded   # Minotaur found the doorway
     t, i, action = recorded[0]
-    x, y, axis, width, explored = action["debug"]["doorways"][0]
-    sent = [m for s, m in ours[f"/robot_{i}/doorways"] if s >= t * TICK_NS][0]
+    x, y, axis, width, _ = action["debug"]["doorways"][0]
+    sent = next(m for s, m in ours[f"/robot_{i}/doorways"] if s >= t * TICK_NS)
     ends = {(p.x, p.y) for marker in sent.markers for p in marker.points}
     assert ((x, y - width / 2) if axis == 1 else (x - width / 2, y)) in ends
     for marker in sent.markers:
@@ -266,7 +273,7 @@ def test_the_foxglove_layout_names_exported_topics():
     assert sorted(ids) == sorted(layout["configById"]) and len(set(ids)) == len(ids)
     names = {t.name for t in RunTopics(RunInfo(hall(), 10, LidarParams(), 0.3, np.zeros(10))).topics}
     used = set()
-    for panel, config in layout["configById"].items():
+    for config in layout["configById"].values():
         used |= set(config.get("topics", {}))
         used |= {p["value"].split(".", 1)[0] for p in config.get("paths", [])}
     assert used and used <= names, used - names
