@@ -25,6 +25,7 @@ def _register() -> None:
     from . import map_cmd, run_cmd  # noqa: F401  (commands register themselves on import)
     from . import radio_cmd  # noqa: F401
     from . import view_cmd  # noqa: F401
+    from . import export_cmd  # noqa: F401
     from . import plan_cmd  # noqa: F401
     from . import campaign_cmd  # noqa: F401
 

@@ -15,6 +15,7 @@ from swarm.sim.spec import MAX_ROBOTS
 from swarm.sim.spec_input import check_size_flag, flag_overrides, load_spec_file, merge
 from .group import cli
 from .checks import FiniteSeconds, check_output_path, writing
+from .export_cmd import MAP_EVERY_HELP
 from .options import parse_params
 
 
@@ -70,6 +71,11 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
               help="Write the animation as MP4 (needs the 'video' extra: imageio-ffmpeg).")
 @click.option("--record", "record_out", type=click.Path(dir_okay=False, path_type=Path),
               help="Record the run (.swr) for 'swarm view'.")
+@click.option("--mcap", "mcap_out", type=click.Path(dir_okay=False, path_type=Path),
+              help="Write the run as MCAP with ROS 2 messages, for Foxglove and 'ros2 bag play' (needs the 'ros' "
+                   "extra; docs/ros2.md).")
+@click.option("--mcap-map-every", type=click.IntRange(1, 1_000_000), default=None,
+              help=f"With --mcap: the {MAP_EVERY_HELP}. [default: 10]")
 @click.option("--print-spec", is_flag=True,
               help="Print the fully-resolved spec as a TOML run spec (every default filled in) and exit; "
                    "--spec reads it back to the same run.")
@@ -78,7 +84,8 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
             algorithm_params: tuple[str, ...], seed: int | None, max_ticks: int | None, explored: float | None,
             transport: str | None, sets: tuple[str, ...], listen: tuple[str, ...], remote: tuple[int, ...],
             agent_timeout: float, run_id: str | None, token_file: Path | None, json_out: Path | None,
-            gif: Path | None, mp4: Path | None, record_out: Path | None, print_spec: bool) -> None:
+            gif: Path | None, mp4: Path | None, record_out: Path | None, mcap_out: Path | None,
+            mcap_map_every: int | None, print_spec: bool) -> None:
     """Run one exploration and print a one-line summary.
 
     With no arguments: 4 robots with the frontier explorer on a 50 x 50 building, seed 0. On a terminal,
@@ -103,7 +110,14 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
         except ImportError:
             raise InvalidInput("--mp4", str(mp4), "an MP4 path once the video extra is installed "
                                "(pip install 'swarm-sim[video]')") from None
-    for flag, path in (("--json", json_out), ("--gif", gif), ("--mp4", mp4), ("--record", record_out)):
+    if mcap_map_every is not None and mcap_out is None:
+        raise InvalidInput("--mcap-map-every", mcap_map_every, "only with --mcap")
+    if mcap_out is not None:
+        from swarm.ros2 import require_extra
+
+        require_extra("--mcap", str(mcap_out), "an MCAP path")
+    for flag, path in (("--json", json_out), ("--gif", gif), ("--mp4", mp4), ("--record", record_out),
+                       ("--mcap", mcap_out)):
         if path is not None:
             check_output_path(flag, path)
     options = _transport_options(spec, listen, remote, agent_timeout, run_id, token_file)
@@ -122,13 +136,19 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
             from swarm.record import Recorder
 
             run_recorder = Recorder.attach(sim)
+        mcap_recorder = None
+        if mcap_out is not None:
+            from swarm.ros2.mcap_export import McapRecorder
+
+            mcap_recorder = McapRecorder.attach(sim, mcap_map_every or 10)
         result = sim.run()
     click.echo(result.one_line())
     outputs = (("--json", json_out, lambda p: result.write_json(p)),
                ("--gif", gif if recorder is not None else None, lambda p: recorder.save(p)),
                ("--mp4", mp4 if recorder is not None else None, lambda p: recorder.save_mp4(p)),
                ("--record", record_out if run_recorder is not None else None,
-                lambda p: (run_recorder.finish(sim, result), run_recorder.save(p))[1]))
+                lambda p: (run_recorder.finish(sim, result), run_recorder.save(p))[1]),
+               ("--mcap", mcap_out if mcap_recorder is not None else None, lambda p: mcap_recorder.save(sim, p)))
     for flag, path, write in outputs:
         if path is None:
             continue

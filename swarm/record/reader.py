@@ -391,6 +391,21 @@ class Recording:
         q = _last_wins(r * r, self._rssi_idx[:end], self._rssi_val[:end], RSSI_NAN, np.int16)
         return link, dequantise_rssi(q, self.quantum).reshape(r, r)
 
+    def known_changes(self, tick: int) -> tuple[np.ndarray, np.ndarray]:
+        """The knowledge cells written at ``tick``: flat indices into ``(R, H, W)`` (each at most once) and
+        their new values. Applied in order from tick 0 they give :meth:`known_at` of every tick, for a
+        replay that walks the run once instead of rebuilding each tick from the start."""
+        t = self._check_tick(tick)
+        a, b = self._off["known"][t], self._off["known"][t + 1]
+        return self._known_idx[a:b], self._known_val[a:b]
+
+    def actions_changed(self, tick: int) -> dict[int, Any]:
+        """The robots whose action at ``tick`` differs from their previous one, each with that action (as in
+        :meth:`actions_at`); every other robot repeated its own."""
+        t = self._check_tick(tick)
+        a, b = self._off["act"][t], self._off["act"][t + 1]
+        return {int(self._act_robot[k]): self._decode_action(k) for k in range(a, b)}
+
     def actions_at(self, tick: int) -> list[Any]:
         """Each robot's latest action up to ``tick``: {"goal", "velocity", "clear_goal", "debug"} or None
         (no decision yet, or a failed agent). The final tick has no decisions of its own."""
@@ -470,16 +485,31 @@ class Recording:
                          link=link, rssi=rssi, explored=float(self.explored[t]), coverage=float(self.coverage[t]),
                          actions=self.actions_at(t))
 
-    def link_state(self, tick: int) -> Any:
-        """The exact radio picture at ``tick`` (a :class:`radio.models.LinkState`), recomputed from the exact
-        poses with the run's own map and radio spec: RSSI to the last bit, unlike the quantised stream."""
-        from radio import build_link_model, config_from_mapping
+    @cached_property
+    def run_spec(self) -> Any:
+        """HEAD's spec as a :class:`swarm.sim.spec.RunSpec`; :class:`InvalidInput` naming the file if it is not
+        a run's (the reader checks only that it is a map)."""
+        from swarm.sim.spec import RunSpec
+
+        try:
+            return RunSpec.from_mapping(self.spec)
+        except InvalidInput as exc:
+            raise bad(self.path, f"HEAD spec is not a run spec ({exc})") from None
+
+    @cached_property
+    def link_model(self) -> Any:
+        """The run's radio (a :class:`radio.LinkModel`), rebuilt from its map and spec as the run built it."""
+        from radio import build_link_model
 
         from swarm.sim.spec import run_map_seed
 
-        field_seed = run_map_seed(self.spec["seed"], self.spec["map"].get("seed"))  # the shadowing field's, as the run's
-        model = build_link_model(self.truth, config_from_mapping(self.spec.get("radio", {})), field_seed=field_seed)
-        return model.evaluate(self.poses[self._check_tick(tick), :, :2])
+        spec = self.run_spec
+        return build_link_model(self.truth, spec.radio, field_seed=run_map_seed(spec.seed, spec.map.seed))
+
+    def link_state(self, tick: int) -> Any:
+        """The exact radio picture at ``tick`` (a :class:`radio.models.LinkState`), recomputed from the exact
+        poses with the run's own map and radio spec: RSSI to the last bit, unlike the quantised stream."""
+        return self.link_model.evaluate(self.poses[self._check_tick(tick), :, :2])
 
 
 def read_bytes(path: str | Path) -> bytes:

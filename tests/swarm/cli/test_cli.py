@@ -60,7 +60,7 @@ def test_show_and_import(tmp_path, capsys):
     (["map", "generate", "--kind", "cave", "--param", "fill_percent=100"], "fill_percent: got 100"),
     (["map", "generate", "--param", "nokey"], "--param"),
     (["map", "generate", "--frobnicate"], "No such option"),
-    (["mapz"], "allowed: agent, algorithms, campaign, map"),
+    (["mapz"], "allowed: agent, algorithms, campaign, export, map"),
     (["map", "show", "/nonexistent.npz"], "does not exist"),
 ])
 def test_bad_arguments_are_one_line_and_exit_2(capsys, args, needle):
