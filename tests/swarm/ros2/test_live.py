@@ -280,7 +280,7 @@ def test_twist_commands_drive_robot_1_and_a_silent_tick_keeps_the_last_one():
     spec = {**SPEC, "stop": {"max_ticks": 14}}
     try:
         sim = Simulation(spec, transport=TransportOptions(wrap=lambda host: RosHost(host, node, external=[1],
-                                                                                  timeout_s=0.3)))
+                                                                                  timeout_s=1.0)))
         start = sim.start_poses[1]
         taken: list[Any] = []
         sim.observers = (lambda view: taken.append(view.actions[1]),)
