@@ -34,7 +34,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("swarm.navigation", "swarm.transport", "swarm.api"),
     ("swarm.sim",),
     ("swarm.testing", "swarm.record", "swarm.env", "swarm.campaign"),
-    ("swarm.viewer",),
+    ("swarm.viewer", "swarm.ros2"),
     ("swarm.cli",),
     ("swarm",),  # the root package: names imported on first use, and ``python -m swarm``
 ]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -65,6 +66,20 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
 @click.option("--token-file", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="The run secret remote agents authenticate with: read, or created (mode 0600) if missing. "
                    "Default: $SWARM_TOKEN, else a new secret whose robot tokens are printed.")
+@click.option("--ros2", "ros2", is_flag=True,
+              help="Speak ROS 2 live as rmw_zenoh does: /clock, the robots' poses, scans, maps, /tf, goals and "
+                   "radio markers every tick (needs the ros extra; docs/ros2.md).")
+@click.option("--ros-domain", type=click.IntRange(0, 232), default=None, help="ROS_DOMAIN_ID. [default: 0]")
+@click.option("--ros-distro", type=click.Choice(["humble", "jazzy", "kilted", "rolling"]), default=None,
+              help="The ROS 2 distribution of the peers (Humble has no type hashes). [default: jazzy]")
+@click.option("--ros-connect", multiple=True, metavar="ENDPOINT",
+              help="An rmw_zenohd router to publish through (watching only). [default: tcp/127.0.0.1:7447]")
+@click.option("--ros-listen", multiple=True, metavar="ENDPOINT",
+              help="Listen for ROS 2 nodes that log in with the printed zenoh configs (needed by --ros-external).")
+@click.option("--ros-external", multiple=True, type=click.IntRange(0), metavar="ID",
+              help="Robot ids driven from ROS 2 (/robot_ID/goal_pose, /robot_ID/cmd_vel), in lockstep; repeatable.")
+@click.option("--ros-timeout", type=FiniteSeconds(), default=10.0, show_default=True,
+              help="Seconds a tick waits for an external robot's command before it keeps its last one.")
 @click.option("--json", "json_out", type=click.Path(dir_okay=False, path_type=Path), help="Write the result JSON.")
 @click.option("--gif", type=click.Path(dir_okay=False, path_type=Path), help="Write an animation.")
 @click.option("--mp4", type=click.Path(dir_okay=False, path_type=Path),
@@ -75,7 +90,7 @@ def build_spec_mapping(spec_file: Path | None, flags: dict[str, Any], sets: tupl
               help="Write the run as MCAP with ROS 2 messages, for Foxglove and 'ros2 bag play' (needs the 'ros' "
                    "extra; docs/ros2.md).")
 @click.option("--mcap-map-every", type=click.IntRange(1, 1_000_000), default=None,
-              help=f"With --mcap: the {MAP_EVERY_HELP}. [default: 10]")
+              help=f"With --mcap or --ros2: the {MAP_EVERY_HELP}. [default: 10]")
 @click.option("--print-spec", is_flag=True,
               help="Print the fully-resolved spec as a TOML run spec (every default filled in) and exit; "
                    "--spec reads it back to the same run.")
@@ -83,9 +98,11 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
             map_params: tuple[str, ...], robots: int | None, spawn: str | None, algorithm: str | None,
             algorithm_params: tuple[str, ...], seed: int | None, max_ticks: int | None, explored: float | None,
             transport: str | None, sets: tuple[str, ...], listen: tuple[str, ...], remote: tuple[int, ...],
-            agent_timeout: float, run_id: str | None, token_file: Path | None, json_out: Path | None,
-            gif: Path | None, mp4: Path | None, record_out: Path | None, mcap_out: Path | None,
-            mcap_map_every: int | None, print_spec: bool) -> None:
+            agent_timeout: float, run_id: str | None, token_file: Path | None, ros2: bool, ros_domain: int | None,
+            ros_distro: str | None, ros_connect: tuple[str, ...], ros_listen: tuple[str, ...],
+            ros_external: tuple[int, ...], ros_timeout: float, json_out: Path | None, gif: Path | None,
+            mp4: Path | None, record_out: Path | None, mcap_out: Path | None, mcap_map_every: int | None,
+            print_spec: bool) -> None:
     """Run one exploration and print a one-line summary.
 
     With no arguments: 4 robots with the frontier explorer on a 50 x 50 building, seed 0. On a terminal,
@@ -100,7 +117,8 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
              "algorithm": algorithm, "seed": seed, "max_ticks": max_ticks, "explored": explored,
              "transport": transport}
     spec = RunSpec.from_mapping(build_spec_mapping(spec_file, flags, sets, algorithm_params, map_params))
-    _check_transport_flags(spec, listen, remote, run_id, token_file)
+    ros = RosFlags(ros2, ros_domain, ros_distro, ros_connect, ros_listen, ros_external, ros_timeout)
+    _check_transport_flags(spec, listen, remote, run_id, token_file, ros)
     if print_spec:
         click.echo(spec.to_toml(), nl=False)
         return
@@ -110,8 +128,8 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
         except ImportError:
             raise InvalidInput("--mp4", str(mp4), "an MP4 path once the video extra is installed "
                                "(pip install 'swarm-sim[video]')") from None
-    if mcap_map_every is not None and mcap_out is None:
-        raise InvalidInput("--mcap-map-every", mcap_map_every, "only with --mcap")
+    if mcap_map_every is not None and mcap_out is None and not ros2:
+        raise InvalidInput("--mcap-map-every", mcap_map_every, "only with --mcap or --ros2")
     if mcap_out is not None:
         from swarm.ros2 import require_extra
 
@@ -120,9 +138,16 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
                        ("--mcap", mcap_out)):
         if path is not None:
             check_output_path(flag, path)
-    options = _transport_options(spec, listen, remote, agent_timeout, run_id, token_file)
+    live_topics = None
+    if ros.on:
+        from swarm.ros2.external import LiveTopics
+
+        live_topics = LiveTopics(mcap_map_every or 10)
+    options = _transport_options(spec, listen, remote, agent_timeout, run_id, token_file, ros, live_topics)
     with RunProgress(spec.stop.max_ticks, spec.stop.explored) as progress:
         sim = Simulation(spec, transport=options)
+        if live_topics is not None:
+            live_topics.attach(sim)
         recorder = None
         if gif is not None or mp4 is not None:
             from swarm.record.animation import GifRecorder
@@ -156,11 +181,61 @@ def run_cmd(spec_file: Path | None, map_: str | None, size: str | None, map_seed
             click.echo(f"wrote {write(path)}")
 
 
+@dataclass(frozen=True)
+class RosFlags:
+    """The ``--ros*`` flags of ``swarm run`` (None: not given)."""
+
+    on: bool = False
+    domain: int | None = None
+    distro: str | None = None
+    connect: tuple[str, ...] = ()
+    listen: tuple[str, ...] = ()
+    external: tuple[int, ...] = ()
+    timeout: float = 10.0
+
+    def check(self, spec, remote: tuple[int, ...]) -> None:
+        """Well formed, given with ``--ros2``, and fitting the spec and the remote agents."""
+        from swarm.transport.sessions import check_endpoint
+
+        given = {"--ros-domain": self.domain, "--ros-distro": self.distro, "--ros-connect": list(self.connect),
+                 "--ros-listen": list(self.listen), "--ros-external": list(self.external)}
+        if not self.on:
+            for flag, value in given.items():
+                if value:
+                    raise InvalidInput(flag, value, "only with --ros2")
+            return
+        for flag, endpoints in (("--ros-connect", self.connect), ("--ros-listen", self.listen)):
+            for endpoint in endpoints:
+                check_endpoint(endpoint, flag)
+        for endpoint in self.listen:
+            if not endpoint.startswith("unixsock-stream/") and endpoint.rsplit(":", 1)[1] == "0":
+                raise InvalidInput("--ros-listen", endpoint, "a fixed port (the zenoh configs printed for the "
+                                   "ROS 2 nodes name it), e.g. tcp/127.0.0.1:7448")
+        if self.connect and self.listen:
+            raise InvalidInput("--ros-connect", list(self.connect), "either --ros-connect (a router, watching only) "
+                               "or --ros-listen (ROS 2 nodes log in), not both")
+        for r in self.external:
+            if r >= spec.robots.count:
+                raise InvalidInput("--ros-external", r, f"a robot id below --robots ({spec.robots.count})")
+            if r in remote:
+                raise InvalidInput("--ros-external", r, "a robot not also driven by a remote agent (--remote)")
+        if self.external and not self.listen:
+            raise InvalidInput("--ros-listen", None, "an endpoint the ROS 2 drivers of --ros-external log in to, "
+                               "e.g. tcp/127.0.0.1:7448 (commands through a router could come from anyone)")
+        try:
+            import rosbags  # noqa: F401
+        except ImportError:
+            raise InvalidInput("--ros2", True, "ROS 2 once the ros extra is installed (pip install 'swarm-sim[ros]')") \
+                from None
+
+
 def _check_transport_flags(spec, listen: tuple[str, ...], remote: tuple[int, ...], run_id: str | None,
-                           token_file: Path | None) -> None:
+                           token_file: Path | None, ros: RosFlags = RosFlags()) -> None:
     """The transport flags are well formed and fit the spec (nothing opened or written yet)."""
     from swarm.transport.auth import check_run_id
     from swarm.transport.sessions import check_endpoint
+
+    ros.check(spec, remote)
 
     for endpoint in listen:
         check_endpoint(endpoint, "--listen")
@@ -174,24 +249,26 @@ def _check_transport_flags(spec, listen: tuple[str, ...], remote: tuple[int, ...
             raise InvalidInput("--remote", r, f"a robot id below --robots ({spec.robots.count})")
     if remote and not listen:
         raise InvalidInput("--listen", None, "an endpoint remote agents can connect to, e.g. tcp/127.0.0.1:7447")
-    if token_file is not None and not listen:
-        raise InvalidInput("--token-file", str(token_file), "only with --listen (remote agents)")
+    if token_file is not None and not (listen or ros.listen):
+        raise InvalidInput("--token-file", str(token_file), "only with --listen (remote agents) or --ros-listen")
 
 
 def _transport_options(spec, listen: tuple[str, ...], remote: tuple[int, ...], timeout: float,
-                       run_id: str | None, token_file: Path | None):
+                       run_id: str | None, token_file: Path | None, ros: RosFlags = RosFlags(),
+                       live_topics=None):
     """How the run reaches its remote agents: their secret (read or created) and the commands to start them,
     printed once the runtime listens (a --listen endpoint that cannot be bound fails first, with no command
-    to start an agent for)."""
+    to start an agent for); and, with --ros2, the ROS 2 node around the run's host (:func:`_ros_wrap`)."""
     from swarm.sim.loop import TransportOptions
     from swarm.transport.auth import TOKEN_ENV, runtime_secret
     from swarm.transport.zenoh_host import new_run_id
 
-    secret = runtime_secret(token_file) if listen else None
+    secret = runtime_secret(token_file) if listen or ros.listen else None
+    if remote or ros.listen:
+        run_id = run_id or new_run_id(spec.key)
     lines: list[str] = []
     if remote:
-        assert secret is not None
-        run_id = run_id or new_run_id(spec.key)
+        assert secret is not None and run_id is not None
         for r in remote:
             if token_file is not None:
                 how = f"--token-file {token_file}"
@@ -206,7 +283,35 @@ def _transport_options(spec, listen: tuple[str, ...], remote: tuple[int, ...], t
             click.echo(line, err=True)
 
     return TransportOptions(listen=listen, remote=remote, timeout_s=timeout, run_id=run_id, secret=secret,
-                            on_listening=announce if lines else None)
+                            on_listening=announce if lines else None,
+                            wrap=_ros_wrap(ros, secret, run_id, live_topics) if ros.on else None)
+
+
+def _ros_wrap(ros: RosFlags, secret, run_id: str | None, live_topics=None):
+    """The run's host wrapped in a :class:`~swarm.ros2.external.RosHost` on a new ROS 2 node; once its session
+    is open, stderr says where it publishes and, when it listens, which zenoh session config each ROS 2 node
+    uses to watch (``viewer``) or to drive an external robot (``robot-N``)."""
+    def wrap(host):
+        from swarm.ros2.external import RosHost
+        from swarm.ros2.live import open_node
+
+        domain, distro = ros.domain or 0, ros.distro or "jazzy"
+        node, access = open_node(connect=ros.connect or (() if ros.listen else ("tcp/127.0.0.1:7447",)),
+                                 listen=ros.listen, domain=domain, distro=distro, secret=secret,
+                                 run_id=run_id or "swarm", external=ros.external)
+        if access is None:
+            where = ", ".join(ros.connect) or "the rmw_zenohd router at tcp/127.0.0.1:7447"
+            click.echo(f"ROS 2 ({distro}, domain {domain}): publishing through {where}", err=True)
+        else:
+            click.echo(f"ROS 2 ({distro}, domain {domain}): listening on {', '.join(ros.listen)}; watch with "
+                       f"ZENOH_SESSION_CONFIG_URI={access.configs['viewer']}", err=True)
+            for robot in ros.external:
+                click.echo(f"waiting for: a ROS 2 node driving robot {robot} (/robot_{robot}/goal_pose or cmd_vel) "
+                           f"with ZENOH_SESSION_CONFIG_URI={access.configs[f'robot-{robot}']}", err=True)
+        if live_topics is not None:
+            live_topics.use(node)
+        return RosHost(host, node, external=ros.external, timeout_s=ros.timeout)
+    return wrap
 
 
 @cli.command("agent")

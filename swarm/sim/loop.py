@@ -89,6 +89,9 @@ class TransportOptions:
     on_listening: Callable[[], None] | None = field(default=None, compare=False, repr=False)
     """Called once the ``listen`` endpoints are open, before the run waits for remote agents: ``swarm run``
     prints the agents' commands then, not before a bind that may fail."""
+    wrap: Callable[[AgentHost], AgentHost] | None = field(default=None, compare=False, repr=False)
+    """A host around the transport's (closed with it), e.g. :class:`swarm.ros2.external.RosHost`, which
+    publishes each tick on ROS 2 and drives some robots from there."""
 
 
 @dataclass
@@ -225,6 +228,8 @@ class Simulation:
         if opts.times is not None:
             self._time_phases(opts.times)
         try:
+            if opts.wrap is not None:
+                host = opts.wrap(host)
             if opts.on_listening is not None:
                 opts.on_listening()
             host.start(self.resets())

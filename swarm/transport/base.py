@@ -9,6 +9,7 @@ the radio medium and steps in lockstep, so the transport never changes a result.
 
 from __future__ import annotations
 
+import copy
 from dataclasses import dataclass, field
 from typing import Any, Callable, Protocol, Sequence
 
@@ -44,6 +45,13 @@ class TickBatch:
         self.inboxes = inboxes          # the envelopes delivered to each robot (.message, .data: wire bytes)
         self._sight, self._sight_value = sight, None
         self._changed, self._changed_value = changed, None
+
+    def asking(self, live: np.ndarray) -> TickBatch:
+        """This batch asking only the robots of ``live`` (a host that decides some robots itself hands the
+        others to another host this way); parts computed so far are shared."""
+        other = copy.copy(self)
+        other.live = live
+        return other
 
     def sight(self) -> tuple[np.ndarray, np.ndarray]:
         """``(distance, near)``: pair distances (m, float64[R, R]) and who senses whom (bool[R, R]: in range,

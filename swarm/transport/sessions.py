@@ -71,12 +71,15 @@ def check_endpoint(text: object, flag: str) -> str:
 
 def session_config(listen: Sequence[str] = (), connect: Sequence[str] = (), user: str | None = None,
                    password: str | None = None, dictionary_file: str | None = None,
-                   access_control: dict[str, Any] | None = None) -> zenoh.Config:
+                   access_control: dict[str, Any] | None = None,
+                   max_message_bytes: int | None = None) -> zenoh.Config:
     """Peer mode, no multicast scouting, only the given endpoints; optionally usrpwd credentials
-    (``user``/``password``: this session's; ``dictionary_file``: who may connect to it) and an
-    access-control policy. A session with endpoints takes its TLS files from :data:`TLS_ENV`; one that
-    listens bounds the connections still in zenoh's handshake (:data:`ACCEPT_TIMEOUT_MS`,
-    :func:`accept_pending`)."""
+    (``user``/``password``: this session's; ``dictionary_file``: who may connect to it), an
+    access-control policy and a bound on the size of one incoming message (``max_message_bytes``: zenoh
+    reassembles fragments up to 1 GiB by default, and takes bigger ones from a local peer's shared memory,
+    which is then off). A session with endpoints takes its TLS files from
+    :data:`TLS_ENV`; one that listens bounds the connections still in zenoh's handshake
+    (:data:`ACCEPT_TIMEOUT_MS`, :func:`accept_pending`)."""
     c = zenoh.Config()
     c.insert_json5("mode", '"peer"')
     c.insert_json5("scouting/multicast/enabled", "false")
@@ -98,6 +101,9 @@ def session_config(listen: Sequence[str] = (), connect: Sequence[str] = (), user
         c.insert_json5("transport/unicast/accept_pending", str(accept_pending()))
     if access_control is not None:
         c.insert_json5("access_control", json.dumps(access_control))
+    if max_message_bytes is not None:  # shared memory off: a local peer's buffers would bypass the bound
+        c.insert_json5("transport/link/rx/max_message_size", str(max_message_bytes))
+        c.insert_json5("transport/shared_memory/enabled", "false")
     return c
 
 
