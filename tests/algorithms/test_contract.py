@@ -17,8 +17,12 @@ BUILT_INS = {
     "tnf": "algorithms.tnf:TNF",
     "minotaur": "algorithms.minotaur:Minotaur",
     "xboa": "algorithms.xboa:XBOA",
+    "rbw": "algorithms.random_ballistic_walk:RandomBallisticWalk",
+    "wall_follower": "algorithms.wall_follower:WallFollower",
+    "brick_and_mortar": "algorithms.brick_and_mortar:BrickAndMortar",
 }
-OWN_MESSAGES = {"tnf": "tnf.destination", "minotaur": "minotaur.", "xboa": "xboa.target"}
+OWN_MESSAGES = {"tnf": "tnf.destination", "minotaur": "minotaur.", "xboa": "xboa.target",
+                "brick_and_mortar": "brick_and_mortar."}
 """A message type of its own each of these must send in the check's run, so the messages check saw it."""
 SETTINGS = {"xboa": {"params": {"pop_size": 8, "max_gen": 8, "preset": "defaults"}}}
 """xBOA's optimiser at its smallest useful budget (the check's run still decides and announces)."""
