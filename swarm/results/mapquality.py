@@ -14,6 +14,44 @@ import numpy as np
 from numba import njit
 
 from swarm.base.types import CELL_M, FREE, SOLID
+from .schema import THRESHOLDS, threshold_key
+
+
+@njit(cache=True)
+def _correct_free(known: np.ndarray, free: np.ndarray) -> int:  # pragma: no cover - compiled
+    """Truly free cells (``free``) that some robot's map holds FREE."""
+    n, h, w = known.shape
+    total = 0
+    for i in range(h):
+        for j in range(w):
+            if free[i, j]:
+                for r in range(n):
+                    if known[r, i, j] == FREE:
+                        total += 1
+                        break
+    return total
+
+
+class CorrectlyExplored:
+    """The explored fraction counting only correctly known cells (the share of the truly free cells some
+    robot's map holds FREE where they are), recorded with the time series of a run with a localisation model,
+    and the first recorded tick it reaches each threshold. Recorded ticks only (``record_every``): one pass
+    over every robot's map costs what the lidar's writes of a few ticks do."""
+
+    def __init__(self, truth_solid: np.ndarray, thresholds: tuple[float, ...] = THRESHOLDS) -> None:
+        self._free = np.ascontiguousarray(~np.asarray(truth_solid, dtype=np.bool_))
+        self._total = max(int(self._free.sum()), 1)
+        self._thresholds = tuple(sorted(thresholds))
+        self._next = 0
+        self.ticks_to: dict[str, int | None] = {threshold_key(t): None for t in self._thresholds}
+
+    def record(self, tick: int, known: np.ndarray) -> float:
+        """The fraction at ``tick`` from the robots' maps ``known`` (``uint8[R, H, W]``)."""
+        value = _correct_free(known, self._free) / self._total
+        while self._next < len(self._thresholds) and value >= self._thresholds[self._next]:
+            self.ticks_to[threshold_key(self._thresholds[self._next])] = tick
+            self._next += 1
+        return value
 
 
 @njit(cache=True)
@@ -68,4 +106,4 @@ def map_quality(known: np.ndarray, truth_solid: np.ndarray) -> dict[str, Any]:
             "explored_correct": float(correct.sum() / max(int((~solid).sum()), 1))}
 
 
-__all__ = ["map_quality"]
+__all__ = ["CorrectlyExplored", "map_quality"]

@@ -10,7 +10,8 @@ import numpy as np
 from numba import njit
 
 from swarm.base.types import FREE
-from .schema import COMM_ROBOT_SERIES, COMM_SERIES_COLUMNS, DROP_CAUSES, THRESHOLDS, TIMESERIES_COLUMNS, threshold_key
+from .schema import (COMM_ROBOT_SERIES, COMM_SERIES_COLUMNS, DROP_CAUSES, OPTIONAL_TIMESERIES, THRESHOLDS,
+                     TIMESERIES_COLUMNS, threshold_key)
 
 
 class Metrics:
@@ -37,13 +38,15 @@ class Metrics:
         return tick % self.record_every == 0
 
     def record(self, tick: int, **values: Any) -> None:
-        """Append one row of the schema's columns (:data:`swarm.results.schema.TIMESERIES`), in its order."""
+        """Append one row of the schema's columns (:data:`swarm.results.schema.TIMESERIES`), in its order; the
+        optional columns (:data:`~swarm.results.schema.OPTIONAL_TIMESERIES`) in every row or in none."""
         if self._last_recorded == tick:
             return
         row = {"tick": tick, **values}
         if not self.series:
-            if tuple(row) != TIMESERIES_COLUMNS:
-                raise ValueError(f"time-series columns {list(row)}, the schema has {list(TIMESERIES_COLUMNS)}")
+            want = tuple(c for c in TIMESERIES_COLUMNS if c in row or c not in OPTIONAL_TIMESERIES)
+            if tuple(row) != want:
+                raise ValueError(f"time-series columns {list(row)}, the schema has {list(want)}")
             self.series = {k: [] for k in row}
         elif set(row) != set(self.series):
             raise ValueError(f"time-series columns changed: {sorted(row)} vs {sorted(self.series)}")

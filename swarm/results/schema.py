@@ -121,9 +121,14 @@ TIMESERIES: dict[str, tuple[ArrowType, str]] = {
     "biggest_group": ("float64", "the biggest group's share of the robots"),
     "all_connected": ("bool_", "one group holds every robot"),
     "mean_pair_distance_m": ("float64", "mean distance between robots"),
+    "explored_correct": ("float64", "with a localisation model only: fraction of free cells some robot's map holds "
+                                    "free where they are (docs/localization.md)"),
 }
 """Time-series columns (``RunResult.timeseries``, ``*.timeseries.parquet`` with a ``key`` column first)."""
 TIMESERIES_COLUMNS: tuple[str, ...] = tuple(TIMESERIES)
+OPTIONAL_TIMESERIES: tuple[str, ...] = ("explored_correct",)
+"""Time-series columns a run records only when they mean something (the last columns of the schema); without
+them a run's series is what it was before they existed."""
 
 # ---------------------------------------------------------------------------- communication ----
 # ``RunResult.comm`` (docs/comm-metrics.md defines every quantity): its own summary and series, so the run's
@@ -213,6 +218,10 @@ LOCALIZATION_RUN_COLUMNS: dict[str, tuple[ArrowType, str]] = {
                                  "true wall (m): a map-alignment error"),
     "explored_correct": ("float64", "share of the free cells some robot's map holds free where they are (the "
                                     "explored fraction counting only correctly known cells)"),
+    **{f"{col}_correct": ("int64", f"first recorded tick at which explored_correct reached {t}")
+       for t, col in THRESHOLD_COLUMNS.items()},
+    "explored_measure": ("string", "'correct' when the run recorded explored_correct over time: reports count its "
+                                   "explored fraction and ticks to thresholds on correctly known cells"),
 }
 """Runs-table columns of a run with a localisation model (``[localization]``; null without one)."""
 RUNS: dict[str, ArrowType] = {
@@ -258,7 +267,10 @@ def summary_columns(summary: Summary | Mapping[str, Any] | None) -> dict[str, An
             "false_free_share": loc["false_free_share"] if loc else None,
             "false_occupied_share": loc["false_occupied_share"] if loc else None,
             "wall_offset_m": loc["wall_offset_mean_m"] if loc else None,
-            "explored_correct": loc["explored_correct"] if loc else None}
+            "explored_correct": loc["explored_correct"] if loc else None,
+            **{f"{col}_correct": loc.get("ticks_to_correct", {}).get(t) if loc else None
+               for t, col in THRESHOLD_COLUMNS.items()},
+            "explored_measure": "correct" if loc and "ticks_to_correct" in loc else None}
 
 
 def timeseries_table(rows: list[dict[str, Any]]) -> "pa.Table":

@@ -46,6 +46,7 @@ from swarm.navigation.avoidance import Avoidance
 from swarm.navigation.maes_drive import MaesDriveFleet
 from swarm.navigation.navigator import NavigationFleet
 from swarm.plugins import explorers as registry
+from swarm.results.mapquality import CorrectlyExplored
 from swarm.results.metrics import CommMetrics, FreeCounts, InfoAges, Metrics
 from swarm.results.result import RunResult
 from swarm.transport import AgentHost, PhaseTimes, TickBatch, make_host
@@ -176,6 +177,7 @@ class Simulation:
                           if loc.on else None)
         self.off_map_scans = 0   # robot-ticks whose lidar wrote nothing for believing itself off the map
         self._pose_errors: dict[str, list[Any]] = {"tick": [], "position_m": [], "heading_rad": []}
+        self._correct = CorrectlyExplored(self.truth.solid) if self.localizer else None
         self.occlude = self.lidar_params.robots_occlude   # robots hide what is behind them from each other's lidar
         monotone = self.lidar_params.mode == "ternary" and self.localizer is None and not self.occlude
         self.free = FreeCounts(n, exact=monotone)  # each map's FREE cells
@@ -526,6 +528,7 @@ class Simulation:
             self._pose_errors["tick"].append(tick)
             self._pose_errors["position_m"].append([round(float(e), 4) for e in err[:, 0]])
             self._pose_errors["heading_rad"].append([round(float(e), 5) for e in err[:, 1]])
+        correct = {} if self._correct is None else {"explored_correct": self._correct.record(tick, self.known)}
         groups = links.groups() if n > 1 else [frozenset({0})]
         self.metrics.record(tick, explored=explored, coverage=self.tracker.coverage,
                             distance_m=float(self.world.distance.sum()), collisions=collisions,
@@ -534,7 +537,7 @@ class Simulation:
                             msgs_dropped=stats.dropped,
                             comm_groups=len(groups), biggest_group=max(len(g) for g in groups) / n,
                             all_connected=len(groups) == 1,
-                            mean_pair_distance_m=links.mean_distance() if n > 1 else 0.0)
+                            mean_pair_distance_m=links.mean_distance() if n > 1 else 0.0, **correct)
         self.comm_metrics.record(tick, stats, self.known, self.tracker.seen_free_cells, groups, self.ages)
 
     def _localization_summary(self) -> dict[str, Any]:
@@ -550,6 +553,7 @@ class Simulation:
                                  "final_heading_error_rad": [float(e) for e in err[:, 1]],
                                  "off_map_scans": self.off_map_scans,
                                  "pose_error_series": self._pose_errors,
+                                 "ticks_to_correct": dict(self._correct.ticks_to),
                                  **map_quality(self.known, self.truth.solid)}}
 
     def _message_counts(self, host: AgentHost) -> dict[str, Any]:

@@ -142,8 +142,13 @@ def _runs_frame(df: pd.DataFrame | None, axes: tuple[str, ...] = ()) -> pd.DataF
     for col in ("ticks", "max_ticks", "explored_target", "explored", "coverage", "t50", "t75", "t90", "t95",
                 "t98", "t99", "replicate", "map_seed", "msgs_sent", "bytes_sent", "msgs_delivered",
                 "bytes_delivered", "msgs_dropped", "collisions_wall", "collisions_robot", *COMM_RUN_COLUMNS,
-                *LOCALIZATION_RUN_COLUMNS):
+                *(c for c in LOCALIZATION_RUN_COLUMNS if c != "explored_measure")):
         df[col] = pd.to_numeric(df[col], errors="coerce")
+    correct = (df["explored_measure"] == "correct").to_numpy()
+    if correct.any():   # runs with a localisation model: explored counts correctly known cells (docs/localization.md)
+        df.loc[correct, "explored"] = df.loc[correct, "explored_correct"]
+        for col in THRESHOLD_COLUMNS.values():
+            df.loc[correct, col] = df.loc[correct, f"{col}_correct"]
     df["error"] = df["error"].fillna("").astype(str)
     df["status"] = df["status"].fillna("failed").astype(str)
     df["stop_reason"] = df["stop_reason"].fillna("error").astype(str)

@@ -261,9 +261,19 @@ def _map_quality(rep: Report) -> str:
              "they are in. Per cell, medians over its runs: the final position error of the pose estimate; the "
              "shares of the known cells that are false free and false occupied; the mean distance from a mapped "
              "wall cell to the nearest true wall; and the share of the free cells some map holds free where they "
-             "are. **The explored fraction of the other tables counts what the lidars have seen; *Explored "
-             "correctly* counts only correctly known cells.**", ""]
+             "are.", "", _explored_convention(rep), ""]
     return "\n".join(lines + _inline(rep.map_quality, rep.map_quality_rows, "map_quality"))
+
+
+def _explored_convention(rep: Report) -> str:
+    runs = rep.data.runs
+    if (runs["explored_measure"] == "correct").any():
+        return ("**For runs with a localisation model, every explored fraction, curve and time to target in this "
+                "report counts only correctly known cells** (the share of the free cells some robot's map holds "
+                "free where they are, recorded with the time series); their stop rule still judged what the "
+                "lidars had seen, so such a run can stop short of the target and count as DNF.")
+    return ("**The explored fraction of the other tables counts what the lidars have seen** (these results predate "
+            "the correctly-known series); *Explored correctly* counts only correctly known cells, at the end.")
 
 
 def _collisions(rep: Report) -> str:

@@ -57,6 +57,16 @@ def iter_parts(store: ResultsStore, runs: pd.DataFrame, columns: Sequence[str]) 
         yield run_index[order], table.take(pa.array(order))
 
 
+def explored_values(table: pa.Table) -> np.ndarray:
+    """The explored fraction of each row: counting only correctly known cells where the run recorded that
+    (a localisation model: ``explored_correct``), else the cells the lidars have seen."""
+    value = table.column("explored").to_numpy(zero_copy_only=False).astype(np.float64)
+    if "explored_correct" in table.column_names:
+        correct = table.column("explored_correct").to_numpy(zero_copy_only=False).astype(np.float64)
+        value = np.where(np.isnan(correct), value, correct)
+    return value
+
+
 @dataclass
 class Sampled:
     """Explored fraction of every run on its cell's grid, and each run's first recorded tick at the target."""
@@ -138,9 +148,9 @@ def sample(store: ResultsStore, runs: pd.DataFrame, cell_id: np.ndarray, every: 
     layout = _Layout.of(runs, cell_id, every)
     buffer = np.full(layout.size, np.nan, dtype=np.float32)
     first_at = np.full(len(runs), -1, dtype=np.int64)
-    for ridx, table in iter_parts(store, runs, ("tick", "explored")):
+    for ridx, table in iter_parts(store, runs, ("tick", "explored", "explored_correct")):
         tick = table.column("tick").to_numpy().astype(np.int64)
-        value = table.column("explored").to_numpy(zero_copy_only=False).astype(np.float64)
+        value = explored_values(table)
         flat, last = layout.slots(ridx, tick)
         buffer[flat[last]] = value[last]
         reached = value >= target

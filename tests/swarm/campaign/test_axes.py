@@ -3,6 +3,7 @@ every run spec and in the runs table, and one-line errors that name the field.""
 
 from __future__ import annotations
 
+import pandas as pd
 import pytest
 
 from maps import InvalidInput
@@ -215,7 +216,12 @@ def test_localization_axes_and_map_quality_reach_the_runs_table_and_report(tmp_p
             "explored_correct"} <= set(header)
     quality = (tmp_path / "report" / "tables" / "map_quality.csv").read_text().splitlines()
     assert quality[0].startswith("localization.model,runs,pose_error_m") and len(quality) == 3
-    assert "## Localisation and map quality" in (tmp_path / "report" / "README.md").read_text()
+    readme = (tmp_path / "report" / "README.md").read_text()
+    assert "## Localisation and map quality" in readme and "counts only correctly known cells" in readme
+    assert runs.loc["odometry", "explored_measure"] == "correct" and pd.isna(runs.loc["perfect", "explored_measure"])
+    report_runs = pd.read_csv(tmp_path / "report" / "tables" / "runs.csv").set_index("localization.model")
+    assert report_runs.loc["odometry", "explored"] == pytest.approx(runs.loc["odometry", "explored_correct"])
+    assert report_runs.loc["perfect", "explored"] == pytest.approx(runs.loc["perfect", "explored"])
     err = error_of(text.replace('"localization.drift_per_m" = [0.05]', '"localization.drift_per_m" = [2]'))
     assert err.field == "grid.localization.drift_per_m[0]"
 

@@ -220,3 +220,19 @@ def test_a_robot_hides_what_is_behind_it_and_does_not_enter_the_map():
     assert open_view[0, row, 24] == SOLID                 # without occlusion the wall is seen through robot 1
     with pytest.raises(InvalidInput, match="robots_occlude"):
         LidarParams(mode="logodds", robots_occlude=True)
+
+
+def test_the_correctly_explored_fraction_is_recorded_over_time_with_a_localisation_model():
+    base = {"map": {"kind": "building", "size": 30, "seed": 3}, "robots": {"count": 3, "spawn": "together",
+                                                                             "spawn_seed": 1},
+            "seed": 5, "algorithm": {"name": "frontier"}, "stop": {"max_ticks": 600}, "lidar": {"mode": "logodds"}}
+    perfect = swarm.run(base)
+    assert "explored_correct" not in perfect.timeseries
+    bounded = swarm.run({**base, "localization": {"model": "bounded", "sigma_m": 0.05}})
+    ts, loc = bounded.timeseries, bounded.summary["localization"]
+    correct = np.asarray(ts["explored_correct"])
+    assert len(correct) == len(ts["tick"]) and correct[-1] == loc["explored_correct"]
+    assert (correct <= np.asarray(ts["explored"]) + 0.05).all() and correct[-1] > 0.3
+    for key, tick in loc["ticks_to_correct"].items():   # the first recorded tick at or above each threshold
+        reached = [t for t, v in zip(ts["tick"], correct) if v >= float(key)]
+        assert tick == (reached[0] if reached else None), key
