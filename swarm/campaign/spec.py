@@ -598,6 +598,7 @@ def campaign_from_mapping(raw: Mapping[str, Any], base: str = "") -> CampaignSpe
             or robot_every % every):
         raise InvalidInput("output.robot_series_every", robot_every, f"0 (no per-robot rows) or a multiple of "
                                                                      f"timeseries_every ({every}) in ticks")
+    _check_file_entries(grid["map"])
     uses_files = any("files" in opt.value for opt in grid["map"] if isinstance(opt.value, Mapping))
     spec = CampaignSpec(name=name, seed=seed, replicates=reps, grid=grid, run=dict(run_base), stop=dict(stop),
                         output=dict(output), exclude=(), include=(), description=str(head.get("description", "")),
@@ -848,6 +849,21 @@ def _files_option(table: dict[str, Any], where: str, replicates: int, base: str)
     if params:
         value["params"] = dict(params)
     return Option(label, value)
+
+
+def _check_file_entries(options: tuple[Option, ...]) -> None:
+    """Two map entries over files must not share a file with the same params: their runs would be the same
+    runs (one key) under two labels."""
+    owner: dict[tuple[str, str], str] = {}
+    for opt in options:
+        if not (isinstance(opt.value, Mapping) and "files" in opt.value):
+            continue
+        params = json.dumps(opt.value.get("params", {}), sort_keys=True)
+        for path in opt.value["files"]:
+            other = owner.setdefault((path, params), opt.label)
+            if other != opt.label:
+                raise InvalidInput("grid.map", opt.label, f"map entries over distinct files ({clip(Path(path).name, 40)} "
+                                                          f"is also in {clip(other, 30)}; or give other params)")
 
 
 def _matches(cell: Mapping[str, Option], rule: Mapping[str, Any]) -> bool:

@@ -97,3 +97,17 @@ def test_bad_file_entries_name_their_key(campaign, old, new, needle):
     with pytest.raises(InvalidInput, match=None) as info:
         load_campaign(campaign)
     assert needle in str(info.value), str(info.value)
+
+
+def test_two_entries_may_share_a_file_only_with_other_params(campaign):
+    two = ('map = [{files = "plans/*.json", label = "all"}, '
+           '{files = "plans/handmade_[hs]*.json", label = "two"PARAMS}]')
+    old = 'map = [{files = "plans/*.json", label = "houseexpo", params = {scale = 2.5}}]'
+    campaign.write_text(SPEC.replace(old, two.replace("PARAMS", "")))
+    with pytest.raises(InvalidInput, match="grid.map: got 'two'.*handmade_hall_three_rooms.json is also in all"):
+        load_campaign(campaign)
+    campaign.write_text(SPEC.replace(old, two.replace("PARAMS", ", params = {scale = 2.5}")))
+    spec = load_campaign(campaign)
+    assert spec.run_count() == 2 * 2 * 3 and len({k for _, k in spec.iter_keys()}) == 12
+    paths = {(r.cell["map"], r.replicate): Path(r.spec.map.path).name for r in spec.runs()}
+    assert paths[("all", 2)] == "handmade_two_rooms.json" and paths[("two", 2)] == "handmade_hall_three_rooms.json"
