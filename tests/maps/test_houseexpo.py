@@ -8,12 +8,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 import swarm
 from maps import InvalidInput
 from maps.houseexpo import EXPLORABLE_SCALE, MAX_SIDE_M, MAX_VERTS
 from maps.io import load_map
 from swarm.cli import main
+from .test_fuzz_inputs import EDITS, fuzz, load_or_refuse, mutate
 from .test_input_errors import cli_error
 
 PLANS = Path(__file__).resolve().parents[2] / "examples" / "plans"
@@ -156,3 +159,25 @@ def test_at_scale_one_the_default_robot_cannot_leave_the_hallway_at_explorable_s
         explored[scale] = swarm.run(spec).timeseries["explored"]
     assert explored[1.0][-1] == explored[1.0][0], "stuck at scale 1"
     assert explored[EXPLORABLE_SCALE][-1] > explored[EXPLORABLE_SCALE][0] + 0.3, explored[EXPLORABLE_SCALE]
+
+
+COORD = st.one_of(st.floats(-60, 60, allow_nan=False), st.integers(-60, 60),
+                  st.sampled_from([float("nan"), float("inf"), 1e300, -0.0, True, None, "1", [1]]))
+
+
+@fuzz(200)
+@given(verts=st.lists(st.lists(COORD, min_size=0, max_size=3), min_size=0, max_size=40),
+       extra=st.dictionaries(st.sampled_from(["id", "room_num", "room_category", "bbox"]),
+                             st.one_of(st.none(), st.integers(-5, 5), st.text(max_size=4), st.lists(st.integers()))))
+def test_random_plans_import_or_are_refused_in_one_line(tmp_path_factory, verts, extra):
+    path = tmp_path_factory.getbasetemp() / "fuzz_plan.json"
+    path.write_text(json.dumps({"verts": verts, **extra}))
+    load_or_refuse("houseexpo plan", load_map, path)
+
+
+@fuzz(150)
+@given(edits=EDITS)
+def test_mutated_plans(tmp_path_factory, edits):
+    path = tmp_path_factory.getbasetemp() / "mutated_plan.json"
+    path.write_bytes(mutate((PLANS / "handmade_hall_three_rooms.json").read_bytes(), edits))
+    load_or_refuse("houseexpo mutated", load_map, path)

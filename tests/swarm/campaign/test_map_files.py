@@ -72,6 +72,11 @@ def test_run_and_report_end_to_end(campaign, tmp_path, capsys):
     assert main(["campaign", "report", str(out), "--quiet", "--no-cell-figures"]) == 0
     readme = (out / "report" / "README.md").read_text()
     assert "houseexpo" in readme
+    import csv
+
+    with open(out / "report" / "tables" / "paired.csv", newline="") as f:
+        (row,) = list(csv.DictReader(f))
+    assert (row["map"], row["a"], row["b"], row["pairs"], row["maps"]) == ("houseexpo", "frontier", "greed", "3", "3")
 
 
 @pytest.mark.parametrize("change, needles", [
