@@ -1,5 +1,5 @@
 """Map files: the lossless ``.npz`` format, and importers for images with a legend, MAES PGM and xBOA CSV
-(ROS map_server YAML files: :mod:`maps.ros`).
+(ROS map_server YAML files: :mod:`maps.ros`; HouseExpo JSON plans: :mod:`maps.houseexpo`).
 
 Every reader turns anything malformed into one :class:`InvalidInput` naming the file and what is wrong;
 every writer writes to a temporary file and renames it, so an existing file is never left half-written.
@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from swarm.base.errors import InvalidInput, field_name, short_repr, shorten
-from . import ros
+from . import houseexpo, ros
 from .materials import AIR, DEFAULT_TABLE, check_known_material, check_material_name
 from .model import CELL_M, CELLS_PER_TILE, Map, graph_from_json, graph_to_json
 
@@ -563,6 +563,23 @@ def import_ros(path: str | Path, material: str = "concrete", border: int = 0,
                            "mode": info.mode, "origin": origin, "material": material, "border": border})
 
 
+# ------------------------------------------------------------------------------------- HouseExpo ----
+def import_houseexpo(path: str | Path, material: str = "concrete", border: int = 0,
+                     border_material: str = "concrete", scale: float = 1.0) -> Map:
+    """A HouseExpo JSON floor plan as a swarm map (the rules: :mod:`maps.houseexpo`); walls get ``material``,
+    coordinates are multiplied by ``scale``."""
+    check_known_material(material)
+    _check_border(border, border_material)
+    scale = houseexpo.check_scale(scale)
+    path = Path(path)
+    plan = houseexpo.parse_plan(read_file_bytes(path, "map file", houseexpo.MAX_BYTES), str(path), scale)
+    solid, params = houseexpo.rasterise(plan)
+    shift = border * CELLS_PER_TILE * CELL_M
+    params["origin"] = [params["origin"][0] - shift, params["origin"][1] - shift]
+    return _finish_import(solid, solid.astype(np.uint8), (AIR, material), 1, border, border_material, str(path),
+                          {**params, "material": material, "border": border})
+
+
 def save_ros(m: Map, yaml_path: str | Path) -> tuple[Path, Path]:
     """Write ``m`` as ROS map_server files, as map_saver writes a trinary map: ``yaml_path`` and the image next
     to it (same name, ``.pgm``). Both or neither: if the YAML cannot be written, the new image is removed."""
@@ -580,11 +597,18 @@ def save_ros(m: Map, yaml_path: str | Path) -> tuple[Path, Path]:
 
 def load_map(path: str | Path, legend: str | Path | None = None, **options: Any) -> Map:
     """Open any supported map file by its suffix: ``.npz``, ``.csv``, ``.yaml``/``.yml`` (ROS map_server),
-    ``.pgm`` (ASCII P2, or an image with a legend), or an image with a legend."""
+    ``.json`` (HouseExpo), ``.pgm`` (ASCII P2, or an image with a legend), or an image with a legend."""
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".npz":
         return load_npz(path)
+    if "scale" in options and suffix != ".json":
+        raise InvalidInput("scale", options["scale"], "only for HouseExpo .json plans")
+    if suffix == ".json":
+        if legend is not None:
+            raise InvalidInput("legend", str(legend), "no legend for a HouseExpo .json plan (walls take the "
+                                                      "material option)")
+        return import_houseexpo(path, **options)
     if suffix == ".csv":
         return import_csv(path, **options)
     if suffix in (".yaml", ".yml"):

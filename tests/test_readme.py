@@ -5,7 +5,7 @@ A command too costly to run here is either shrunk by flags it takes (``SHRINK``:
 skipped with the reason (``SKIP``); both tables must name commands the README still has, so neither can
 hide a command that changed. Fixtures stand in for the files a reader would have: ``grid.toml`` is the
 README's campaign spec cut to 8 runs of 80 ticks, ``run.toml`` the README's run spec, and a tiny
-``floor.png`` with its legend.
+``floor.png`` with its legend, and ``plan.json``, a hand-made HouseExpo plan from ``examples/plans/``.
 """
 
 from __future__ import annotations
@@ -186,6 +186,7 @@ def workspace(tmp_path_factory):
     floor = np.full((40, 40, 3), 255, np.uint8)
     floor[:2], floor[-2:], floor[:, :2], floor[:, -2:] = 0, 0, 0, 0
     Image.fromarray(floor).save(ws / "floor.png")
+    (ws / "plan.json").write_bytes((ROOT / "examples" / "plans" / "handmade_two_rooms.json").read_bytes())
     return ws
 
 

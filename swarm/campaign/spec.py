@@ -8,6 +8,7 @@ replicates = 3
 
 [grid]                                   # lists to cross; every entry may be a plain value or a table
 map = ["building", "cave"]               # or {kind = "building", params = {door_width = 3}, label = "b3"}
+                                         # or {files = "plans/*.json", label = "houseexpo", params = {scale = 2.5}}
 size = [50, 100]
 robots = [2, 8]
 spawn = ["together", "random"]
@@ -47,6 +48,15 @@ seed derive from (campaign seed, map kind, size, replicate) only, through :func:
 Every algorithm, robot count and comm model therefore meets the same worlds and starting points (paired
 comparisons), and nothing depends on the order runs execute in. Each run is keyed by the hash of its
 canonical spec (:attr:`swarm.sim.spec.RunSpec.key`).
+
+**Map files.** A map entry ``{files = "<glob>", label = "..."}`` is one grid value over a folder of map files
+(any format :func:`maps.io.load_map` reads; the glob is relative to the campaign file's folder, ``**``
+allowed). The matches are sorted, and replicate ``r`` runs on file ``r mod n``: replicate r is the same
+world (file and seeds) for every algorithm, robot count and radio, so paired statistics stay paired by map.
+``replicates`` must be at least the number of files (every file is run), ideally a multiple of it. A glob
+that matches nothing is an error. The run specs hold absolute paths, so the folder (recorded as the first
+line of the stored spec, ``# swarm: campaign folder = "..."``) decides the run keys; ``size`` is ignored
+by file maps (give one value). ``params`` may hold a HouseExpo plan's ``scale`` (:mod:`maps.houseexpo`).
 
 **Axes.** Any radio or comm parameter can be a grid dimension of its own, named ``radio.<parameter>`` or
 ``comm.<parameter>`` (a field of :class:`radio.RadioConfig` other than ``model``, or of
@@ -96,6 +106,10 @@ DEFAULT_ROBOT_SERIES_EVERY = 10
 SECTIONS = ("campaign", "grid", "run", "stop", "output", "exclude", "include")
 SPEC_FORMAT = 1
 MAX_OPTIONS = 10_000
+MAX_MAP_FILES = 10_000
+"""Files one ``{files = "<glob>"}`` map entry may match."""
+FOLDER_LINE = "# swarm: campaign folder = "
+"""First line of a stored spec whose map entries name files: the folder their globs are relative to."""
 """Values per grid dimension."""
 MAX_INCLUDED_CELLS = 100_000
 """Cells all ``[[include]]`` rules may add (they are listed, not counted from the grid)."""
@@ -196,6 +210,8 @@ class CampaignSpec:
     include: tuple[dict[str, Any], ...] = ()
     description: str = ""
     source: str = ""
+    base: str = ""
+    """The folder ``{files = ...}`` map globs are relative to (the campaign file's; empty: the current one)."""
 
     @property
     def timeseries_every(self) -> int:
@@ -318,6 +334,8 @@ class CampaignSpec:
 
     @staticmethod
     def _new_template(spec: RunSpec) -> Any:
+        if spec.map.kind == "file":
+            return spec  # the file may change with the replicate (a {files = ...} entry): build each run's spec
         try:
             tpl = _Template(spec)
         except _NoTemplate:
@@ -388,7 +406,11 @@ class CampaignSpec:
         for opt in self.grid.get(dim, ()):
             if value == opt.label or value == opt.value:
                 return opt
-        return _parse_option(dim, value, where, self.grid.get("radio"))
+        return _parse_option(dim, value, where, self.grid.get("radio"), self.reps_and_base)
+
+    @property
+    def reps_and_base(self) -> tuple[int, str]:
+        return self.replicates, self.base
 
     def run_for(self, cell: Mapping[str, Option], rep: int, index: int = 0) -> Run:
         """The run of a grid cell at replicate ``rep`` (``index``: its position in :meth:`runs`), its spec
@@ -399,6 +421,9 @@ class CampaignSpec:
         spec: dict[str, Any] = json.loads(json.dumps(self.run))
         spec["seed"] = seeds["run_seed"]
         spec["map"] = {**kind_opt.value, "size": size, "seed": seeds["map_seed"]}
+        if "files" in spec["map"]:  # a folder of maps: replicate r runs on file r mod n (module docstring)
+            files = spec["map"].pop("files")
+            spec["map"]["path"] = files[rep % len(files)]
         spec["robots"] = {**spec.get("robots", {}), "count": cell["robots"].value, "spawn": cell["spawn"].value,
                           "spawn_seed": seeds["spawn_seed"]}
         spec["algorithm"] = cell["algorithm"].value
@@ -455,13 +480,33 @@ def _world_seeds(campaign_seed: int, kind: str, size_key: int | str, replicate: 
 
 # -------------------------------------------------------------------------------------- parsing ----
 def load_campaign(path: str | Path, max_runs: int | None = MAX_RUNS) -> CampaignSpec:
-    """Read, parse and validate the campaign TOML at ``path`` (see :func:`parse_campaign`)."""
-    return parse_campaign(read_user_file(path, "spec", "campaign TOML"), str(path), max_runs=max_runs)
+    """Read, parse and validate the campaign TOML at ``path`` (see :func:`parse_campaign`); ``{files = ...}``
+    map globs are relative to its folder."""
+    text = read_user_file(path, "spec", "campaign TOML")
+    return parse_campaign(text, str(path), max_runs=max_runs, base=str(Path(path).resolve().parent))
 
 
-def parse_campaign(text: str, source: str = "<string>", max_runs: int | None = MAX_RUNS) -> CampaignSpec:
+def folder_of(text: str) -> str | None:
+    """The folder a stored spec's first line records (:data:`FOLDER_LINE`), or None."""
+    first = text.split("\n", 1)[0]
+    if first.startswith(FOLDER_LINE):
+        try:
+            value = json.loads(first[len(FOLDER_LINE):])
+        except ValueError:
+            return None
+        return value if isinstance(value, str) else None
+    return None
+
+
+def parse_campaign(text: str, source: str = "<string>", max_runs: int | None = MAX_RUNS,
+                   base: str | None = None) -> CampaignSpec:
     """Parse a campaign TOML and validate it before anything runs: its shape, its size (at most
-    ``max_runs`` runs; None: no limit) and one run spec per cell."""
+    ``max_runs`` runs; None: no limit) and one run spec per cell. ``base``: the folder ``{files = ...}`` map
+    globs are relative to (default: the one the text's first line records, else the current folder)."""
+    recorded = folder_of(text)
+    if recorded is not None:
+        text = text.split("\n", 1)[1] if "\n" in text else ""
+        base = recorded if base is None else base
     try:
         raw = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -469,7 +514,10 @@ def parse_campaign(text: str, source: str = "<string>", max_runs: int | None = M
     except (RecursionError, ValueError) as exc:  # nested too deeply; an integer of over 4300 digits
         raise InvalidInput("spec", source, f"valid TOML ({type(exc).__name__}: {clip(str(exc), 100)})") from None
     try:
-        spec = dataclasses.replace(campaign_from_mapping(raw), source=text)
+        spec = campaign_from_mapping(raw, base or "")
+        if spec.base:  # map entries name files: record their folder with the text (status, report, resume)
+            text = f"{FOLDER_LINE}{json.dumps(spec.base)}\n{text}"
+        spec = dataclasses.replace(spec, source=text)
         spec.validate(max_runs)
     except InvalidInput:
         raise
@@ -480,8 +528,9 @@ def parse_campaign(text: str, source: str = "<string>", max_runs: int | None = M
     return spec
 
 
-def campaign_from_mapping(raw: Mapping[str, Any]) -> CampaignSpec:
-    """The spec's shape and grid options checked, without building any run spec (see :func:`parse_campaign`)."""
+def campaign_from_mapping(raw: Mapping[str, Any], base: str = "") -> CampaignSpec:
+    """The spec's shape and grid options checked, without building any run spec (see :func:`parse_campaign`);
+    ``base``: the folder ``{files = ...}`` map globs are relative to (empty: the current folder)."""
     for key in raw:
         if key not in SECTIONS:
             raise InvalidInput(clip(key), raw[key], f"a section of a campaign spec: {', '.join(SECTIONS)}")
@@ -519,7 +568,8 @@ def campaign_from_mapping(raw: Mapping[str, Any]) -> CampaignSpec:
             raise InvalidInput(f"grid.{dim}", values, "a non-empty list")
         if len(values) > MAX_OPTIONS:
             raise InvalidInput(f"grid.{dim}", f"{len(values):,} values", f"at most {MAX_OPTIONS:,} values")
-        options = tuple(_parse_option(dim, v, f"grid.{dim}[{i}]", grid.get("radio")) for i, v in enumerate(values))
+        options = tuple(_parse_option(dim, v, f"grid.{dim}[{i}]", grid.get("radio"), (reps, base))
+                        for i, v in enumerate(values))
         labels = [o.label for o in options]
         if len(set(labels)) != len(labels):
             dup = next(label for i, label in enumerate(labels) if label in labels[:i])
@@ -548,11 +598,14 @@ def campaign_from_mapping(raw: Mapping[str, Any]) -> CampaignSpec:
             or robot_every % every):
         raise InvalidInput("output.robot_series_every", robot_every, f"0 (no per-robot rows) or a multiple of "
                                                                      f"timeseries_every ({every}) in ticks")
+    _check_file_entries(grid["map"])
+    uses_files = any("files" in opt.value for opt in grid["map"] if isinstance(opt.value, Mapping))
+    spec = CampaignSpec(name=name, seed=seed, replicates=reps, grid=grid, run=dict(run_base), stop=dict(stop),
+                        output=dict(output), exclude=(), include=(), description=str(head.get("description", "")),
+                        base=str(Path(base or ".").resolve()) if uses_files else "")
     exclude = tuple(_rules(raw, "exclude", grid))
     include = tuple(_rules(raw, "include", grid))
-    return CampaignSpec(name=name, seed=seed, replicates=reps, grid=grid, run=dict(run_base), stop=dict(stop),
-                        output=dict(output), exclude=exclude, include=include,
-                        description=str(head.get("description", "")))
+    return dataclasses.replace(spec, exclude=exclude, include=include)
 
 
 def _table(raw: Mapping[str, Any], name: str) -> dict[str, Any]:
@@ -688,7 +741,8 @@ def _parse_axis(axis: str, value: Any, where: str, radio: tuple[Option, ...] | N
     return Option(label, value)
 
 
-def _parse_option(dim: str, value: Any, where: str, radio: tuple[Option, ...] | None = None) -> Option:
+def _parse_option(dim: str, value: Any, where: str, radio: tuple[Option, ...] | None = None,
+                  reps_and_base: tuple[int, str] = (1, "")) -> Option:
     """Turn one grid entry into an Option, validating it in isolation so errors name its key (``radio``:
     the grid's radio entries, against which a radio parameter axis is checked)."""
     from swarm.base.params import from_mapping
@@ -702,6 +756,8 @@ def _parse_option(dim: str, value: Any, where: str, radio: tuple[Option, ...] | 
             table = {"kind": value} if isinstance(value, str) else dict(value) if isinstance(value, Mapping) else None
             if table is None:
                 raise InvalidInput(where, value, "a map kind or a table {kind, params, label}")
+            if "files" in table:
+                return _files_option(table, where, *reps_and_base)
             label = table.pop("label", table.get("kind"))
             if "size" in table or "seed" in table:
                 raise InvalidInput(where, value, "kind, params, path and label only (size and seeds come from the grid)")
@@ -749,6 +805,65 @@ def _parse_option(dim: str, value: Any, where: str, radio: tuple[Option, ...] | 
             raise
         raise InvalidInput(f"{where}: {exc.field}", exc.value, exc.allowed) from None
     raise InvalidInput(where, value, f"a grid dimension: {', '.join(DIMENSIONS)}")
+
+
+def _files_option(table: dict[str, Any], where: str, replicates: int, base: str) -> Option:
+    from swarm.sim.spec import MapSpec
+
+    """``{files = "<glob>", label = "..."}``: the sorted absolute paths of the files the glob matches, relative
+    to ``base`` (see the module docstring, "Map files")."""
+    pattern = table.pop("files")
+    label = table.pop("label", pattern)
+    params = table.pop("params", {})
+    if table:
+        raise InvalidInput(where, sorted(table), "files, label and params only in a map entry over files")
+    if not isinstance(params, Mapping):
+        raise InvalidInput(f"{where}.params", params, "a table, e.g. {scale = 2.5} (HouseExpo .json plans)")
+    if not isinstance(pattern, str) or not pattern.strip() or "\x00" in pattern:
+        raise InvalidInput(f"{where}.files", pattern, "a glob of map files relative to the campaign file, "
+                                                      "e.g. \"plans/*.json\"")
+    if not isinstance(label, str) or not label:
+        raise InvalidInput(f"{where}.label", label, "a non-empty label")
+    folder = Path(base or ".").resolve()
+    if Path(pattern).is_absolute():
+        raise InvalidInput(f"{where}.files", pattern, "a glob relative to the campaign file's folder")
+    try:
+        found = sorted(str(p.resolve()) for p in folder.glob(pattern) if p.is_file())
+    except (ValueError, OSError) as exc:
+        raise InvalidInput(f"{where}.files", pattern, f"a valid glob ({clip(str(exc), 60)})") from None
+    if not found:
+        raise InvalidInput(f"{where}.files", pattern, f"a glob matching at least one map file in {clip(str(folder), 80)}")
+    if len(found) > MAX_MAP_FILES:
+        raise InvalidInput(f"{where}.files", f"{len(found)} files", f"at most {MAX_MAP_FILES} files")
+    if replicates < len(found):
+        raise InvalidInput("campaign.replicates", replicates, f"at least {len(found)}: replicate r runs on file "
+                                                              f"r mod {len(found)} of {clip(pattern, 40)}, so "
+                                                              "fewer would leave files out")
+    for path in found:  # each file's params checked here, so the error names this entry, not a run
+        try:
+            MapSpec(kind="file", path=path, params=dict(params))
+        except InvalidInput as exc:
+            raise InvalidInput(f"{where}.{exc.field.removeprefix('map.')}", exc.value,
+                               f"{exc.allowed} ({clip(Path(path).name, 40)})") from None
+    value: dict[str, Any] = {"kind": "file", "files": found}
+    if params:
+        value["params"] = dict(params)
+    return Option(label, value)
+
+
+def _check_file_entries(options: tuple[Option, ...]) -> None:
+    """Two map entries over files must not share a file with the same params: their runs would be the same
+    runs (one key) under two labels."""
+    owner: dict[tuple[str, str], str] = {}
+    for opt in options:
+        if not (isinstance(opt.value, Mapping) and "files" in opt.value):
+            continue
+        params = json.dumps(opt.value.get("params", {}), sort_keys=True)
+        for path in opt.value["files"]:
+            other = owner.setdefault((path, params), opt.label)
+            if other != opt.label:
+                raise InvalidInput("grid.map", opt.label, f"map entries over distinct files ({clip(Path(path).name, 40)} "
+                                                          f"is also in {clip(other, 30)}; or give other params)")
 
 
 def _matches(cell: Mapping[str, Option], rule: Mapping[str, Any]) -> bool:

@@ -107,18 +107,22 @@ def show_cmd(path: Path, output: Path | None, legend: Path | None, scale: int | 
 @map_group.command("import")
 @click.argument("path", type=PathType(exists=True, dir_okay=False, path_type=Path))
 @click.option("--legend", type=PathType(exists=True, dir_okay=False, path_type=Path),
-              help="Legend TOML mapping colours to materials (images); not needed for .pgm (MAES), .csv (xBOA) "
-                   "and .yaml (ROS map_server).")
+              help="Legend TOML mapping colours to materials (images); not needed for .pgm (MAES), .csv (xBOA), "
+                   ".yaml (ROS map_server) and .json (HouseExpo).")
 @click.option("-o", "--output", type=PathType(dir_okay=False, path_type=Path), required=True,
               help="Write the map (.npz).")
 @click.option("--png", type=PathType(dir_okay=False, path_type=Path), help="Also write a picture.")
-@click.option("--material", default=None, help="Wall material for .pgm/.csv/.yaml walls (default concrete).")
+@click.option("--material", default=None, help="Wall material for .pgm/.csv/.yaml/.json walls (default concrete).")
 @click.option("--border", type=IntRange(0, 10), default=0, show_default=True,
               help="Add a wall border this many tiles thick.")
 @click.option("--border-material", default="concrete", show_default=True)
+@click.option("--plan-scale", type=float, default=None,
+              help="HouseExpo .json: multiply the plan's metres (default 1; 2.5 lets the default robot through "
+                   "0.8 m doors).")
 def import_cmd(path: Path, legend: Path | None, output: Path, png: Path | None, material: str | None, border: int,
-               border_material: str) -> None:
-    """Import a floor plan: an image with a legend, a MAES ASCII PGM, an xBOA 0/1 CSV or a ROS map_server YAML."""
+               border_material: str, plan_scale: float | None) -> None:
+    """Import a floor plan: an image with a legend, a MAES ASCII PGM, an xBOA 0/1 CSV, a ROS map_server YAML or a
+    HouseExpo JSON plan."""
     from maps.io import load_map, save_npz
     from maps.materials import check_known_material
     from maps.render import save_png
@@ -129,15 +133,21 @@ def import_cmd(path: Path, legend: Path | None, output: Path, png: Path | None, 
                                    ("--legend", legend, None)):
             if value != unset:
                 raise InvalidInput(flag, str(value),
-                                   "only for .pgm, .csv, .yaml and image files (a .npz is a swarm map)")
+                                   "only for .pgm, .csv, .yaml, .json and image files (a .npz is a swarm map)")
     check_known_material(border_material, "--border-material")
     options: dict[str, object] = {"border": border, "border_material": border_material}
     if material is not None:
         if legend is not None:
             raise InvalidInput("--material", material,
-                               "only for .pgm, .csv and .yaml files (images take materials from the legend)")
+                               "only for .pgm, .csv, .yaml and .json files (images take materials from the legend)")
         check_known_material(material, "--material")
         options["material"] = material
+    if plan_scale is not None:
+        if path.suffix.lower() != ".json":
+            raise InvalidInput("--plan-scale", plan_scale, "only for HouseExpo .json plans")
+        from maps.houseexpo import check_scale
+
+        options["scale"] = check_scale(plan_scale, "--plan-scale")
     m = load_map(path, legend=legend, **options)
     click.echo(m.summary())
     with writing("--output", output):

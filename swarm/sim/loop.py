@@ -71,7 +71,7 @@ def build_map(spec: RunSpec, map_seed: int) -> Map:
     if spec.map.kind == "file":
         from maps.io import load_map
 
-        return load_map(Path(spec.map.path))
+        return load_map(Path(spec.map.path), **spec.map.params)  # params: only a .json plan's scale
     return generate(spec.map.kind, spec.map.size if isinstance(spec.map.size, int) else tuple(spec.map.size),
                     map_seed, spec.map.params)
 

@@ -51,6 +51,14 @@ class MapSpec:
         if self.kind == "file":
             if not isinstance(self.path, str) or not self.path:
                 raise InvalidInput("map.path", self.path, "a map file path when map.kind = 'file'")
+            if isinstance(self.params, Mapping) and self.params:
+                from maps.houseexpo import check_scale
+
+                for key, value in self.params.items():
+                    if key != "scale" or not self.path.lower().endswith(".json"):
+                        raise InvalidInput(f"map.params.{key}", value, "only scale, for a HouseExpo .json plan "
+                                                                       "(other map files take no parameters)")
+                    check_scale(value, "map.params.scale")
         else:
             from maps import parse_size, params_for
 

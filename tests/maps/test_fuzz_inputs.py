@@ -134,7 +134,7 @@ VALID_CSV = "1,1,1,1,1\n1,0,0,0,1\n1,0,1,0,1\n1,0,0,0,1\n1,1,1,1,1\n"
 VALID_PGM_TOKENS = ["P2", "5", "5", "255"] + [str(v) for v in
                                               [0] * 6 + [255, 255, 255, 0, 0, 255, 0, 255, 0, 0, 255, 255, 255] + [0] * 6]
 LEGEND_TEXT = '[colours]\n"#ffffff" = "free"\n"#000000" = "concrete"\n"#a0522d" = "brick"\n'
-SUFFIXES = [".npz", ".csv", ".pgm", ".png", ".jpg", ".bmp", ".gif", ".tif", ".webp", ".txt", ""]
+SUFFIXES = [".npz", ".csv", ".json", ".pgm", ".png", ".jpg", ".bmp", ".gif", ".tif", ".webp", ".txt", ""]
 
 
 @pytest.fixture(scope="module")

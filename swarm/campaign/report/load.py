@@ -19,7 +19,7 @@ import pandas as pd
 from swarm.base.errors import InvalidInput
 
 from swarm.results.schema import COMM_RUN_COLUMNS, LOCALIZATION_RUN_COLUMNS, RUNS, THRESHOLD_COLUMNS
-from ..spec import CampaignSpec, campaign_from_mapping, is_axis
+from ..spec import CampaignSpec, campaign_from_mapping, folder_of, is_axis
 from ..store import ResultsStore
 
 DIMS = ("map", "size", "robots", "spawn", "algorithm", "radio", "comm", "transport")
@@ -109,7 +109,7 @@ def load(results_dir: str | Path) -> CampaignData:
 def _read_spec(source: str) -> tuple[CampaignSpec | None, str]:
     """The spec without validating its runs; a spec this installation cannot read still gets a report."""
     try:
-        return campaign_from_mapping(tomllib.loads(source)), ""
+        return campaign_from_mapping(tomllib.loads(source), folder_of(source) or ""), ""
     except (InvalidInput, tomllib.TOMLDecodeError) as exc:
         return None, str(exc)
 
