@@ -117,8 +117,8 @@ def show_cmd(path: Path, output: Path | None, legend: Path | None, scale: int | 
               help="Add a wall border this many tiles thick.")
 @click.option("--border-material", default="concrete", show_default=True)
 @click.option("--plan-scale", type=float, default=None,
-              help="HouseExpo .json: multiply the plan's metres (default 1; 2.5 lets the default robot through "
-                   "0.8 m doors).")
+              help="HouseExpo .json and ROS .yaml: multiply the map's metres (default 1; 2.5 lets the default "
+                   "robot through HouseExpo's 0.8 m doors, 1.5 through Explore-Bench's 1.4 m ones).")
 def import_cmd(path: Path, legend: Path | None, output: Path, png: Path | None, material: str | None, border: int,
                border_material: str, plan_scale: float | None) -> None:
     """Import a floor plan: an image with a legend, a MAES ASCII PGM, an xBOA 0/1 CSV, a ROS map_server YAML or a
@@ -143,8 +143,8 @@ def import_cmd(path: Path, legend: Path | None, output: Path, png: Path | None, 
         check_known_material(material, "--material")
         options["material"] = material
     if plan_scale is not None:
-        if path.suffix.lower() != ".json":
-            raise InvalidInput("--plan-scale", plan_scale, "only for HouseExpo .json plans")
+        if path.suffix.lower() not in (".json", ".yaml", ".yml"):
+            raise InvalidInput("--plan-scale", plan_scale, "only for HouseExpo .json plans and ROS .yaml maps")
         from maps.houseexpo import check_scale
 
         options["scale"] = check_scale(plan_scale, "--plan-scale")

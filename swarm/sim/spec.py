@@ -55,9 +55,10 @@ class MapSpec:
                 from maps.houseexpo import check_scale
 
                 for key, value in self.params.items():
-                    if key != "scale" or not self.path.lower().endswith(".json"):
-                        raise InvalidInput(f"map.params.{key}", value, "only scale, for a HouseExpo .json plan "
-                                                                       "(other map files take no parameters)")
+                    if key != "scale" or not self.path.lower().endswith((".json", ".yaml", ".yml")):
+                        raise InvalidInput(f"map.params.{key}", value, "only scale, for a HouseExpo .json plan or "
+                                                                       "a ROS .yaml map (other map files take no "
+                                                                       "parameters)")
                     check_scale(value, "map.params.scale")
         else:
             from maps import parse_size, params_for

@@ -376,3 +376,25 @@ def test_explore_bench_map_is_explored_through_the_run_path(explore_bench_loop):
     explored = result.timeseries["explored"]
     assert explored[0] < 0.3 and explored[-1] > 0.7, explored
     assert result.summary["explored"] == explored[-1]
+
+
+def test_scale_lets_the_default_robot_through_explore_bench_doors(tmp_path):
+    """Two 6 m rooms joined by a 1.4 m door (Explore-Bench's ``room`` maps): it resamples to a 1 m gap the
+    default robot cannot plan through; at scale 1.5 the gap is 2 m and the second room is explored."""
+    pixels = np.full((80, 140), 0, dtype=np.uint8)   # 0.1 m pixels: 8 x 14 m of wall
+    pixels[10:70, 10:68] = 254                        # room A, 5.8 x 6 m
+    pixels[10:70, 72:130] = 254                       # room B
+    pixels[33:47, 68:72] = 254                        # the 1.4 m door in the 0.4 m wall between them
+    path = write_ros(tmp_path, pixels, resolution=0.1)
+    base = {"seed": 1, "robots": {"count": 1, "spawn_seed": 1}, "stop": {"max_ticks": 1500}}
+    narrow = swarm.run({**base, "map": {"kind": "file", "path": str(path)}})
+    wide = swarm.run({**base, "map": {"kind": "file", "path": str(path), "params": {"scale": 1.5}}})
+    assert narrow.summary["stop_reason"] == "stalled" and narrow.summary["explored"] < 0.9   # seen through the door
+    assert wide.summary["stop_reason"] == "explored" and wide.summary["explored"] >= 0.99
+    m = load_map(path, scale=1.5)
+    assert m.params["scale"] == 1.5 and m.shape == (24, 42)   # 8 x 14 m at 1.5: 12 x 21 m in 0.5 m cells
+
+
+def test_scale_is_refused_for_maps_without_metres_to_scale(tmp_path):
+    with pytest.raises(InvalidInput, match="scale"):
+        load_map(write_pgm(tmp_path / "m.pgm", framed([[254, 254]])), scale=1.5)
