@@ -39,8 +39,26 @@ from swarm.base.types import (CELL_M, FREE, ROBOT_RADIUS_M, SOLID, UNSEEN, Actio
 from .params import (OMIT_DEFAULT, InvalidInput, check_bool, check_choice, check_float, check_int, from_mapping,
                      to_mapping)
 
+# Constants carry no docstring of their own: the API reference (pdoc) reads these annotation-only
+# declarations' docstrings, which tests/test_api_reference.py keeps equal to the defining module's.
+UNSEEN: int
+"""Knowledge-map value of a cell not yet seen (by this robot or any robot whose map it received)."""
+FREE: int
+"""Knowledge-map value of a cell seen empty."""
+SOLID: int
+"""Knowledge-map value of a cell seen occupied (a wall); the largest, so merging maps is ``numpy.maximum``."""
+CELL_M: float
+"""Edge of one cell in metres, of ground-truth maps (:mod:`maps`) and knowledge maps alike."""
+ROBOT_RADIUS_M: float
+"""A robot's radius in metres, the default of :attr:`RobotInfo.radius` (read that one: it is the run's)."""
+OMIT_DEFAULT: str
+"""Field metadata key: ``field(default=..., metadata={OMIT_DEFAULT: True})`` leaves the field out of
+:func:`to_mapping` while it holds its default. A setting added to an existing section carries it, so every
+spec written before it existed keeps its canonical form and its run key (campaign folders resume)."""
+
 __all__ = [
     "Action", "CELL_M", "Explorer", "FREE", "InvalidInput", "OMIT_DEFAULT", "NavStatus", "Neighbour", "Neighbours", "NoParams",
     "Observation", "Pose", "ROBOT_RADIUS_M", "RobotInfo", "SOLID", "UNSEEN", "cell_centre", "cell_of", "check_bool",
     "check_choice", "check_float", "check_int", "from_mapping", "frozen_builder", "to_mapping",
+    "grid", "messages", "params",   # the submodules, so the API reference (pdoc) documents them too
 ]

@@ -13,6 +13,10 @@ from swarm.grid import (DEFAULT_MARGIN_M, FrontierCluster, any_angle_length_m, c
                     segment_clear, simplify, steps_length, view_cells)
 from swarm.grid.targets import default_view_reach_cells
 
+DEFAULT_MARGIN_M: float
+"""Extra clearance (m) on top of the robot radius, for tracking error and sensor noise: the navigator's
+default, so ``configuration_space(known)`` is the space the navigator plans on."""
+
 __all__ = [
     "DEFAULT_MARGIN_M", "FrontierCluster", "any_angle_length_m", "cells_to_metres", "configuration_space",
     "default_view_reach_cells", "distance_field", "field_at", "frontier_clusters", "frontier_mask", "grid_length_m",
