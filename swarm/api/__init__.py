@@ -25,7 +25,9 @@ cell constants and conversions, defined in :mod:`swarm.base.types`), the paramet
 :class:`InvalidInput` (:mod:`swarm.api.params`), the grid helpers (:mod:`swarm.api.grid`: configuration
 space, plans, distance fields, frontiers, the nearest reachable unseen cell) and the message codec
 (:mod:`swarm.api.messages`: :func:`message` to declare a message type, :class:`MessageError`). Nothing
-outside ``swarm.api`` is part of the contract; ``algorithms/`` imports nothing else from swarm.
+outside ``swarm.api`` is part of the contract; ``algorithms/`` imports nothing else from swarm. Every
+name's docstring states its return convention (and, for the grid helpers, its cost per call);
+``python -m pdoc swarm.api -o docs/api`` renders them as the API reference.
 
 A facade over lower packages: may import ``swarm.base``, ``swarm.grid``, ``swarm.comm``; nothing below it
 imports ``swarm.api``, so what plugins see can grow without tangling the runtime.
