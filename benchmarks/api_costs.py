@@ -71,7 +71,8 @@ def cases(known: np.ndarray, start: tuple[int, int]) -> dict[str, Callable[[], o
         "path_length_m": lambda: grid.path_length_m(grid.cells_to_metres(path)),
         "grid_length_m": lambda: grid.grid_length_m(space, start, goal),
         "any_angle_length_m": lambda: grid.any_angle_length_m(space, start, goal),
-        f"(map {known.shape}, {int((known == FREE).sum())} free cells, {int(frontier.sum())} frontier cells, goal {far[1]:.0f} m, path {len(path)} cells)": lambda: None,
+        f"(map {known.shape}, {int((known == FREE).sum())} free cells, {int(frontier.sum())} frontier cells, "
+        f"goal {far[1]:.0f} m, path {len(path)} cells)": lambda: None,
     }
 
 

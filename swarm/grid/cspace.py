@@ -95,8 +95,9 @@ def configuration_space(known: np.ndarray, radius_m: float = ROBOT_RADIUS_M, mar
     with :func:`swarm.grid.nearest_reachable_unseen` or :func:`swarm.grid.view_cells`, or snap a cell
     with :func:`nearest_in`. Raises :class:`InvalidInput` for a bad map or a negative or non-finite length.
 
-    Cost: O(H * W * radius cells); ~0.04 ms on a 300 x 300 map (0.3 m robot). Computed as an erosion of the passable cells by the offsets of :func:`inflation_offsets` (cells off
-    the map count as blocked), decomposed into one centred row run per offset row
+    Cost: O(H * W * radius cells); ~0.04 ms on a 300 x 300 map (0.3 m robot). Computed as an erosion of
+    the passable cells by the offsets of :func:`inflation_offsets` (cells off the map count as blocked),
+    decomposed into one centred row run per offset row
     (:func:`swarm.grid._kernels.grid_configuration_space`), so the cost is O(radius) passes over the map,
     not O(radius^2).
     """

@@ -110,9 +110,10 @@ def plan(space: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> np
     end is outside the space (snap them first with :func:`swarm.grid.nearest_in`). Raises
     :class:`InvalidInput` for a cell off the map. Cost: O(cells nearer the start than the goal, by path
     length): the search stops as soon as the goal's distance is final, so short plans are cheap; ~0.03 ms
-    for a 38 m plan on a 300 x 300 map (loaded 2-core machine). Among equal-length paths the one walked back from the goal keeping its direction as long
-    as possible is returned (:func:`swarm.grid._kernels.grid_descend_path`): deterministic, and straight
-    runs simplify into few waypoints.
+    for a 38 m plan on a 300 x 300 map (loaded 2-core machine). Among equal-length paths the one walked
+    back from the goal keeping its direction as long as possible is returned
+    (:func:`swarm.grid._kernels.grid_descend_path`): deterministic, and straight runs simplify into few
+    waypoints.
     """
     sp = check_space(space)
     s = check_cell(start, sp.shape, "start")

@@ -78,8 +78,10 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
     rest is cut off). The cell is in the configuration space of ``radius_m`` and ``margin_m`` (a goal the
     navigator can reach), up to ``view_reach_cells`` free cells from the frontier it looks at; drive to
     ``cell_centre(*cell)``. Cost: O(cells nearer than the answer) (see Speed below); ~0.05 ms on a
-    300 x 300 map for a target 38 m away (loaded 2-core machine). ``exclude`` (bool[H, W]) removes cells both as targets and as frontiers, for deadlock
-    handling: pass the current target to give up that spot, or a disc around it to give up that frontier.
+    300 x 300 map for a target 38 m away (loaded 2-core machine).
+
+    ``exclude`` (bool[H, W]) removes cells both as targets and as frontiers, for deadlock handling: pass
+    the current target to give up that spot, or a disc around it to give up that frontier.
 
     ``start`` is the robot's cell; when it lies in inflated space (a robot pushed against a wall) it snaps
     to the nearest configuration-space cell within ``snap_radius_cells`` (default: view reach + 1), and
