@@ -25,7 +25,9 @@ cell constants and conversions, defined in :mod:`swarm.base.types`), the paramet
 :class:`InvalidInput` (:mod:`swarm.api.params`), the grid helpers (:mod:`swarm.api.grid`: configuration
 space, plans, distance fields, frontiers, the nearest reachable unseen cell) and the message codec
 (:mod:`swarm.api.messages`: :func:`message` to declare a message type, :class:`MessageError`). Nothing
-outside ``swarm.api`` is part of the contract; ``algorithms/`` imports nothing else from swarm.
+outside ``swarm.api`` is part of the contract; ``algorithms/`` imports nothing else from swarm. Every
+name's docstring states its return convention (and, for the grid helpers, its cost per call);
+``python -m pdoc swarm.api -o docs/api`` renders them as the API reference.
 
 A facade over lower packages: may import ``swarm.base``, ``swarm.grid``, ``swarm.comm``; nothing below it
 imports ``swarm.api``, so what plugins see can grow without tangling the runtime.
@@ -39,8 +41,26 @@ from swarm.base.types import (CELL_M, FREE, ROBOT_RADIUS_M, SOLID, UNSEEN, Actio
 from .params import (OMIT_DEFAULT, InvalidInput, check_bool, check_choice, check_float, check_int, from_mapping,
                      to_mapping)
 
+# Constants carry no docstring of their own: the API reference (pdoc) reads these annotation-only
+# declarations' docstrings, which tests/test_api_reference.py keeps equal to the defining module's.
+UNSEEN: int
+"""Knowledge-map value of a cell not yet seen (by this robot or any robot whose map it received)."""
+FREE: int
+"""Knowledge-map value of a cell seen empty."""
+SOLID: int
+"""Knowledge-map value of a cell seen occupied (a wall); the largest, so merging maps is ``numpy.maximum``."""
+CELL_M: float
+"""Edge of one cell in metres, of ground-truth maps (:mod:`maps`) and knowledge maps alike."""
+ROBOT_RADIUS_M: float
+"""A robot's radius in metres, the default of :attr:`RobotInfo.radius` (read that one: it is the run's)."""
+OMIT_DEFAULT: str
+"""Field metadata key: ``field(default=..., metadata={OMIT_DEFAULT: True})`` leaves the field out of
+:func:`to_mapping` while it holds its default. A setting added to an existing section carries it, so every
+spec written before it existed keeps its canonical form and its run key (campaign folders resume)."""
+
 __all__ = [
     "Action", "CELL_M", "Explorer", "FREE", "InvalidInput", "OMIT_DEFAULT", "NavStatus", "Neighbour", "Neighbours", "NoParams",
     "Observation", "Pose", "ROBOT_RADIUS_M", "RobotInfo", "SOLID", "UNSEEN", "cell_centre", "cell_of", "check_bool",
     "check_choice", "check_float", "check_int", "from_mapping", "frozen_builder", "to_mapping",
+    "grid", "messages", "params",   # the submodules, so the API reference (pdoc) documents them too
 ]

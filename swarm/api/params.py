@@ -13,5 +13,10 @@ from __future__ import annotations
 from swarm.base.errors import InvalidInput
 from swarm.base.params import OMIT_DEFAULT, check_bool, check_choice, check_float, check_int, from_mapping, to_mapping
 
+OMIT_DEFAULT: str
+"""Field metadata key: ``field(default=..., metadata={OMIT_DEFAULT: True})`` leaves the field out of
+:func:`to_mapping` while it holds its default. A setting added to an existing section carries it, so every
+spec written before it existed keeps its canonical form and its run key (campaign folders resume)."""
+
 __all__ = ["InvalidInput", "OMIT_DEFAULT", "check_bool", "check_choice", "check_float", "check_int", "from_mapping",
            "to_mapping"]

@@ -256,6 +256,7 @@ def check_choice(name: str, value: Any, choices: tuple[str, ...]) -> str:
 
 
 def check_bool(name: str, value: Any) -> bool:
+    """``value`` if it is a bool (not 0/1, not a string); else :class:`InvalidInput` naming ``name``."""
     if not isinstance(value, bool):
         raise InvalidInput(name, value, "true or false")
     return value

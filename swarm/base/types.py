@@ -16,28 +16,37 @@ from typing import Any, Callable, ClassVar, Mapping, NamedTuple, Protocol, Seque
 import numpy as np
 
 UNSEEN: int = 0
+"""Knowledge-map value of a cell not yet seen (by this robot or any robot whose map it received)."""
 FREE: int = 1
+"""Knowledge-map value of a cell seen empty."""
 SOLID: int = 2
+"""Knowledge-map value of a cell seen occupied (a wall); the largest, so merging maps is ``numpy.maximum``."""
 CELL_M: float = 0.5
 """Edge of one cell in metres, of ground-truth maps (:mod:`maps`) and knowledge maps alike."""
 ROBOT_RADIUS_M: float = 0.3
+"""A robot's radius in metres, the default of :attr:`RobotInfo.radius` (read that one: it is the run's)."""
 
 
 class Pose(NamedTuple):
     """Position (m) and heading (rad, CCW from +x)."""
 
     x: float
+    """Metres from the map's left edge."""
     y: float
+    """Metres from the map's bottom edge."""
     theta: float
+    """Heading in radians, counter-clockwise from +x."""
 
 
 def cell_of(x: float, y: float) -> tuple[int, int]:
-    """(row, col) of the 0.5 m cell containing (x, y)."""
+    """(row, col) of the 0.5 m cell containing (x, y) metres (row 0 at the bottom). Not clipped: a point off
+    the map gives a cell off it (negative, or >= the map's shape). Cost: O(1), under 1 us."""
     return int(math.floor(y / CELL_M)), int(math.floor(x / CELL_M))
 
 
 def cell_centre(row: int, col: int) -> tuple[float, float]:
-    """(x, y) of a cell's centre in metres."""
+    """(x, y) of a cell's centre in metres: the goal to give :class:`Action` for a cell. Cost: O(1), under
+    1 us."""
     return (col + 0.5) * CELL_M, (row + 0.5) * CELL_M
 
 
@@ -45,10 +54,15 @@ class Neighbour(NamedTuple):
     """Another robot this robot can sense this tick (within sensing range and line of sight)."""
 
     id: int
+    """The other robot's id."""
     distance: float
-    bearing: float          # relative to this robot's heading, radians
-    x: float                # absolute position estimate
+    """Metres, centre to centre."""
+    bearing: float
+    """Radians relative to this robot's heading, counter-clockwise."""
+    x: float
+    """Its position estimate, metres."""
     y: float
+    """Its position estimate, metres."""
 
 
 class Neighbours(Sequence[Neighbour]):
@@ -56,7 +70,8 @@ class Neighbours(Sequence[Neighbour]):
     algorithms never look, and building them for 16 packed robots costs more than the rest of a tick).
 
     Holds the tick's (R, R) ``near`` mask, distance and bearing matrices and (R, 2) positions, and this
-    robot's row."""
+    robot's row. A read-only sequence ordered by robot id; empty when nobody is in range. Cost: the first
+    full read builds every tuple, O(R); ``bool(...)`` and :meth:`within` build none or only the near ones."""
 
     __slots__ = ("_source", "_items")
 
@@ -114,9 +129,13 @@ class NavStatus:
     """What the runtime's navigator is doing for this robot."""
 
     goal: tuple[float, float] | None = None
-    state: str = "idle"     # idle | moving | reached | unreachable | blocked
+    """The goal (x, y) metres the state refers to, None when idle."""
+    state: str = "idle"
+    """``idle``, ``planning``, ``moving``, ``reached``, ``unreachable`` or ``blocked`` (docs/plugins.md)."""
     path_length: float = 0.0
+    """Metres of planned path left to drive (0.0 without a path)."""
     ticks_since_progress: int = 0
+    """Ticks since the remaining path last shrank by 5 cm (the navigator replans after 30)."""
 
 
 @dataclass(frozen=True)
@@ -124,14 +143,23 @@ class RobotInfo:
     """Static facts about one robot, given to ``Explorer.reset``."""
 
     id: int
+    """This robot's id, ``0 .. n_robots - 1``."""
     n_robots: int
+    """How many robots the run has."""
     map_shape: tuple[int, int]
+    """(H, W) of ``Observation.known``, in cells."""
     radius: float = ROBOT_RADIUS_M
+    """Metres; pass it to the grid helpers' ``radius_m``."""
     lidar_range: float = 7.0
+    """Metres."""
     max_speed: float = 1.0
+    """m/s; ``Action.velocity`` is clipped to it."""
     max_turn_rate: float = 2.0
+    """rad/s; ``Action.velocity`` is clipped to it."""
     tick_seconds: float = 0.1
-    battery: float | None = None   # energy budget (algorithm-defined units), None = unlimited
+    """Simulated seconds per tick."""
+    battery: float | None = None
+    """Energy budget (algorithm-defined units), None = unlimited."""
 
 
 @dataclass(frozen=True)
@@ -139,15 +167,25 @@ class Observation:
     """Everything a robot knows at the start of its decision in tick ``tick``."""
 
     tick: int
+    """The tick number, from 0."""
     robot_id: int
+    """This robot's id."""
     pose: Pose
-    known: np.ndarray                       # uint8[H, W], read-only view of the robot's own map
-    inbox: tuple[Any, ...] = ()             # messages delivered this tick (sent by others at tick - 1)
-    neighbours: Sequence[Neighbour] = ()    # robots in sensing range and line of sight
-    collided: bool = False                  # touched a wall or robot since the last decision
+    """Where the robot is (metres, radians)."""
+    known: np.ndarray
+    """uint8[H, W], a read-only view of the robot's own map (UNSEEN/FREE/SOLID); copy it to change it."""
+    inbox: tuple[Any, ...] = ()
+    """Messages delivered this tick (sent by others at tick - 1), ordered by sender."""
+    neighbours: Sequence[Neighbour] = ()
+    """Robots in sensing range and line of sight (:class:`Neighbours`: built only when read)."""
+    collided: bool = False
+    """Touched a wall or robot since the last decision."""
     nav: NavStatus = NavStatus()
-    distance_travelled: float = 0.0         # metres since the start
-    energy_used: float = 0.0                # moves + rotations, see swarm.world.physics
+    """What the navigator is doing."""
+    distance_travelled: float = 0.0
+    """Metres driven since the start."""
+    energy_used: float = 0.0
+    """Metres driven plus radians turned (see swarm.world.physics)."""
 
 
 DRIVES: tuple[str, ...] = ("path", "runs", "straight")
@@ -167,11 +205,17 @@ class Action:
     smooth path whatever it says."""
 
     goal: tuple[float, float] | None = None
+    """(x, y) metres, or None: plan and drive there (setting the same goal again changes nothing)."""
     velocity: tuple[float, float] | None = None
+    """(v m/s, omega rad/s), or None: direct control for this tick only."""
     messages: tuple[Any, ...] = ()
+    """Registered messages to broadcast this tick (a tuple)."""
     debug: Mapping[str, Any] | None = None
+    """Free-form, msgpack-able; shown by the viewer, not part of a run's result."""
     clear_goal: bool = False
+    """True drops the current goal first (the navigator goes idle)."""
     drive: str = "path"
+    """One of :data:`DRIVES`; only MAES's motion model reads it."""
 
 
 def frozen_builder(cls: type) -> Callable[..., Any]:
@@ -196,19 +240,25 @@ def frozen_builder(cls: type) -> Callable[..., Any]:
 
 @runtime_checkable
 class Explorer(Protocol):
-    """The algorithm interface; see the module docstring."""
+    """The algorithm interface: one instance per robot, built without arguments (docs/plugins.md)."""
 
     name: ClassVar[str]
+    """The algorithm's name, shown in results."""
     Params: ClassVar[type]
+    """A frozen dataclass of the parameters, every field with a default (:class:`NoParams` if none)."""
 
-    def reset(self, robot: RobotInfo, params: Any, rng: np.random.Generator) -> None: ...
+    def reset(self, robot: RobotInfo, params: Any, rng: np.random.Generator) -> None:
+        """Once, before the first tick: the robot's facts, the built ``Params`` and the robot's own random
+        generator (draw every random number from it: runs are bit-reproducible)."""
 
-    def act(self, obs: Observation) -> Action: ...
+    def act(self, obs: Observation) -> Action:
+        """Once per tick while the robot is alive: the decision for ``obs`` (never change ``obs``). Its cost
+        is the robot's share of a tick: keep it to a few grid helper calls."""
 
 
 @dataclass(frozen=True)
 class NoParams:
-    """For algorithms without parameters."""
+    """The ``Params`` of an algorithm without parameters (an empty frozen dataclass)."""
 
 
 __all__ = [

@@ -56,7 +56,12 @@ class MessageError(ValueError):
 
 
 def message(type_name: str, version: int = 1) -> Callable[[type[T]], type[T]]:
-    """Class decorator: register a frozen dataclass as a message type. The first field must be ``sender``."""
+    """Class decorator: register a frozen dataclass as a message type. The first field must be ``sender``.
+
+    ``type_name`` must be unique across every package (prefix it with yours); ``version`` is sent with
+    every message, and a message of another version fails to decode. Raises ``TypeError`` at import for a
+    non-dataclass, a first field that is not ``sender`` or a name taken by another class. Returns the
+    class itself, with ``message_type`` and ``message_version`` set."""
 
     def register(cls: type[T]) -> type[T]:
         if not dataclasses.is_dataclass(cls):
@@ -78,6 +83,7 @@ def message(type_name: str, version: int = 1) -> Callable[[type[T]], type[T]]:
 
 
 def registered() -> dict[str, type]:
+    """Every registered message type: a new dict of type name to class (changing it registers nothing)."""
     return dict(_REGISTRY)
 
 
@@ -102,7 +108,9 @@ def _ext_hook(code: int, data: bytes) -> Any:
 
 
 def encode(msg: Any) -> bytes:
-    """The wire bytes of a registered message."""
+    """The wire bytes of a registered message: msgpack ``[type, version, sender, fields...]``; their length
+    is what the radio's bandwidth counts. Raises :class:`MessageError` for an unregistered type. Cost:
+    ~3 us for a three-number message (loaded 2-core machine)."""
     cls = type(msg)
     name = _NAMES.get(cls)
     if name is None:
@@ -112,7 +120,9 @@ def encode(msg: Any) -> bytes:
 
 
 def decode(data: bytes) -> Any:
-    """A message from wire bytes; raises :class:`MessageError` for anything malformed."""
+    """A message from wire bytes; raises :class:`MessageError` for anything malformed (not bytes, over
+    ``MAX_MESSAGE_BYTES``, an unknown type or version, wrong field count, or its ``validate()`` refusing
+    it). Fields annotated as tuples come back as tuples. Cost: ~4 us for a three-number message."""
     if not isinstance(data, (bytes, bytearray, memoryview)) or len(data) > MAX_MESSAGE_BYTES:
         raise MessageError("not bytes, or larger than MAX_MESSAGE_BYTES")
     try:

@@ -38,11 +38,16 @@ from ._kernels import grid_configuration_space, grid_snap
 from ._validate import check_cell, check_count, check_known, check_length, check_space
 
 DEFAULT_MARGIN_M: float = 0.05
-"""Extra clearance on top of the robot radius, for tracking error and sensor noise."""
+"""Extra clearance (m) on top of the robot radius, for tracking error and sensor noise: the navigator's
+default, so ``configuration_space(known)`` is the space the navigator plans on."""
 
 
 def passable(known: np.ndarray, unseen_traversable: bool = False) -> np.ndarray:
-    """Cells the robot may enter: FREE, plus UNSEEN when planning optimistically."""
+    """Cells the robot may enter, ignoring its size: bool[H, W], True where ``known`` is FREE (plus
+    UNSEEN when ``unseen_traversable``, the navigator's optimistic mode).
+
+    A new array. Cost: one pass over the map, O(H * W); ~0.01 ms on a 300 x 300 map.
+    Raises :class:`InvalidInput` for a map that is not a 2-D array of 0/1/2."""
     k = check_known(known)
     return k != SOLID if unseen_traversable else k == FREE
 
@@ -61,8 +66,10 @@ def _square_square_distance(dr: int, dc: int) -> float:
 def inflation_offsets(radius_m: float, margin_m: float) -> tuple[tuple[int, int], ...]:
     """Offsets (dr, dc) such that a blocked cell at (row + dr, col + dc) removes (row, col) from the space.
 
-    The rule of the module docstring: the two squares are nearer than ``radius + margin``; the diagonal
-    neighbours are exempt while a cell centre is at least ``radius + margin`` from their square.
+    The rule of the module docstring: the two squares are nearer than ``radius + margin`` (metres); the
+    diagonal neighbours are exempt while a cell centre is at least ``radius + margin`` from their square.
+    A tuple of int pairs, ``()`` when ``radius + margin <= 0``. Cached per (radius, margin): a repeated
+    call is a dictionary lookup; the first costs O(reach^2) with reach = ceil(need / 0.5) + 1 cells.
     """
     need = radius_m + margin_m
     if need <= 0.0:
@@ -80,10 +87,17 @@ def inflation_offsets(radius_m: float, margin_m: float) -> tuple[tuple[int, int]
 
 def configuration_space(known: np.ndarray, radius_m: float = ROBOT_RADIUS_M, margin_m: float = DEFAULT_MARGIN_M,
                         unseen_traversable: bool = False) -> np.ndarray:
-    """Cells where the robot's centre may be (see the module docstring for the clearance rule).
+    """Cells where the robot's centre may be: bool[H, W], the ``space`` every planning helper takes.
 
-    Computed as an erosion of the passable cells by the offsets of :func:`inflation_offsets` (cells off
-    the map count as blocked), decomposed into one centred row run per offset row
+    A passable cell (:func:`passable`) is kept when no blocked cell (or the map's edge) is within
+    ``radius_m + margin_m`` metres of its square (the clearance rule of :mod:`swarm.grid.cspace`). Frontier
+    cells next to UNSEEN ones are therefore usually *not* in the space (pessimistic planning): pick goals
+    with :func:`swarm.grid.nearest_reachable_unseen` or :func:`swarm.grid.view_cells`, or snap a cell
+    with :func:`nearest_in`. Raises :class:`InvalidInput` for a bad map or a negative or non-finite length.
+
+    Cost: O(H * W * radius cells); ~0.04 ms on a 300 x 300 map (0.3 m robot). Computed as an erosion of
+    the passable cells by the offsets of :func:`inflation_offsets` (cells off the map count as blocked),
+    decomposed into one centred row run per offset row
     (:func:`swarm.grid._kernels.grid_configuration_space`), so the cost is O(radius) passes over the map,
     not O(radius^2).
     """
@@ -122,10 +136,15 @@ def nearest_in(space: np.ndarray, cell: tuple[int, int], max_radius_cells: int |
                ) -> tuple[int, int] | None:
     """The True cell of ``space`` whose centre is nearest (Euclidean) to ``cell``; ``cell`` itself if True.
 
-    For snapping a start or goal that lies in inflated space. Ties go to the lowest row, then the lowest
-    column. ``max_radius_cells`` bounds the distance (in cells, inclusive); None searches the whole grid.
-    The search looks in growing square windows, so a nearby cell costs a few microseconds; a window of
-    half-size ``s`` is conclusive once its best cell is within ``s`` (anything outside is farther).
+    For snapping a start or goal that lies in inflated space (a frontier cell, a robot pushed against a
+    wall). Returns ``(row, col)``, or None when no True cell is within ``max_radius_cells`` (in cells,
+    inclusive; None searches the whole grid). Ties go to the lowest row, then the lowest column. The
+    answer is nearest in a straight line, not necessarily reachable from the robot: a wall may separate
+    them (use :func:`swarm.grid.nearest_reachable` when that matters).
+
+    Cost: O(1) when ``cell`` is in the space; else O(s^2) for an answer ``s`` cells away (growing square
+    windows; a window of half-size ``s`` is conclusive once its best cell is within ``s``): ~2 us one cell
+    off, on a loaded 2-core machine; O(H * W) when nothing is found and the radius is None.
     """
     sp = check_space(space)
     r, c = check_cell(cell, sp.shape, "cell")

@@ -23,8 +23,11 @@ _EIGHT = np.ones((3, 3), dtype=bool)
 
 
 def frontier_mask(known: np.ndarray) -> np.ndarray:
-    """FREE cells with at least one UNSEEN 4-neighbour: bool[H, W]. The compiled pass the target search
-    uses (:func:`swarm.grid.view_cells`), so both agree on what a frontier is."""
+    """FREE cells with at least one UNSEEN 4-neighbour: bool[H, W] (cells off the map are not UNSEEN).
+
+    The compiled pass the target search uses (:func:`swarm.grid.view_cells`), so both agree on what a
+    frontier is. A frontier cell is usually in inflated space, not in :func:`configuration_space`. Cost:
+    one pass, O(H * W); ~0.02 ms on a 300 x 300 map."""
     k = np.ascontiguousarray(check_known(known), dtype=np.uint8)  # values checked: 0..2 fit any dtype
     out = np.zeros(k.shape, dtype=bool)
     grid_frontier_mask(k, _NO_EXCLUDE, out)
@@ -36,23 +39,31 @@ _NO_EXCLUDE = np.zeros((0, 0), dtype=bool)
 
 @dataclass(frozen=True, eq=False)
 class FrontierCluster:
-    """One 8-connected group of frontier cells.
+    """One 8-connected group of frontier cells, as :func:`frontier_clusters` returns it (frozen; compared by
+    identity).
 
-    ``cells`` int[K, 2] (row, col) in row-major order (read-only); ``centroid`` (x, y) metres is the mean
-    of the cell centres; ``representative`` is the cluster cell whose centre is nearest the centroid
-    (ties to the first in ``cells``) -- a goal that lies on the frontier even when the cluster is curved.
+    The representative lies on the frontier, so usually in inflated space: it is where to look, not where
+    to drive. docs/plugins.md ("Picking a goal from a frontier") turns it into a reachable goal.
     """
 
     cells: np.ndarray
+    """int64[K, 2] (row, col) of the cluster's cells, row-major order, read-only."""
     size: int
+    """K, the number of cells (at least ``min_size``)."""
     centroid: tuple[float, float]
+    """(x, y) metres: the mean of the cell centres (may lie off the frontier, even in a wall, when curved)."""
     representative: tuple[int, int]
+    """(row, col): the cluster cell whose centre is nearest the centroid (ties to the first in ``cells``)."""
 
 
 def frontier_clusters(known: np.ndarray, min_size: int = 1) -> list[FrontierCluster]:
-    """8-connected components of :func:`frontier_mask` with at least ``min_size`` cells.
+    """8-connected components of :func:`frontier_mask` with at least ``min_size`` cells: a list of
+    :class:`FrontierCluster`, empty when the map has no frontier.
 
     Ordered by their first cell in row-major order (scipy's labelling order), so the list is deterministic.
+    Cost: O(H * W) labelling plus Python work per cluster; ~2 ms on a 300 x 300 map with 375 frontier
+    cells (loaded 2-core machine), some 100 times :func:`frontier_mask`: call it once per decision, not per
+    candidate. Raises :class:`InvalidInput` for a bad map or ``min_size < 1``.
     """
     size_min = check_count(min_size, "min_size", 1)
     assert size_min is not None

@@ -30,8 +30,9 @@ SQRT2 = math.sqrt(2.0)
 
 
 def steps_length(path: np.ndarray) -> float:
-    """Length in cells of an 8-connected cell path: 1 per orthogonal step, sqrt(2) per diagonal one,
-    summed from the start."""
+    """Length in cells of an 8-connected cell path (int[N, 2]): 1 per orthogonal step, sqrt(2) per
+    diagonal one, summed from the start; 0.0 for one cell. Not validated (a longer step counts as
+    orthogonal). Cost: O(N), a Python loop; ~6 us for 80 cells."""
     p = np.asarray(path, dtype=np.int64)
     total = 0.0
     for d in (np.abs(p[1:] - p[:-1]).sum(axis=1) == 2).tolist():
@@ -40,13 +41,17 @@ def steps_length(path: np.ndarray) -> float:
 
 
 def grid_length_m(space: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> float:
-    """Length (m) of the optimal 8-connected path from ``start`` to ``goal`` through ``space``."""
+    """Length (m) of the optimal 8-connected path from ``start`` to ``goal`` through ``space``: the
+    length of :func:`swarm.grid.plan`'s path, ``inf`` when there is none. Cost: a :func:`plan`."""
     path = plan(space, start, goal)
     return math.inf if path is None else steps_length(path) * CELL_M
 
 
 def any_angle_length_m(space: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> float:
-    """Length (m) of the Euclidean shortest path between the centres of ``start`` and ``goal``."""
+    """Length (m) of the Euclidean shortest path between the centres of ``start`` and ``goal`` through
+    ``space``'s True cells (see the module docstring), ``inf`` when either is outside the space or no path
+    exists. For judging paths, not for per-tick use. Cost: A* on the visibility graph of the convex
+    corners; ~4 ms for 38 m on a 300 x 300 building map (loaded 2-core machine)."""
     sp = check_space(space)
     s, g = check_cell(start, sp.shape, "start"), check_cell(goal, sp.shape, "goal")
     if not (sp[s] and sp[g]):

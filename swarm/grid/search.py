@@ -107,10 +107,13 @@ def plan(space: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> np
     """Shortest 8-connected path from ``start`` to ``goal`` through ``space``: int64[N, 2] (row, col).
 
     The path includes both ends (N = 1 when they coincide). None when the goal is unreachable or either
-    end is outside the space. The search stops as soon as the goal's distance is final, so short plans
-    are cheap. Among equal-length paths the one walked back from the goal keeping its direction as long
-    as possible is returned (:func:`swarm.grid._kernels.grid_descend_path`): deterministic, and straight
-    runs simplify into few waypoints.
+    end is outside the space (snap them first with :func:`swarm.grid.nearest_in`). Raises
+    :class:`InvalidInput` for a cell off the map. Cost: O(cells nearer the start than the goal, by path
+    length): the search stops as soon as the goal's distance is final, so short plans are cheap; ~0.03 ms
+    for a 38 m plan on a 300 x 300 map (loaded 2-core machine). Among equal-length paths the one walked
+    back from the goal keeping its direction as long as possible is returned
+    (:func:`swarm.grid._kernels.grid_descend_path`): deterministic, and straight runs simplify into few
+    waypoints.
     """
     sp = check_space(space)
     s = check_cell(start, sp.shape, "start")
@@ -136,9 +139,14 @@ def plan(space: np.ndarray, start: tuple[int, int], goal: tuple[int, int]) -> np
 def distance_field(space: np.ndarray, sources: Any, max_dist_m: float | None = None) -> np.ndarray:
     """Geodesic distance (m) from the nearest source to every cell of ``space``: float32[H, W].
 
-    ``sources`` is one (row, col) or an int[K, 2] array; sources outside ``space`` are ignored. Cells not
-    reached (outside the space, cut off, or farther than ``max_dist_m``) are ``inf``. Bounding the distance
-    bounds the work, which is what a local coordination penalty wants.
+    ``sources`` is one (row, col) or an int[K, 2] array; sources outside ``space`` are ignored (all of them:
+    an all-``inf`` field). Cells not reached (outside the space, cut off, or farther than ``max_dist_m``)
+    are ``inf`` -- test with ``numpy.isfinite``. Path lengths are octile (8-connected, no corner cutting),
+    as :func:`plan`'s. A new array each call.
+
+    Cost: O(cells reached) for the search plus O(H * W) to write the field; ~0.1 ms on a 300 x 300 map
+    with 17 k free cells (loaded 2-core machine). Bounding the distance bounds the search, which is what a
+    local coordination penalty wants; when only some cells matter, :func:`field_at` is cheaper.
     """
     sp = check_space(space)
     cells = check_cells(sources, sp.shape, "sources")
@@ -164,7 +172,9 @@ def field_at(space: np.ndarray, sources: Any, cells: np.ndarray, max_dist_m: flo
     every one of ``cells`` has its final distance (a cell outside the space never gets one, so the search
     then runs to its end, as :func:`distance_field` does), and neither the whole distance array is reset
     nor the whole field converted to metres. The search is the same compiled one, run in the same order
-    (:func:`swarm.grid._kernels.grid_bucket_settle`), which is what makes the values identical.
+    (:func:`swarm.grid._kernels.grid_bucket_settle`), which is what makes the values identical. Unreached
+    cells are ``inf``. Cost: O(cells nearer the sources than the farthest of ``cells``); ~0.05 ms for a
+    frontier cluster's cells on a 300 x 300 map.
     """
     sp = check_space(space)
     src = check_cells(sources, sp.shape, "sources")
@@ -198,8 +208,11 @@ def nearest_reachable(space: np.ndarray, start: tuple[int, int], targets: np.nda
     """The ``targets`` cell with the shortest path from ``start`` through ``space``, and that length (m).
 
     Only targets inside the space can be reached. Ties (equal length within 1e-9 cells) go to the lowest
-    row, then the lowest column. None when no target is reachable or ``start`` is outside the space. The
-    search stops at the first distance bucket holding a target, so a near target is found quickly.
+    row, then the lowest column. Returns ``((row, col), metres)``, or None when no target is reachable or
+    ``start`` is outside the space. ``targets`` is bool[H, W], the shape of ``space``.
+
+    Cost: O(cells nearer than the answer, by path length) plus two O(H * W) byte copies: the search stops
+    at the first distance bucket holding a target; ~0.03 ms on a 300 x 300 map (loaded 2-core machine).
     """
     sp = check_space(space)
     s = check_cell(start, sp.shape, "start")

@@ -4,6 +4,7 @@ passes the plugin template; typed parameters (swarm.base.params.from_mapping, re
 
 from __future__ import annotations
 
+import ast
 import random
 import time
 from dataclasses import dataclass, field
@@ -239,6 +240,23 @@ def test_the_plugin_template_passes_every_check(monkeypatch):
     assert report.checks == CHECKS and [r.check for r in seen] == list(CHECKS)
     assert "claimer.claim" in next(r.detail for r in report.results if r.check == "messages")
     assert "survives" in str(report) and report.seconds > 0
+
+
+def test_the_plugin_template_uses_only_the_documented_contract():
+    """The template's module imports only swarm.api; its tests add only swarm.run and swarm.testing."""
+    allowed = {"swarm_example_explorer.py": {"swarm.api", "swarm.api.messages"},
+               "tests/test_claimer.py": {"swarm", "swarm.api", "swarm.api.messages", "swarm.testing"}}
+    for path, modules in allowed.items():
+        tree = ast.parse((TEMPLATE / path).read_text(encoding="utf-8"))
+        used = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.module}
+        used |= {a.name for node in ast.walk(tree) if isinstance(node, ast.Import) for a in node.names}
+        swarm_used = {m for m in used if m.split(".")[0] == "swarm"}
+        assert swarm_used and swarm_used <= modules, (path, swarm_used - modules)
+        from_root = {a.name for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.module == "swarm"
+                     for a in node.names}
+        attributes = {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)
+                      and isinstance(node.value, ast.Name) and node.value.id == "swarm"}
+        assert from_root | attributes <= {"run"}, (path, from_root | attributes)
 
 
 def test_a_passing_explorer_with_a_subset_of_checks():

@@ -1,11 +1,13 @@
-"""The explorer meets swarm's plugin contract, and explores."""
+"""The explorer meets swarm's plugin contract, and explores.
+
+Uses only the documented contract: ``swarm.api``, ``swarm.run`` and ``swarm.testing``."""
 
 from __future__ import annotations
 
 import pytest
 
+import swarm
 from swarm.api import InvalidInput
-from swarm import Simulation
 from swarm.testing import check_explorer
 
 from swarm_example_explorer import Claimer, ClaimerParams
@@ -19,8 +21,8 @@ def test_meets_the_plugin_contract():
 
 
 def test_explores_a_small_building():
-    result = Simulation({"seed": 1, "map": {"kind": "building", "size": 20}, "robots": {"count": 2},
-                         "algorithm": {"name": NAME}, "stop": {"max_ticks": 1500}}).run()
+    result = swarm.run({"seed": 1, "map": {"kind": "building", "size": 20}}, robots=2, algorithm=NAME,
+                       max_ticks=1500)
     assert result.summary["explored"] > 0.9, result.one_line()
     assert result.summary["messages"]["malformed"] == 0
 
