@@ -295,7 +295,8 @@ def _summary(rep: Report, out: ReportWriter) -> None:
     table = tables.summary_table(df, dims)
     pct = f"{100 * rep.target:g} %"
     _write_table(out, "summary", df, table, f"Ticks to {pct} explored per cell and algorithm "
-                 f"(campaign {rep.data.name}; means and medians over successful runs; DNF: target not reached).")
+                 f"(campaign {rep.data.name}; means, medians and quartiles Q1–Q3 over successful runs; DNF: target "
+                 "not reached; a tick is 0.1 s).", tables.summary_latex_table(df, dims))
     rep.summary, rep.summary_rows = table, len(df)
 
 
@@ -615,9 +616,11 @@ def _collisions(rep: Report, out: ReportWriter) -> None:
     rep.collisions, rep.collisions_rows = table, len(df)
 
 
-def _write_table(out: ReportWriter, name: str, df: pd.DataFrame, table: tables.Table, caption: str) -> None:
+def _write_table(out: ReportWriter, name: str, df: pd.DataFrame, table: tables.Table, caption: str,
+                 latex_table: tables.Table | None = None) -> None:
+    """Markdown, LaTeX (``latex_table`` when a paper shows fewer columns) and CSV of one table."""
     out.write(f"tables/{name}.md", f"*{caption}*\n\n" + tables.markdown(table))
-    out.write(f"tables/{name}.tex", tables.latex(table, caption, f"tab:{name.replace('_', '-')}"))
+    out.write(f"tables/{name}.tex", tables.latex(latex_table or table, caption, f"tab:{name.replace('_', '-')}"))
     out.write(f"tables/{name}.csv", tables.csv_text(df))
 
 

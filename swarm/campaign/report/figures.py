@@ -161,7 +161,7 @@ def _draw_curves(ax: Any, curves: Sequence[Curve], target: float) -> None:
             t, m, lo, hi = (np.append(t, end), np.append(m, m[-1]), np.append(lo, lo[-1]), np.append(hi, hi[-1]))
         x = seconds(t)
         ax.plot(x, 100 * m, color=colour(c.colour), gid=GID + c.label,
-                label=_text(f"{c.label} (n = {c.runs}, {c.successes} reached)"))
+                label=_text(f"{c.label} ({c.successes}/{c.runs} reached)"))
         if np.any(np.isfinite(lo)):
             ax.fill_between(x, np.clip(100 * lo, 0, 100), np.clip(100 * hi, 0, 100), color=colour(c.colour),
                             alpha=0.2, lw=0, gid=GID + c.label)
@@ -216,7 +216,7 @@ def cactus_figure(lines: Sequence[Times], title: str, target: float, max_ticks: 
         ecdf.set_xlabel(f"time to {pct} explored (s)")
         ecdf.set_ylabel("runs done (fraction)")
         ecdf.set_title(f"ECDF (DNF never arrive; max {float(seconds(max_ticks)):g} s)")
-        cactus.legend(loc="upper left", title="runs reached / all")
+        cactus.legend(loc="best", title="runs reached / all")
         ecdf.legend(loc="lower right")
         fig.suptitle(heading)
     return fig
@@ -278,9 +278,10 @@ def paired_figure(panels: Sequence[PairPanel], title: str, max_ticks: float, wid
 def panels_figure(panels: Sequence[tuple[str, Sequence[Curve]]], title: str, target: float, width: float,
                   columns: int = 0) -> Figure:
     """Explored-vs-time panels in a grid (the layout of a paper's figure); ``panels`` = (panel title, its
-    curves); ``columns`` panels per row (0: one row). Each panel's legend names its band (pooled runs)."""
+    curves); ``columns`` panels per row (0: one row; fewer when panels would be narrower than 2.3 in). Each
+    panel's legend names its band (pooled runs)."""
     n = len(panels)
-    cols = min(columns or n, n)
+    cols = min(columns or n, _grid(n, width)[0])
     rows = -(-n // cols)
     chars = max(20, int(PANEL_TITLE_CHARS * width / cols / 4.6))
     titles = [textwrap.fill(_text(t), chars) for t, _ in panels]
@@ -290,7 +291,7 @@ def panels_figure(panels: Sequence[tuple[str, Sequence[Curve]]], title: str, tar
     height = panel_h * rows + 0.45 + 0.15 * heading.count("\n")
     with matplotlib.rc_context(STYLE):
         fig = _figure(width, height, left=0.5, right=0.1, bottom=0.4, top=0.3 + 0.15 * (lines + heading.count("\n")),
-                      wspace=0.2, hspace=(0.35 + 0.15 * lines) / max(panel_h - 0.35, 0.5))
+                      wspace=0.3, hspace=(0.35 + 0.15 * lines) / max(panel_h - 0.35, 0.5))
         fig.suptitle(heading)
         for k, (panel_title, (_, curves)) in enumerate(zip(titles, panels)):
             ax = fig.add_subplot(rows, cols, k + 1)
