@@ -142,8 +142,9 @@ def _cactus(rep: Report) -> str:
     if not rep.figures:
         return ""
     lines = ["## Time to target: cactus and ECDF", "",
-             "Left: runs that reached the target sorted by ticks (log scale), as maes-csv-reader's cactus plot. "
-             "Right: the fraction of all runs done by a given tick; it stops at the success rate.", ""]
+             "Left: runs that reached the target sorted by their time to it, as maes-csv-reader's cactus plot "
+             "(log scale when the times span more than a decade). Right: the fraction of all runs done by a "
+             "given time; it stops at the success rate.", ""]
     for compare in dict.fromkeys(f.compare for f in rep.figures):
         lines += [f"### {section(compare)}", ""]
         lines += [f"- [{f.title}]({f.cactus})" for f in rep.figures if f.compare == compare]
