@@ -1,6 +1,6 @@
-"""The communication section's figures (matplotlib, in :mod:`.figures`' style, palette and time unit): exploration time and the key comm
-metrics against a talk-only dimension (a radio model, a comm setting, a swept radio or comm parameter), and
-comm metrics over time per cell."""
+"""The communication section's figures (matplotlib, in :mod:`.figures`' style, palette and time unit):
+exploration time and the key comm metrics against a talk-only dimension (a radio model, a comm setting, a
+swept radio or comm parameter), and comm metrics over time per cell."""
 
 from __future__ import annotations
 
@@ -10,10 +10,19 @@ from dataclasses import dataclass, field
 
 import matplotlib
 import numpy as np
-
 from matplotlib.figure import Figure
 
-from .figures import GID, PANEL_TITLE_CHARS, STYLE, _figure, _grid, _text, _wrap, band_text, colour
+from .figures import (
+    GID,
+    PANEL_TITLE_CHARS,
+    STYLE,
+    _figure,
+    _grid,
+    _text,
+    _wrap,
+    band_text,
+    colour,
+)
 from .units import seconds
 
 

@@ -71,7 +71,7 @@ def check_figure(fig: Figure) -> list[str]:
             continue  # an unlabelled inner panel, or a categorical axis (its tick labels are its values)
         if not re.search(r"\([^)]+\)", text):
             problems.append(f"axis label without a unit: {text!r}")
-        if re.search(r"\btick", text, re.I) or re.search(r"\bmin(ute)?s?\b", text):
+        if re.search(r"\btick", text, re.IGNORECASE) or re.search(r"\bmin(ute)?s?\b", text):
             problems.append(f"time not in seconds: {text!r}")
         if "time" in text and "(s)" not in text:
             problems.append(f"a time axis not in seconds: {text!r}")
