@@ -69,7 +69,8 @@ def p_value(p: float) -> str:
 
 def summary_table(df: pd.DataFrame, dims: Sequence[str]) -> Table:
     headers = [header(d) for d in dims] + ["Runs", "Successes", "Success rate", "DNF", "Timeouts", "Mean ticks",
-                                           "Median ticks", "Mean ticks (DNF = max)", "Fastest", "Slowest"]
+                                           "Median ticks", "Mean ticks (DNF = max)", "Fastest ticks",
+                                           "Slowest ticks"]
     rows = [[str(r[d]) for d in dims] + [str(r["runs"]), str(r["successes"]), rate(r["success_rate"]), str(r["dnf"]),
                                          str(r["timeouts"]), ticks(r["mean_ticks"]), ticks(r["median_ticks"]),
                                          ticks(r["mean_ticks_dnf_max"], "–"), ticks(r["fastest"]),
