@@ -20,6 +20,7 @@ from matplotlib.ticker import FixedFormatter
 from PIL import Image
 
 from swarm.campaign.report import build_report, comm_figures, figures
+from swarm.cli import main
 
 from .synthetic_results import FakeRun, write
 
@@ -201,3 +202,13 @@ def test_the_checker_fails_a_figure_made_the_old_way():
     for needle in ("time not in seconds", "without a unit: 'explored'", "labels fewer than 3 ticks",
                    "does not say what it is", "not one colour of the palette"):
         assert needle in problems
+
+
+def test_cli_figure_width_column_is_recorded_and_sizes_the_pngs(tmp_path):
+    runs = [FakeRun(alg, "global", rep, t) for alg, t in (("greed", 100), ("frontier", 200)) for rep in range(2)]
+    results = write(tmp_path / "results", runs, spec_text=SPEC.replace('radio = ["global", "los"]', 'radio = ["global"]'))
+    assert main(["campaign", "report", str(results), "-o", str(tmp_path / "rep"), "--figure-width", "column",
+                 "--quiet"]) == 0
+    assert "--figure-width column" in (tmp_path / "rep/README.md").read_text()
+    png = Image.open(tmp_path / "rep/curves/algorithms__building_40_2_together_global.png")
+    assert png.size[0] == round(figures.WIDTHS["column"] * 300)
