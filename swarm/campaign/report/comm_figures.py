@@ -22,6 +22,7 @@ from .figures import (
     _wrap,
     band_text,
     colour,
+    line_style,
 )
 from .units import seconds
 
@@ -75,7 +76,7 @@ def against_figure(panels: Sequence[Panel], metrics: Sequence[tuple[str, str]], 
                     band = line.bands.get(key)
                     if band is None or not np.isfinite(band.mean).any():
                         continue
-                    ax.plot(line.x, band.mean, color=colour(line.colour), marker="o", ms=3,
+                    ax.plot(line.x, band.mean, **line_style(line.colour), marker="o", ms=3,
                             label=_text(line.label), gid=GID + line.label)
                     if np.isfinite(band.lo).any():
                         lo, hi = _clip(key, band)
@@ -129,7 +130,7 @@ def over_time_figure(panels: Sequence[tuple[str, str, Sequence[Series]]], title:
         for ax, (panel_title, ylabel, series) in zip(axes, panels):
             for s in series:
                 x = seconds(s.ticks)
-                ax.plot(x, s.band.mean, color=colour(s.colour), label=_text(f"{s.label} (n = {s.runs})"),
+                ax.plot(x, s.band.mean, **line_style(s.colour), label=_text(f"{s.label} (n = {s.runs})"),
                         gid=GID + s.label)
                 if np.isfinite(s.band.lo).any():
                     lo, hi = _clip(ylabel, s.band)

@@ -76,6 +76,15 @@ def colour(index: int) -> str:
     return PALETTE[index % len(PALETTE)]
 
 
+DASHES = ("-", "--", ":", "-.")
+
+
+def line_style(index: int) -> dict[str, str]:
+    """Colour and line style of the label at ``index``: past the palette's eight colours the colours repeat
+    with another dash pattern, so up to 32 lines of a figure stay apart."""
+    return {"color": colour(index), "linestyle": DASHES[index // len(PALETTE) % len(DASHES)]}
+
+
 def band_text(runs: Sequence[int], unit: str = "runs") -> str:
     """What a figure's lines and bands are, as :func:`.stats.mean_band` computes them."""
     counts = sorted(set(runs))
@@ -160,7 +169,7 @@ def _draw_curves(ax: Any, curves: Sequence[Curve], target: float) -> None:
         if t[-1] < end:
             t, m, lo, hi = (np.append(t, end), np.append(m, m[-1]), np.append(lo, lo[-1]), np.append(hi, hi[-1]))
         x = seconds(t)
-        ax.plot(x, 100 * m, color=colour(c.colour), gid=GID + c.label,
+        ax.plot(x, 100 * m, **line_style(c.colour), gid=GID + c.label,
                 label=_text(f"{c.label} ({c.successes}/{c.runs} reached)"))
         if np.any(np.isfinite(lo)):
             ax.fill_between(x, np.clip(100 * lo, 0, 100), np.clip(100 * hi, 0, 100), color=colour(c.colour),
@@ -201,11 +210,11 @@ def cactus_figure(lines: Sequence[Times], title: str, target: float, max_ticks: 
         lo, hi = (float(every.min()), float(every.max())) if len(every) else (floor, float(seconds(max_ticks)))
         for line, y in zip(lines, done_s):
             label = _text(f"{line.label} ({len(y)}/{len(line.ttt)})")
-            cactus.plot(np.arange(1, len(y) + 1), y, marker="o", ms=2.5, lw=1, color=colour(line.colour),
+            cactus.plot(np.arange(1, len(y) + 1), y, marker="o", ms=2.5, lw=1, **line_style(line.colour),
                         label=label, gid=GID + line.label)
             frac = np.arange(1, len(y) + 1) / max(len(line.ttt), 1)
             ecdf.step(np.r_[lo / 10, y, hi * 10], np.r_[0, frac, frac[-1] if len(frac) else 0], where="post",
-                      color=colour(line.colour), label=label, gid=GID + line.label)
+                      **line_style(line.colour), label=label, gid=GID + line.label)
         _time_axis(cactus, "y", every, floor)
         _time_axis(ecdf, "x", every, floor)
         cactus.xaxis.set_major_locator(MaxNLocator(integer=True))

@@ -89,6 +89,11 @@ def check_figure(fig: Figure) -> list[str]:
     for label, hexes in series_colours(fig).items():
         if len(hexes) > 1 or not hexes <= {c.lower() for c in figures.PALETTE}:
             problems.append(f"{label}: colours {sorted(hexes)} are not one colour of the palette")
+    for ax in axes:
+        styles = {line.get_gid(): (to_hex(line.get_color()), line.get_linestyle()) for line in ax.get_lines()
+                  if (line.get_gid() or "").startswith(figures.GID)}
+        if len(set(styles.values())) < len(styles):
+            problems.append(f"two lines of one panel look the same: {styles}")
     return problems
 
 
@@ -192,6 +197,7 @@ def test_the_checker_fails_a_figure_made_the_old_way():
     ax = fig.add_subplot()
     ax.plot([1, 2], [900, 1000], color="#1f77b4", gid=figures.GID + "greed")  # tab10 blue
     ax.plot([1, 2], [950, 990], color=figures.colour(1), gid=figures.GID + "greed")
+    ax.plot([1, 2], [920, 960], color=figures.colour(1), gid=figures.GID + "frontier")  # as greed's second line
     ax.fill_between([1, 2], [0, 1], [1, 2])
     ax.set_yscale("log")
     ax.set_ylim(850, 1100)
@@ -200,7 +206,7 @@ def test_the_checker_fails_a_figure_made_the_old_way():
     fig.canvas.draw()
     problems = "\n".join(check_figure(fig))
     for needle in ("time not in seconds", "without a unit: 'explored'", "labels fewer than 3 ticks",
-                   "does not say what it is", "not one colour of the palette"):
+                   "does not say what it is", "not one colour of the palette", "look the same"):
         assert needle in problems
 
 
@@ -212,3 +218,13 @@ def test_cli_figure_width_column_is_recorded_and_sizes_the_pngs(tmp_path):
     assert "--figure-width column" in (tmp_path / "rep/README.md").read_text()
     png = Image.open(tmp_path / "rep/curves/algorithms__building_40_2_together_global.png")
     assert png.size[0] == round(figures.WIDTHS["column"] * 300)
+
+
+def test_more_lines_than_colours_differ_in_dashes():
+    """A sweep of 12 values: the ninth line repeats the first colour, dashed."""
+    curves = [figures.Curve(f"v{k}", k, np.array([0, 10]), np.array([0.1, 0.5]), np.full(2, np.nan),
+                            np.full(2, np.nan), 1, 0) for k in range(12)]
+    fig = figures.curves_figure(curves, "sweep", 0.98, figures.WIDTHS["page"])
+    assert check_figure(fig) == []
+    same = [line for line in fig.axes[0].get_lines() if to_hex(line.get_color()) == figures.PALETTE[0].lower()]
+    assert sorted(line.get_linestyle() for line in same) == ["-", "--"]
