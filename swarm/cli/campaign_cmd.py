@@ -248,7 +248,9 @@ def status_cmd(folder: Path) -> None:
 @click.option("--maes-csv", "maes_csv", is_flag=True,
               help="Also write one MAES statistics CSV per run (MAES's header and file naming) into maes-csv/.")
 @click.option("--format", "fmt", type=click.Choice(["png", "svg", "pdf"]), default="png", show_default=True,
-              help="Figure file format.")
+              help="Figure file format (a PDF copy of every figure is written too).")
+@click.option("--figure-width", "figure_width", type=click.Choice(["page", "column"]), default="page",
+              show_default=True, help="Figure width: a journal page (7.16 in, two columns) or one column (3.5 in).")
 @click.option("--figures", "figures_file", type=click.Path(path_type=Path), default=None,
               help="A figure layout TOML: multi-panel figures drawn first (e.g. examples/minotaur-paper-figures.toml).")
 @click.option("--cell-figures/--no-cell-figures", "cell_figures", default=True, show_default=True,
@@ -256,7 +258,7 @@ def status_cmd(folder: Path) -> None:
 @click.option("--force", is_flag=True,
               help="Rebuild even if the report is up to date (same results, options and swarm version).")
 @click.option("--quiet", is_flag=True, help="No progress output.")
-def report_cmd(folder: Path, output: Path | None, target: float, maes_csv: bool, fmt: str,
+def report_cmd(folder: Path, output: Path | None, target: float, maes_csv: bool, fmt: str, figure_width: str,
                figures_file: Path | None, cell_figures: bool, force: bool, quiet: bool) -> None:
     """Curves, cactus/ECDF plots, paired comparisons and tables of the results in DIR.
 
@@ -266,5 +268,6 @@ def report_cmd(folder: Path, output: Path | None, target: float, maes_csv: bool,
 
     check_target(target)
     readme, built = _report(folder, output or folder / "report", quiet=quiet, force=force, target=target,
-                            maes_csv=maes_csv, fmt=fmt, figures_file=figures_file, cell_figures=cell_figures)
+                            maes_csv=maes_csv, fmt=fmt, figure_width=figure_width, figures_file=figures_file,
+                            cell_figures=cell_figures)
     click.echo(f"report: {readme}" + ("" if built else " (up to date; --force rebuilds it)"))

@@ -3,10 +3,10 @@
 Layout of the report folder::
 
     README.md                        everything below, linked, with the summary tables inline
-    curves/<cmp>__<cell>.png|.csv    explored % vs time, mean and 95 % band per line (csv: the plotted numbers)
-    cactus/<cmp>__<cell>.png         cactus + ECDF of ticks to target
-    paired/algorithms__<cell>.png    per-replicate scatter for every pair of algorithms
-    figures/<name>.png|.csv          with --figures: the multi-panel figures of a layout file (layout.py)
+    curves/<cmp>__<cell>.png|.pdf|.csv  explored % vs time, mean and 95 % band per line (csv: the plotted numbers)
+    cactus/<cmp>__<cell>.png|.pdf    cactus + ECDF of the time to target
+    paired/algorithms__<cell>.png|.pdf  per-replicate scatter for every pair of algorithms
+    figures/<name>.png|.pdf|.csv     with --figures: the multi-panel figures of a layout file (layout.py)
     tables/summary.md|.tex|.csv      per cell and algorithm: runs, successes, DNF, ticks to target
     tables/pooled.md|.tex|.csv       every cell pooled, per dimension and pair of values: paired statistics
     tables/paired.md|.tex|.csv       per cell and algorithm pair: wins, ties, ratio a/b with its 95 % CI,
@@ -19,6 +19,7 @@ Layout of the report folder::
     maes-csv/*.csv                   with --maes-csv: one MAES statistics CSV per run (+ maes-csv-index.csv)
     files.txt                        what this report wrote
 
+Every figure is in :mod:`.figures`' style (seconds, units, palette, 300 dpi) with a PDF copy beside it.
 ``<cmp>`` is the dimension compared inside a figure (``algorithms``, ``radio``, ``comm``; ``cells`` when
 nothing varies) and ``<cell>`` the labels of every other shown dimension in grid order, e.g.
 ``curves/algorithms__building_150_16_together_multiwall.png``.
@@ -38,7 +39,7 @@ from swarm.base.errors import InvalidInput
 from swarm.results.schema import LOCALIZATION_RUN_COLUMNS
 
 from ..store import ResultsStore
-from . import comm, comm_figures, effects, figures, stats, tables
+from . import comm, comm_figures, effects, figures, stats, tables, units
 from .contents import CommSection, FigureSet, LayoutFigure, PairedSection, Report
 from .layout import FigureLayout, check_layout, load_layout
 from .load import CampaignData, load
@@ -67,7 +68,7 @@ def check_target(target: Any) -> float:
 
 
 def command_line(results_dir: Path, report_dir: Path, target: float, maes_csv: bool, fmt: str,
-                 figures_file: Path | None = None, cell_figures: bool = True) -> str:
+                 figures_file: Path | None = None, cell_figures: bool = True, figure_width: str = "page") -> str:
     """The ``swarm`` command that builds this same report (what the README says made it)."""
     parts = ["swarm", "campaign", "report", str(results_dir), "-o", str(report_dir), "--target", f"{target:g}"]
     if figures_file is not None:
@@ -78,17 +79,21 @@ def command_line(results_dir: Path, report_dir: Path, target: float, maes_csv: b
         parts.append("--maes-csv")
     if fmt != "png":
         parts += ["--format", fmt]
+    if figure_width != "page":
+        parts += ["--figure-width", figure_width]
     return shlex.join(parts)
 
 
 def build_report(results_dir: str | Path, report_dir: str | Path, *, target: float = DEFAULT_TARGET,
                  maes_csv: bool = False, fmt: str = "png", figures_file: str | Path | None = None,
-                 cell_figures: bool = True, progress: "ReportProgress | None" = None) -> Path:
+                 cell_figures: bool = True, figure_width: str = "page",
+                 progress: "ReportProgress | None" = None) -> Path:
     """Write the report of ``results_dir`` into ``report_dir``; returns the path of its README.md.
 
     ``figures_file``: a figure layout (:mod:`.layout`) whose multi-panel figures are drawn first.
     ``cell_figures=False``: no per-cell curves, cactus and paired figures (tables and layout figures only;
     a 540-cell campaign has ~1,200 of them, ~70 MB: right for exploring, too much to publish).
+    ``figure_width``: ``page`` (7.16 in, two journal columns) or ``column`` (3.5 in), :data:`.figures.WIDTHS`.
     ``progress``: told each stage as it starts and each file as it is written."""
     from .readme import render
 
@@ -97,6 +102,8 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
     target = check_target(target)
     if fmt not in figures.FORMATS:
         raise InvalidInput("--format", fmt, ", ".join(figures.FORMATS))
+    if figure_width not in figures.WIDTHS:
+        raise InvalidInput("--figure-width", figure_width, ", ".join(figures.WIDTHS))
     results_dir, report_dir = Path(results_dir), Path(report_dir)
     layout_figs = load_layout(figures_file) if figures_file is not None else ()
     stage("loading results")
@@ -117,8 +124,9 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
               f"{data.every - 1} ticks late)")
     figures_path = Path(figures_file) if figures_file is not None else None
     rep = Report(data=data, target=target,
-                 command=command_line(results_dir, report_dir, target, maes_csv, fmt, figures_path, cell_figures),
-                 fmt=fmt, runs_t=runs_t, ttt_source=source,
+                 command=command_line(results_dir, report_dir, target, maes_csv, fmt, figures_path, cell_figures,
+                                      figure_width),
+                 fmt=fmt, width=figures.WIDTHS[figure_width], runs_t=runs_t, ttt_source=source,
                  layout_file=figures_path.name if figures_path is not None else None, cell_figures=cell_figures)
     if len(ok):
         stage("figures")
@@ -151,12 +159,28 @@ def comparisons(data: CampaignData) -> list[str | None]:
     return found or [None]  # nothing compared: one figure per cell
 
 
+def map_size(size: str) -> str:
+    """A map size label in metres (a tile is 1 m, maps/model.py): '150' -> '150 × 150 m', '120x80' ->
+    '120 × 80 m'; another label is kept."""
+    parts = size.lower().split("x")
+    if not all(p.strip().isdigit() for p in parts) or len(parts) > 2:
+        return f"size {size}"
+    w, h = (parts * 2)[:2]
+    return f"{w.strip()}\u00a0×\u00a0{h.strip()}\u00a0m"  # no-break spaces: a wrapped title keeps it whole
+
+
 def describe(values: dict[str, str]) -> str:
-    """A figure title from cell labels, e.g. 'building, size 150, 16 robots, spawn together, radio multiwall'."""
-    words = {"map": "{}", "size": "size {}", "robots": "{} robots", "spawn": "spawn {}", "algorithm": "algorithm {}",
+    """A figure title from cell labels, e.g. '150 × 150 m building, 16 robots, spawn together, radio
+    multiwall' (the map and its size in one phrase)."""
+    words = {"map": "{}", "robots": "{} robots", "spawn": "spawn {}", "algorithm": "algorithm {}",
              "radio": "radio {}", "comm": "comm {}", "transport": "transport {}"}
-    return ", ".join("1 robot" if (d, v) == ("robots", "1") else words[d].format(v) if d in words else f"{d} {v}"
-                     for d, v in values.items())
+    parts = []
+    for d, v in values.items():
+        if d == "size":
+            parts.append(f"{map_size(v)} {values['map']}" if "map" in values else map_size(v))
+        elif not (d == "map" and "size" in values):
+            parts.append("1 robot" if (d, v) == ("robots", "1") else words[d].format(v) if d in words else f"{d} {v}")
+    return ", ".join(parts)
 
 
 class _Names:
@@ -177,7 +201,7 @@ class _Names:
 def _curve_rows(label: str, ticks: np.ndarray, mean: np.ndarray, lo: np.ndarray, hi: np.ndarray,
                 n: np.ndarray) -> pd.DataFrame:
     """The numbers a curve plots, as the CSV written beside its figure."""
-    return pd.DataFrame({"line": label, "tick": ticks, "minutes": ticks / figures.TICKS_PER_MINUTE,
+    return pd.DataFrame({"line": label, "tick": ticks, "seconds": units.seconds(ticks),
                          "explored_mean_pct": np.round(100 * mean, 4), "ci95_low_pct": np.round(100 * lo, 4),
                          "ci95_high_pct": np.round(100 * hi, 4), "runs": n})
 
@@ -207,9 +231,11 @@ def _figures(rep: Report, out: ReportWriter, ok: pd.DataFrame, sampled: Any) -> 
                 rows.append(_curve_rows(label, sampled.cell_ticks[c], mean, lo, hi, n))
             max_ticks = float(rep.runs_t["max_ticks"].to_numpy()[np.concatenate(
                 [sampled.cell_rows[int(c)] for c in grp["cell"]])].max())
-            out.write(f"curves/{name}.{fmt}", figures.curves_figure(curves, title, rep.target, fmt))
+            figures.write_figure(out.write, f"curves/{name}",
+                                 figures.curves_figure(curves, title, rep.target, rep.width), fmt)
             out.write(f"curves/{name}.csv", tables.csv_text(pd.concat(rows, ignore_index=True)))
-            out.write(f"cactus/{name}.{fmt}", figures.cactus_figure(times, title, rep.target, max_ticks, fmt))
+            figures.write_figure(out.write, f"cactus/{name}",
+                                 figures.cactus_figure(times, title, rep.target, max_ticks, rep.width), fmt)
             rep.figures.append(FigureSet(compare, title, f"curves/{name}.{fmt}", f"cactus/{name}.{fmt}",
                                          f"curves/{name}.csv"))
 
@@ -256,7 +282,8 @@ def _layout_figures(rep: Report, out: ReportWriter, ok: pd.DataFrame, sampled: A
         if not any(curves for _, curves in panels):
             rep.notes.append(f"Figure `{fig.name}` of the layout has no finished runs to draw.")
             continue
-        out.write(f"figures/{fig.name}.{fmt}", figures.panels_figure(panels, fig.title, rep.target, fmt, fig.columns))
+        figures.write_figure(out.write, f"figures/{fig.name}",
+                             figures.panels_figure(panels, fig.title, rep.target, rep.width, fig.columns), fmt)
         out.write(f"figures/{fig.name}.csv", tables.csv_text(pd.concat(rows, ignore_index=True)))
         rep.layout_figures.append(LayoutFigure(fig.name, fig.title, f"figures/{fig.name}.{fmt}",
                                                f"figures/{fig.name}.csv", titles))
@@ -268,7 +295,8 @@ def _summary(rep: Report, out: ReportWriter) -> None:
     table = tables.summary_table(df, dims)
     pct = f"{100 * rep.target:g} %"
     _write_table(out, "summary", df, table, f"Ticks to {pct} explored per cell and algorithm "
-                 f"(campaign {rep.data.name}; means and medians over successful runs; DNF: target not reached).")
+                 f"(campaign {rep.data.name}; means, medians and quartiles Q1–Q3 over successful runs; DNF: target "
+                 "not reached; a tick is 0.1 s).", tables.summary_latex_table(df, dims))
     rep.summary, rep.summary_rows = table, len(df)
 
 
@@ -348,8 +376,8 @@ def _paired_figures(rep: Report, out: ReportWriter, pairs: pd.DataFrame, cell: l
                                             (~pg["ok_a"] | ~pg["ok_b"]).to_numpy(bool), int((w == "a").sum()),
                                             int((w == "b").sum()), int((w == "tie").sum())))
         name = names("algorithms", values)
-        path = f"paired/{name}.{rep.fmt}"
-        out.write(path, figures.paired_figure(panels, describe(values), max_ticks, rep.fmt))
+        path = figures.write_figure(out.write, f"paired/{name}",
+                                    figures.paired_figure(panels, describe(values), max_ticks, rep.width), rep.fmt)
         rep.paired_figures.append((describe(values), path))
 
 
@@ -372,11 +400,19 @@ def _comm(rep: Report, out: ReportWriter) -> None:
                  "(not judged in 1-robot cells, where every model gives the same run).")
 
 
-AGAINST_METRICS = (("ttt_or_max", "ticks to target\n(DNF = max)"), ("missing_pct", "missing (%)"),
+AGAINST_METRICS = (("ttt_or_max", "time to target (s)\n(DNF = max)"), ("missing_pct", "missing (%)"),
                    ("aoi_age_s", "AoI age (s)"), ("delivered_pct", "delivered (%)"))
-OVER_TIME = (("missing_free_mean", "missing (%)", 100.0, "share of the team's known free cells a robot misses"),
-             ("aoi_age_mean", "AoI age (s)", 0.1, "age of a robot's information about the others"),
-             ("biggest_group", "biggest group (%)", 100.0, "the biggest communication group's share of the robots"))
+def _percent(fraction: np.ndarray) -> np.ndarray:
+    return 100.0 * fraction
+
+
+OVER_TIME: tuple[tuple[str, str, Callable[[np.ndarray], np.ndarray], str], ...] = (
+    ("missing_free_mean", "missing (%)", _percent, "share of the team's known free cells a robot misses"),
+    ("aoi_age_mean", "AoI age (s)", units.seconds, "age of a robot's information about the others"),
+    ("biggest_group", "biggest group (%)", _percent, "the biggest communication group's share of the robots"))
+"""Comm metrics over time: column, y label, conversion from the recorded unit (fraction, ticks), panel title."""
+AGAINST_TICKS = ("ttt_or_max",)
+"""Metrics of :data:`AGAINST_METRICS` in ticks: drawn in seconds."""
 MAX_AGAINST_PANELS = 6
 
 
@@ -472,7 +508,8 @@ def _against_figure(rep: Report, out: ReportWriter, multi: pd.DataFrame, dim: st
                     v = runs.loc[runs[dim].astype(str) == lab, key].to_numpy(float)
                     stacked[:len(v), j] = v
                 mean, lo, hi, n = stats.mean_band(stacked)
-                line.bands[key] = comm_figures.Band(mean, lo, hi)
+                shown = units.seconds if key in AGAINST_TICKS else np.asarray  # the CSV keeps ticks
+                line.bands[key] = comm_figures.Band(shown(mean), shown(lo), shown(hi))
                 rows.append(pd.DataFrame({"panel": title, "algorithm": alg, "metric": key, "value": labels,
                                           "mean": mean, "ci95_low": lo, "ci95_high": hi, "runs": n}))
             lines.append(line)
@@ -483,8 +520,8 @@ def _against_figure(rep: Report, out: ReportWriter, multi: pd.DataFrame, dim: st
     title = f"Exploration time and communication against {what} (" + (
         f"pooled over {', '.join(pooled)}; " if pooled else "") + f"{left_out})"
     xlabel = tables.header(dim) if dim not in ("radio", "comm") else what
-    out.write(f"{name}.{rep.fmt}", comm_figures.against_figure(panels, AGAINST_METRICS, xlabel, (x, labels), title,
-                                                               rep.fmt))
+    figures.write_figure(out.write, name, comm_figures.against_figure(panels, AGAINST_METRICS, xlabel, (x, labels),
+                                                                      title, rep.width), rep.fmt)
     out.write(f"{name}.csv", tables.csv_text(pd.concat(rows, ignore_index=True)))
     rep.communication.against.append((title, f"{name}.{rep.fmt}", f"{name}.csv"))
 
@@ -507,14 +544,14 @@ def _over_time_figures(rep: Report, out: ReportWriter, ok: pd.DataFrame, store: 
             for _, cell in grp.iterrows():
                 c = int(cell["cell"])
                 sampled_c = sampled[column]
-                mean, lo, hi, _ = stats.mean_band(scale * sampled_c.cell_values[c].astype(np.float64))
+                mean, lo, hi, _ = stats.mean_band(scale(sampled_c.cell_values[c].astype(np.float64)))
                 label = str(cell[compare])
                 series.append(comm_figures.Series(label, data.orders[compare].index(label), sampled_c.cell_ticks[c],
                                                   comm_figures.Band(mean, lo, hi), len(sampled_c.cell_rows[c])))
             panels.append((panel_title, ylabel, series))
-        name = f"comm/{names(PREFIX.get(compare) or slug(compare), values)}.{rep.fmt}"
         title = describe(values)
-        out.write(name, comm_figures.over_time_figure(panels, title, rep.fmt))
+        name = figures.write_figure(out.write, f"comm/{names(PREFIX.get(compare) or slug(compare), values)}",
+                                    comm_figures.over_time_figure(panels, title, rep.width), rep.fmt)
         rep.communication.over_time.append((title, name))
 
 
@@ -558,14 +595,12 @@ def _collisions(rep: Report, out: ReportWriter) -> None:
     """Per cell, the medians of the contacts begun with walls and with other robots per robot-hour of simulated
     time (``tables/collisions``); skipped for results older than the split (no columns) and for runs without a
     contact."""
-    from swarm.world.motion import TICK_S
-
     data = rep.data
     runs = data.runs[data.runs["status"] == "ok"]
     columns = [c for c, _ in COLLISIONS if c in runs and runs[c].notna().any()]
     if not columns or not runs[columns].fillna(0).to_numpy().any():
         return
-    hours = pd.to_numeric(runs["robots"], errors="coerce") * runs["ticks"] * TICK_S / 3600
+    hours = pd.to_numeric(runs["robots"], errors="coerce") * units.seconds(runs["ticks"]) / 3600
     rates = pd.DataFrame({c: runs[c] / hours.where(hours > 0) for c in columns})
     dims = [d for d in data.all_dims if runs[d].nunique() > 1] or list(data.all_dims[:1])
     rates[dims] = runs[dims]
@@ -581,9 +616,11 @@ def _collisions(rep: Report, out: ReportWriter) -> None:
     rep.collisions, rep.collisions_rows = table, len(df)
 
 
-def _write_table(out: ReportWriter, name: str, df: pd.DataFrame, table: tables.Table, caption: str) -> None:
+def _write_table(out: ReportWriter, name: str, df: pd.DataFrame, table: tables.Table, caption: str,
+                 latex_table: tables.Table | None = None) -> None:
+    """Markdown, LaTeX (``latex_table`` when a paper shows fewer columns) and CSV of one table."""
     out.write(f"tables/{name}.md", f"*{caption}*\n\n" + tables.markdown(table))
-    out.write(f"tables/{name}.tex", tables.latex(table, caption, f"tab:{name.replace('_', '-')}"))
+    out.write(f"tables/{name}.tex", tables.latex(latex_table or table, caption, f"tab:{name.replace('_', '-')}"))
     out.write(f"tables/{name}.csv", tables.csv_text(df))
 
 

@@ -33,8 +33,8 @@ import pandas as pd
 from swarm.results.schema import DROP_CAUSES
 from . import effects
 from .tables import Table, header, p_value
+from .units import seconds
 
-TICKS_PER_S = 10
 METRICS = {
     "delivered_pct": "Delivered %",
     "missing_pct": "Missing %",
@@ -81,8 +81,8 @@ def derive(runs_t: pd.DataFrame) -> pd.DataFrame:
             out[f"lost_{cause}_pct"] = share(f"msgs_{cause}")
     out["kb_sent"] = out["bytes_sent"].to_numpy(float) / 1000
     out["missing_pct"] = 100 * out["missing_free_mean"].to_numpy(float)
-    out["aoi_age_s"] = out["aoi_age_mean"].to_numpy(float) / TICKS_PER_S
-    out["contact_s"] = out["since_contact_mean"].to_numpy(float) / TICKS_PER_S
+    out["aoi_age_s"] = seconds(out["aoi_age_mean"].to_numpy(float))
+    out["contact_s"] = seconds(out["since_contact_mean"].to_numpy(float))
     out["biggest_pct"] = 100 * out["biggest_group_mean"].to_numpy(float)
     out["connected_pct"] = 100 * out["all_connected_share"].to_numpy(float)
     return out

@@ -84,6 +84,8 @@ class Report:
     fmt: str
     runs_t: pd.DataFrame
     ttt_source: str
+    width: float = 7.16
+    """Figure width in inches (:data:`.figures.WIDTHS`)."""
     figures: list[FigureSet] = field(default_factory=list)
     layout_figures: list[LayoutFigure] = field(default_factory=list)
     layout_file: str | None = None

@@ -417,7 +417,8 @@ def effects_table(df: pd.DataFrame, labels: Sequence[str], *, cells: bool = Fals
     head = [{"name": "Comparison", "dimension": "Dimension"}.get(c) or (header(c) if c in DIMS or is_axis(c) else c)
             for c in labels]
     head += (["Cells"] if cells else []) + ["Pairs"] + (["Maps"] if maps else [])
-    head += ["a faster", "b faster", "Ties", "DNF", "Median a", "Median b", "a/b (95 % CI)", "r", "p", "p (Holm)"]
+    head += ["a faster", "b faster", "Ties", "DNF", "Median a ticks", "Median b ticks", "a/b (95 % CI)", "r", "p",
+             "p (Holm)"]
     rows = []
     for _, r in df.iterrows():
         row = [str(r[c]) for c in labels] + ([str(int(r["cells"]))] if cells else []) + [str(int(r["pairs"]))]

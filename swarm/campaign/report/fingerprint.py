@@ -47,7 +47,7 @@ def _code_hash() -> str:
 
 
 DEFAULTS: dict[str, Any] = {"target": 0.98, "maes_csv": False, "fmt": "png", "figures_file": None,
-                            "cell_figures": True}
+                            "cell_figures": True, "figure_width": "page"}
 """:func:`.build.build_report`'s options and their defaults (a default given or left out is the same report)."""
 
 

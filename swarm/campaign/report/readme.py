@@ -44,8 +44,11 @@ def _head(rep: Report) -> str:
     lines += [f"- Made by: `{rep.command}`",
               f"- Target: **{_pct(rep.target)} explored**. Time to target is {rep.ttt_source}; a run that never "
               f"reaches it is DNF (did not finish), as in MAES.",
-              "- Time: a tick is 0.1 simulated seconds (600 ticks = 1 simulated minute). Curves are in simulated "
-              "minutes; tables, cactus and paired plots in ticks.", ""]
+              "- Time: a tick is 0.1 simulated seconds. Every figure is in simulated seconds; tables count "
+              "ticks (their headers say so).",
+              "- Figures: 300 dpi with a PDF copy beside each, sized for "
+              + ("one journal column (3.5 in)" if rep.width < 5 else "a full journal page (7.16 in)")
+              + "; colours are colour-blind safe (Okabe-Ito) and each label keeps its colour in every figure.", ""]
     return "\n".join(lines)
 
 
@@ -139,8 +142,9 @@ def _cactus(rep: Report) -> str:
     if not rep.figures:
         return ""
     lines = ["## Time to target: cactus and ECDF", "",
-             "Left: runs that reached the target sorted by ticks (log scale), as maes-csv-reader's cactus plot. "
-             "Right: the fraction of all runs done by a given tick; it stops at the success rate.", ""]
+             "Left: runs that reached the target sorted by their time to it, as maes-csv-reader's cactus plot "
+             "(log scale when the times span more than a decade). Right: the fraction of all runs done by a "
+             "given time; it stops at the success rate.", ""]
     for compare in dict.fromkeys(f.compare for f in rep.figures):
         lines += [f"### {section(compare)}", ""]
         lines += [f"- [{f.title}]({f.cactus})" for f in rep.figures if f.compare == compare]

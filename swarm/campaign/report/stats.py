@@ -86,18 +86,20 @@ def mean_band(values: np.ndarray, level: float = 0.95) -> tuple[np.ndarray, np.n
 
 # ---------------------------------------------------------------------------------------- summary ----
 def summary(runs_t: pd.DataFrame, dims: Sequence[str]) -> pd.DataFrame:
-    """One row per cell (every dimension in ``dims``), over ok runs: counts and ticks to target."""
+    """One row per cell (every dimension in ``dims``), over ok runs: counts and ticks to target (mean, median
+    and quartiles over the successes)."""
     ok = runs_t[runs_t["status"] == "ok"]
     g = ok.groupby(list(dims), observed=True, sort=True)
     out = g.agg(runs=("key", "size"), successes=("success", "sum"), timeouts=("timeout", "sum"),
                 mean_ticks=("ttt", "mean"), median_ticks=("ttt", "median"), mean_ticks_dnf_max=("ttt_or_max", "mean"),
-                fastest=("ttt", "min"), slowest=("ttt", "max")).reset_index()
+                fastest=("ttt", "min"), slowest=("ttt", "max"), q1_ticks=("ttt", lambda t: t.quantile(0.25)),
+                q3_ticks=("ttt", lambda t: t.quantile(0.75))).reset_index()
     out["successes"] = out["successes"].astype(int)
     out["timeouts"] = out["timeouts"].astype(int)
     out["dnf"] = out["runs"] - out["successes"]
     out["success_rate"] = out["successes"] / out["runs"]
     return out[[*dims, "runs", "successes", "success_rate", "dnf", "timeouts", "mean_ticks", "median_ticks",
-                "mean_ticks_dnf_max", "fastest", "slowest"]]
+                "q1_ticks", "q3_ticks", "mean_ticks_dnf_max", "fastest", "slowest"]]
 
 
 # ---------------------------------------------------------------------------------------- paired ----

@@ -1,6 +1,8 @@
-"""Tables as text: Markdown for the README, LaTeX ``table*`` as maes-csv-reader writes, CSV for machines.
+"""Tables as text: Markdown for the README, LaTeX ``table*`` (booktabs) for a paper, CSV for machines.
 
-Numbers are formatted here, once, so the Markdown and LaTeX versions of a table always agree.
+Numbers are formatted here, once, so the Markdown and LaTeX versions of a table always agree. The LaTeX
+version leaves out the columns that are the same in every row (the caption states them once); the summary's
+LaTeX version is a paper's selection of its columns (:func:`summary_latex_table`).
 """
 
 from __future__ import annotations
@@ -67,13 +69,28 @@ def p_value(p: float) -> str:
 
 def summary_table(df: pd.DataFrame, dims: Sequence[str]) -> Table:
     headers = [header(d) for d in dims] + ["Runs", "Successes", "Success rate", "DNF", "Timeouts", "Mean ticks",
-                                           "Median ticks", "Mean ticks (DNF = max)", "Fastest", "Slowest"]
+                                           "Median ticks", "Mean ticks (DNF = max)", "Fastest ticks",
+                                           "Slowest ticks"]
     rows = [[str(r[d]) for d in dims] + [str(r["runs"]), str(r["successes"]), rate(r["success_rate"]), str(r["dnf"]),
                                          str(r["timeouts"]), ticks(r["mean_ticks"]), ticks(r["median_ticks"]),
                                          ticks(r["mean_ticks_dnf_max"], "–"), ticks(r["fastest"]),
                                          ticks(r["slowest"])]
             for _, r in df.iterrows()]
     return Table(headers, rows, [False] * len(dims) + [True] * 10)
+
+
+def summary_latex_table(df: pd.DataFrame, dims: Sequence[str]) -> Table:
+    """The summary as a paper shows it: per cell, runs that reached the target, the median ticks to target with
+    its interquartile range (over those runs) and the mean with DNF counted at ``max_ticks``."""
+    headers = [header(d) for d in dims] + ["Reached", "Median ticks", "Q1–Q3 ticks", "Mean ticks (DNF = max)"]
+    rows = [[str(r[d]) for d in dims] + [f"{r['successes']}/{r['runs']}", ticks(r["median_ticks"], "–"),
+                                         interval(r["q1_ticks"], r["q3_ticks"]), ticks(r["mean_ticks_dnf_max"], "–")]
+            for _, r in df.iterrows()]
+    return Table(headers, rows, [False] * len(dims) + [True] * 4)
+
+
+def interval(lo: float, hi: float) -> str:
+    return "–" if pd.isna(lo) or pd.isna(hi) else f"{ticks(lo)}–{ticks(hi)}"
 
 
 def comm_table(df: pd.DataFrame, cell: Sequence[str], labels: Sequence[str]) -> Table:
@@ -114,13 +131,21 @@ def latex_escape(text: str) -> str:
 
 
 def latex(table: Table, caption: str, label: str) -> str:
-    """A ``table*`` (full text width) as maes-csv-reader writes its tables."""
-    spec = "".join("r" if num else "l" for num in table.numeric)
+    """A ``table*`` (full text width) with booktabs rules (``\\usepackage{booktabs}``); a column with the same
+    value in every row (of two or more) is left out and named once in the caption."""
+    n = len(table.headers)
+    same = [len(table.rows) > 1 and len({row[j] for row in table.rows}) == 1 for j in range(n)]
+    same = [False] * n if all(same) else same
+    keep = [j for j in range(n) if not same[j]]
+    if any(same):
+        caption += " In every row: " + "; ".join(f"{table.headers[j]}: {table.rows[0][j]}" for j in range(n)
+                                                 if same[j]) + "."
+    spec = "".join("r" if table.numeric[j] else "l" for j in keep)
     out = ["\\begin{table*}[t]", "\\centering", f"\\caption{{{latex_escape(caption)}}}", f"\\label{{{label}}}",
-           f"\\begin{{tabular}}{{{spec}}}", "\\hline",
-           " & ".join(latex_escape(h) for h in table.headers) + " \\\\", "\\hline"]
-    out += [" & ".join(latex_escape(c) for c in row) + " \\\\" for row in table.rows]
-    out += ["\\hline", "\\end{tabular}", "\\end{table*}"]
+           f"\\begin{{tabular}}{{{spec}}}", "\\toprule",
+           " & ".join(latex_escape(table.headers[j]) for j in keep) + " \\\\", "\\midrule"]
+    out += [" & ".join(latex_escape(row[j]) for j in keep) + " \\\\" for row in table.rows]
+    out += ["\\bottomrule", "\\end{tabular}", "\\end{table*}"]
     return "\n".join(out) + "\n"
 
 

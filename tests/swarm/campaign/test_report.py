@@ -176,6 +176,18 @@ def test_summary_matches_hand_computed_values(synthetic):
     assert "| building | 20 | 2 | together | global | greed | 6 | 5 | 83.3 % | 1 | 1 | 300 | 300 | 416.7 | 100 | 500 |" in md
 
 
+def test_latex_summary_has_booktabs_rules_varying_columns_and_an_interval(synthetic):
+    _, report = synthetic
+    tex = (report / "tables/summary.tex").read_text()
+    assert "\\hline" not in tex and tex.count("\\toprule") == tex.count("\\midrule") == tex.count("\\bottomrule") == 1
+    assert "In every row: Map: building; Size: 20; Robots: 2; Spawn: together." in tex  # constant: in the caption
+    assert "\\begin{tabular}{llrrrr}" in tex
+    assert "Radio & Algorithm & Reached & Median ticks & Q1--Q3 ticks & Mean ticks (DNF = max) \\\\" in tex
+    assert "global & greed & 5/6 & 300 & 200--400 & 416.7 \\\\" in tex  # quartiles of 100..500
+    s = csv(report, "summary").set_index(["radio", "algorithm"])
+    assert (s.loc[("global", "greed"), "q1_ticks"], s.loc[("global", "greed"), "q3_ticks"]) == (200, 400)
+
+
 def test_paired_comparison_matches_hand_computed_values(synthetic):
     _, report = synthetic
     p = csv(report, "paired").set_index("radio")
