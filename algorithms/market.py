@@ -1,7 +1,8 @@
 """Market-based (cost-utility) frontier assignment: Burgard, Moors, Stachniss and Schneider,
 "Coordinated multi-robot exploration", IEEE Transactions on Robotics 21(3), 2005 (docs/baselines.md).
 
-What the paper does, and what this module follows (section numbers of the T-RO article):
+What the paper does, and what this module follows (section numbers of the T-RO article, as recalled: the
+article's text was not at hand when this was written, so check them against it):
 
 - **Targets (section III).** Every frontier cell -- a known-free cell next to unexplored space -- is a
   candidate target point. Here the candidates are the drivable cells (configuration space) from which a
