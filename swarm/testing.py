@@ -143,7 +143,7 @@ def check_explorer(explorer: type | str, *, map_kind: str = "building", size: in
     """
     wanted = _wanted(checks)
     for t in transports:
-        if t not in ("inprocess", "zenoh"):
+        if not isinstance(t, str) or t not in ("inprocess", "zenoh"):
             raise InvalidInput("transports", t, "'zenoh' (or 'inprocess')")
     label = explorer if isinstance(explorer, str) else getattr(explorer, "__qualname__", short_repr(explorer))
     checker = _Checker(label, wanted, progress)
@@ -172,11 +172,14 @@ def _wanted(checks: Iterable[str] | None) -> frozenset[str]:
         return frozenset(CHECKS)
     if isinstance(checks, str):
         checks = (checks,)
-    chosen = frozenset(checks)
+    try:
+        chosen = tuple(checks)
+    except TypeError:
+        raise InvalidInput("checks", checks, "a check name or a list of them: " + " | ".join(CHECKS)) from None
     for c in chosen:
-        if c not in CHECKS:
+        if not isinstance(c, str) or c not in CHECKS:
             raise InvalidInput("checks", c, " | ".join(CHECKS))
-    return chosen
+    return frozenset(chosen)
 
 
 class _Checker:
@@ -500,7 +503,7 @@ def action_problem(action: Any) -> str | None:
         return f"Action.clear_goal is {short_repr(action.clear_goal, 60)}; allowed: True or False"
     if action.debug is not None and not isinstance(action.debug, Mapping):
         return f"Action.debug is a {type(action.debug).__name__}; allowed: None or a mapping"
-    if action.drive not in DRIVES:
+    if not isinstance(action.drive, str) or action.drive not in DRIVES:
         return f"Action.drive is {short_repr(action.drive, 60)}; allowed: {', '.join(map(repr, DRIVES))}"
     return None
 

@@ -110,7 +110,7 @@ class _Lazy:
 def check_action(action: object, robot: int) -> Action:
     if not isinstance(action, Action):
         raise TypeError(f"robot {robot}: act() returned {type(action).__name__}, expected swarm.api.Action")
-    if action.drive not in DRIVES:
+    if not isinstance(action.drive, str) or action.drive not in DRIVES:
         raise TypeError(f"robot {robot}: Action.drive is {short_repr(action.drive, 40)}; allowed: "
                         f"{', '.join(map(repr, DRIVES))}")
     return action

@@ -267,6 +267,13 @@ def test_a_passing_explorer_with_a_subset_of_checks():
 def test_bad_options_are_invalid_input_not_a_failed_check():
     with pytest.raises(InvalidInput, match="checks"):
         check_explorer(Nearest, checks=["speed"])
+    for array in (np.array([1, 2]), np.array(["contract", "determinism"])):   # not numpy's truth-value error
+        with pytest.raises(InvalidInput, match="checks"):
+            check_explorer(Nearest, checks=[array])
+        with pytest.raises(InvalidInput, match="transports"):
+            check_explorer(Nearest, transports=[array])
+    with pytest.raises(InvalidInput, match="checks"):
+        check_explorer(Nearest, checks=3)
     with pytest.raises(InvalidInput, match="robots.count"):
         check_explorer(Nearest, robots=0)
     with pytest.raises(InvalidInput, match="algorithm.name"):
@@ -379,3 +386,14 @@ def test_distribution_of_registered_and_path_algorithms():
     assert registry.distribution(f"{__name__}:Nearest") is None, "a test module is in no installed distribution"
     with pytest.raises(InvalidInput, match="algorithm.name"):
         registry.distribution("no-such-explorer")
+
+
+def test_a_drive_that_is_not_a_string_is_named_not_a_numpy_error():
+    from swarm.testing import action_problem
+    from swarm.transport.inprocess import check_action
+
+    bad = Action(goal=(1.0, 1.0), drive=np.array(["path", "runs"]))
+    assert action_problem(bad).startswith("Action.drive is")
+    with pytest.raises(TypeError, match="Action.drive"):
+        check_action(bad, 3)
+    assert action_problem(Action(goal=(1.0, 1.0), drive="runs")) is None
