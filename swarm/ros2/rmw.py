@@ -100,7 +100,7 @@ def check_topic(topic: object, field: str = "topic") -> str:
 
 
 def check_distro(distro: object, field: str = "--ros-distro") -> str:
-    if distro not in DISTROS:
+    if not isinstance(distro, str) or distro not in DISTROS:
         raise InvalidInput(field, distro, f"one of {', '.join(DISTROS)}")
     return str(distro)
 
