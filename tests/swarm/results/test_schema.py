@@ -10,7 +10,8 @@ import pyarrow as pa
 from swarm.campaign import make_executor, parse_campaign, run_campaign
 from swarm.campaign.runner import runs_row
 from swarm.campaign.store import ResultsStore
-from swarm.results.schema import RUNS, THRESHOLD_COLUMNS, TIMESERIES, MessageCounts, Summary, dropped, summary_columns
+from swarm.results.schema import (OPTIONAL_TIMESERIES, RUNS, THRESHOLD_COLUMNS, TIMESERIES, MessageCounts, Summary,
+                                  dropped, summary_columns)
 from swarm.sim.loop import Simulation
 from swarm.util.source import source_commit, version_label
 
@@ -26,7 +27,9 @@ def test_a_runs_summary_and_time_series_have_the_schemas_fields():
     assert set(r.summary["messages"]) == MessageCounts.__required_keys__
     relaying = Simulation({**SPEC, "comm": {"relay": "flood"}}).run()  # the relaying counts come with relaying
     assert set(relaying.summary["messages"]) == set(typing.get_type_hints(MessageCounts))
-    assert list(r.timeseries) == list(TIMESERIES)
+    assert list(r.timeseries) == [c for c in TIMESERIES if c not in OPTIONAL_TIMESERIES]
+    located = Simulation({**SPEC, "localization": {"model": "bounded"}}).run()   # the optional columns come with it
+    assert list(located.timeseries) == list(TIMESERIES)
     assert r.timeseries["msgs_dropped"][-1] == dropped(r.summary["messages"]) > 0, "one definition of dropped"
 
 
