@@ -20,6 +20,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Mapping
 
+import numpy as np
 import pandas as pd
 
 from swarm.base.errors import InvalidInput, shorten
@@ -206,12 +207,18 @@ def _keys(keys: Any) -> list[str] | None:
 def load_timeseries(folder: str | os.PathLike[str], keys: Any = None, labels: bool = True) -> pd.DataFrame:
     """The time series of the runs of a results folder (those of ``keys`` only, if given): one row per
     recorded tick with the run's ``key``, ``tick``, ``explored``, ``coverage`` and the comm metrics
-    (:data:`swarm.results.schema.TIMESERIES`); ``labels`` joins each run's grid cell (:data:`LABELS`), so
+    (:data:`swarm.results.schema.TIMESERIES`; ``explored_correct`` is NaN for runs without a localisation
+    model); ``labels`` joins each run's grid cell (:data:`LABELS`), so
     ``df.groupby(["algorithm", "tick"]).explored.mean()`` is a curve."""
+    from swarm.results.schema import OPTIONAL_TIMESERIES
+
     store = _store(folder)
     table = store.timeseries_table(_keys(keys))
     frame = table.to_pandas() if table is not None else pd.DataFrame({"key": pd.Series(dtype=object),
                                                                        "tick": pd.Series(dtype="int64")})
+    for col in OPTIONAL_TIMESERIES:
+        if col not in frame:
+            frame[col] = np.nan
     if labels:
         runs = load(folder)
         frame = frame.merge(runs[["key", *LABELS]], on="key", how="left")
