@@ -53,14 +53,13 @@ made no progress for ``deadlock_ticks``, and every ``recheck_ticks``.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from swarm.api import CELL_M, Action, Observation, RobotInfo, cell_centre, cell_of, check_float, check_int, grid
 from swarm.api.grid import DEFAULT_MARGIN_M, default_view_reach_cells
-from swarm.api.messages import MessageError, message
+from swarm.api.messages import message, require_finite
 
 from .recovery import Exclusions, Watchdog, unseen_near
 
@@ -78,9 +77,7 @@ class MarketPose:
     y: float
 
     def validate(self) -> None:
-        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-                   for v in (self.x, self.y)):
-            raise MessageError("market.pose: x and y must be finite numbers")
+        require_finite("market.pose", x=self.x, y=self.y)
 
 
 @dataclass(frozen=True)

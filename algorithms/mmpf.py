@@ -62,7 +62,7 @@ from scipy import ndimage
 
 from swarm.api import CELL_M, Action, Observation, RobotInfo, cell_centre, cell_of, check_float, check_int, grid
 from swarm.api.grid import DEFAULT_MARGIN_M, default_view_reach_cells
-from swarm.api.messages import MessageError, message
+from swarm.api.messages import message, require_finite
 
 from .recovery import Exclusions
 
@@ -81,9 +81,7 @@ class MMPFPose:
     y: float
 
     def validate(self) -> None:
-        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-                   for v in (self.x, self.y)):
-            raise MessageError("mmpf.pose: x and y must be finite numbers")
+        require_finite("mmpf.pose", x=self.x, y=self.y)
 
 
 @dataclass(frozen=True)

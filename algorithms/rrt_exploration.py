@@ -62,7 +62,7 @@ import numpy as np
 from scipy import ndimage
 
 from swarm.api import CELL_M, SOLID, UNSEEN, Action, Observation, RobotInfo, check_float, check_int, grid
-from swarm.api.messages import MessageError, message
+from swarm.api.messages import message, require_finite
 
 MEAN_SHIFT_MAX_ITER = 300          # scikit-learn's MeanShift default
 MIN_FRONTIER_GAIN_M2 = 0.2         # filter.py: informationGain(..., info_radius * 0.5) < 0.2 drops a centroid
@@ -78,9 +78,7 @@ class RRTGoal:
     y: float
 
     def validate(self) -> None:
-        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-                   for v in (self.x, self.y)):
-            raise MessageError("rrt.goal: x and y must be finite numbers")
+        require_finite("rrt.goal", x=self.x, y=self.y)
 
 
 @dataclass(frozen=True)

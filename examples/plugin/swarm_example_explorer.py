@@ -19,14 +19,13 @@ Copy this file, rename the class, ``name`` and the message type, and keep the ru
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from swarm.api import (CELL_M, UNSEEN, Action, Observation, RobotInfo, cell_centre, cell_of, check_float,
                        check_int, grid)
-from swarm.api.messages import MessageError, message
+from swarm.api.messages import message, require_finite
 
 LOOK_CELLS = 3   # a target is worth going to while unseen cells remain this close to it (1.5 m)
 
@@ -43,9 +42,7 @@ class Claim:
 
     def validate(self) -> None:
         """Called on every decoded Claim (messages from remote agents are untrusted bytes)."""
-        if not all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-                   for v in (self.x, self.y)):
-            raise MessageError("claimer.claim: x and y must be finite numbers")
+        require_finite("claimer.claim", x=self.x, y=self.y)
 
 
 @dataclass(frozen=True)

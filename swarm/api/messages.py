@@ -10,6 +10,8 @@ receiver's map when an algorithm sees it in its inbox).
 
 from __future__ import annotations
 
-from swarm.comm.messages import Heartbeat, MapRequest, MapUpdate, MessageError, decode, encode, message, registered
+from swarm.comm.messages import (Heartbeat, MapRequest, MapUpdate, MessageError, decode, encode, message, registered,
+                                 require_finite)
 
-__all__ = ["Heartbeat", "MapRequest", "MapUpdate", "MessageError", "decode", "encode", "message", "registered"]
+__all__ = ["Heartbeat", "MapRequest", "MapUpdate", "MessageError", "decode", "encode", "message", "registered",
+           "require_finite"]

@@ -174,6 +174,14 @@ def _finite(v: Any) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
 
+def require_finite(type_name: str, **fields: Any) -> None:
+    """For a message's ``validate``: raise :class:`MessageError` naming ``type_name`` and the fields unless
+    every value is a finite int or float (a decoded message is untrusted: NaN, inf, bools and strings are
+    refused). Cost: a type check per value."""
+    if not all(_finite(v) for v in fields.values()):
+        raise MessageError(f"{type_name}: {' and '.join(fields)} must be finite numbers")
+
+
 _TUPLES: dict[type, tuple[int, ...]] = {}
 """Per message type, per field: how many levels of lists to turn back into tuples (2 for ``tuple[tuple...``,
 1 for another ``tuple``, 0 otherwise), read off the annotations once per type, not per message."""
