@@ -147,9 +147,10 @@ def render(costs: pd.DataFrame, qual: pd.DataFrame, avoid: pd.DataFrame | None, 
                 fmt(r["explored_correct"], True)] for _, r in qual.iterrows()],
               [False, False] + [True] * 8)
     lines += [markdown(t), "",
-              "*Explored* counts the cells the lidars have seen (the stop rule's fraction); *explored correctly* "
-              "the free cells some map holds free where they are. Perfect runs carry no map-quality columns: "
-              "their maps hold what was seen where it is.", ""]
+              "*Explored* is the report's explored fraction at the end of the run: for runs with a localisation "
+              "model that recorded it over time, the correctly known cells (as *explored correctly*), else the "
+              "cells the lidars have seen. Perfect runs carry no map-quality columns: their maps hold what was "
+              "seen where it is.", ""]
     if avoid is not None:
         off, on = avoid.attrs["labels"]
         lines += [f"## 3. Avoidance: `{on}` against `{off}`", "",
