@@ -78,7 +78,7 @@ import numpy as np
 from swarm.api import OMIT_DEFAULT, Action, Observation, RobotInfo, cell_centre, cell_of, check_choice, check_int, grid
 from swarm.api.grid import DEFAULT_MARGIN_M, default_view_reach_cells
 
-from .recovery import Backoff, Exclusions, Watchdog, check_recovery_params, unseen_near
+from .recovery import Backoff, Exclusions, Watchdog, check_recovery_params, gave_up, unseen_near
 
 
 VARIANTS = ("swarm", "maes")
@@ -149,12 +149,7 @@ class Greed:
         if self.target is None:
             return obs.tick >= self.next_look
         nav = obs.nav if obs.nav.goal == self.goal else None  # a status about an older goal says nothing
-        if nav is not None and nav.state in ("unreachable", "blocked"):
-            self.exclusions.add(self.target, obs.tick)
-            return True
-        if self.watchdog.stuck(obs):
-            self.exclusions.add(self.target, obs.tick)
-            self.watchdog.restart(obs)
+        if gave_up(obs, nav, self.target, self.exclusions, self.watchdog):
             return True
         if self.rechoose:
             return True

@@ -61,7 +61,7 @@ from swarm.api import CELL_M, Action, Observation, RobotInfo, cell_centre, cell_
 from swarm.api.grid import DEFAULT_MARGIN_M, default_view_reach_cells
 from swarm.api.messages import message, require_finite
 
-from .recovery import Exclusions, Watchdog, unseen_near
+from .recovery import Exclusions, Watchdog, gave_up, unseen_near
 
 _STOP = Action(velocity=(0.0, 0.0), clear_goal=True)
 SNAP_CELLS = 4   # a robot standing inside inflated space is costed from the drivable cell nearest it
@@ -174,12 +174,7 @@ class Market:
         if self.target is None:
             return True
         nav = obs.nav if obs.nav.goal == self.goal else None
-        if nav is not None and nav.state in ("unreachable", "blocked"):
-            self.exclusions.add(self.target, obs.tick)
-            return True
-        if self.watchdog.stuck(obs):
-            self.exclusions.add(self.target, obs.tick)
-            self.watchdog.restart(obs)
+        if gave_up(obs, nav, self.target, self.exclusions, self.watchdog):
             return True
         if nav is not None and nav.state == "reached":   # seen what it can from there (a corner may hide
             self.exclusions.add(self.target, obs.tick)    # the rest): do not choose it again at once

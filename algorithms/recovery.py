@@ -10,6 +10,7 @@ sections 7.3 and 7.4). The runtime here already plans with clearance and reports
 - :class:`Watchdog`: MAES Greed's deadlock rule ("position unchanged at 5 checks 10 ticks apart") as a
   radius: a robot that stayed within ``radius_m`` of one spot for ``ticks`` ticks while it had a target is
   deadlocked (pushing against another robot, oscillating between two plans, pinned in a corner).
+- :func:`gave_up`: the rule both apply to their target (unreachable, blocked or stuck: excluded).
 - :class:`Exclusions`: targets given up on, each a disc kept out of target selection for a while. MAES
   excludes the failed cell for the single re-targeting call that follows; a lasting, time-limited disc is
   what stops the next call from picking the cell right next to it.
@@ -24,7 +25,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from swarm.api import CELL_M, FREE, Neighbours, Observation, cell_of, check_float, check_int
+from swarm.api import CELL_M, FREE, NavStatus, Neighbours, Observation, cell_of, check_float, check_int
 
 
 def check_recovery_params(p: Any) -> None:
@@ -129,6 +130,21 @@ class Exclusions:
             c0, c1 = max(c - k, 0), min(c + k + 1, shape[1])
             out[r0:r1, c0:c1] |= disc[r0 - r + k:r1 - r + k, c0 - c + k:c1 - c + k]
         return out
+
+
+def gave_up(obs: Observation, nav: NavStatus | None, target: tuple[int, int], exclusions: Exclusions,
+            watchdog: Watchdog) -> bool:
+    """True when the current target is given up: the navigator's status about the current goal (``nav``, None
+    if it is about an older one) says unreachable or blocked, or the watchdog finds the robot stuck (its window
+    then restarts). A given-up target joins ``exclusions``."""
+    if nav is not None and nav.state in ("unreachable", "blocked"):
+        exclusions.add(target, obs.tick)
+        return True
+    if watchdog.stuck(obs):
+        exclusions.add(target, obs.tick)
+        watchdog.restart(obs)
+        return True
+    return False
 
 
 def unseen_near(known: np.ndarray, cell: tuple[int, int], reach: int) -> bool:

@@ -158,7 +158,7 @@ from swarm.api import (CELL_M, OMIT_DEFAULT, Action, InvalidInput, Observation, 
 from swarm.api.grid import DEFAULT_MARGIN_M, configuration_space, default_view_reach_cells
 from swarm.api.messages import MessageError, message
 
-from .recovery import Backoff, Exclusions, Watchdog, check_recovery_params, unseen_near
+from .recovery import Backoff, Exclusions, Watchdog, check_recovery_params, gave_up, unseen_near
 from .tnf_utility import VARIANTS, FrontierScore, best_frontier, maes_sensed_position
 
 
@@ -335,12 +335,7 @@ class TNF:
         if self.target is None:
             return "own" if self.decide or obs.tick >= self.next_look else None
         nav = obs.nav if obs.nav.goal == self.goal else None  # a status about an older goal says nothing
-        if nav is not None and nav.state in ("unreachable", "blocked"):
-            self.exclusions.add(self.target, obs.tick)
-            return "own"
-        if self.watchdog.stuck(obs):
-            self.exclusions.add(self.target, obs.tick)
-            self.watchdog.restart(obs)
+        if gave_up(obs, nav, self.target, self.exclusions, self.watchdog):
             return "own"
         if self.decide or (nav is not None and nav.state == "reached"):
             return "own"
