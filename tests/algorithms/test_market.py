@@ -76,12 +76,6 @@ def test_bad_parameters_are_one_line_errors_naming_the_field(params, field):
     assert err.value.field == field and "\n" not in str(err.value)
 
 
-def test_passes_the_explorer_checker():
-    from swarm.testing import CHECKS, check_explorer
-
-    assert check_explorer(ALGORITHM).checks == CHECKS
-
-
 def test_four_robots_explore_a_50_tile_building():
     """Measured (seeds 1-3, 1,500 ticks): 0.73, 0.77, 0.78 explored (nearest frontier: 0.61, 0.68, 0.78);
     with 3,000 ticks all three reach the 0.99 stop in 2453, 2047, 2132 ticks (frontier 2505, 2309, 2169)."""
