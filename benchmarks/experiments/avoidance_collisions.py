@@ -16,6 +16,7 @@ import statistics
 import time
 
 from swarm.sim.loop import Simulation
+from swarm.world.motion import TICK_S
 
 
 def one(kind: str, seed: int, robots: int, size: int, algorithm: str) -> dict[str, float]:
@@ -28,10 +29,10 @@ def one(kind: str, seed: int, robots: int, size: int, algorithm: str) -> dict[st
     result = sim.run()
     cpu = time.process_time() - t0
     ticks = result.summary["ticks"]
-    hours = robots * ticks * 0.1 / 3600
+    hours = robots * ticks * TICK_S / 3600
     s = result.summary
     return {"robot_per_rh": s["collisions_robot"] / hours, "wall_per_rh": s["collisions_wall"] / hours, "ticks": ticks,
-            "ms_per_tick": 1000 * cpu / ticks, "explored": result.summary["explored"]}
+            "ms_per_tick": 1000 * cpu / ticks, "explored": s["explored"]}
 
 
 def main() -> None:

@@ -29,13 +29,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from swarm.campaign.report import effects
+from swarm.campaign.report import effects, units
 from swarm.campaign.report.tables import Table, markdown, p_value
 
 MODEL = "localization.model"
 LOC_AXES = (MODEL, "localization.drift_per_m", "localization.turn_drift_per_rad", "localization.sigma_m")
 AVOID = "navigation.avoidance"
-TICK_S = 0.1
 
 
 def conditions(runs: pd.DataFrame) -> list[tuple[str, dict[str, str]]]:
@@ -99,7 +98,7 @@ def avoidance(runs: pd.DataFrame) -> pd.DataFrame | None:
                    for n in sorted(runs["robots"].astype(str).unique(), key=int)]
     out = effects.compare_runs(runs, comparisons)
     ok = runs[runs["status"] == "ok"].copy()
-    hours = pd.to_numeric(ok["robots"]) * pd.to_numeric(ok["ticks"]) * TICK_S / 3600
+    hours = pd.to_numeric(ok["robots"]) * units.seconds(pd.to_numeric(ok["ticks"])) / 3600
     for kind in ("robot", "wall"):
         if f"collisions_{kind}" in ok:
             ok[f"{kind}_rh"] = pd.to_numeric(ok[f"collisions_{kind}"]) / hours
