@@ -92,10 +92,6 @@ def map_quality(known: np.ndarray, truth_solid: np.ndarray) -> dict[str, Any]:
     per = np.maximum(known_cells, 1)
     to_wall = ndimage.distance_transform_edt(~solid) * CELL_M          # metres to the nearest solid cell
     offsets = [float(to_wall[m == SOLID].mean()) if (m == SOLID).any() else 0.0 for m in known]
-    correct = np.zeros(solid.shape, dtype=np.bool_)
-    for m in known:
-        correct |= m == FREE
-    correct &= ~solid
     return {"known_cells": [int(v) for v in known_cells],
             "false_free": [float(v) for v in out[:, 1] / per],
             "false_occupied": [float(v) for v in out[:, 2] / per],
@@ -103,7 +99,7 @@ def map_quality(known: np.ndarray, truth_solid: np.ndarray) -> dict[str, Any]:
             "false_occupied_share": float(out[:, 2].sum() / total),
             "wall_offset_m": offsets,
             "wall_offset_mean_m": float(np.mean(offsets)) if offsets else 0.0,
-            "explored_correct": float(correct.sum() / max(int((~solid).sum()), 1))}
+            "explored_correct": float(_correct_free(known, ~solid) / max(int((~solid).sum()), 1))}
 
 
 __all__ = ["CorrectlyExplored", "map_quality"]
