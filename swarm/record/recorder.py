@@ -190,7 +190,7 @@ class Recorder:
     """Observer of one :class:`~swarm.sim.loop.Simulation` that records it (module docstring)."""
 
     def __init__(self, sim: Simulation, block_ticks: int = 256, rssi_quantum_db: float = 0.25,
-                 rssi_update_db: float = 1.0) -> None:
+                 rssi_update_db: float = 1.0, journal: bool = True) -> None:
         n = sim.spec.robots.count
         h, w = sim.truth.shape
         if n > 65535 or n * h * w >= _U32:
@@ -217,7 +217,11 @@ class Recorder:
         self._team_free = sim.comm_metrics.team_free
         self._pending: tuple[Sequence[Sequence[Any]], Any] | None = None  # last tick's (outboxes, links)
         sim.medium.note_losses = True
-        self._words = np.empty(n * h * w // 8 + 1, dtype=np.int64)   # scratch for changed_cells
+        # The maps are diffed where the run's journal says they were written (swarm.knowledge.journal), not
+        # whole: the same cells, at a cost that follows the writes instead of R x H x W bytes a tick.
+        # ``journal=False``: whole-map diffs (the reference the journal is tested against).
+        self._journal = sim.knowledge_journal() if journal else None
+        self._words = np.empty((h * w if journal else n * h * w) // 8 + 1, dtype=np.int64)  # changed_cells' scratch
         self._toggled = np.empty(n * n, dtype=np.int64)             # scratch for the link kernel
         self._rssi_idx = np.empty(n * n, dtype=np.int64)
         self._rssi_val = np.empty(n * n, dtype=np.int16)
@@ -281,7 +285,10 @@ class Recorder:
         b = self._block
         b.poses.append(np.array(poses, dtype=np.float64))
         b.metrics.append((float(tracker.explored), float(tracker.coverage)))
-        idx = changed_cells(known, self._known, self._words)
+        if self._journal is not None:
+            idx = self._journal.take(known, self._known)
+        else:
+            idx = changed_cells(known, self._known, self._words)
         b.counts["known"].append(len(idx))
         b.known_idx.append(idx)
         b.known_val.append(self._known.reshape(-1)[idx])

@@ -39,6 +39,7 @@ from swarm.comm.maes_merge import resolve as resolve_maes_merge
 from swarm.comm.medium import Envelope, Inboxes, Medium
 from swarm.comm.sharing import MapSharing
 from swarm.grid._validate import vouch_known
+from swarm.knowledge.journal import KnowledgeJournal
 from swarm.knowledge.maps import sync_boxes_flat, sync_changes
 from swarm.knowledge.planes import KnowledgePlanes
 from swarm.knowledge.planes import wanted as planes_wanted
@@ -200,6 +201,7 @@ class Simulation:
         self.failed = np.zeros(n, dtype=bool)
         self._drop_events = 0
         self._mirror: np.ndarray | None = None
+        self.journals: list[KnowledgeJournal] = []  # where maps were written, one per reader that asked
         self.setup_time_s = time.perf_counter() - t0
 
     def _read_only(self, i: int) -> np.ndarray:
@@ -208,6 +210,14 @@ class Simulation:
         view = self.known[i].view()
         view.flags.writeable = False
         return vouch_known(view)
+
+    def knowledge_journal(self) -> KnowledgeJournal:
+        """A new journal of where each robot's map is written from now on (:mod:`swarm.knowledge.journal`),
+        every robot flagged whole to start. For a reader that diffs the maps every tick (the recorder): it
+        then compares only the places written. Each reader takes its own."""
+        journal = KnowledgeJournal(self.spec.robots.count, self.truth.shape, self._reach)
+        self.journals.append(journal)
+        return journal
 
     def robot_info(self, i: int) -> RobotInfo:
         return RobotInfo(id=i, n_robots=self.spec.robots.count, map_shape=self.truth.shape,
@@ -304,6 +314,8 @@ class Simulation:
                 self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker,
                                 measure=False, write_poses=believed)
         self.sharing.scanned(believed)
+        for journal in self.journals:
+            journal.scanned(believed, self.lidar.cast)
         self.tracker.update_coverage(poses[:, :2], active=active)
         state.poses, state.collided, state.active, state.believed = poses, collided, active, believed
 
@@ -396,6 +408,10 @@ class Simulation:
             for robot in sorted(self.maes_merge.receive(deliveries, self.known, ~self.failed, tick)):
                 merged[robot].append(None)
                 self.free.dirty[robot] = True
+                for journal in self.journals:
+                    journal.rewritten([robot])
+        for journal in self.journals:
+            journal.delivered(deliveries)
         return inboxes, merged
 
     def _send(self, tick: int, poses: np.ndarray, actions: list[Action | None], links: Any,
