@@ -235,7 +235,6 @@ class SSB:
         if not self.initial_reserved:                               # 116-123
             if self._mine_confirmed(self.here):
                 self.initial_reserved = True
-                self.facing = round((90.0 - math.degrees(obs.pose.theta)) / 90.0) % 4
             else:
                 self._reserve((self.here,))
                 return self._action(obs)
