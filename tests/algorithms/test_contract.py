@@ -20,12 +20,15 @@ BUILT_INS = {
     "rbw": "algorithms.random_ballistic_walk:RandomBallisticWalk",
     "wall_follower": "algorithms.wall_follower:WallFollower",
     "brick_and_mortar": "algorithms.brick_and_mortar:BrickAndMortar",
+    "ssb": "algorithms.ssb:SSB",
+    "voronoi": "algorithms.voronoi:Voronoi",
     "market": "algorithms.market:Market",
     "mmpf": "algorithms.mmpf:MMPF",
     "rrt_exploration": "algorithms.rrt_exploration:RRTExploration",
 }
 OWN_MESSAGES = {"tnf": "tnf.destination", "minotaur": "minotaur.", "xboa": "xboa.target",
-                "brick_and_mortar": "brick_and_mortar.", "market": "market.pose", "mmpf": "mmpf.pose",
+                "brick_and_mortar": "brick_and_mortar.", "ssb": "ssb.", "voronoi": "voronoi.explored",
+                "market": "market.pose", "mmpf": "mmpf.pose",
                 "rrt_exploration": "rrt.goal"}
 """A message type of its own each of these must send in the check's run, so the messages check saw it."""
 SETTINGS = {"xboa": {"params": {"pop_size": 8, "max_gen": 8, "preset": "defaults"}}}
