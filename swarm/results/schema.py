@@ -95,6 +95,7 @@ class Summary(TypedDict):
     collisions: int                 # contacts begun: a robot starting to touch anything, once per robot
     collisions_wall: int            # a robot starting to touch a wall (counted per robot)
     collisions_robot: int           # a robot starting to touch another robot (counted for each of the two)
+    seen_cells: int                 # cells (free or solid) some robot's own lidar saw
     own_seen_cells: list[int]       # per robot: cells (free or solid) its own lidar saw
     overlap_rate: float             # cells seen by 2+ robots' own lidars / cells seen (docs/benchmark-metrics.md)
     coverage_spread: float          # population std over robots of own-seen cells / cells seen

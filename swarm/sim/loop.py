@@ -558,10 +558,12 @@ class Simulation:
                                  **map_quality(self.known, self.truth.solid)}}
 
     def _sight_summary(self) -> dict[str, Any]:
-        """Who saw what by its own lidar (docs/benchmark-metrics.md): each robot's own-seen cells, the overlap
-        rate and the coverage spread (Explore-Bench's collaboration metrics)."""
+        """Who saw what by its own lidar (docs/benchmark-metrics.md): the cells the team saw (free or solid),
+        each robot's own-seen cells, the overlap rate and the coverage spread (Explore-Bench's collaboration
+        metrics)."""
         trk = self.tracker
-        return {"own_seen_cells": [int(c) for c in trk.own_seen_cells], "overlap_rate": trk.overlap_rate(),
+        return {"seen_cells": int(np.count_nonzero(trk.seers)),
+                "own_seen_cells": [int(c) for c in trk.own_seen_cells], "overlap_rate": trk.overlap_rate(),
                 "coverage_spread": trk.coverage_spread()}
 
     def _message_counts(self, host: AgentHost) -> dict[str, Any]:
