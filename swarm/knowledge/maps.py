@@ -517,7 +517,7 @@ class ExplorationTracker:
       (docs/maes.md section 5.2; a cell is coverable iff it is free). ``coverage = covered / free cells``.
     - With :meth:`track_robots`, who saw what by its own lidar (not through shared maps): a ``uint8[R, H, W]``
       own-sight mask (memory only where written), ``seers[r, c]`` the number of distinct robots whose own
-      lidar saw the cell (``uint16``, saturating), and each robot's own-seen cell count. The lidar kernels
+      lidar saw the cell (``uint16``), and each robot's own-seen cell count. The lidar kernels
       update them where they mark ``seen``, so the cost is linear in the cells the rays touch. They give
       :attr:`overlap_rate` and :attr:`coverage_spread` (docs/benchmark-metrics.md).
     """
@@ -540,6 +540,8 @@ class ExplorationTracker:
         docstring); the lidar kernels then mark a robot's own sight wherever they mark ``seen``."""
         from swarm.util.memory import lazy_zeros
 
+        if not 0 < n_robots <= 65535:
+            raise InvalidInput("n_robots", n_robots, "1 ... 65535 (the per-cell robot count is a uint16)")
         self._own = lazy_zeros((n_robots, *self.shape), np.uint8)
         self._seers = np.zeros(self.shape, dtype=np.uint16)
         self._own_cells = np.zeros(n_robots, dtype=np.int64)
@@ -564,7 +566,7 @@ class ExplorationTracker:
 
     @property
     def seers(self) -> np.ndarray:
-        """Read-only ``uint16[H, W]``: how many distinct robots' own lidars saw each cell (saturating)."""
+        """Read-only ``uint16[H, W]``: how many distinct robots' own lidars saw each cell."""
         view = self._seers.view()
         view.setflags(write=False)
         return view

@@ -222,16 +222,16 @@ def _lidar_advance(t_x: float, t_y: float, d_x: float, d_y: float) -> tuple[bool
 
 
 @njit(cache=True, inline="always")
-def _note_own_sight(own: np.ndarray, i: int, seers: np.ndarray, at: np.uint64, own_cells: np.ndarray,
-                    robot: int) -> None:
-    """Mark cell ``at`` seen by ``robot``'s own lidar (flat ``own[i]``); on its first own sighting count it in
-    ``own_cells[robot]`` and ``seers[at]`` (saturating at the uint16 maximum)."""
+def _note_own_sight(own: np.ndarray, i: int, seers: np.ndarray, at: np.uint64) -> int:
+    """Mark cell ``at`` seen by a robot's own lidar (flat ``own[i]``, 0 or 1); returns 1 on the robot's first
+    own sighting of it, which also counts in ``seers[at]``. Branch-free: a compare-and-write here made the walk
+    three times slower (measured); at most 65,535 robots (:meth:`ExplorationTracker.track_robots`), so the
+    uint16 count cannot overflow."""
     o = np.uint64(i)
-    if own[o] == 0:
-        own[o] = 1
-        own_cells[robot] += 1
-        if seers[at] < 65535:
-            seers[at] += 1
+    first = 1 - own[o]
+    own[o] = 1
+    seers[at] += first
+    return first
 
 
 @njit(cache=True, inline="always")
@@ -250,6 +250,7 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
     is marked in it too, and a first own sighting counts in ``own_cells[robot]`` and ``seers``."""
     planes = p_free.shape[0] > 0
     tracking = own.shape[0] > 0
+    mine = 0
     row, col, step_r, step_c, t_x, t_y, d_x, d_y = _lidar_ray_start(x, y, dx, dy, cell)
     r2 = range_m * range_m
     t_entry = 0.0
@@ -268,7 +269,7 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
                 known[np.uint64(known_base + k)] = SOLID
             seen[at] = True
             if tracking:
-                _note_own_sight(own, own_base + k, seers, at, own_cells, robot)
+                own_cells[robot] += mine + _note_own_sight(own, own_base + k, seers, at)
             return t_entry, new, fresh
         if t_entry <= sure:
             in_range = True
@@ -286,13 +287,15 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
                 seen[at] = True
                 new += 1
             if tracking:
-                _note_own_sight(own, own_base + k, seers, at, own_cells, robot)
+                mine += _note_own_sight(own, own_base + k, seers, at)
         t_entry = min(t_x, t_y)
         in_x, t_x, t_y = _lidar_advance(t_x, t_y, d_x, d_y)
         col = select(in_x, col + step_c, col)
         row = select(in_x, row, row + step_r)
         k = select(in_x, k + step_c, k + step_k)
         if t_entry > range_m:
+            if tracking:
+                own_cells[robot] += mine
             return np.inf, new, fresh
 
 
