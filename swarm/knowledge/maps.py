@@ -502,6 +502,10 @@ def _cover_blocks_kernel(free: np.ndarray, positions: np.ndarray, active: np.nda
     return new
 
 
+_NO_OWN = np.zeros((0, 1, 1), dtype=np.uint8)
+"""The own-sight mask of a tracker that does not track robots (:meth:`ExplorationTracker.track_robots`)."""
+
+
 class ExplorationTracker:
     """Ground-truth exploration and coverage of one run.
 
@@ -511,6 +515,11 @@ class ExplorationTracker:
       explored triangles; on our raster the cell is the unit.
     - ``covered[r, c]``: a free cell in the 3x3 block of 0.5 m cells around a robot's cell at some tick
       (docs/maes.md section 5.2; a cell is coverable iff it is free). ``coverage = covered / free cells``.
+    - With :meth:`track_robots`, who saw what by its own lidar (not through shared maps): a ``uint8[R, H, W]``
+      own-sight mask (memory only where written), ``seers[r, c]`` the number of distinct robots whose own
+      lidar saw the cell (``uint16``), and each robot's own-seen cell count. The lidar kernels
+      update them where they mark ``seen``, so the cost is linear in the cells the rays touch. They give
+      :attr:`overlap_rate` and :attr:`coverage_spread` (docs/benchmark-metrics.md).
     """
 
     def __init__(self, truth: Map) -> None:
@@ -522,6 +531,57 @@ class ExplorationTracker:
         self._covered = np.zeros(self.shape, dtype=np.bool_)
         self.seen_free_cells: int = 0
         self.covered_cells: int = 0
+        self._own = _NO_OWN
+        self._seers = np.zeros((0, 0), dtype=np.uint16)
+        self._own_cells = np.zeros(0, dtype=np.int64)
+
+    def track_robots(self, n_robots: int) -> None:
+        """Keep, from now on, which of ``n_robots`` robots saw each cell by its own lidar (see the class
+        docstring); the lidar kernels then mark a robot's own sight wherever they mark ``seen``."""
+        from swarm.util.memory import lazy_zeros
+
+        if not 0 < n_robots <= 65535:
+            raise InvalidInput("n_robots", n_robots, "1 ... 65535 (the per-cell robot count is a uint16)")
+        self._own = lazy_zeros((n_robots, *self.shape), np.uint8)
+        self._seers = np.zeros(self.shape, dtype=np.uint16)
+        self._own_cells = np.zeros(n_robots, dtype=np.int64)
+
+    @property
+    def sight_buffers(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The writable own-sight mask (``uint8[R, H, W]``), ``seers`` (``uint16[H, W]``) and own-seen counts
+        (``int64[R]``), for the sensor kernels only; empty arrays unless :meth:`track_robots` was called."""
+        return self._own, self._seers, self._own_cells
+
+    @property
+    def tracks_robots(self) -> bool:
+        """Whether :meth:`track_robots` is on."""
+        return self._own_cells.shape[0] > 0
+
+    @property
+    def own_seen_cells(self) -> np.ndarray:
+        """Per robot, the cells (free or solid) its own lidar has seen (read-only ``int64[R]``)."""
+        view = self._own_cells.view()
+        view.setflags(write=False)
+        return view
+
+    @property
+    def seers(self) -> np.ndarray:
+        """Read-only ``uint16[H, W]``: how many distinct robots' own lidars saw each cell."""
+        view = self._seers.view()
+        view.setflags(write=False)
+        return view
+
+    def overlap_rate(self) -> float:
+        """Cells seen by the own lidars of two or more robots over the cells seen (free or solid); 0 when
+        nothing was seen. One pass over the ``seers`` raster: call it once, at the end of a run."""
+        seen = int(np.count_nonzero(self._seers))
+        return int(np.count_nonzero(self._seers >= 2)) / seen if seen else 0.0
+
+    def coverage_spread(self) -> float:
+        """The population standard deviation over robots of each robot's own-seen share, the cells its own
+        lidar saw over the cells the team saw (Explore-Bench's coverage std); 0 when nothing was seen."""
+        seen = int(np.count_nonzero(self._seers))
+        return float(np.std(self._own_cells / seen)) if seen and self._own_cells.shape[0] else 0.0
 
     # The lidar kernel writes into this raster directly and reports its count through ``add_seen``.
     @property

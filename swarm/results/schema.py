@@ -95,6 +95,10 @@ class Summary(TypedDict):
     collisions: int                 # contacts begun: a robot starting to touch anything, once per robot
     collisions_wall: int            # a robot starting to touch a wall (counted per robot)
     collisions_robot: int           # a robot starting to touch another robot (counted for each of the two)
+    seen_cells: int                 # cells (free or solid) some robot's own lidar saw
+    own_seen_cells: list[int]       # per robot: cells (free or solid) its own lidar saw
+    overlap_rate: float             # cells seen by 2+ robots' own lidars / cells seen (docs/benchmark-metrics.md)
+    coverage_spread: float          # population std over robots of own-seen cells / cells seen
     plans: list[int]                # per robot: path plans made
     messages: MessageCounts
     acts: ActCounts
@@ -208,6 +212,31 @@ def comm_columns(summary: Summary | Mapping[str, Any] | None, comm: Mapping[str,
 
 
 # ------------------------------------------------------------------------------------- runs table ----
+BENCHMARK_RUN_COLUMNS: dict[str, tuple[ArrowType, str]] = {
+    "path_length_mean_m": ("float64", "mean over robots of the distance each drove (m; Explore-Bench)"),
+    "path_length_cv": ("float64", "population standard deviation over robots of the distance driven, over its mean "
+                                  "(0 when nobody moved)"),
+    "overlap_rate": ("float64", "cells seen by the own lidars of two or more robots over the cells seen "
+                                "(Explore-Bench)"),
+    "coverage_spread": ("float64", "population standard deviation over robots of each robot's own-seen cells over "
+                                   "the cells the team saw (Explore-Bench's coverage std)"),
+}
+"""Runs-table columns of the benchmark metrics (docs/benchmark-metrics.md); null for results of versions without
+them (overlap and spread) and for failed runs. MAES's all-connected share and largest-cluster share are the
+communication columns ``all_connected_share`` and ``biggest_group_mean``."""
+
+
+def benchmark_columns(summary: Summary | Mapping[str, Any] | None) -> dict[str, Any]:
+    """The runs-table columns of :data:`BENCHMARK_RUN_COLUMNS` for a run's summary."""
+    if summary is None:
+        return {c: None for c in BENCHMARK_RUN_COLUMNS}
+    dist = [float(d) for d in summary["distance_m"]]
+    mean = sum(dist) / len(dist) if dist else 0.0
+    std = (sum((d - mean) ** 2 for d in dist) / len(dist)) ** 0.5 if dist else 0.0
+    return {"path_length_mean_m": mean, "path_length_cv": std / mean if mean > 0 else 0.0,
+            "overlap_rate": summary.get("overlap_rate"), "coverage_spread": summary.get("coverage_spread")}
+
+
 LOCALIZATION_RUN_COLUMNS: dict[str, tuple[ArrowType, str]] = {
     "pose_error_m": ("float64", "mean over robots of the final position error of the pose estimate (m)"),
     "false_free_share": ("float64", "share of the cells the robots know that their maps say free where the truth "
@@ -232,7 +261,8 @@ RUNS: dict[str, ArrowType] = {
     "run_seed": "int64", "status": "string", "error": "string", "explored_target": "float64",
     "max_ticks": "int64", "ticks": "int64", "stop_reason": "string", "explored": "float64",
     "coverage": "float64", **{col: "int64" for col in THRESHOLD_COLUMNS.values()}, "distance_m": "float64",
-    "collisions": "int64", "collisions_wall": "int64", "collisions_robot": "int64", "msgs_sent": "int64", "bytes_sent": "int64", "msgs_delivered": "int64",
+    "collisions": "int64", "collisions_wall": "int64", "collisions_robot": "int64",
+    **{c: t for c, (t, _) in BENCHMARK_RUN_COLUMNS.items()}, "msgs_sent": "int64", "bytes_sent": "int64", "msgs_delivered": "int64",
     "bytes_delivered": "int64", "msgs_dropped": "int64", "failed_robots": "int64", "spec_json": "string",
     "wall_time_s": "float64", "cpu_time_s": "float64", "jit_time_s": "float64", "worker_pid": "int64",
     "worker_rss_mb": "float64", "swarm_version": "string", "algorithm_dist": "string",
@@ -251,7 +281,7 @@ def summary_columns(summary: Summary | Mapping[str, Any] | None) -> dict[str, An
     if summary is None:
         return {"ticks": None, "stop_reason": "error", "explored": None, "coverage": None,
                 **{col: None for col in THRESHOLD_COLUMNS.values()}, "distance_m": None, "collisions": None,
-                "collisions_wall": None, "collisions_robot": None, "msgs_sent": None, "bytes_sent": None, "msgs_delivered": None, "bytes_delivered": None,
+                "collisions_wall": None, "collisions_robot": None, **benchmark_columns(None), "msgs_sent": None, "bytes_sent": None, "msgs_delivered": None, "bytes_delivered": None,
                 "msgs_dropped": None, "failed_robots": None, **{c: None for c in LOCALIZATION_RUN_COLUMNS}}
     msgs = summary["messages"]
     loc = summary.get("localization")   # only with a localisation model (Simulation._localization_summary)
@@ -260,6 +290,7 @@ def summary_columns(summary: Summary | Mapping[str, Any] | None) -> dict[str, An
             **{col: summary["ticks_to"].get(t) for t, col in THRESHOLD_COLUMNS.items()},
             "distance_m": float(sum(summary["distance_m"])), "collisions": summary["collisions"],
             "collisions_wall": summary.get("collisions_wall"), "collisions_robot": summary.get("collisions_robot"),
+            **benchmark_columns(summary),
             "msgs_sent": msgs["sent"], "bytes_sent": msgs["bytes_sent"], "msgs_delivered": msgs["delivered"],
             "bytes_delivered": msgs["bytes_delivered"], "msgs_dropped": dropped(msgs),
             "failed_robots": len(summary["failed_robots"]),

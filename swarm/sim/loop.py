@@ -156,6 +156,7 @@ class Simulation:
         self.world = World(self.truth, self.start_poses, self.motion)
         self.lidar = Lidar(self.truth, self.lidar_params)
         self.tracker = ExplorationTracker(self.truth)
+        self.tracker.track_robots(n)   # who saw what by its own lidar: overlap and coverage spread
         self.known = lazy_zeros((n, *self.truth.shape), np.uint8)  # memory where the maps hold something
         self._views = [self._read_only(i) for i in range(n)]
         fleet = MaesDriveFleet if self.motion.model == "maes" else NavigationFleet
@@ -572,6 +573,15 @@ class Simulation:
                                  "ticks_to_correct": dict(self._correct.ticks_to),
                                  **map_quality(self.known, self.truth.solid)}}
 
+    def _sight_summary(self) -> dict[str, Any]:
+        """Who saw what by its own lidar (docs/benchmark-metrics.md): the cells the team saw (free or solid),
+        each robot's own-seen cells, the overlap rate and the coverage spread (Explore-Bench's collaboration
+        metrics)."""
+        trk = self.tracker
+        return {"seen_cells": int(np.count_nonzero(trk.seers)),
+                "own_seen_cells": [int(c) for c in trk.own_seen_cells], "overlap_rate": trk.overlap_rate(),
+                "coverage_spread": trk.coverage_spread()}
+
     def _message_counts(self, host: AgentHost) -> dict[str, Any]:
         """The medium's counts, with the messages a remote agent sent that did not decode counted as malformed
         like those the medium dropped."""
@@ -593,6 +603,7 @@ class Simulation:
             "collisions": state.collisions,
             "collisions_wall": int(state.collisions_with[0]),
             "collisions_robot": int(state.collisions_with[1]),
+            **self._sight_summary(),
             "plans": [nav.plans for nav in self.navigators],
             "messages": self._message_counts(host),
             "acts": {kind: host.stats.per_robot(kind, n) for kind in ACT_COUNTS},

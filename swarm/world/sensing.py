@@ -222,17 +222,35 @@ def _lidar_advance(t_x: float, t_y: float, d_x: float, d_y: float) -> tuple[bool
 
 
 @njit(cache=True, inline="always")
+def _note_own_sight(own: np.ndarray, i: int, seers: np.ndarray, at: np.uint64) -> int:
+    """Mark cell ``at`` seen by a robot's own lidar (flat ``own[i]``, 0 or 1); returns 1 on the robot's first
+    own sighting of it, which also counts in ``seers[at]``. Branch-free: a compare-and-write here made the walk
+    three times slower (measured); at most 65,535 robots (:meth:`ExplorationTracker.track_robots`), so the
+    uint16 count cannot overflow."""
+    o = np.uint64(i)
+    first = 1 - own[o]
+    own[o] = 1
+    seers[at] += first
+    return first
+
+
+@njit(cache=True, inline="always")
 def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_base: int, write_known: bool,
                         seen: np.ndarray, x: float, y: float, dx: float, dy: float, range_m: float,
-                        cell: float, p_free: np.ndarray, p_solid: np.ndarray, robot: int) -> tuple[float, int, int]:
+                        cell: float, p_free: np.ndarray, p_solid: np.ndarray, robot: int, own: np.ndarray,
+                        own_base: int, seers: np.ndarray, own_cells: np.ndarray) -> tuple[float, int, int]:
     """Walk one ray by the exact rule (module docstring). ``solid``, ``seen`` and ``known`` are flat views
     of the rasters, ``cols`` wide (``known`` of all robots: this robot's map starts at ``known_base``).
     Marks ``seen`` (and the robot's map with a maximum when ``write_known``); returns (entry distance of
     the first solid cell or inf, newly seen free cells, cells of the robot's map it turned FREE). Needs a solid outer edge, which :class:`maps.Map`
     guarantees, to stay on the raster; indices are unsigned, so no negative-index code is compiled. With
     planes (``p_free`` not empty, :mod:`swarm.knowledge.planes`) every cell it raises in robot ``robot``'s
-    map is noted there too."""
+    map is noted there too. With an own-sight mask (``own`` not empty: flat, this robot's mask from
+    ``own_base``; :meth:`~swarm.knowledge.maps.ExplorationTracker.track_robots`) every cell marked in ``seen``
+    is marked in it too, and a first own sighting counts in ``own_cells[robot]`` and ``seers``."""
     planes = p_free.shape[0] > 0
+    tracking = own.shape[0] > 0
+    mine = 0
     row, col, step_r, step_c, t_x, t_y, d_x, d_y = _lidar_ray_start(x, y, dx, dy, cell)
     r2 = range_m * range_m
     t_entry = 0.0
@@ -250,6 +268,8 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
                     note_raise(p_free, p_solid, k, robot, SOLID)
                 known[np.uint64(known_base + k)] = SOLID
             seen[at] = True
+            if tracking:
+                own_cells[robot] += mine + _note_own_sight(own, own_base + k, seers, at)
             return t_entry, new, fresh
         if t_entry <= sure:
             in_range = True
@@ -266,12 +286,16 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
             if not seen[at]:
                 seen[at] = True
                 new += 1
+            if tracking:
+                mine += _note_own_sight(own, own_base + k, seers, at)
         t_entry = min(t_x, t_y)
         in_x, t_x, t_y = _lidar_advance(t_x, t_y, d_x, d_y)
         col = select(in_x, col + step_c, col)
         row = select(in_x, row, row + step_r)
         k = select(in_x, k + step_c, k + step_k)
         if t_entry > range_m:
+            if tracking:
+                own_cells[robot] += mine
             return np.inf, new, fresh
 
 
@@ -279,17 +303,21 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
 def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarray, cos_a: np.ndarray,
                           sin_a: np.ndarray, range_m: float, cell: float, known: np.ndarray,
                           seen: np.ndarray, ranges: np.ndarray, required: np.ndarray, half_widths: np.ndarray,
-                          cast: np.ndarray, fresh: np.ndarray, p_free: np.ndarray, p_solid: np.ndarray) -> int:
+                          cast: np.ndarray, fresh: np.ndarray, p_free: np.ndarray, p_solid: np.ndarray,
+                          own: np.ndarray, seers: np.ndarray, own_cells: np.ndarray) -> int:
     """One tick of the ternary lidar for every robot and ray. Returns the number of newly seen free
     cells, or ``-(r + 1)`` (nothing written) if robot r's pose is invalid. With a ``required`` raster
     (:func:`_required_raster`; empty: cast every robot) a robot whose scan would write nothing
     (:func:`_lidar_settled`) is not cast: its ranges are NaN and ``cast[r]`` is False (True for robots
-    cast). ``fresh[r]`` grows by the cells of robot r's map the scan turned from UNSEEN to FREE."""
+    cast). ``fresh[r]`` grows by the cells of robot r's map the scan turned from UNSEEN to FREE. ``own``,
+    ``seers``, ``own_cells``: the tracker's own-sight buffers (empty: not kept); kept, a robot is settled only
+    if its own lidar has also seen every cell in reach."""
     rows, cols = solid.shape
     bad = _lidar_first_bad_pose(poses, active, rows, cols, cell)
     if bad >= 0:
         return -(bad + 1)
     solid_flat, known_flat, seen_flat = solid.reshape(solid.size), known.reshape(known.size), seen.reshape(seen.size)
+    own_flat, seers_flat = own.reshape(own.size), seers.reshape(seers.size)
     skip_settled = required.shape[0] == rows
     required_flat = required.reshape(required.size)
     new = 0
@@ -302,7 +330,8 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
         x = poses[r, 0]
         y = poses[r, 1]
         if skip_settled and _lidar_settled(required_flat, known_flat, r * rows * cols, seen_flat, rows, cols,
-                                           int(math.floor(y / cell)), int(math.floor(x / cell)), half_widths):
+                                           int(math.floor(y / cell)), int(math.floor(x / cell)), half_widths,
+                                           own_flat):
             for i in range(cos_a.shape[0]):
                 ranges[r, i] = np.nan
             continue
@@ -313,7 +342,8 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
             dx = ch * cos_a[i] - sh * sin_a[i]
             dy = sh * cos_a[i] + ch * sin_a[i]
             t_hit, n_new, n_fresh = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, True,
-                                                        seen_flat, x, y, dx, dy, range_m, cell, p_free, p_solid, r)
+                                                        seen_flat, x, y, dx, dy, range_m, cell, p_free, p_solid, r,
+                                                        own_flat, r * rows * cols, seers_flat, own_cells)
             new += n_new
             fresh[r] += n_fresh
             ranges[r, i] = t_hit
@@ -323,7 +353,8 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
 @njit(cache=True)
 def _lidar_measure_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarray, cos_a: np.ndarray,
                           sin_a: np.ndarray, range_m: float, cell: float, seen: np.ndarray,
-                          ranges: np.ndarray, limits: np.ndarray) -> int:
+                          ranges: np.ndarray, limits: np.ndarray, own: np.ndarray, seers: np.ndarray,
+                          own_cells: np.ndarray) -> int:
     """The ternary lidar's ranges and ``seen`` cells for every active robot, nothing written into a map (a
     robot with a localisation error writes them from its estimated pose: :func:`_lidar_belief_kernel`).
     ``limits`` (``float64[R, n_rays]``, or empty: none): a ray reaches no further than its limit (another
@@ -333,6 +364,7 @@ def _lidar_measure_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     if bad >= 0:
         return -(bad + 1)
     solid_flat, seen_flat = solid.reshape(solid.size), seen.reshape(seen.size)
+    own_flat, seers_flat = own.reshape(own.size), seers.reshape(seers.size)
     unused = np.zeros(1, dtype=np.uint8)
     p_none = np.zeros((0, 1), dtype=np.uint64)
     limited = limits.shape[0] > 0
@@ -349,7 +381,8 @@ def _lidar_measure_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
             dy = sh * cos_a[i] + ch * sin_a[i]
             reach = min(range_m, limits[r, i]) if limited else range_m
             t_hit, n_new, _ = _lidar_walk_visible(solid_flat, cols, unused, 0, False, seen_flat, poses[r, 0],
-                                                  poses[r, 1], dx, dy, reach, cell, p_none, p_none, r)
+                                                  poses[r, 1], dx, dy, reach, cell, p_none, p_none, r, own_flat,
+                                                  r * rows * cols, seers_flat, own_cells)
             new += n_new
             ranges[r, i] = t_hit
     return new
@@ -411,7 +444,7 @@ def _lidar_belief_kernel(poses: np.ndarray, ranges: np.ndarray, cos_a: np.ndarra
 
 @njit(cache=True, inline="always")
 def _lidar_settled(required: np.ndarray, known: np.ndarray, known_base: int, seen: np.ndarray, rows: int,
-                   cols: int, row0: int, col0: int, half_widths: np.ndarray) -> bool:
+                   cols: int, row0: int, col0: int, half_widths: np.ndarray, own: np.ndarray) -> bool:
     """Whether a ternary scan from a pose in cell (row0, col0) would write nothing: every cell its rays
     can reach (the cells within range of any point of the robot's cell, rows ``row0 - K .. row0 + K`` with
     ``half_widths[k]`` columns each side) already holds what a ray would leave there, in the robot's map
@@ -419,7 +452,8 @@ def _lidar_settled(required: np.ndarray, known: np.ndarray, known_base: int, see
     it at least FREE), 2 for a solid cell a ray can enter (it becomes exactly SOLID), 0 for a solid cell
     enclosed by solid 4-neighbours, which no ray enters (rays step 4-connected and stop at the first solid
     cell). A robot in a solid cell (``required`` not 1) writes it at distance 0, so it is never settled.
-    Flat views, as in :func:`_lidar_walk_visible`."""
+    Flat views, as in :func:`_lidar_walk_visible`. With an own-sight mask (``own`` not empty, laid out as
+    ``known``) every such cell must also be marked in it, so a robot crossing cells only others saw is cast."""
     if required[row0 * cols + col0] != 1:
         return False
     reach = (half_widths.shape[0] - 1) // 2
@@ -437,6 +471,10 @@ def _lidar_settled(required: np.ndarray, known: np.ndarray, known_base: int, see
             q = req[c]
             m = mine[c]
             unsettled |= (m < q) | ((q == 2) & (m != 2)) | ((q != 0) & (was_seen[c] == 0))
+        if not unsettled and own.shape[0] > 0:
+            owned = own[known_base + a:known_base + b]
+            for c in range(b - a):
+                unsettled |= (req[c] != 0) & (owned[c] == 0)
         if unsettled:
             return False
     return True
@@ -487,7 +525,8 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
                           noise_std: float, noise_per_metre: float, logodds: np.ndarray, hit: float,
                           miss: float, lo: float, hi: float, occupied_above: float, free_below: float,
                           known: np.ndarray, seen: np.ndarray, ranges: np.ndarray, votes: np.ndarray,
-                          mark: np.ndarray, touched: np.ndarray, vote_poses: np.ndarray) -> int:
+                          mark: np.ndarray, touched: np.ndarray, vote_poses: np.ndarray, own: np.ndarray,
+                          seers: np.ndarray, own_cells: np.ndarray) -> int:
     """One tick of the log-odds lidar for every robot and ray (``noise``: standard normals [R, n_rays],
     ignored when both noise parameters are 0). Returns newly seen free cells or ``-(r + 1)``. Ranges are
     measured from ``poses`` and voted along rays from ``vote_poses`` (where the robots believe they are:
@@ -497,6 +536,7 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     if bad >= 0:
         return -(bad + 1)
     solid_flat, known_flat, seen_flat = solid.reshape(solid.size), known.reshape(known.size), seen.reshape(seen.size)
+    own_flat, seers_flat = own.reshape(own.size), seers.reshape(seers.size)
     noisy = noise_std > 0.0 or noise_per_metre > 0.0
     hit32 = np.float32(hit)
     miss32 = np.float32(miss)
@@ -524,7 +564,8 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
             dx = ch * cos_a[i] - sh * sin_a[i]
             dy = sh * cos_a[i] + ch * sin_a[i]
             t_hit, n_new, _ = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, False, seen_flat,
-                                                  x, y, dx, dy, range_m, cell, _NO_PLANE, _NO_PLANE, r)
+                                                  x, y, dx, dy, range_m, cell, _NO_PLANE, _NO_PLANE, r,
+                                                  own_flat, r * rows * cols, seers_flat, own_cells)
             new += n_new
             z = t_hit
             if noisy and t_hit <= range_m:
@@ -708,7 +749,8 @@ class Lidar:
                 raise InvalidInput("write", write, "True unless the lidar is ternary and no planes are given")
             ranges = np.empty((n, self.n_rays), dtype=np.float64)   # exact: write_from walks to these distances
             new = _lidar_measure_kernel(self._solid, pose, act, self._cos, self._sin, p.range_m, CELL_M,
-                                        trk.seen_buffer, ranges, _NO_LIMITS if limits is None else limits)
+                                        trk.seen_buffer, ranges, _NO_LIMITS if limits is None else limits,
+                                        *self._sight(trk, n))
             self._cast[:] = act
         elif p.mode == "ternary":
             required = _CAST_EVERY_ROBOT
@@ -719,7 +761,8 @@ class Lidar:
             p_free, p_solid = no_planes() if planes is None else (planes.free, planes.solid)
             new = _lidar_ternary_kernel(self._solid, pose, act, self._cos, self._sin, p.range_m, CELL_M,
                                         known, trk.seen_buffer, ranges, required, self._half_widths, self._cast,
-                                        self._freed if freed is None else freed, p_free, p_solid)
+                                        self._freed if freed is None else freed, p_free, p_solid,
+                                        *self._sight(trk, n))
         else:
             if planes is not None:
                 raise InvalidInput("planes", "given", "none: a log-odds lidar may lower cells, which planes cannot mirror")
@@ -738,7 +781,7 @@ class Lidar:
                                         p.logodds_miss, p.logodds_min, p.logodds_max,
                                         p.logodds_occupied_above, p.logodds_free_below, known,
                                         trk.seen_buffer, ranges, self._votes, self._mark,
-                                        self._touched, voting)
+                                        self._touched, voting, *self._sight(trk, n))
             self._cast[:] = act
         if new < 0:
             r = -new - 1
@@ -785,6 +828,14 @@ class Lidar:
         view = self._cast.view()
         view.setflags(write=False)
         return view
+
+    @staticmethod
+    def _sight(tracker: ExplorationTracker, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The tracker's own-sight buffers for a scan of ``n`` robots (empty when it does not track robots)."""
+        own, seers, counts = tracker.sight_buffers
+        if counts.shape[0] not in (0, n):
+            raise InvalidInput("tracker", f"tracking {counts.shape[0]} robots", f"tracking {n} robots or none")
+        return own, seers, counts
 
     def _check_tracker(self, tracker: ExplorationTracker) -> ExplorationTracker:
         if not isinstance(tracker, ExplorationTracker) or tracker.shape != self.truth.shape:

@@ -141,6 +141,7 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
     _run_tables(rep, out)
     _map_quality(rep, out)
     _collisions(rep, out)
+    _benchmark(rep, out)
     _notes(rep)
     if maes_csv:
         from ..maes_csv import write_runs
@@ -614,6 +615,42 @@ def _collisions(rep: Report, out: ReportWriter) -> None:
     _write_table(out, "collisions", df, table, "Contacts begun per robot-hour of simulated time: medians over "
                                                "each cell's runs (a robot-robot contact counts for both robots)")
     rep.collisions, rep.collisions_rows = table, len(df)
+
+
+BENCHMARK = (("t90_s", "T90 (s)", "{:.0f}"), ("t99_s", "T99 (s)", "{:.0f}"),
+             ("path_length_mean_m", "Path per robot (m)", "{:.1f}"), ("path_length_cv", "Path CV", "{:.2f}"),
+             ("overlap_rate", "Overlap", "{:.2f}"), ("coverage_spread", "Coverage spread", "{:.3f}"),
+             ("all_connected_share", "All connected", "{:.2f}"), ("biggest_group_mean", "Largest cluster", "{:.2f}"))
+"""The benchmark table's columns (docs/benchmark-metrics.md): name in ``tables/benchmark.csv``, header, format."""
+
+
+def _benchmark(rep: Report, out: ReportWriter) -> None:
+    """Per cell, the medians of the field's benchmark metrics (``tables/benchmark``): Explore-Bench's times to 90 %
+    and 99 % explored, path length per robot and its spread, overlap rate and coverage spread, MAES's
+    all-connected and largest-cluster shares. A run that never reached 90 % (99 %) counts as never in the
+    median (– when half of a cell's runs did not). Skipped for results older than the overlap column."""
+    data = rep.data
+    runs = data.runs[data.runs["status"] == "ok"]
+    if runs.empty or "overlap_rate" not in runs or not runs["overlap_rate"].notna().any():
+        return
+    values = pd.DataFrame({f"{t}_s": units.seconds(runs[t].astype(float).fillna(np.inf)) for t in ("t90", "t99")},
+                          index=runs.index)
+    for col, _, _ in BENCHMARK[2:]:
+        values[col] = runs[col].astype(float)
+    dims = [d for d in data.all_dims if runs[d].nunique() > 1] or list(data.all_dims[:1])
+    values[dims] = runs[dims]
+    columns = [c for c, _, _ in BENCHMARK]
+    df = values.groupby(dims, observed=True, sort=True)[columns].median().reset_index()
+    df.insert(len(dims), "runs", values.groupby(dims, observed=True, sort=True).size().to_numpy())
+    table = tables.Table([*(tables.header(d) for d in dims), "Runs", *(h for _, h, _ in BENCHMARK)],
+                         [[*(str(r[d]) for d in dims), str(int(r["runs"])),
+                           *("–" if pd.isna(r[c]) or np.isinf(r[c]) else fmt.format(r[c]) for c, _, fmt in BENCHMARK)]
+                          for _, r in df.iterrows()],
+                         [False] * len(dims) + [True] * (1 + len(BENCHMARK)))
+    _write_table(out, "benchmark", df.replace([np.inf], np.nan), table,
+                 "Benchmark metrics (Explore-Bench, MAES): medians over each cell's runs; T90/T99 in simulated "
+                 "seconds, – when half of the runs did not reach the fraction")
+    rep.benchmark, rep.benchmark_rows = table, len(df)
 
 
 def _write_table(out: ReportWriter, name: str, df: pd.DataFrame, table: tables.Table, caption: str,

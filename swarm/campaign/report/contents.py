@@ -105,6 +105,8 @@ class Report:
     map_quality_rows: int = 0
     collisions: tables.Table | None = None
     collisions_rows: int = 0
+    benchmark: tables.Table | None = None
+    benchmark_rows: int = 0
     communication: CommSection | None = None
     notes: list[str] = field(default_factory=list)
     written: list[str] = field(default_factory=list)

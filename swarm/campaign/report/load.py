@@ -18,7 +18,8 @@ import pandas as pd
 
 from swarm.base.errors import InvalidInput
 
-from swarm.results.schema import COMM_RUN_COLUMNS, LOCALIZATION_RUN_COLUMNS, RUNS, THRESHOLD_COLUMNS
+from swarm.results.schema import (BENCHMARK_RUN_COLUMNS, COMM_RUN_COLUMNS, LOCALIZATION_RUN_COLUMNS, RUNS,
+                                  THRESHOLD_COLUMNS)
 from ..spec import CampaignSpec, campaign_from_mapping, folder_of, is_axis
 from ..store import ResultsStore
 
@@ -30,9 +31,10 @@ ALWAYS_SHOWN = ("map", "size", "robots", "spawn", "algorithm", "radio")
 RUN_COLUMNS = ("key", *DIMS, "replicate", "map_kind", "radio_model", "map_seed", "status", "error", "stop_reason",
                "ticks", "max_ticks", "explored_target", "explored", "coverage", *THRESHOLD_COLUMNS.values(), "part",
                "msgs_sent", "bytes_sent", "msgs_delivered", "bytes_delivered", "msgs_dropped", "collisions_wall",
-               "collisions_robot", *COMM_RUN_COLUMNS, *LOCALIZATION_RUN_COLUMNS)
+               "collisions_robot", *BENCHMARK_RUN_COLUMNS, *COMM_RUN_COLUMNS, *LOCALIZATION_RUN_COLUMNS)
 """The runs-table columns the report reads (:data:`swarm.results.schema.RUNS`, plus the store's ``part``); results of
-older versions lack the communication, localisation and collision-split columns (they read as missing)."""
+older versions lack the communication, localisation, collision-split and benchmark-metric columns (they read as
+missing)."""
 assert set(RUN_COLUMNS) <= {*RUNS, "part"}
 
 
@@ -141,7 +143,8 @@ def _runs_frame(df: pd.DataFrame | None, axes: tuple[str, ...] = ()) -> pd.DataF
         df[dim] = df[dim].astype(str)
     for col in ("ticks", "max_ticks", "explored_target", "explored", "coverage", "t50", "t75", "t90", "t95",
                 "t98", "t99", "replicate", "map_seed", "msgs_sent", "bytes_sent", "msgs_delivered",
-                "bytes_delivered", "msgs_dropped", "collisions_wall", "collisions_robot", *COMM_RUN_COLUMNS,
+                "bytes_delivered", "msgs_dropped", "collisions_wall", "collisions_robot", *BENCHMARK_RUN_COLUMNS,
+                *COMM_RUN_COLUMNS,
                 *(c for c in LOCALIZATION_RUN_COLUMNS if c != "explored_measure")):
         df[col] = pd.to_numeric(df[col], errors="coerce")
     correct = (df["explored_measure"] == "correct").to_numpy()

@@ -16,6 +16,7 @@ FAILED_SHOWN = 50
 FILE_NOTES = {"tables/runs.csv": ": every committed run with its cell, stop reason and ticks to target",
               "tables/map_quality.csv": ": pose error and map quality per cell (runs with a localisation model)",
               "tables/collisions.csv": ": robot-wall and robot-robot contacts per robot-hour per cell",
+              "tables/benchmark.csv": ": Explore-Bench and MAES benchmark metrics per cell",
               "tables/pairs.csv": ": every pair of runs compared", "tables/failed.csv": ": failed runs and errors"}
 SECTION = {"algorithm": "Algorithms compared", "radio": "Radio models compared", "comm": "Comm settings compared",
            None: "Every cell"}
@@ -28,7 +29,7 @@ def section(compare: str | None) -> str:
 
 def render(rep: Report) -> str:
     parts = [_head(rep), _runs(rep), _campaign(rep), _layout(rep), _summary(rep), _curves(rep), _cactus(rep), _paired(rep),
-             _comm(rep), _communication(rep), _map_quality(rep), _collisions(rep), _failed(rep), _maes(rep), _method(rep), _files(rep)]
+             _comm(rep), _communication(rep), _map_quality(rep), _collisions(rep), _benchmark(rep), _failed(rep), _maes(rep), _method(rep), _files(rep)]
     return "\n".join(p for p in parts if p).rstrip() + "\n"
 
 
@@ -288,6 +289,18 @@ def _collisions(rep: Report) -> str:
               "a wall, and a robot starting to touch another robot (counted for both). Local avoidance "
               "(`navigation.avoidance`) acts on the second. Per cell, medians over its runs."), ""]
     return "\n".join(lines + _inline(rep.collisions, rep.collisions_rows, "collisions"))
+
+
+def _benchmark(rep: Report) -> str:
+    if rep.benchmark is None:
+        return ""
+    lines = ["## Benchmark metrics", "",
+             ("The field's metrics, defined in docs/benchmark-metrics.md: Explore-Bench's (ICRA 2022) time to 90 % "
+              "and 99 % explored, path length per robot and its coefficient of variation, overlap rate (cells seen by "
+              "two or more robots' own lidars over the cells seen) and coverage spread (the standard deviation of "
+              "each robot's own-seen share), and MAES's share of recorded ticks with every robot connected and mean "
+              "largest-cluster share. Per cell, medians over its runs."), ""]
+    return "\n".join(lines + _inline(rep.benchmark, rep.benchmark_rows, "benchmark"))
 
 
 def _failed(rep: Report) -> str:

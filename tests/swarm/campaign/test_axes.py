@@ -245,3 +245,29 @@ def test_collisions_split_reaches_the_runs_table_and_report(tmp_path):
     assert "## Collisions" in (tmp_path / "report" / "README.md").read_text()
     header = (tmp_path / "report" / "tables" / "runs.csv").read_text().splitlines()[0].split(",")
     assert {"collisions_wall", "collisions_robot"} <= set(header)
+
+
+def test_benchmark_metrics_reach_the_runs_table_and_report(tmp_path):
+    """Issue 52: path length per robot and its spread, overlap rate and coverage spread are runs-table columns,
+    and the report tabulates them with times to 90/99 % and MAES's connectivity shares per cell."""
+    from swarm.campaign.report import build_report
+    from swarm.results.schema import BENCHMARK_RUN_COLUMNS
+
+    text = HEAD.replace("robots = [2]", "robots = [2, 4]") + 'radio = ["global"]\n[stop]\nmax_ticks = 400\n'
+    run_campaign(parse_campaign(text), tmp_path / "res", executor=make_executor(inline=True), progress=False)
+    runs = ResultsStore(tmp_path / "res").runs_table().to_pandas().set_index("robots")
+    for col in BENCHMARK_RUN_COLUMNS:
+        assert runs[col].dtype.kind == "f" and runs[col].notna().all(), col
+    assert ((runs["overlap_rate"] >= 0) & (runs["overlap_rate"] <= 1)).all()
+    assert runs["path_length_mean_m"].mul(runs.index).to_numpy() == pytest.approx(runs["distance_m"].to_numpy())
+    build_report(tmp_path / "res", tmp_path / "report")
+    table = (tmp_path / "report" / "tables" / "benchmark.csv").read_text().splitlines()
+    assert table[0] == ("robots,runs,t90_s,t99_s,path_length_mean_m,path_length_cv,overlap_rate,coverage_spread,"
+                        "all_connected_share,biggest_group_mean") and len(table) == 3
+    row4 = dict(zip(table[0].split(","), table[2].split(",")))
+    assert float(row4["overlap_rate"]) == pytest.approx(runs.loc[4, "overlap_rate"])
+    assert float(row4["all_connected_share"]) == pytest.approx(runs.loc[4, "all_connected_share"])
+    if pd.notna(runs.loc[4, "t90"]):
+        assert float(row4["t90_s"]) == pytest.approx(runs.loc[4, "t90"] * 0.1)
+    readme = (tmp_path / "report" / "README.md").read_text()
+    assert "## Benchmark metrics" in readme and "Coverage spread" in readme

@@ -199,3 +199,36 @@ def test_spec_key_is_stable_and_defaults_are_resolved():
     assert a.canonical()["lidar"]["range_m"] == 7.0
     assert RunSpec.from_mapping(a.canonical()).key == a.key, "the canonical form round-trips"
     assert RunSpec.from_mapping({"seed": 6}).key != RunSpec.from_mapping({"seed": 5}).key
+
+
+def test_path_length_of_a_straight_drive_is_its_length():
+    """Issue 52: path length per robot (Explore-Bench) is the distance each drove; two robots driving the same
+    straight line in an open hall drive equal lengths (spread 0) and see much of the same hall."""
+    from maps import Map
+    from swarm.results.schema import benchmark_columns
+
+    solid = np.ones((20, 160), dtype=bool)   # an 80 m x 10 m hall
+    solid[1:-1, 1:-1] = False
+    hall = Map(solid=solid, material=solid.astype(np.uint8), materials=("air", "concrete"))
+    start = np.array([[2.0, 3.0, 0.0], [2.0, 7.0, 0.0]])
+    sim = Simulation(small_spec(stop={"max_ticks": 150}, algorithm={"name": "tests.swarm.sim.test_simulation:Charger"}),
+                     truth=hall, start_poses=start)
+    s = sim.run().summary
+    driven = [p[0] - x0 for p, x0 in zip(s["final_poses"], start[:, 0])]
+    assert min(driven) > 10 and max(p[0] for p in s["final_poses"]) < 78      # drove far, never reached the wall
+    assert [abs(p[1] - y0) for p, y0 in zip(s["final_poses"], start[:, 1])] == pytest.approx([0, 0], abs=1e-9)
+    assert s["distance_m"] == pytest.approx(driven, rel=1e-9)
+    cols = benchmark_columns(s)
+    assert cols["path_length_mean_m"] == pytest.approx(sum(driven) / 2) and cols["path_length_cv"] < 1e-9
+    assert 0 < s["overlap_rate"] <= 1 and len(s["own_seen_cells"]) == 2
+    assert s["seen_cells"] == np.count_nonzero(sim.tracker.seen)
+    assert sum(s["own_seen_cells"]) >= s["seen_cells"] > max(s["own_seen_cells"])
+
+
+def test_benchmark_columns_from_a_hand_built_summary():
+    from swarm.results.schema import benchmark_columns
+
+    cols = benchmark_columns({"distance_m": [1.0, 3.0], "overlap_rate": 0.25, "coverage_spread": 0.1})
+    assert cols == {"path_length_mean_m": 2.0, "path_length_cv": 0.5, "overlap_rate": 0.25, "coverage_spread": 0.1}
+    assert benchmark_columns({"distance_m": [0.0, 0.0]})["path_length_cv"] == 0.0   # nobody moved; older results
+    assert benchmark_columns(None) == dict.fromkeys(cols)

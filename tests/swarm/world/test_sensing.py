@@ -654,3 +654,88 @@ def test_a_robot_inside_a_thick_wall_is_cast_although_no_ray_could_enter_its_cel
     assert not lidar.cast[0] and known[0, 1, 1] == UNSEEN
     lidar.scan(np.array([[0.7, 0.7, 0.0]]), known, measure=False)
     assert lidar.cast[0] and known[0, 1, 1] == SOLID
+
+
+# ---------------------------------------------------------------- own sight: overlap and coverage spread ----
+def two_rooms() -> Map:
+    """Two 18 x 18-cell rooms side by side, parted by a wall two cells thick: no ray from one room reaches a cell
+    a ray from the other reaches (rays stop at the first solid cell)."""
+    solid = np.ones((20, 40), dtype=bool)
+    solid[1:-1, 1:19] = False
+    solid[1:-1, 21:39] = False
+    return make_map(solid)
+
+
+def tracked_scan(truth: Map, poses: list[tuple[float, float, float]], mode: str = "ternary",
+                 measure: bool = True) -> tuple[Lidar, ExplorationTracker]:
+    tracker = ExplorationTracker(truth)
+    tracker.track_robots(len(poses))
+    lidar = Lidar(truth, LidarParams(mode=mode), tracker=tracker)
+    lidar.scan(np.array(poses), empty_knowledge(truth.shape, len(poses)), np.random.default_rng(0), measure=measure)
+    return lidar, tracker
+
+
+@pytest.mark.parametrize("mode", ["ternary", "logodds"])
+def test_robots_that_see_disjoint_rooms_overlap_zero(mode: str) -> None:
+    _, trk = tracked_scan(two_rooms(), [(5.0, 5.0, 0.0), (15.0, 5.0, 0.0)], mode)
+    own = trk.own_seen_cells
+    assert own[0] > 0 and own[1] > 0
+    assert trk.overlap_rate() == 0.0
+    assert own.sum() == np.count_nonzero(trk.seen) == np.count_nonzero(trk.seers)   # each cell seen by one
+    shares = own / np.count_nonzero(trk.seen)
+    assert trk.coverage_spread() == pytest.approx(abs(shares[0] - shares[1]) / 2)   # population std of two
+
+
+@pytest.mark.parametrize("mode", ["ternary", "logodds"])
+def test_robots_that_see_the_same_cells_overlap_one(mode: str) -> None:
+    _, trk = tracked_scan(two_rooms(), [(5.0, 5.0, 0.0), (5.0, 5.0, 0.0)], mode)
+    assert trk.overlap_rate() == 1.0 and trk.coverage_spread() == 0.0
+    assert trk.own_seen_cells.tolist() == [np.count_nonzero(trk.seen)] * 2
+    assert trk.seers.max() == 2
+
+
+def test_overlap_counts_cells_seen_by_two_of_three_over_cells_seen() -> None:
+    # robots 0 and 1 share the left room, robot 2 is alone in the right one
+    _, trk = tracked_scan(two_rooms(), [(5.0, 5.0, 0.0), (5.0, 5.0, 0.0), (15.0, 5.0, 0.0)])
+    left, right = trk.own_seen_cells[0], trk.own_seen_cells[2]
+    assert trk.overlap_rate() == pytest.approx(left / (left + right))
+
+
+def test_a_robot_in_cells_it_only_heard_of_is_cast_and_counted() -> None:
+    """The ternary lidar skips robots whose scan would write nothing new (``measure=False``); a robot whose map
+    holds its surroundings only through map sharing has not seen them itself, so tracking own sight casts it."""
+    truth = make_map(room(12, 12))   # a convex room within range: the rays from its centre see every cell
+    for tracking in (False, True):
+        tracker = ExplorationTracker(truth)
+        if tracking:
+            tracker.track_robots(2)
+        lidar = Lidar(truth, LidarParams(), tracker=tracker)
+        known = empty_knowledge(truth.shape, 2)
+        pose = np.array([[3.0, 3.0, 0.0], [3.0, 3.0, 0.0]])
+        lidar.scan(pose, known, measure=False, active=np.array([True, False]))
+        known[1] = known[0]   # robot 1 hears robot 0's map
+        lidar.scan(pose, known, measure=False, active=np.array([False, True]))
+        assert bool(lidar.cast[1]) is tracking
+    assert tracker.overlap_rate() == 1.0
+    lidar.scan(pose, known, measure=False)   # now both have seen everything in reach themselves: both settled
+    assert not lidar.cast.any()
+
+
+def test_measuring_scans_track_own_sight_too() -> None:
+    """The localisation path measures (``write=False``) and writes from the believed pose: own sight is what the
+    lidar saw from the true pose."""
+    truth = two_rooms()
+    tracker = ExplorationTracker(truth)
+    tracker.track_robots(2)
+    lidar = Lidar(truth, LidarParams(), tracker=tracker)
+    lidar.scan(np.array([[5.0, 5.0, 0.0], [15.0, 5.0, 0.0]]), empty_knowledge(truth.shape, 2), write=False)
+    assert tracker.overlap_rate() == 0.0 and tracker.own_seen_cells.sum() == np.count_nonzero(tracker.seen)
+
+
+def test_a_tracker_of_other_robot_count_is_refused() -> None:
+    truth = two_rooms()
+    tracker = ExplorationTracker(truth)
+    tracker.track_robots(3)
+    with pytest.raises(InvalidInput):
+        Lidar(truth, LidarParams(), tracker=tracker).scan(np.array([[5.0, 5.0, 0.0]] * 2),
+                                                         empty_knowledge(truth.shape, 2))
