@@ -501,6 +501,8 @@ def _against_figure(rep: Report, out: ReportWriter, multi: pd.DataFrame, dim: st
     complete = multi.groupby(keys, observed=True)[dim].transform("nunique") == len(labels)
     partial = not complete.all()
     multi = multi[complete]
+    if multi.empty:  # no cell has run every value yet (a shard, a campaign in progress): nothing to draw
+        return
     panel_dims = ["map", "size"]
     if len(multi.groupby(panel_dims, observed=True)) > MAX_AGAINST_PANELS:
         panel_dims = ["map"]
