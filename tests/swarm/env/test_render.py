@@ -9,9 +9,17 @@ import pytest
 pytest.importorskip("gymnasium")
 pytest.importorskip("pettingzoo")
 
-import swarm.env as senv  # noqa: E402
-from maps import InvalidInput  # noqa: E402
-from swarm.env.render import FREE, LEARNER, SCRIPTED, UNKNOWN, WALL, cell_px, world_to_pixel  # noqa: E402
+import swarm.env as senv
+from maps import InvalidInput
+from swarm.env.render import (
+    FREE,
+    LEARNER,
+    SCRIPTED,
+    UNKNOWN,
+    WALL,
+    cell_px,
+    world_to_pixel,
+)
 
 SPEC = {"robots": {"count": 3, "spawn": "random"}, "size": 20, "stop": {"max_ticks": 300}}
 
