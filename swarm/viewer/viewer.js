@@ -1465,23 +1465,34 @@
 
     /** Robots drawn too close to read (discs and ids overlap: centres nearer than a diameter plus an id's
      *  height), as lists of ids in order, each of two or more: at tick 0 a team spawned together is one
-     *  cluster. Single-link grouping over R^2/2 pairs (disc mode only: at most POINTS_ABOVE in view). */
+     *  cluster. Single-link grouping over the robots in view (disc mode: at most POINTS_ABOVE of them, so
+     *  a zoomed-in swarm costs O(R) here, not O(R^2)). */
     clusters() {
-      const R = this.rec.R, near = 2 * this.robotPx + ID_FONT_PX, parent = [...Array(R).keys()];
-      const find = (i) => { while (parent[i] !== i) i = parent[i] = parent[parent[i]]; return i; };
-      const xy = [...Array(R).keys()].map((i) => this.canvasXY(i));
-      for (let i = 0; i < R; i++) {
-        for (let j = i + 1; j < R; j++) {
-          if (Math.hypot(xy[i][0] - xy[j][0], xy[i][1] - xy[j][1]) < near) parent[find(j)] = find(i);
+      const near = 2 * this.robotPx + ID_FONT_PX, shown = this.inView(near);
+      const parent = shown.map((_, k) => k), xy = shown.map((i) => this.canvasXY(i));
+      const find = (k) => { while (parent[k] !== k) k = parent[k] = parent[parent[k]]; return k; };
+      for (let a = 0; a < shown.length; a++) {
+        for (let b = a + 1; b < shown.length; b++) {
+          if (Math.hypot(xy[a][0] - xy[b][0], xy[a][1] - xy[b][1]) < near) parent[find(b)] = find(a);
         }
       }
       const by = new Map();
-      for (let i = 0; i < R; i++) {
-        const root = find(i);
+      shown.forEach((i, k) => {
+        const root = find(k);
         if (!by.has(root)) by.set(root, []);
         by.get(root).push(i);
-      }
+      });
       return [...by.values()].filter((g) => g.length > 1);
+    }
+
+    /** The robots drawn on the canvas (within ``margin`` pixels of it), in id order. */
+    inView(margin = 0) {
+      const w = this.canvas.width, h = this.canvas.height, out = [];
+      for (let i = 0; i < this.rec.R; i++) {
+        const [x, y] = this.canvasXY(i);
+        if (x >= -margin && y >= -margin && x <= w + margin && y <= h + margin) out.push(i);
+      }
+      return out;
     }
 
     /** A cluster of overlapping robots: a ring around them, their count in a badge and their ids (as
@@ -1518,12 +1529,12 @@
       ctx.restore();
     }
 
-    /** The goal every robot drives to (its latest navigate action's goal): a dashed line in its colour and a
+    /** The goal every robot in view drives to (its latest navigate action's goal): a dashed line in its colour and a
      *  cross at the goal. The selected robot's goal is drawn again, in black, by drawDebug. */
     drawGoals() {
       const ctx = this.ctx, wMax = this.rec.W * this.cellM, hMax = this.rec.H * this.cellM;
       ctx.save();
-      for (let i = 0; i < this.rec.R; i++) {
+      for (const i of this.inView(this.robotPx)) {   // robots in view (disc mode: at most POINTS_ABOVE)
         const goal = this.currentGoal(i, this.tick);
         if (!goal || goal[0] < 0 || goal[1] < 0 || goal[0] > wMax || goal[1] > hMax) continue;
         const [gx, gy] = this.worldToCanvas(goal[0], goal[1]), [x, y] = this.canvasXY(i);
