@@ -12,7 +12,8 @@ from swarm.base.errors import InvalidInput
 
 from .config import EnvConfig, Reward, check_render_mode, env_spec, episode_seed
 from .core import ExplorationCore
-from .spaces import action_space, observation_space, render_rgb
+from .render import RENDER_PX, check_render_px, render_rgb
+from .spaces import action_space, observation_space
 
 
 class SwarmParallelEnv(ParallelEnv):
@@ -29,11 +30,12 @@ class SwarmParallelEnv(ParallelEnv):
     def __init__(self, spec: Any = None, *, learners: Any = None, action: str = "goal", delegate: bool = False,
                  ticks_per_step: int = 1, crop_cells: int = 32, observe_all: bool = False, margin_db: float = 60.0,
                  reward: Reward | dict[str, float] | None = None, render_mode: str | None = None,
-                 **overrides: Any) -> None:
+                 render_px: int = RENDER_PX, **overrides: Any) -> None:
         config = EnvConfig(learners=learners, action=action, delegate=delegate, ticks_per_step=ticks_per_step,
                            crop_cells=crop_cells, observe_all=observe_all, margin_db=margin_db,
                            reward=Reward() if reward is None else reward)
         check_render_mode(render_mode, self.metadata["render_modes"])
+        self.render_px = check_render_px(render_px)
         self.core = ExplorationCore(env_spec(spec, overrides), config)
         self.render_mode = render_mode
         self.possible_agents = [f"robot_{i}" for i in self.core.learners]
@@ -99,7 +101,7 @@ class SwarmParallelEnv(ParallelEnv):
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array" or self.core.sim is None:
             return None
-        return render_rgb(self.core)
+        return render_rgb(self.core, self.render_px)
 
     def close(self) -> None:
         self.core.close()

@@ -11,7 +11,8 @@ import numpy as np
 from swarm.api import check_int
 from .config import EnvConfig, Reward, check_render_mode, env_spec
 from .core import ExplorationCore
-from .spaces import action_space, observation_space, render_rgb
+from .render import RENDER_PX, check_render_px, render_rgb
+from .spaces import action_space, observation_space
 
 
 class SwarmEnv(gym.Env):
@@ -26,12 +27,13 @@ class SwarmEnv(gym.Env):
     def __init__(self, spec: Any = None, *, learner: int = 0, action: str = "goal", delegate: bool = False,
                  ticks_per_step: int = 1, crop_cells: int = 32, observe_all: bool = False, margin_db: float = 60.0,
                  reward: Reward | dict[str, float] | None = None, render_mode: str | None = None,
-                 **overrides: Any) -> None:
+                 render_px: int = RENDER_PX, **overrides: Any) -> None:
         check_int("learner", learner, 0, 999)
         config = EnvConfig(learners=(learner,), action=action, delegate=delegate, ticks_per_step=ticks_per_step,
                            crop_cells=crop_cells, observe_all=observe_all, margin_db=margin_db,
                            reward=Reward() if reward is None else reward)
         check_render_mode(render_mode, self.metadata["render_modes"])
+        self.render_px = check_render_px(render_px)
         self.core = ExplorationCore(env_spec(spec, overrides), config)
         self.learner = learner
         self.render_mode = render_mode
@@ -66,7 +68,7 @@ class SwarmEnv(gym.Env):
     def render(self) -> np.ndarray | None:
         if self.render_mode != "rgb_array" or self.core.sim is None:
             return None
-        return render_rgb(self.core)
+        return render_rgb(self.core, self.render_px)
 
     def close(self) -> None:
         self.core.close()

@@ -30,17 +30,3 @@ def action_space(core: ExplorationCore) -> spaces.Space:
         return spaces.Discrete(core.config.n_actions)
     return spaces.Box(-1.0, 1.0, (2,), dtype=np.float32)
 
-
-def render_rgb(core: ExplorationCore) -> np.ndarray:
-    """The team's knowledge (union of the robots' maps: unseen grey, free white, solid black), learning robots
-    blue and scripted ones red, north up: ``uint8[H, W, 3]`` at one pixel per 0.5 m cell."""
-    sim = core.sim
-    union = sim.known.max(axis=0)
-    palette = np.array([[128, 128, 128], [255, 255, 255], [0, 0, 0]], dtype=np.uint8)
-    image = palette[union]
-    h, w = union.shape
-    for robot, (x, y, _) in enumerate(sim.world.poses):
-        r, c = int(y / 0.5), int(x / 0.5)
-        colour = (40, 90, 230) if robot in core.learners else (220, 40, 40)
-        image[max(r - 1, 0):min(r + 2, h), max(c - 1, 0):min(c + 2, w)] = colour
-    return np.ascontiguousarray(image[::-1])

@@ -47,6 +47,8 @@
   const TOTALS_EVERY = 16;        // message totals are checkpointed every this many ticks
   const PAIR_AGES_UP_TO = 64;     // robots: up to this, the map-merge pairs are kept for the per-robot ages
   const MAX_ZOOM = 64;            // mouse wheel zoom: up to this many times the fitted map
+  const ID_FONT_PX = 13;          // robot ids: bold, with a white halo
+  const NICE_METRES = [0.5, 1, 2, 5, 10, 20, 50, 100, 200, 500, 1000];   // scale bar and grid steps
 
   // ------------------------------------------------------------------------------ decoding ----
   /** The recording from its base64 pieces (each a whole number of 3-byte groups), each dropped from the
@@ -563,6 +565,18 @@
     return items.slice(0, LIST_ITEMS).join(', ') + (more > 0 ? ` … and ${more} more` : '') + (note || '');
   }
 
+  /** Sorted ids as ranges: [0, 1, 2, 3, 7] -> "0-3, 7". */
+  function idRanges(ids) {
+    const out = [];
+    for (let k = 0; k < ids.length; k++) {
+      let j = k;
+      while (j + 1 < ids.length && ids[j + 1] === ids[j] + 1) j++;
+      out.push(j > k ? `${ids[k]}–${ids[j]}` : String(ids[k]));
+      k = j;
+    }
+    return out.join(', ');
+  }
+
   function plural(n, word) { return `${n} ${word}${n === 1 ? '' : 's'}`; }
 
   function causeColour(cause) { return (CAUSE_STYLE[cause] || [[90, 90, 90]])[0]; }
@@ -731,7 +745,8 @@
     // -------------------------------------------------------------------------- geometry ----
     layout() {
       const { W, H } = this.rec;
-      const aside = 380, pad = 40;
+      const side = document.getElementById('side');
+      const aside = 350 + (side ? side.offsetWidth + 10 : 0), pad = 40;
       const maxW = Math.max(200, window.innerWidth - aside - pad);
       const maxH = Math.max(200, window.innerHeight - 80);
       this.cellPx = Math.max(0.5, Math.min(maxW / W, maxH / H));
@@ -806,8 +821,10 @@
       s.addEventListener('input', () => this.setTick(Number(s.value)));
       document.getElementById('play').addEventListener('click', () => (this.playing ? this.pause() : this.play()));
       this.speed = document.getElementById('speed');
+      document.getElementById('lost-window').textContent =
+        `(last ${LOST_TICKS} ticks, ${(LOST_TICKS * this.head.tick_s).toFixed(1)} s)`;
       for (const id of ['show-links', 'show-messages', 'show-trails', 'show-debug', 'show-groups', 'show-lost',
-                        'trail-fade']) {
+                        'trail-fade', 'show-goals', 'show-ids', 'show-grid']) {
         document.getElementById(id).addEventListener('change', () => this.draw());
       }
       this.trailSeconds.addEventListener('input', () => this.draw());
@@ -925,20 +942,23 @@
         clock = now;
       };
       const ctx = this.ctx;
-      this.drawn = { losses: [], groups: [], robots: 0, links: 0, messages: 0 };
+      this.drawn = { losses: [], groups: [], robots: 0, links: 0, messages: 0, goals: [], clusters: [], scale: null, grid: null };
       this.scaleRobots();
       step('base', () => {
         this.drawBase();
         ctx.imageSmoothingEnabled = false;
         ctx.drawImage(this.base, -this.offX, -this.offY, this.canvas.width * this.zoom, this.canvas.height * this.zoom);
       });
+      if (on('show-grid')) step('grid', () => this.drawGrid());
       if (this.rec.hasComm && on('show-groups')) step('groups', () => this.drawGroups());
       if (on('show-trails')) step('trails', () => this.drawTrails());
       if (on('show-links')) step('links', () => this.drawLinks());
       if (on('show-messages')) step('messages', () => this.drawMessages());
       if (on('show-lost')) step('lost', () => this.drawLosses());
+      if (on('show-goals') && !this.points) step('goals', () => this.drawGoals());
       if (this.selectedRobot !== null && on('show-debug')) step('debug', () => this.drawDebug(this.selectedRobot));
-      step('robots', () => this.drawRobots());
+      step('robots', () => this.drawRobots(on('show-ids')));
+      if (on('show-grid')) step('scale', () => this.drawScaleBar());
       step('curve', () => this.drawCurve());
       step('readout', () => this.updateReadout());
       step('aoi', () => this.updateAoi());
@@ -1430,14 +1450,147 @@
       }
     }
 
-    drawRobots() {
+    drawRobots(ids = true) {
       if (this.points) { this.drawPoints(); return; }
       const ctx = this.ctx, r = this.robotPx;
       const order = [...Array(this.rec.R).keys()];
       if (this.selectedRobot !== null) { order.splice(this.selectedRobot, 1); order.push(this.selectedRobot); }
-      ctx.font = '10px sans-serif';
-      for (const i of order) this.drawDisc(i, r, true);
+      const clusters = this.clusters(), inCluster = new Set(clusters.flat());
+      ctx.font = `bold ${ID_FONT_PX}px sans-serif`;
+      for (const i of order) this.drawDisc(i, r, ids && !inCluster.has(i));
+      for (const members of clusters) this.drawCluster(members, ids);
       this.drawn.robots = this.rec.R;
+      this.drawn.clusters = clusters;
+    }
+
+    /** Robots drawn too close to read (discs and ids overlap: centres nearer than a diameter plus an id's
+     *  height), as lists of ids in order, each of two or more: at tick 0 a team spawned together is one
+     *  cluster. Single-link grouping over the robots in view (disc mode: at most POINTS_ABOVE of them, so
+     *  a zoomed-in swarm costs O(R) here, not O(R^2)). */
+    clusters() {
+      const near = 2 * this.robotPx + ID_FONT_PX, shown = this.inView(near);
+      const parent = shown.map((_, k) => k), xy = shown.map((i) => this.canvasXY(i));
+      const find = (k) => { while (parent[k] !== k) k = parent[k] = parent[parent[k]]; return k; };
+      for (let a = 0; a < shown.length; a++) {
+        for (let b = a + 1; b < shown.length; b++) {
+          if (Math.hypot(xy[a][0] - xy[b][0], xy[a][1] - xy[b][1]) < near) parent[find(b)] = find(a);
+        }
+      }
+      const by = new Map();
+      shown.forEach((i, k) => {
+        const root = find(k);
+        if (!by.has(root)) by.set(root, []);
+        by.get(root).push(i);
+      });
+      return [...by.values()].filter((g) => g.length > 1);
+    }
+
+    /** The robots drawn on the canvas (within ``margin`` pixels of it), in id order. */
+    inView(margin = 0) {
+      const w = this.canvas.width, h = this.canvas.height, out = [];
+      for (let i = 0; i < this.rec.R; i++) {
+        const [x, y] = this.canvasXY(i);
+        if (x >= -margin && y >= -margin && x <= w + margin && y <= h + margin) out.push(i);
+      }
+      return out;
+    }
+
+    /** A cluster of overlapping robots: a ring around them, their count in a badge and their ids (as
+     *  ranges: "0-15") in a label beside it, so a team spawned together stays readable. */
+    drawCluster(members, ids) {
+      const ctx = this.ctx, pts = members.map((i) => this.canvasXY(i));
+      const xs = pts.map((p) => p[0]), ys = pts.map((p) => p[1]);
+      const cx = (Math.min(...xs) + Math.max(...xs)) / 2, cy = (Math.min(...ys) + Math.max(...ys)) / 2;
+      const radius = Math.max(...pts.map(([x, y]) => Math.hypot(x - cx, y - cy))) + this.robotPx + 3;
+      ctx.save();
+      ctx.lineWidth = 1.5; ctx.strokeStyle = '#111'; ctx.setLineDash([3, 2]);
+      ctx.beginPath(); ctx.arc(cx, cy, radius, 0, 2 * Math.PI); ctx.stroke(); ctx.setLineDash([]);
+      ctx.font = `bold ${ID_FONT_PX}px sans-serif`;
+      const badge = String(members.length), bw = Math.max(18, ctx.measureText(badge).width + 8);
+      const bx = cx + (radius + bw / 2) * 0.71, by = cy - (radius + bw / 2) * 0.71;   // outside the ring
+      ctx.fillStyle = '#111'; ctx.beginPath(); ctx.arc(bx, by, bw / 2, 0, 2 * Math.PI); ctx.fill();
+      ctx.fillStyle = '#fff'; ctx.textAlign = 'center'; ctx.textBaseline = 'middle'; ctx.fillText(badge, bx, by + 0.5);
+      if (ids) {   // beside the badge, or left of the ring where the canvas ends
+        const text = `robots ${idRanges(members)}`, tw = ctx.measureText(text).width;
+        const right = bx + bw / 2 + 3 + tw <= this.canvas.width;
+        ctx.textAlign = 'left';
+        this.haloText(text, right ? bx + bw / 2 + 3 : Math.max(2, cx - radius - 4 - tw), by, '#111');
+      }
+      ctx.restore();
+    }
+
+    /** Text with a white halo, readable over walls, trails and links. */
+    haloText(text, x, y, colour) {
+      const ctx = this.ctx;
+      ctx.save();
+      ctx.lineWidth = 3; ctx.strokeStyle = 'rgba(255,255,255,0.9)'; ctx.lineJoin = 'round';
+      ctx.strokeText(text, x, y);
+      ctx.fillStyle = colour; ctx.fillText(text, x, y);
+      ctx.restore();
+    }
+
+    /** The goal every robot in view drives to (its latest navigate action's goal): a dashed line in its colour and a
+     *  cross at the goal. The selected robot's goal is drawn again, in black, by drawDebug. */
+    drawGoals() {
+      const ctx = this.ctx, wMax = this.rec.W * this.cellM, hMax = this.rec.H * this.cellM;
+      ctx.save();
+      for (const i of this.inView(this.robotPx)) {   // robots in view (disc mode: at most POINTS_ABOVE)
+        const goal = this.currentGoal(i, this.tick);
+        if (!goal || goal[0] < 0 || goal[1] < 0 || goal[0] > wMax || goal[1] > hMax) continue;
+        const [gx, gy] = this.worldToCanvas(goal[0], goal[1]), [x, y] = this.canvasXY(i);
+        const colour = this.colour(i);
+        ctx.strokeStyle = rgb(colour, 0.75); ctx.lineWidth = 1.5; ctx.setLineDash([3, 3]);
+        ctx.beginPath(); ctx.moveTo(x, y); ctx.lineTo(gx, gy); ctx.stroke();
+        ctx.setLineDash([]); ctx.lineWidth = 2.5; ctx.strokeStyle = rgb(colour);
+        ctx.beginPath(); ctx.moveTo(gx - 4, gy - 4); ctx.lineTo(gx + 4, gy + 4);
+        ctx.moveTo(gx + 4, gy - 4); ctx.lineTo(gx - 4, gy + 4); ctx.stroke();
+        this.drawn.goals.push({ robot: i, goal: goal.slice(), x: gx, y: gy });
+      }
+      ctx.restore();
+    }
+
+    /** Metres per grid step / scale bar: the smallest NICE_METRES step at least ``minPx`` pixels long. */
+    niceMetres(minPx) {
+      const pxPerM = this.cellPx * this.zoom / this.cellM;
+      return NICE_METRES.find((m) => m * pxPerM >= minPx) || NICE_METRES[NICE_METRES.length - 1];
+    }
+
+    /** A metre grid: faint lines every niceMetres(70) m from the map's origin (its south-west corner), labelled
+     *  along the top and left edges in metres. */
+    drawGrid() {
+      const ctx = this.ctx, step = this.niceMetres(70), w = this.canvas.width, h = this.canvas.height;
+      this.drawn.grid = step;
+      const wM = this.rec.W * this.cellM, hM = this.rec.H * this.cellM;
+      ctx.save();
+      ctx.strokeStyle = 'rgba(0,0,0,0.13)'; ctx.lineWidth = 1;
+      ctx.font = '11px sans-serif'; ctx.textBaseline = 'top';
+      for (let m = 0; m <= wM + 1e-9; m += step) {
+        const [x] = this.worldToCanvas(m, 0);
+        if (x < -1 || x > w + 1) continue;
+        ctx.beginPath(); ctx.moveTo(Math.round(x) + 0.5, 0); ctx.lineTo(Math.round(x) + 0.5, h); ctx.stroke();
+        if (m > 0) this.haloText(`${+m.toFixed(1)}`, x + 2, 2, '#333');
+      }
+      for (let m = 0; m <= hM + 1e-9; m += step) {
+        const [, y] = this.worldToCanvas(0, m);
+        if (y < -1 || y > h + 1) continue;
+        ctx.beginPath(); ctx.moveTo(0, Math.round(y) + 0.5); ctx.lineTo(w, Math.round(y) + 0.5); ctx.stroke();
+        if (m > 0 && y > 14) this.haloText(`${+m.toFixed(1)} m`, 2, y + 2, '#333');
+      }
+      ctx.restore();
+    }
+
+    /** A scale bar in the bottom-left corner: niceMetres(80) m, on a white plate. */
+    drawScaleBar() {
+      const ctx = this.ctx, metres = this.niceMetres(80);
+      const px = metres / this.cellM * this.cellPx * this.zoom, x = 12, y = this.canvas.height - 14;
+      ctx.save();
+      ctx.fillStyle = 'rgba(255,255,255,0.85)'; ctx.fillRect(x - 6, y - 22, px + 12, 30);
+      ctx.fillStyle = '#000'; ctx.fillRect(x, y - 3, px, 6);
+      ctx.fillRect(x, y - 8, 2, 12); ctx.fillRect(x + px - 2, y - 8, 2, 12);
+      ctx.font = 'bold 12px sans-serif'; ctx.textAlign = 'center'; ctx.textBaseline = 'bottom';
+      ctx.fillText(`${metres} m`, x + px / 2, y - 7);
+      ctx.restore();
+      this.drawn.scale = { metres, px, x, y };
     }
 
     /** Robot i as a disc of radius r in its colour with a heading tick (and its number). */
@@ -1457,7 +1610,7 @@
       ctx.lineWidth = 2;
       ctx.beginPath(); ctx.moveTo(cx + 0.55 * r * dx, cy + 0.55 * r * dy); ctx.lineTo(cx + 1.7 * r * dx, cy + 1.7 * r * dy);
       ctx.stroke();
-      if (label) { ctx.fillStyle = '#000'; ctx.fillText(String(i), cx + r + 2, cy - r - 1); }
+      if (label) this.haloText(String(i), cx + r + 2, cy - r - 1, '#000');
     }
 
     /** Many robots: a square point per robot, at most one per POINT_CELL x POINT_CELL pixel square (the
@@ -1523,14 +1676,16 @@
       document.getElementById('readout').textContent =
         `tick ${t} / ${this.rec.T - 1} (${(t * this.head.tick_s).toFixed(1)} s) · explored ` +
         `${(100 * this.rec.explored[t]).toFixed(1)} % · coverage ${(100 * this.rec.coverage[t]).toFixed(1)} % · ` +
-        `${this.linkCount()} links · ${off[t + 1] - off[t]} messages sent` +
+        `${this.linkCount()} links · ${off[t + 1] - off[t]} messages sent this tick` +
         (this.rec.hasComm
-          ? ` · ${this.lostCount(t)} deliveries lost · ${plural(this.groups().length, 'group')}` : '');
+          ? ` · lost in the last ${LOST_TICKS} ticks: ${this.lostCount(t)} · ${plural(this.groups().length, 'group')}`
+          : '');
     }
 
+    /** Deliveries lost in the window the lost-message layer draws: ticks t - LOST_TICKS + 1 to t. */
     lostCount(t) {
       const m = this.rec.msg, off = this.rec.off.msg;
-      return m.lostOff[off[t + 1]] - m.lostOff[off[t]];
+      return m.lostOff[off[t + 1]] - m.lostOff[off[Math.max(0, t - LOST_TICKS + 1)]];
     }
 
     updatePanel(i) {
@@ -1608,6 +1763,9 @@
       for (const name of this.rec.msg.types) {
         items.push(`<span><span class="swatch" style="background:${rgb(typeColour(name))}"></span>${escapeHtml(name)}</span>`);
       }
+      items.push('<span><b>&times;</b> goal, dashed from its robot</span>',
+                 '<span><span class="badge">n</span> n robots drawn on top of each other</span>',
+                 '<span>grid and scale bar in metres</span>');
       document.getElementById('legend').innerHTML = items.join('');
       const totals = new Map();
       for (const code of this.rec.msg.lostCause) totals.set(code, (totals.get(code) || 0) + 1);
@@ -1677,6 +1835,14 @@
                                                         hull: g.hull.map((p) => p.slice()) })),
         causeColour: (cause) => causeColour(cause).slice(),
         trailRange: () => v.trailRange.slice(),
+        lostTicks: LOST_TICKS,
+        lostCount: () => v.lostCount(v.tick),
+        drawnGoals: () => v.drawn.goals.map((g) => ({ ...g, goal: g.goal.slice() })),
+        currentGoal: (i) => v.currentGoal(i, v.tick),
+        drawnClusters: () => v.drawn.clusters.map((c) => c.slice()),
+        scaleBar: () => (v.drawn.scale ? { ...v.drawn.scale } : null),
+        cellPx: () => v.cellPx,
+        gridMetres: () => v.drawn.grid,
         tooltipAt: (cx, cy) => { v.showTip(cx, cy, 0, 0); return v.tip.hidden ? '' : v.tip.textContent; },
       };
     }

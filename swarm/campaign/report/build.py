@@ -39,7 +39,7 @@ from swarm.base.errors import InvalidInput
 from swarm.results.schema import LOCALIZATION_RUN_COLUMNS
 
 from ..store import ResultsStore
-from . import comm, comm_figures, effects, figures, stats, tables, units
+from . import comm, comm_figures, effects, figures, headline, stats, tables, units
 from .contents import CommSection, FigureSet, LayoutFigure, PairedSection, Report
 from .layout import FigureLayout, check_layout, load_layout
 from .load import CampaignData, load
@@ -138,6 +138,7 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
         _paired(rep, out)
         _comm(rep, out)
         _communication(rep, out, ok.assign(cell=cell_id), store)
+        _finding(rep)
     _run_tables(rep, out)
     _map_quality(rep, out)
     _collisions(rep, out)
@@ -155,6 +156,18 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
 
 
 # ------------------------------------------------------------------------------------------ parts ----
+def _finding(rep: Report) -> None:
+    """The first page's sentence and figure: exploration time and communication against the radio model
+    when it varies, else the first curves figure comparing algorithms."""
+    rep.finding = headline.finding(rep.runs_t, rep.data.orders, rep.target)
+    if rep.finding is None:
+        return
+    against = [(t, path) for t, path, _ in rep.communication.against if "/against_radio." in path] \
+        if rep.communication is not None else []
+    curves = [(f.title, f.curves) for f in rep.figures if f.compare == "algorithm"]
+    rep.finding_figure = (against or curves or [None])[0]
+
+
 def comparisons(data: CampaignData) -> list[str | None]:
     found: list[str | None] = [d for d in (*COMPARE, *data.axes) if d in data.dims and data.varies(d)]
     return found or [None]  # nothing compared: one figure per cell
@@ -489,6 +502,8 @@ def _against_figure(rep: Report, out: ReportWriter, multi: pd.DataFrame, dim: st
     complete = multi.groupby(keys, observed=True)[dim].transform("nunique") == len(labels)
     partial = not complete.all()
     multi = multi[complete]
+    if multi.empty:  # no cell has run every value yet (a shard, a campaign in progress): nothing to draw
+        return
     panel_dims = ["map", "size"]
     if len(multi.groupby(panel_dims, observed=True)) > MAX_AGAINST_PANELS:
         panel_dims = ["map"]

@@ -109,4 +109,8 @@ class Report:
     benchmark_rows: int = 0
     communication: CommSection | None = None
     notes: list[str] = field(default_factory=list)
+    finding: str | None = None
+    """One sentence for the first page (:func:`.headline.finding`)."""
+    finding_figure: tuple[str, str] | None = None
+    """(title, path) of the figure shown with it."""
     written: list[str] = field(default_factory=list)

@@ -28,8 +28,9 @@ def section(compare: str | None) -> str:
 
 
 def render(rep: Report) -> str:
-    parts = [_head(rep), _runs(rep), _campaign(rep), _layout(rep), _summary(rep), _curves(rep), _cactus(rep), _paired(rep),
-             _comm(rep), _communication(rep), _map_quality(rep), _collisions(rep), _benchmark(rep), _failed(rep), _maes(rep), _method(rep), _files(rep)]
+    parts = [_head(rep), _finding(rep), _runs(rep), _campaign(rep), _layout(rep), _summary(rep), _curves(rep),
+             _cactus(rep), _paired(rep), _comm(rep), _communication(rep), _map_quality(rep), _collisions(rep),
+             _benchmark(rep), _failed(rep), _maes(rep), _method(rep), _files(rep)]
     return "\n".join(p for p in parts if p).rstrip() + "\n"
 
 
@@ -50,6 +51,18 @@ def _head(rep: Report) -> str:
               "- Figures: 300 dpi with a PDF copy beside each, sized for "
               + ("one journal column (3.5 in)" if rep.width < 5 else "a full journal page (7.16 in)")
               + "; colours are colour-blind safe (Okabe-Ito) and each label keeps its colour in every figure.", ""]
+    return "\n".join(lines)
+
+
+def _finding(rep: Report) -> str:
+    """The finding in one sentence with its figure, before everything else (:mod:`.headline`)."""
+    if not rep.finding:
+        return ""
+    lines = ["## Finding", "", f"**{rep.finding}** Whether each difference is established: "
+             "[Paired comparisons](#paired-comparisons).", ""]
+    if rep.finding_figure is not None:
+        title, path = rep.finding_figure
+        lines += [f"![{title}]({path})", "", f"*{title}.*", ""]
     return "\n".join(lines)
 
 

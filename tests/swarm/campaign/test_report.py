@@ -119,6 +119,11 @@ def test_real_readme_states_the_campaign_and_links_resolve(real):
     assert "| 16 | 0 | 0 | 16 |" in text  # done, failed, pending, total
     assert "**98 % explored**" in text
     assert f"`swarm campaign report {results} -o {report} --target 0.98 --maes-csv`" in text
+    # the first page: the finding in one sentence, with the radio figure, before the tables
+    assert text.index("## Finding") < text.index("## Runs")
+    finding = text[text.index("## Finding"):text.index("## Runs")]
+    assert "**No run reached 98 % explored within its time limit (2 maps).**" in finding  # these short runs
+    assert "](comm/against_radio.png)" in finding
     links = re.findall(r"\]\(([^)#]+)\)", text)
     assert len(links) > 30
     for link in links:

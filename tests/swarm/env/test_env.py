@@ -46,7 +46,7 @@ def test_gymnasium_env_checker_passes(env_id, options):
     assert [str(w.message) for w in caught] == []
     env.reset(seed=1)
     frame = env.render()
-    assert frame.dtype == np.uint8 and frame.shape == (40, 40, 3)
+    assert frame.dtype == np.uint8 and frame.shape == (600, 600, 3)  # 40 x 40 cells at 15 px (swarm.env.render)
 
 
 def trajectory(seed: int, policy_seed: int, **options) -> str:

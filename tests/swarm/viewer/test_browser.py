@@ -68,7 +68,7 @@ def browser():
         b.close()
 
 
-def open_page(browser, html, width=1280, height=800):
+def open_page(browser, html, width=1400, height=900):
     """A page of ``html`` once its script is ready; after the test: no errors, nothing fetched."""
     context = browser.new_context(viewport={"width": width, "height": height}, device_scale_factor=1)
     pg = context.new_page()
@@ -131,7 +131,7 @@ def test_robots_are_drawn_at_their_recorded_positions(page, recording):
 
 def test_walls_are_coloured_by_material(page, recording):
     rec = recording[0]
-    set_layers(page, links=False, messages=False, trails=False, lost=False, groups=False)
+    set_layers(page, links=False, messages=False, trails=False, lost=False, groups=False, goals=False, grid=False)
     page.evaluate(f"swarmViewer.setTick({rec.last_tick})")
     seen, truth = rec.seen_at(rec.last_tick), rec.truth
     rows, cols = np.nonzero(truth.solid & seen)
@@ -184,7 +184,8 @@ def test_clicking_a_robot_shows_its_panel_and_its_own_map(page, recording):
     assert f"{len(sent)} sent ({sum(m.size for m in sent)} B), {received} received" in text
     # the map now shows this robot's knowledge: a free cell others saw but it did not is drawn differently
     # from one it knows
-    set_layers(page, links=False, messages=False, trails=False, debug=False, lost=False, groups=False)
+    set_layers(page, links=False, messages=False, trails=False, debug=False, lost=False, groups=False, goals=False,
+               grid=False)
     others_only = np.argwhere(rec.seen_at(TICK) & (known == 0) & ~rec.truth.solid)
     mine = np.argwhere((known == 1) & ~rec.truth.solid)
     far = lambda rc: min(np.hypot(*(rec.poses[TICK, :, :2] - ((rc[1] + 0.5) * 0.5, (rc[0] + 0.5) * 0.5)).T)) > 1.5
@@ -238,7 +239,8 @@ def test_screenshot_is_not_blank(page, tmp_path):
 
 
 # ------------------------------------------------------------------------------ communication ----
-ONLY = dict(links=False, messages=False, trails=False, debug=False, lost=False, groups=False)
+ONLY = dict(links=False, messages=False, trails=False, debug=False, lost=False, groups=False, goals=False, grid=False,
+            ids=False)
 
 
 def map_image(pg) -> np.ndarray:
@@ -622,3 +624,146 @@ def test_each_linked_pair_of_a_spread_swarm_is_drawn_once(browser, tmp_path):
     for pg in open_page(browser, write_html(path, tmp_path / "spread.html")):
         counts = check_links_drawn_once(pg, rec, range(rec.ticks))
         assert 0 < max(counts) and 2 * max(counts) < rec.n_robots ** 2 / 8   # sparse indeed
+
+
+# ------------------------------------------------------------------------------ readability (issue 53) ----
+def dark(image: np.ndarray) -> np.ndarray:
+    return image.sum(axis=-1) < 120
+
+
+def test_the_lost_readout_counts_the_window_the_layer_draws(page, recording):
+    rec = recording[0]
+    window = page.evaluate("swarmViewer.lostTicks")
+    assert f"(last {window} ticks, {window / 10:.1f} s)" in page.inner_text("#layers")
+    lost = [(m.tick, m.transmitter, r) for m in rec.messages() for r, _ in m.lost]
+    per_tick = np.bincount([t for t, _, _ in lost], minlength=rec.ticks + 1)
+    in_window = np.convolve(per_tick, np.ones(window, dtype=int))[: len(per_tick)]
+    # a tick whose window holds losses from more than one tick (the one-tick count would differ)
+    tick = next(t for t in range(window, rec.ticks) if 0 < per_tick[t] < in_window[t] < 200)
+    set_layers(page, **{**ONLY, "lost": True})
+    page.evaluate(f"swarmViewer.setTick({tick})")
+    readout = page.inner_text("#readout")
+    assert f"lost in the last {window} ticks: {in_window[tick]}" in readout, readout
+    assert len(page.evaluate("swarmViewer.drawnLosses()")) == in_window[tick] == page.evaluate("swarmViewer.lostCount()")
+
+
+def test_a_scale_bar_and_metre_grid_are_drawn_and_toggle(page, recording):
+    rec = recording[0]
+    set_layers(page, **ONLY)
+    page.evaluate(f"swarmViewer.setTick({TICK})")
+    assert page.evaluate("swarmViewer.scaleBar()") is None
+    bare = map_image(page)
+    set_layers(page, grid=True)
+    bar = page.evaluate("swarmViewer.scaleBar()")
+    cell = page.evaluate("swarmViewer.cellPx()")
+    assert bar["metres"] in (1, 2, 5, 10, 20) and bar["px"] == pytest.approx(bar["metres"] / 0.5 * cell)
+    assert 80 <= bar["px"] < 250
+    image = map_image(page)
+    y = int(bar["y"])
+    assert dark(image[y, int(bar["x"]) + 2: int(bar["x"] + bar["px"]) - 2]).all()  # the bar, its full length
+    assert not dark(bare[y, int(bar["x"]) + 2: int(bar["x"] + bar["px"]) - 2]).all()
+    # grid lines: at every whole step of metres from the map's west edge, and nowhere else along a row
+    step = page.evaluate("swarmViewer.gridMetres()")
+    assert step * 2 * cell >= 70
+    first = (rec.shape[0] - step / 0.5) * cell          # the horizontal line at `step` m from the south edge
+    y = int(first - 0.6 * step / 0.5 * cell)             # between two horizontal lines and below its labels
+    row = np.any(image != bare, axis=2)[y]
+    lines = np.nonzero(row)[0]
+    lines = lines[lines > 45]                            # right of the labels along the west edge
+    want = np.arange(step, rec.shape[1] * 0.5, step) / 0.5 * cell
+    want = want[want > 45]
+    assert len(want) >= 3 and all(np.abs(lines - w).min() <= 1 for w in want)
+    assert all(np.abs(want - c).min() <= 1.5 for c in lines)
+
+
+def test_robot_ids_are_big_and_can_be_hidden(page, recording):
+    rec = recording[0]
+    set_layers(page, **{**ONLY, "ids": True})
+    page.evaluate(f"swarmViewer.setTick({TICK})")
+    radius = page.evaluate("swarmViewer.robotScreenPosition(0).radius")
+    clustered = {i for c in page.evaluate("swarmViewer.drawnClusters()") for i in c}
+    robot = next(i for i in range(rec.n_robots) if i not in clustered)
+    p = page.evaluate(f"swarmViewer.robotScreenPosition({robot})")
+    x0, y1 = int(p["canvasX"] + radius + 2), int(p["canvasY"] - radius - 1)
+    box = (slice(max(0, y1 - 14), y1 + 1), slice(x0, x0 + 10 * len(str(robot)) + 2))
+    on = dark(map_image(page)[box]).sum()
+    set_layers(page, ids=False)
+    off = dark(map_image(page)[box]).sum()
+    assert on >= 15 and off < on / 3, (on, off)  # bold 13 px digits, gone when hidden
+
+
+def test_the_robot_panel_is_beside_the_map_at_1400_by_900(page, recording):
+    page.evaluate(f"swarmViewer.setTick({TICK}); swarmViewer.select(1)")
+    panel = page.locator("#robot-panel").bounding_box()
+    stage = page.locator("#map").bounding_box()
+    assert page.evaluate("[window.innerWidth, window.innerHeight]") == [1400, 900]
+    assert panel["x"] >= stage["x"] + stage["width"] and panel["x"] + panel["width"] <= 1400
+    assert panel["y"] < 120 and panel["y"] + panel["height"] <= 900  # seen without scrolling
+    assert stage["width"] >= 600 and stage["y"] + stage["height"] <= 900
+
+
+def goal_at(rec, robot: int, tick: int):
+    """The goal the robot drives to at ``tick``, as the viewer's currentGoal finds it: its latest action that
+    sets or clears one (an action without a goal keeps the previous)."""
+    for t in range(tick, -1, -1):
+        changed = rec.actions_changed(t)
+        if robot in changed:
+            act = changed[robot]
+            if act is None:
+                return None
+            if isinstance(act["goal"], (list, tuple)) and len(act["goal"]) == 2:
+                return list(act["goal"])
+            if act["clear_goal"]:
+                return None
+    return None
+
+
+def test_every_robots_goal_is_drawn_and_can_be_hidden(page, recording):
+    rec = recording[0]
+    set_layers(page, **{**ONLY, "goals": True})
+    page.evaluate(f"swarmViewer.setTick({TICK})")
+    want = {i: goal_at(rec, i, TICK) for i in range(rec.n_robots)}
+    drawn = {g["robot"]: g for g in page.evaluate("swarmViewer.drawnGoals()")}
+    assert {i: g["goal"] for i, g in drawn.items()} == {i: g for i, g in want.items() if g is not None}
+    assert len(drawn) >= 2
+    image = map_image(page)
+    hits = 0
+    for i, g in drawn.items():
+        x, y = expected_canvas_xy(page, rec, *g["goal"])
+        assert (g["x"], g["y"]) == (pytest.approx(x, abs=0.01), pytest.approx(y, abs=0.01))
+        patch = image[int(y) - 3: int(y) + 4, int(x) - 3: int(x) + 4]
+        hits += bool((patch == page.evaluate(f"swarmViewer.robotColour({i})")).all(axis=2).any())
+    assert hits >= len(drawn) - 1  # a cross in the robot's colour (one may hide under a robot)
+    set_layers(page, goals=False)
+    assert page.evaluate("swarmViewer.drawnGoals()") == []
+
+
+def test_robots_drawn_on_top_of_each_other_are_one_labelled_cluster(page, recording):
+    rec = recording[0]
+    set_layers(page, **{**ONLY, "ids": True})
+    radius = page.evaluate("swarmViewer.robotScreenPosition(0).radius")
+    for tick in (0, TICK):
+        page.evaluate(f"swarmViewer.setTick({tick})")
+        xy = np.array([expected_canvas_xy(page, rec, *rec.poses[tick, i, :2]) for i in range(rec.n_robots)])
+        near = np.hypot(*(xy[:, None] - xy[None]).transpose(2, 0, 1)) < 2 * radius + 13
+        # connected components of "drawn too close", computed here
+        parent = list(range(rec.n_robots))
+        for i, j in zip(*np.nonzero(near)):
+            a, b = parent[i], parent[j]
+            parent = [min(a, b) if p in (a, b) else p for p in parent]
+        groups = {}
+        for i, p in enumerate(parent):
+            groups.setdefault(p, []).append(i)
+        want = sorted(g for g in groups.values() if len(g) > 1)
+        assert sorted(page.evaluate("swarmViewer.drawnClusters()")) == want
+        if tick == 0:
+            assert want == [list(range(rec.n_robots))]  # spawned together: one cluster of all
+            image = map_image(page)
+            cx, cy = xy.min(axis=0) / 2 + xy.max(axis=0) / 2
+            reach = np.hypot(*(xy - (cx, cy)).T).max() + radius + 3
+            ys, xs = np.mgrid[0:image.shape[0], 0:image.shape[1]] + 0.5
+            ring = np.abs(np.hypot(xs - cx, ys - cy) - reach) <= 1.5
+            outside = np.abs(np.hypot(xs - cx, ys - cy) - reach - 6) <= 1.5
+            assert dark(image)[ring].mean() > 0.08 > dark(image)[outside].mean()  # a dashed ring around them
+            label = image[int(cy - reach - 30): int(cy), int(cx + 0.5 * reach): int(cx + reach + 140)]
+            assert dark(label).sum() > 60  # the count badge and "robots 0-3"
