@@ -92,6 +92,7 @@ class ResultsStore:
         parsed TOML must be equal; comments and formatting may differ). Deletes nothing."""
         spec_file = self.folder / SPEC_FILE
         try:
+            self.refuse_foreign()
             self.parts.mkdir(parents=True, exist_ok=True)
             if spec_file.exists():
                 stored = spec_file.read_text(encoding="utf-8", errors="replace")
@@ -105,6 +106,17 @@ class ResultsStore:
             if changed:
                 raise InvalidInput("-o", str(self.folder), "an empty folder or one holding results of this same "
                                                            f"spec (campaign.toml differs: {changed})")
+
+    def refuse_foreign(self) -> None:
+        """A one-line refusal if the folder holds files but no ``campaign.toml``: a campaign is never scattered
+        among someone else's files (``-o .``, ``-o ~``). Call before writing anything into it."""
+        if not (self.folder / SPEC_FILE).exists() and self.folder.is_dir():
+            others = sorted(p.name for p in self.folder.iterdir()  # (a writer starting beside us may be
+                            if p.name not in (PARTS, "writers")      # writing campaign.toml right now)
+                            and not p.name.startswith(f".{SPEC_FILE}."))
+            if others:
+                raise InvalidInput("-o", str(self.folder), "an empty folder or one holding results of this same "
+                                                           f"spec (it holds {clip(others[0])} and no {SPEC_FILE})")
 
     open_for = prepare  # the name of earlier versions (a single writer: nothing is cleaned any more)
 

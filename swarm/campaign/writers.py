@@ -218,6 +218,7 @@ class Writer:
     def __enter__(self) -> "Writer":
         folder = self.store.folder
         try:
+            self.store.refuse_foreign()
             (folder / WRITERS).mkdir(parents=True, exist_ok=True)
             with registry_lock(folder):
                 self.store.prepare(self.source)

@@ -207,6 +207,13 @@ def test_a_different_spec_cannot_reuse_a_results_folder(tmp_path):
                      executor=make_executor(inline=True), progress=False)
 
 
+def test_a_folder_of_other_files_is_refused_and_left_alone(tmp_path):
+    (tmp_path / "thesis.tex").write_text("mine")
+    with pytest.raises(InvalidInput, match=r"-o: .*holds thesis.tex and no campaign.toml"):
+        run_campaign(tiny(), tmp_path, executor=make_executor(inline=True), progress=False, shard=(0, 8))
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["thesis.tex"]
+
+
 @pytest.mark.timeout(600)
 def test_kill_9_then_resume_gives_every_run_once_and_identical_results(tmp_path):
     spec_file = tmp_path / "tiny.toml"

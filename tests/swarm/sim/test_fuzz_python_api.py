@@ -183,7 +183,7 @@ campaign_options = st.fixed_dictionaries({}, optional={
 
 @settings(FUZZ, max_examples=100)
 @given(spec=campaign_specs, out=st.sampled_from(["folder", "folder", "folder", None, 5, "", b"x",
-                                                 Path("/proc/version"), "/"]),
+                                                 Path("/proc/version"), "/", "."]),
        options=campaign_options)
 def test_campaign_run_gives_a_result_or_one_line(spec, out, options, results):
     if options.get("inline") is None and options.get("workers") is None and options.get("dask") is None:
