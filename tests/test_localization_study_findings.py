@@ -59,8 +59,11 @@ def test_findings_on_a_hand_built_table(tmp_path):
     assert avoid.loc["greed | 16", "robot_off"] > avoid.loc["greed | 16", "robot_on"]
     assert abs(avoid.loc["greed | 16", "wall_off"] - findings.np.median(
         [10 / (16 * t * 0.1 / 3600) for t in (1000, 1500, 1100)])) < 1e-6   # 10 wall contacts, 3 error models
-    assert [alg for alg, _, _ in findings.ranking(findings.time_costs(runs, conds), findings.quality(runs, conds))] \
-        == ["greed", "tnf"]
+    ranked = findings.ranking(findings.time_costs(runs, conds), findings.quality(runs, conds))
+    assert [alg for alg, *_ in ranked] == ["greed", "tnf"]                    # 0.8 explored correctly against 0.7
+    assert abs(ranked[0][1] - 0.8) < 1e-9 and ranked[1][2] == 2.0 and not ranked[0][3]  # every run reached it
     out = tmp_path / "findings.md"
     assert findings.main([str(tmp_path / "runs.csv"), "-o", str(out)]) == 0
     assert "1. **greed**" in out.read_text()
+    assert findings.main([str(tmp_path / "runs.csv"), "-o", str(out), "--figure", str(tmp_path / "fig.png")]) == 0
+    assert (tmp_path / "fig.png").stat().st_size > 10_000 and (tmp_path / "fig.pdf").exists()
