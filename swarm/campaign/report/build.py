@@ -140,6 +140,7 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
         _communication(rep, out, ok.assign(cell=cell_id), store)
         _finding(rep)
     _run_tables(rep, out)
+    _maps(rep, out)
     _map_quality(rep, out)
     _collisions(rep, out)
     _benchmark(rep, out)
@@ -666,6 +667,16 @@ def _benchmark(rep: Report, out: ReportWriter) -> None:
                  "Benchmark metrics (Explore-Bench, MAES): medians over each cell's runs; T90/T99 in simulated "
                  "seconds, – when half of the runs did not reach the fraction")
     rep.benchmark, rep.benchmark_rows = table, len(df)
+
+
+def _maps(rep: Report, out: ReportWriter) -> None:
+    """The maps the campaign ran on (``figures/maps-*``): what each map value looks like."""
+    from . import mapfigs
+
+    for title, panels in mapfigs.campaign_maps(rep.data):
+        stem = f"figures/maps-{slug(title)}"
+        fig = mapfigs.map_figure(title, panels, rep.width)
+        rep.map_figures.append((title, figures.write_figure(out.write, stem, fig, rep.fmt)))
 
 
 def _write_table(out: ReportWriter, name: str, df: pd.DataFrame, table: tables.Table, caption: str,

@@ -107,6 +107,8 @@ class Report:
     collisions_rows: int = 0
     benchmark: tables.Table | None = None
     benchmark_rows: int = 0
+    map_figures: list[tuple[str, str]] = field(default_factory=list)
+    """(title, path) of each map value's drawing (:mod:`.mapfigs`)."""
     communication: CommSection | None = None
     notes: list[str] = field(default_factory=list)
     finding: str | None = None

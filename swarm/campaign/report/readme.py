@@ -28,7 +28,7 @@ def section(compare: str | None) -> str:
 
 
 def render(rep: Report) -> str:
-    parts = [_head(rep), _finding(rep), _runs(rep), _campaign(rep), _layout(rep), _summary(rep), _curves(rep),
+    parts = [_head(rep), _finding(rep), _runs(rep), _campaign(rep), _maps(rep), _layout(rep), _summary(rep), _curves(rep),
              _cactus(rep), _paired(rep), _comm(rep), _communication(rep), _map_quality(rep), _collisions(rep),
              _benchmark(rep), _failed(rep), _maes(rep), _method(rep), _files(rep)]
     return "\n".join(p for p in parts if p).rstrip() + "\n"
@@ -292,6 +292,16 @@ def _explored_convention(rep: Report) -> str:
                 "lidars had seen, so such a run can stop short of the target and count as DNF.")
     return ("**The explored fraction of the other tables counts what the lidars have seen** (these results predate "
             "the correctly-known series); *Explored correctly* counts only correctly known cells, at the end.")
+
+
+def _maps(rep: Report) -> str:
+    if not rep.map_figures:
+        return ""
+    lines = ["## Maps", "", "The maps the runs met, rebuilt from their specs (up to four per map value), north up, in "
+             "metres; walls are coloured by material.", ""]
+    for title, path in rep.map_figures:
+        lines += [f"![Maps of {title}]({path})", ""]
+    return "\n".join(lines)
 
 
 def _collisions(rep: Report) -> str:

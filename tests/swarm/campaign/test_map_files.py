@@ -72,6 +72,16 @@ def test_run_and_report_end_to_end(campaign, tmp_path, capsys):
     assert main(["campaign", "report", str(out), "--quiet", "--no-cell-figures"]) == 0
     readme = (out / "report" / "README.md").read_text()
     assert "houseexpo" in readme
+    # the plans are drawn as the runs met them: one panel per file, in metres
+    from maps.io import load_map
+    from swarm.campaign.report import mapfigs
+    from swarm.campaign.report.load import load as load_results
+    ((title, panels),) = mapfigs.campaign_maps(load_results(out))
+    assert title.startswith("houseexpo") and len(panels) == len(list((campaign.parent / "plans").glob("*.json")))
+    first = sorted((campaign.parent / "plans").glob("*.json"))[0]
+    assert panels[0][0] == first.name
+    assert (panels[0][1].solid == load_map(first, scale=2.5).solid).all()
+    assert "## Maps" in readme and (out / "report" / "figures" / f"maps-{title.replace(' ', '-')}.png").stat().st_size > 10_000
     import csv
 
     with open(out / "report" / "tables" / "paired.csv", newline="") as f:
