@@ -177,32 +177,29 @@ def _take_kernel(known: np.ndarray, mirror: np.ndarray, tiles: np.ndarray, band:
                 for s in range(m):
                     i = base + row * w + spans[s, 0]
                     b = base + row * w + spans[s, 1]
-                    while i < b and (i & 7) != 0:  # up to the first whole word
-                        if cur[i] != mir[i]:
-                            mir[i] = cur[i]
-                            if k == out.shape[0]:
-                                out = _grown(out)
-                            out[k] = i
-                            k += 1
-                        i += 1
+                    head = min(b, (i + 7) & ~7)  # bytes up to the first whole word, then word by word
+                    out, k = _diff_bytes(cur, mir, i, head, out, k)
+                    i = head
                     while i < b:
                         if i + 8 <= b and cur64[i >> 3] == mir64[i >> 3]:
                             i += 8
                             continue
-                        stop = min(b, i + 8)
-                        while i < stop:
-                            if cur[i] != mir[i]:
-                                mir[i] = cur[i]
-                                if k == out.shape[0]:
-                                    out = _grown(out)
-                                out[k] = i
-                                k += 1
-                            i += 1
+                        out, k = _diff_bytes(cur, mir, i, min(b, i + 8), out, k)
+                        i = min(b, i + 8)
     return out[:k].copy()
 
 
-@njit(cache=True)
-def _grown(out: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
-    grown = np.empty(2 * out.shape[0], dtype=np.int64)
-    grown[:out.shape[0]] = out
-    return grown
+@njit(cache=True, inline="always")
+def _diff_bytes(cur: np.ndarray, mir: np.ndarray, a: int, b: int, out: np.ndarray,
+                k: int) -> tuple[np.ndarray, int]:  # pragma: no cover - compiled
+    """Cells ``a..b-1`` that differ: appended to ``out[k:]`` (grown when full), copied into the mirror."""
+    for i in range(a, b):
+        if cur[i] != mir[i]:
+            mir[i] = cur[i]
+            if k == out.shape[0]:
+                grown = np.empty(2 * k, dtype=np.int64)
+                grown[:k] = out
+                out = grown
+            out[k] = i
+            k += 1
+    return out, k

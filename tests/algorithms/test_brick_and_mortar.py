@@ -14,6 +14,7 @@ from algorithms.brick_and_mortar import (EXPLORED, KEPT, LOOP_CLOSING, LOOP_CONT
 from maps import InvalidInput, Map
 from swarm.api import RobotInfo
 from swarm.sim.loop import Simulation
+from tests.algorithms.explorer_checks import assert_passes_checker
 
 ALGORITHM = "algorithms.brick_and_mortar:BrickAndMortar"
 MAES_MOTION = {"max_speed": 3.0, "max_turn_rate": 4.0, "max_accel": 60.0, "max_turn_accel": 120.0, "model": "maes"}
@@ -169,12 +170,7 @@ def test_maes_motion_keeps_it_too():
 
 # ----------------------------------------------------------------------------------- whole runs ----
 def test_passes_the_explorer_checker():
-    from swarm.testing import CHECKS, check_explorer
-
-    report = check_explorer(ALGORITHM)
-    assert report.checks == CHECKS, str(report)
-    messages = next(r.detail for r in report.results if r.check == "messages")
-    assert "brick_and_mortar.tags" in messages and "brick_and_mortar.board" in messages, messages
+    assert_passes_checker(ALGORITHM, "brick_and_mortar.tags", "brick_and_mortar.board")
 
 
 def test_four_robots_explore_a_50_tile_building_and_never_wall_off_a_tile():

@@ -12,6 +12,7 @@ from algorithms.ssb import (BACKTRACKING, LEFT, RIGHT, SPIRALING, SSB, Reservati
 from maps import InvalidInput, Map
 from swarm.api import FREE, SOLID, RobotInfo
 from swarm.sim.loop import Simulation
+from tests.algorithms.explorer_checks import assert_passes_checker, assert_seed_reproducible
 
 ALGORITHM = "algorithms.ssb:SSB"
 
@@ -182,18 +183,8 @@ def test_four_robots_explore_a_50_tile_building_and_never_hold_one_tile_together
 
 
 def test_a_seed_gives_the_same_run():
-    spec = {"seed": 3, "map": {"kind": "building", "size": 30}, "robots": {"count": 2},
-            "algorithm": {"name": ALGORITHM}, "stop": {"max_ticks": 600}}
-    a, b = (Simulation(spec).run().summary for _ in range(2))
-    timings = ("wall_time_s", "setup_time_s")
-    assert {k: v for k, v in a.items() if k not in timings} == {k: v for k, v in b.items() if k not in timings}
-    assert a["explored"] > 0
+    assert_seed_reproducible(ALGORITHM)
 
 
 def test_passes_the_explorer_checker():
-    from swarm.testing import CHECKS, check_explorer
-
-    report = check_explorer(ALGORITHM)
-    assert report.checks == CHECKS, str(report)
-    messages = next(r.detail for r in report.results if r.check == "messages")
-    assert "ssb." in messages, messages
+    assert_passes_checker(ALGORITHM, "ssb.")
