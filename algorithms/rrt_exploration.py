@@ -59,6 +59,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from scipy import ndimage
 
 from swarm.api import CELL_M, SOLID, UNSEEN, Action, Observation, RobotInfo, check_float, check_int, grid
@@ -168,25 +169,76 @@ class Detector:
 
     def step(self, known: np.ndarray, robot_xy: tuple[float, float], rng: np.random.Generator,
              iterations: int) -> list[tuple[float, float]]:
-        """``iterations`` RRT iterations; the frontier points found."""
-        h, w = known.shape
-        found = []
-        for _ in range(iterations):
-            rand = np.array([rng.random() * w * CELL_M, rng.random() * h * CELL_M])
-            v = self.vertices[:self.n]
-            nearest = v[int(np.argmin(np.einsum("ij,ij->i", v - rand, v - rand)))]
-            new = steer(nearest, rand, self.eta)
-            state, point = obstacle_free(known, nearest, new)
-            if state == -1:
-                found.append((float(point[0]), float(point[1])))
-                if self.reset_on_frontier:
-                    self.root(robot_xy)
-            elif state == 1 and self.n < self.max_vertices:
-                if self.n == self.vertices.shape[0]:
-                    self.vertices = np.concatenate([self.vertices, np.zeros_like(self.vertices)])
-                self.vertices[self.n] = new
-                self.n += 1
-        return found
+        """``iterations`` RRT iterations; the frontier points found. Compiled (:func:`_rrt_steps`): the same
+        samples (x then y per iteration, from ``rng``) and the same arithmetic as :func:`steer` and
+        :func:`obstacle_free`, so the same tree and points as a step in Python."""
+        samples = rng.random(2 * iterations)
+        if self.vertices.shape[0] < self.n + iterations:  # room for every vertex this step may add
+            grown = np.zeros((max(2 * self.vertices.shape[0], self.n + iterations), 2))
+            grown[:self.n] = self.vertices[:self.n]
+            self.vertices = grown
+        found = np.empty((iterations, 2))
+        self.n, count = _rrt_steps(self.vertices, self.n, np.ascontiguousarray(known), samples, self.eta,
+                                   self.reset_on_frontier, float(robot_xy[0]), float(robot_xy[1]), self.max_vertices,
+                                   found)
+        return [(float(x), float(y)) for x, y in found[:count]]
+
+
+@njit(cache=True)
+def _rrt_steps(vertices: np.ndarray, n: int, known: np.ndarray, samples: np.ndarray, eta: float, reset: bool,
+               rx: float, ry: float, max_vertices: int, found: np.ndarray) -> tuple[int, int]:  # pragma: no cover - compiled
+    """The detector's iterations (``samples``: two uniforms each): nearest vertex, ``steer``,
+    ``obstacle_free`` as in Python, the tree grown in ``vertices[:n]`` (room for every new vertex) or
+    re-rooted at (rx, ry) after a frontier point when ``reset``; returns (n, frontier points in ``found``)."""
+    h, w = known.shape
+    step = CELL_M / 2
+    count = 0
+    for it in range(samples.shape[0] // 2):
+        randx = samples[2 * it] * w * CELL_M
+        randy = samples[2 * it + 1] * h * CELL_M
+        best, best_d = 0, np.inf
+        for k in range(n):
+            dx, dy = vertices[k, 0] - randx, vertices[k, 1] - randy
+            d2 = dx * dx + dy * dy
+            if d2 < best_d:
+                best, best_d = k, d2
+        nx, ny = vertices[best, 0], vertices[best, 1]
+        d = np.hypot(randx - nx, randy - ny)  # steer
+        if d <= eta:
+            newx, newy = randx, randy
+        else:
+            newx, newy = nx + (randx - nx) * (eta / d), ny + (randy - ny) * (eta / d)
+        dist = np.hypot(newx - nx, newy - ny)  # obstacle_free
+        m = int(np.ceil(dist / step))
+        state, px, py = 1, newx, newy
+        if m > 0:
+            solid = False
+            for k in range(1, m + 1):
+                t = min(k * step, dist) / dist
+                qx, qy = nx + (newx - nx) * t, ny + (newy - ny) * t
+                if k == m:
+                    qx, qy = newx, newy
+                row, col = int(np.floor(qy / CELL_M)), int(np.floor(qx / CELL_M))
+                value = SOLID
+                if 0 <= row < h and 0 <= col < w:
+                    value = known[row, col]
+                if value == UNSEEN:
+                    state, px, py = (0 if solid else -1), qx, qy
+                    break
+                if value == SOLID:
+                    solid = True
+            else:
+                state = 0 if solid else 1
+        if state == -1:
+            found[count, 0], found[count, 1] = px, py
+            count += 1
+            if reset:
+                vertices[0, 0], vertices[0, 1] = rx, ry
+                n = 1
+        elif state == 1 and n < max_vertices:
+            vertices[n, 0], vertices[n, 1] = newx, newy
+            n += 1
+    return n, count
 
 
 # ----------------------------------------------------------------------------------------- filter ----

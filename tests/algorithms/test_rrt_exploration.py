@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from algorithms.rrt_exploration import (Detector, RRTExploration, RRTExplorationParams, filter_points, mean_shift,
-                                        obstacle_free, revenues, unknown_area)
-from swarm.api import FREE, SOLID, UNSEEN, InvalidInput, Observation, Pose, RobotInfo
+                                        obstacle_free, revenues, steer, unknown_area)
+from swarm.api import CELL_M, FREE, SOLID, UNSEEN, InvalidInput, Observation, Pose, RobotInfo
 from swarm.sim.loop import Simulation
 
 ALGORITHM = "algorithms.rrt_exploration:RRTExploration"
@@ -38,6 +38,49 @@ def test_the_global_tree_finds_the_far_frontier_the_local_one_misses(seed):
     assert local.n < 1000, "it was reset"
     assert any(x > 59.0 for x, _ in far), "the global tree, never reset, reaches the east gap"
     assert glob.n > 1000
+
+
+def _python_step(det: Detector, known: np.ndarray, robot_xy: tuple[float, float], rng: np.random.Generator,
+                 iterations: int) -> list[tuple[float, float]]:
+    """The detector's step as the authors' loop, in Python: the reference the compiled step must equal."""
+    h, w = known.shape
+    found = []
+    for _ in range(iterations):
+        rand = np.array([rng.random() * w * CELL_M, rng.random() * h * CELL_M])
+        v = det.vertices[:det.n]
+        nearest = v[int(np.argmin(np.einsum("ij,ij->i", v - rand, v - rand)))]
+        new = steer(nearest, rand, det.eta)
+        state, point = obstacle_free(known, nearest, new)
+        if state == -1:
+            found.append((float(point[0]), float(point[1])))
+            if det.reset_on_frontier:
+                det.root(robot_xy)
+        elif state == 1 and det.n < det.max_vertices:
+            if det.n == det.vertices.shape[0]:
+                det.vertices = np.concatenate([det.vertices, np.zeros_like(det.vertices)])
+            det.vertices[det.n] = new
+            det.n += 1
+    return found
+
+
+@pytest.mark.parametrize("eta, reset", [(1.0, True), (15.0, False), (3.0, False)])
+def test_the_compiled_step_grows_the_python_tree_bit_for_bit(eta, reset):
+    rng = np.random.default_rng(5)
+    known = rng.choice(np.array([FREE, FREE, FREE, SOLID, UNSEEN], dtype=np.uint8), size=(60, 80))
+    known[20:40, 20:60] = FREE
+    compiled, python = Detector(eta, reset, 300), Detector(eta, reset, 300)
+    for det in (compiled, python):
+        det.root((20.0, 15.0))
+    a, b = np.random.default_rng(9), np.random.default_rng(9)
+    points = 0
+    for tick in range(40):
+        got = compiled.step(known, (20.0 + tick * 0.1, 15.0), a, 10)
+        want = _python_step(python, known, (20.0 + tick * 0.1, 15.0), b, 10)
+        assert got == want and compiled.n == python.n
+        assert np.array_equal(compiled.vertices[:compiled.n], python.vertices[:python.n])
+        points += len(got)
+    assert a.random() == b.random()                       # the same draws consumed
+    assert points > 0 and compiled.n > 1                  # frontier points found, the tree grew
 
 
 def test_obstacle_free_is_free_frontier_or_blocked():
