@@ -15,7 +15,7 @@ returns: the cells that differ from the mirror, in ascending order.
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Sequence
 
 import numpy as np
 from numba import njit
@@ -51,21 +51,17 @@ class KnowledgeJournal:
                       np.ascontiguousarray(cast, dtype=np.bool_), self.reach, CELL_M, self.shape[0], self.shape[1],
                       self.tile_cols, TILE)
 
-    def delivered(self, deliveries: Sequence[tuple[Any, Sequence[int]]]) -> None:
-        """A tick's merged messages with their receivers: a map update's cells are noted for each receiver,
-        a full map flags its receivers whole. Call after the merges (which checked the messages)."""
-        from swarm.comm.messages import MapUpdate  # (swarm.comm imports the knowledge package)
-        for msg, receivers in deliveries:
-            if not isinstance(msg, MapUpdate) or not len(receivers):
-                continue
-            rows = np.asarray(receivers, dtype=np.int64)
-            if msg.full:
-                self.whole[rows] = True
-                continue
-            idx, _ = msg.cells()
-            if len(idx):
-                _note_cells(self.tiles, self.noted, self.band, rows, idx, self.shape[1], self.tile_cols, TILE, self._scratch,
-                            self._found)
+    def merged(self, receivers: Sequence[int] | np.ndarray, cells: np.ndarray | None) -> None:
+        """A map update reached ``receivers`` and was merged: ``cells`` (flat indices it carried) are noted for
+        each of them, or, for a full map (None), their whole maps are flagged."""
+        rows = np.asarray(receivers, dtype=np.int64)
+        if not len(rows):
+            return
+        if cells is None:
+            self.whole[rows] = True
+        elif len(cells):
+            _note_cells(self.tiles, self.noted, self.band, rows, np.ascontiguousarray(cells, dtype=np.int64),
+                        self.shape[1], self.tile_cols, TILE, self._scratch, self._found)
 
     def rewritten(self, robots: Sequence[int] | np.ndarray) -> None:
         """Any cell of these robots' maps may have changed (e.g. MAES's merges)."""

@@ -37,6 +37,7 @@ from swarm.base.types import Action, Pose, RobotInfo
 from swarm.comm.maes_merge import MaesMerge
 from swarm.comm.maes_merge import resolve as resolve_maes_merge
 from swarm.comm.medium import Envelope, Inboxes, Medium
+from swarm.comm.messages import MapUpdate
 from swarm.comm.sharing import MapSharing
 from swarm.grid._validate import vouch_known
 from swarm.knowledge.journal import KnowledgeJournal
@@ -411,8 +412,12 @@ class Simulation:
                 self.free.dirty[robot] = True
                 for journal in self.journals:
                     journal.rewritten([robot])
-        for journal in self.journals:
-            journal.delivered(deliveries)
+        if self.journals:
+            for msg, receivers in deliveries:
+                if isinstance(msg, MapUpdate):  # (checked by the merge above)
+                    cells = None if msg.full else msg.cells()[0]
+                    for journal in self.journals:
+                        journal.merged(receivers, cells)
         return inboxes, merged
 
     def _send(self, tick: int, poses: np.ndarray, actions: list[Action | None], links: Any,

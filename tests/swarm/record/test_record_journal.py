@@ -60,12 +60,8 @@ def test_take_finds_exactly_the_changed_cells_and_only_noted_places_are_read():
     poses = np.array([[0, 0, 0], [6.25, 5.25, 0], [0, 0, 0]], dtype=np.float64)
     journal.scanned(poses, np.array([False, True, False]))
 
-    class Update:  # the journal reads MapUpdates only
-        pass
-
-    from swarm.comm.messages import delta_update
-    update = delta_update(0, 1, 0, known[2], (0.0, 0.0, 0.0), np.array([65 * w + 85], dtype=np.int64))
-    journal.delivered([(update, [2]), (Update(), [0])])
+    journal.merged([2], np.array([65 * w + 85], dtype=np.int64))   # a delta's cells, for its receiver
+    journal.merged([], None)                                           # reaching nobody: nothing noted
     got = journal.take(known, mirror)
     assert got.tolist() == [1 * h * w + 10 * w + 12, 2 * h * w + 65 * w + 85]
     assert mirror[0, 40, 40] == 0 and mirror[1, 10, 12] == 1 and mirror[2, 65, 85] == 2
@@ -79,7 +75,6 @@ def test_take_finds_exactly_the_changed_cells_and_only_noted_places_are_read():
         known.reshape(n, -1)[robots, cells] = rng.integers(1, 3, size=30).astype(np.uint8)
         for r in range(n):
             mine = np.sort(cells[robots == r])
-            if len(mine):
-                journal.delivered([(delta_update(r, 1, 0, known[r], (0.0, 0.0, 0.0), mine), [r])])
+            journal.merged([r], mine)
         expected = np.flatnonzero(known.reshape(-1) != mirror.reshape(-1))
         assert journal.take(known, mirror).tolist() == expected.tolist()
