@@ -59,6 +59,8 @@ class CampaignData:
     spec_error: str = ""
     axes: tuple[str, ...] = ()
     """Radio and comm parameter axes of the grid (``radio.sensitivity_dbm``), after :data:`DIMS`."""
+    foreign: int = 0
+    """Runs in the folder whose keys the spec does not define, left out of every table and statistic."""
 
     @property
     def all_dims(self) -> tuple[str, ...]:
@@ -95,6 +97,11 @@ def load(results_dir: str | Path) -> CampaignData:
     columns = frame.columns if frame is not None else ()
     axes = spec.axes if spec is not None else tuple(c for c in columns if is_axis(c))
     runs = _runs_frame(frame, axes)
+    foreign = 0
+    if spec is not None and len(runs):  # e.g. file-map runs of a copy elsewhere, written before that was refused
+        mine = runs["key"].astype(str).isin({key for _, key in spec.iter_keys()}).to_numpy()
+        foreign = int((~mine).sum())
+        runs = runs[mine].reset_index(drop=True)
     orders = _orders(spec, runs, axes)
     for dim in (*DIMS, *axes):
         runs[dim] = pd.Categorical(runs[dim], categories=orders[dim], ordered=True)
@@ -105,7 +112,7 @@ def load(results_dir: str | Path) -> CampaignData:
     return CampaignData(folder=folder, name=name, description=spec.description if spec else "", source=source,
                         spec=spec, runs=runs, orders=orders, dims=dims,
                         total=expected_runs(spec) if spec is not None else None, every=every, spec_error=spec_error,
-                        axes=axes)
+                        axes=axes, foreign=foreign)
 
 
 def _read_spec(source: str) -> tuple[CampaignSpec | None, str]:

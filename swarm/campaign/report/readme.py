@@ -79,6 +79,9 @@ def _runs(rep: Report) -> str:
         lines += [f"{d.pending} runs are still pending: the statistics below cover finished runs only.", ""]
     if len(d.failed):
         lines += ["Failed runs are excluded from every statistic (see [Failed runs](#failed-runs)).", ""]
+    if d.foreign:
+        lines += [f"{d.foreign} runs in the folder are not runs of its spec (their keys are not the spec's, e.g. "
+                  "map files resolved in another folder): they are left out.", ""]
     for note in rep.notes:
         lines += [f"> **Note.** {note}", ""]
     return "\n".join(lines)

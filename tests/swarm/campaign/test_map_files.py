@@ -89,6 +89,37 @@ def test_run_and_report_end_to_end(campaign, tmp_path, capsys):
     assert (row["map"], row["a"], row["b"], row["pairs"], row["maps"]) == ("houseexpo", "frontier", "greed", "3", "3")
 
 
+def test_runs_the_spec_does_not_define_are_left_out_of_the_report(campaign, tmp_path):
+    out = tmp_path / "out"
+    assert main(["campaign", "run", str(campaign), "-o", str(out), "--inline", "--quiet", "--no-report"]) == 0
+    stored = out / "campaign.toml"
+    stored.write_text(stored.read_text().replace('algorithm = ["frontier", "greed"]', 'algorithm = ["frontier"]'))
+    from swarm.campaign.report.load import load as load_results
+    data = load_results(out)            # greed's 3 runs are no runs of the spec now
+    assert data.foreign == 3 and len(data.runs) == 3 and set(data.runs["algorithm"]) == {"frontier"}
+    assert main(["campaign", "report", str(out), "--quiet", "--no-cell-figures"]) == 0
+    assert "3 runs in the folder are not runs of its spec" in (out / "report" / "README.md").read_text()
+
+
+def test_resuming_from_a_copy_with_its_own_map_files_is_refused(campaign, tmp_path, capsys):
+    """A run's key holds its map file's path: the same TOML beside another copy of the plans would run every
+    file-map run again under new keys. It is refused in one line, and nothing is written."""
+    out = tmp_path / "out"
+    assert main(["campaign", "run", str(campaign), "-o", str(out), "--inline", "--quiet", "--no-report",
+                 "--shard", "0/3"]) == 0
+    copy = tmp_path / "copy"
+    shutil.copytree(campaign.parent / "plans", copy / "plans")
+    shutil.copy(campaign, copy / "spec.toml")
+    before = sorted(p.name for p in (out / "parts").iterdir())
+    capsys.readouterr()
+    assert main(["campaign", "run", str(copy / "spec.toml"), "-o", str(out), "--inline", "--quiet",
+                 "--no-report"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()[-1]
+    assert err.startswith("swarm: error: -o:") and f"map files are in {campaign.parent}," in err and str(copy) in err
+    assert sorted(p.name for p in (out / "parts").iterdir()) == before
+    assert status(out)["done"] == 2
+
+
 @pytest.mark.parametrize("change, needles", [
     ('files = "plans/*.json"', 'files = "none/*.json"', ),
 ])
