@@ -172,3 +172,25 @@ def test_swarm_sizes_example_runs_16_to_1024_robots_and_reports(tmp_path: Path) 
     runs = pd.read_csv(folder / "tables" / "runs.csv")
     assert sorted(runs["robots"]) == [16, 64, 256, 1024] and set(runs["stop_reason"]) == {"max_ticks"}
     assert "`1024`" in (folder / "README.md").read_text()
+
+
+def test_explorer_comparison_runs_every_registered_explorer_on_the_same_maps() -> None:
+    """examples/explorer-comparison.toml (issue 52): every built-in explorer, buildings, caves and the example
+    plans, 4 and 16 robots; each explorer of a cell meets the same maps; its figure layout names only values
+    the grid has."""
+    from swarm.campaign.report.layout import check_layout, load_layout
+    from swarm.plugins import explorers
+
+    spec = load_campaign(ROOT / "examples" / "explorer-comparison.toml")
+    runs = spec.runs()
+    assert len(runs) == 234
+    names = {r.spec.algorithm.name for r in runs}
+    built_in = {name for name, target in explorers.available().items() if target.startswith("algorithms.")}
+    assert names == built_in, "a built-in explorer is missing from the comparison"
+    worlds: dict[tuple[str, int, int], set[str]] = {}
+    for r in runs:
+        world = r.spec.map.path if r.spec.map.kind == "file" else str(r.spec.map.seed)
+        worlds.setdefault((r.cell["map"], r.cell["robots"], r.replicate), set()).add(str(world))
+    assert all(len(w) == 1 for w in worlds.values()), "every explorer meets the same maps"
+    orders = {dim: [o.label for o in opts] for dim, opts in spec.grid.items()}
+    check_layout(load_layout(ROOT / "examples" / "explorer-comparison-figures.toml"), orders)
