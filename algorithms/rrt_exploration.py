@@ -120,35 +120,47 @@ class RRTExplorationParams:
 def steer(nearest: np.ndarray, rand: np.ndarray, eta: float) -> np.ndarray:
     """``Steer`` (src/functions.cpp): ``rand`` if within ``eta`` of ``nearest``, else the point ``eta``
     from ``nearest`` towards it."""
-    d = float(np.hypot(*(rand - nearest)))
-    if d <= eta:
-        return rand.copy()
-    return nearest + (rand - nearest) * (eta / d)
+    return np.array(_steer(float(nearest[0]), float(nearest[1]), float(rand[0]), float(rand[1]), float(eta)))
 
 
 def obstacle_free(known: np.ndarray, near: np.ndarray, new: np.ndarray) -> tuple[int, np.ndarray]:
     """``ObstacleFree`` (src/functions.cpp): walk from ``near`` to ``new`` in steps of ``CELL_M / 2``; 1 and
     ``new`` if every cell is known free, -1 and the first unknown point if one comes before any obstacle, 0
     if an obstacle does (cells off the map are obstacles). The walk's points are those of repeated ``steer``
-    calls, computed at once."""
-    step = CELL_M / 2
-    d = float(np.hypot(*(new - near)))
-    n = int(math.ceil(d / step))
-    if n == 0:
-        return 1, new
-    k = np.arange(1, n + 1, dtype=np.float64)
-    pts = near + (new - near) * (np.minimum(k * step, d) / d)[:, None]
-    pts[-1] = new
-    rows, cols = np.floor(pts[:, 1] / CELL_M).astype(np.int64), np.floor(pts[:, 0] / CELL_M).astype(np.int64)
+    calls."""
+    state, x, y = _walk(np.ascontiguousarray(known), float(near[0]), float(near[1]), float(new[0]), float(new[1]))
+    return state, np.array([x, y])
+
+
+@njit(cache=True, inline="always")
+def _steer(nx: float, ny: float, rx: float, ry: float, eta: float) -> tuple[float, float]:  # pragma: no cover
+    """:func:`steer` on coordinates (shared with the compiled detector step)."""
+    d = np.hypot(rx - nx, ry - ny)
+    if d <= eta:
+        return rx, ry
+    return nx + (rx - nx) * (eta / d), ny + (ry - ny) * (eta / d)
+
+
+@njit(cache=True, inline="always")
+def _walk(known: np.ndarray, nx: float, ny: float, newx: float, newy: float) -> tuple[int, float, float]:  # pragma: no cover
+    """:func:`obstacle_free` on coordinates: (state, point) as it returns them (shared with the detector)."""
     h, w = known.shape
-    inside = (rows >= 0) & (rows < h) & (cols >= 0) & (cols < w)
-    values = np.full(n, SOLID, dtype=np.int64)
-    values[inside] = known[rows[inside], cols[inside]]
-    unseen = np.flatnonzero(values == UNSEEN)
-    if unseen.size:
-        first = int(unseen[0])
-        return (0 if (values[:first] == SOLID).any() else -1), pts[first]
-    return (0 if (values == SOLID).any() else 1), new
+    step = CELL_M / 2
+    dist = np.hypot(newx - nx, newy - ny)
+    m = int(np.ceil(dist / step))
+    solid = False
+    for k in range(1, m + 1):
+        t = min(k * step, dist) / dist
+        qx, qy = nx + (newx - nx) * t, ny + (newy - ny) * t
+        if k == m:
+            qx, qy = newx, newy
+        row, col = int(np.floor(qy / CELL_M)), int(np.floor(qx / CELL_M))
+        value = known[row, col] if 0 <= row < h and 0 <= col < w else SOLID
+        if value == UNSEEN:
+            return (0 if solid else -1), qx, qy
+        if value == SOLID:
+            solid = True
+    return (0 if solid else 1), newx, newy
 
 
 class Detector:
@@ -169,9 +181,9 @@ class Detector:
 
     def step(self, known: np.ndarray, robot_xy: tuple[float, float], rng: np.random.Generator,
              iterations: int) -> list[tuple[float, float]]:
-        """``iterations`` RRT iterations; the frontier points found. Compiled (:func:`_rrt_steps`): the same
-        samples (x then y per iteration, from ``rng``) and the same arithmetic as :func:`steer` and
-        :func:`obstacle_free`, so the same tree and points as a step in Python."""
+        """``iterations`` RRT iterations; the frontier points found. Compiled (:func:`_rrt_steps`, with
+        :func:`steer` and :func:`obstacle_free`'s kernels): the samples are drawn x then y per iteration from
+        ``rng``, as the authors' loop draws them."""
         samples = rng.random(2 * iterations)
         if self.vertices.shape[0] < self.n + iterations:  # room for every vertex this step may add
             grown = np.zeros((max(2 * self.vertices.shape[0], self.n + iterations), 2))
@@ -187,11 +199,10 @@ class Detector:
 @njit(cache=True)
 def _rrt_steps(vertices: np.ndarray, n: int, known: np.ndarray, samples: np.ndarray, eta: float, reset: bool,
                rx: float, ry: float, max_vertices: int, found: np.ndarray) -> tuple[int, int]:  # pragma: no cover - compiled
-    """The detector's iterations (``samples``: two uniforms each): nearest vertex, ``steer``,
-    ``obstacle_free`` as in Python, the tree grown in ``vertices[:n]`` (room for every new vertex) or
+    """The detector's iterations (``samples``: two uniforms each): nearest vertex, :func:`_steer`,
+    :func:`_walk`, the tree grown in ``vertices[:n]`` (room for every new vertex) or
     re-rooted at (rx, ry) after a frontier point when ``reset``; returns (n, frontier points in ``found``)."""
     h, w = known.shape
-    step = CELL_M / 2
     count = 0
     for it in range(samples.shape[0] // 2):
         randx = samples[2 * it] * w * CELL_M
@@ -203,32 +214,8 @@ def _rrt_steps(vertices: np.ndarray, n: int, known: np.ndarray, samples: np.ndar
             if d2 < best_d:
                 best, best_d = k, d2
         nx, ny = vertices[best, 0], vertices[best, 1]
-        d = np.hypot(randx - nx, randy - ny)  # steer
-        if d <= eta:
-            newx, newy = randx, randy
-        else:
-            newx, newy = nx + (randx - nx) * (eta / d), ny + (randy - ny) * (eta / d)
-        dist = np.hypot(newx - nx, newy - ny)  # obstacle_free
-        m = int(np.ceil(dist / step))
-        state, px, py = 1, newx, newy
-        if m > 0:
-            solid = False
-            for k in range(1, m + 1):
-                t = min(k * step, dist) / dist
-                qx, qy = nx + (newx - nx) * t, ny + (newy - ny) * t
-                if k == m:
-                    qx, qy = newx, newy
-                row, col = int(np.floor(qy / CELL_M)), int(np.floor(qx / CELL_M))
-                value = SOLID
-                if 0 <= row < h and 0 <= col < w:
-                    value = known[row, col]
-                if value == UNSEEN:
-                    state, px, py = (0 if solid else -1), qx, qy
-                    break
-                if value == SOLID:
-                    solid = True
-            else:
-                state = 0 if solid else 1
+        newx, newy = _steer(nx, ny, randx, randy, eta)
+        state, px, py = _walk(known, nx, ny, newx, newy)
         if state == -1:
             found[count, 0], found[count, 1] = px, py
             count += 1

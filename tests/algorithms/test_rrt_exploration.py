@@ -42,7 +42,9 @@ def test_the_global_tree_finds_the_far_frontier_the_local_one_misses(seed):
 
 def _python_step(det: Detector, known: np.ndarray, robot_xy: tuple[float, float], rng: np.random.Generator,
                  iterations: int) -> list[tuple[float, float]]:
-    """The detector's step as the authors' loop, in Python: the reference the compiled step must equal."""
+    """The detector's step as the authors' loop, in Python (sampling, nearest vertex, growth, re-rooting):
+    the reference the compiled loop must equal. ``steer`` and ``obstacle_free`` run the same kernels as the
+    compiled step; their own tests check them on hand-built cases."""
     h, w = known.shape
     found = []
     for _ in range(iterations):
