@@ -11,11 +11,10 @@ on ``/a/plans/x.json`` and one on ``/b/plans/x.json`` have different keys.
 from __future__ import annotations
 
 import datetime as _dt
-import json
 import tomllib
 from typing import Any
 
-from .spec import FOLDER_LINE
+from .spec import folder_of
 from .text import clip, clip_repr
 
 
@@ -23,7 +22,7 @@ def difference(stored: str, given: str) -> str | None:
     """None when ``given`` is the campaign ``stored`` is; else a short note of the first difference."""
     if stored == given:
         return None
-    old_folder, new_folder = _folder(stored), _folder(given)
+    old_folder, new_folder = folder_of(stored) or "", folder_of(given) or ""
     if old_folder != new_folder:  # map files: a run's key holds its file's path, so other files are other runs
         return (f"its map files are in {old_folder or 'no folder'}, these in {new_folder or 'no folder'}: run it from "
                 "the first, or into a new folder")
@@ -36,17 +35,6 @@ def difference(stored: str, given: str) -> str | None:
     except (tomllib.TOMLDecodeError, RecursionError):
         return "the given spec is not valid TOML"
     return _first_difference(old, new, "")
-
-
-def _folder(text: str) -> str:
-    """The folder a stored spec's ``{files = ...}`` map globs are relative to (its first line), or ''."""
-    first = text.split("\n", 1)[0]
-    if not first.startswith(FOLDER_LINE):
-        return ""
-    try:
-        return str(json.loads(first[len(FOLDER_LINE):]))
-    except ValueError:
-        return first[len(FOLDER_LINE):]
 
 
 def _first_difference(a: Any, b: Any, path: str) -> str | None:

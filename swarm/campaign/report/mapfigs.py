@@ -6,6 +6,7 @@ imported from HouseExpo is shown as the robots met it.
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -45,15 +46,16 @@ def campaign_maps(data: CampaignData) -> list[tuple[str, list[tuple[str, Map]]]]
                 continue
             run_spec = spec.run_at(index[key]).spec
             m = run_spec.map
+            seed = seed_streams(run_spec).map_seed
             if m.kind == "file":
                 ident: Any = (m.path, tuple(sorted(m.params.items())))
-                name = f"{str(m.path).rsplit('/', 1)[-1]}"
+                name = Path(m.path).name
             else:
-                ident, name = seed_streams(run_spec).map_seed, f"replicate {rep}"
+                ident, name = seed, f"replicate {rep}"
             if ident in seen:
                 continue
             seen.add(ident)
-            panels.append((name, build_map(run_spec, seed_streams(run_spec).map_seed)))
+            panels.append((name, build_map(run_spec, seed)))
             if len(panels) == MAX_PANELS:
                 break
         if panels:
