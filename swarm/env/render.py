@@ -8,12 +8,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from swarm.api import check_int
+from swarm.api import CELL_M, check_int
 
 if TYPE_CHECKING:
     from .core import ExplorationCore
 
-CELL_M = 0.5
 RENDER_PX = 600
 """Default length in pixels of the picture's longer side."""
 UNKNOWN = (175, 175, 175)
