@@ -265,6 +265,107 @@ def tile_view(known: np.ndarray, reach: np.ndarray, start_cell: tuple[int, int],
     return TileView(f, (r0, c0), belief, box, start, reach, (Ht, Wt))
 
 
+def coarsen_window(known: np.ndarray, reach: np.ndarray | None, f: int, tiles: tuple[int, int, int, int]
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``coarsen(known, reach, f)`` read at tile rows ``t0:t1`` and columns ``u0:u1`` (``tiles``, clipped to
+    the tile grid), bit for bit, at the cost of the window instead of the map: the window is coarsened with
+    one more ring of tiles (the wall-corner rule reads each tile's 4 neighbours) and the ring is dropped.
+    ``reach`` None: no cell is reachable (only ``unknown`` and ``occupied`` are wanted)."""
+    H, W = known.shape
+    Ht, Wt = -(-H // f), -(-W // f)
+    t0, t1, u0, u1 = max(tiles[0], 0), min(tiles[1], Ht), max(tiles[2], 0), min(tiles[3], Wt)
+    e0, e1, g0, g1 = max(t0 - 1, 0), min(t1 + 1, Ht), max(u0 - 1, 0), min(u1 + 1, Wt)
+    cells = (slice(e0 * f, min(e1 * f, H)), slice(g0 * f, min(g1 * f, W)))
+    sub = known[cells]
+    unknown, occupied, passable = coarsen(sub, np.zeros(sub.shape, bool) if reach is None else reach[cells], f)
+    keep = (slice(t0 - e0, t1 - e0), slice(u0 - g0, u1 - g0))
+    return unknown[keep], occupied[keep], passable[keep]
+
+
+REACH_MARGIN_CELLS = 40
+"""How far (cells, 20 m) beyond the decision's horizon box the first reachability window reaches; each
+further try doubles it (see :func:`local_reach`)."""
+
+
+def local_reach(known: np.ndarray, radius_m: float, here: tuple[int, int], f: int, horizon: int
+                ) -> tuple[tuple[int, int], np.ndarray] | None:
+    """What a horizon-bounded decision needs of ``isfinite(distance_field(configuration_space(known), start))``
+    with ``start = nearest_in(space, here, SNAP_CELLS)``, computed on a window around the robot instead of
+    the whole map: (start, reach), with ``reach`` bool[H, W] exact inside the box of tiles within
+    ``horizon`` of the start's tile and False elsewhere; None when no start is in reach of ``here``.
+
+    Why it is exact: paths have no corner cutting, so reachability is 4-connectivity of the configuration
+    space, and a window's space equals the map's away from the window's cut edges (it is computed with
+    the erosion's depth more). A component of the window's space that holds the start is reachable; one
+    that does not touch a cut edge is not; one that does touches could join the start's outside the
+    window, and then a window twice as wide is tried (up to the whole map). So a decision costs the area
+    around its horizon, not the map's (issue 47: xBOA's cost per robot-tick grew with the map's area)."""
+    from scipy import ndimage
+
+    H, W = known.shape
+    depth = max(max(abs(dr), abs(dc)) for dr, dc in grid.inflation_offsets(radius_m, grid.DEFAULT_MARGIN_M))
+
+    def space_of(r0: int, r1: int, c0: int, c1: int) -> np.ndarray:
+        s0, s1, q0, q1 = max(r0 - depth, 0), min(r1 + depth, H), max(c0 - depth, 0), min(c1 + depth, W)
+        space = grid.configuration_space(known[s0:s1, q0:q1], radius_m, grid.DEFAULT_MARGIN_M)
+        return space[r0 - s0:r1 - s0, c0 - q0:c1 - q0]
+
+    r0, r1, c0, c1 = (max(here[0] - SNAP_CELLS, 0), min(here[0] + SNAP_CELLS + 1, H),
+                      max(here[1] - SNAP_CELLS, 0), min(here[1] + SNAP_CELLS + 1, W))
+    snapped = grid.nearest_in(space_of(r0, r1, c0, c1), (here[0] - r0, here[1] - c0), SNAP_CELLS)
+    if snapped is None:
+        return None
+    start = (snapped[0] + r0, snapped[1] + c0)
+    tr, tc = start[0] // f, start[1] // f
+    b0, b1 = max(tr - horizon, 0) * f, min((tr + horizon + 1) * f, H)       # the horizon box, in cells
+    d0, d1 = max(tc - horizon, 0) * f, min((tc + horizon + 1) * f, W)
+    margin = REACH_MARGIN_CELLS
+    while True:
+        R0, R1, C0, C1 = max(b0 - margin, 0), min(b1 + margin, H), max(d0 - margin, 0), min(d1 + margin, W)
+        labels, _ = ndimage.label(space_of(R0, R1, C0, C1))
+        mine = labels[start[0] - R0, start[1] - C0]
+        box = labels[b0 - R0:b1 - R0, d0 - C0:d1 - C0]
+        cut = [labels[0]] if R0 > 0 else []
+        cut += [labels[-1]] if R1 < H else []
+        cut += [labels[:, 0]] if C0 > 0 else []
+        cut += [labels[:, -1]] if C1 < W else []
+        open_ = np.setdiff1d(np.concatenate(cut), [0, mine]) if cut else np.zeros(0, labels.dtype)
+        if len(open_) == 0 or not np.isin(box, open_).any():
+            reach = np.zeros(known.shape, bool)
+            reach[b0:b1, d0:d1] = box == mine
+            return start, reach
+        margin *= 2
+
+
+def local_tile_view(known: np.ndarray, reach: np.ndarray, start_cell: tuple[int, int], f: int,
+                    range_tiles: float, horizon: int) -> TileView | None:
+    """``tile_view(known, reach, start_cell, f, range_tiles, horizon)``, bit for bit, for a ``reach`` that
+    is exact inside the horizon box (:func:`local_reach`): the horizon box and the belief's window are
+    coarsened on their own (:func:`coarsen_window`), not the whole map."""
+    H, W = known.shape
+    Ht, Wt = -(-H // f), -(-W // f)
+    tr, tc = start_cell[0] // f, start_cell[1] // f
+    near = (max(tr - horizon, 0), min(tr + horizon + 1, Ht), max(tc - horizon, 0), min(tc + horizon + 1, Wt))
+    _, _, passable_near = coarsen_window(known, reach, f, near)
+    rows = np.flatnonzero(passable_near.any(axis=1))
+    cols = np.flatnonzero(passable_near.any(axis=0))
+    if len(rows) == 0:
+        return None
+    m = int(math.ceil(range_tiles)) + 1
+    first_r, last_r = int(rows[0]) + near[0], int(rows[-1]) + near[0]
+    first_c, last_c = int(cols[0]) + near[2], int(cols[-1]) + near[2]
+    r0, r1 = max(first_r - m, 0), min(last_r + m + 1, Ht)
+    c0, c1 = max(first_c - m, 0), min(last_c + m + 1, Wt)
+    unknown, occupied, _ = coarsen_window(known, None, f, (r0, r1, c0, c1))
+    passable = np.zeros(unknown.shape, bool)
+    a0, a1, g0, g1 = max(near[0], r0), min(near[1], r1), max(near[2], c0), min(near[3], c1)
+    passable[a0 - r0:a1 - r0, g0 - c0:g1 - c0] = passable_near[a0 - near[0]:a1 - near[0], g0 - near[2]:g1 - near[2]]
+    belief = Belief(unknown, occupied, CELL_M * f, ~passable)
+    box = [(float(first_c - c0), float(last_c - c0)), (float(first_r - r0), float(last_r - r0))]
+    start = (tr - r0, tc - c0)
+    return TileView(f, (r0, c0), belief, box, start, reach, (Ht, Wt))
+
+
 def tile_cells(tiles: np.ndarray, f: int, shape: tuple[int, int]) -> np.ndarray:
     """Flat knowledge-cell indices (n, f*f) of full-grid tiles (n, 2); cells beyond the map are clipped
     onto the edge (such tiles never count as unknown, see :func:`coarsen`)."""
@@ -377,16 +478,22 @@ class XBOA:
         p = self.params
         f = p.tile_cells
         known = obs.known
-        space = grid.configuration_space(known, self.robot.radius, grid.DEFAULT_MARGIN_M)
         here = _clip(cell_of(obs.pose.x, obs.pose.y), known.shape)
-        start = grid.nearest_in(space, here, SNAP_CELLS)
         view = None
         budget = None if left is None else int(max(left, 0.0) / p.energy_margin)
         limits = [v for v in (budget, p.horizon_steps or None) if v is not None]
         horizon = min(limits) if limits else None
-        if start is not None:
-            reach = np.isfinite(grid.distance_field(space, start))
-            view = tile_view(known, reach, start, f, self.lidar.range_m / self.tile_m, horizon)
+        range_tiles = self.lidar.range_m / self.tile_m
+        if horizon is not None:                       # the usual case: only the horizon's window is read
+            found = local_reach(known, self.robot.radius, here, f, horizon)
+            if found is not None:
+                view = local_tile_view(known, found[1], found[0], f, range_tiles, horizon)
+        else:                                         # the paper's battery-only constraint: the whole map
+            space = grid.configuration_space(known, self.robot.radius, grid.DEFAULT_MARGIN_M)
+            start = grid.nearest_in(space, here, SNAP_CELLS)
+            if start is not None:
+                reach = np.isfinite(grid.distance_field(space, start))
+                view = tile_view(known, reach, start, f, range_tiles, horizon)
         choice = Choice(None, 0, 0)
         claimed = None
         if view is not None:
@@ -450,51 +557,71 @@ class XBOA:
 
     # --------------------------------------------------------------------------- coordination ----
     def _read_inbox(self, obs: Observation) -> None:
-        coarse: list[tuple[np.ndarray, np.ndarray]] = []  # the map's tiles, coarsened once for all the tick's claims
+        coarse: list[Any] = []  # the tiles around my target region, coarsened once for all the tick's claims
         for msg in obs.inbox:
             if not isinstance(msg, TargetAnnouncement) or msg.sender == obs.robot_id:
                 continue
             if len(msg.poses) == 0:
                 self.claims.pop(msg.sender, None)
                 continue
+            self.claims.pop(msg.sender, None)       # re-inserted last: the dict stays in order of receipt
             self.claims[msg.sender] = _Claim(msg.tick, obs.tick, np.asarray(msg.poses, np.int64))
             if (self.params.overlap_penalty and self.goals and not self.redecide and msg.sender < obs.robot_id
                     and msg.tick >= self.decided_at and self._overlaps(obs.known, msg.poses, coarse)):
                 self.redecide = True
-        expired = [k for k, c in self.claims.items() if obs.tick - c.received > self.params.claim_ticks]
-        for k in expired:
-            del self.claims[k]
+        claims = self.claims                        # oldest first (see above): drop expired ones from the front
+        while claims:
+            oldest = next(iter(claims))
+            if obs.tick - claims[oldest].received <= self.params.claim_ticks:
+                break
+            del claims[oldest]
 
-    def _overlaps(self, known: np.ndarray, poses: np.ndarray, coarse: list[tuple[np.ndarray, np.ndarray]]) -> bool:
+    def _overlaps(self, known: np.ndarray, poses: np.ndarray, coarse: list[Any]) -> bool:
         """Whether ``poses`` (another robot's plan) will observe at least CONFLICT_SHARE of my target region.
-        ``coarse``: empty, or the (unknown, occupied) tiles of ``known`` from an earlier call of this tick (a
-        swarm's robot hears hundreds of claims a tick; coarsening the whole map for each made xBOA's cost
-        grow with robots x map area)."""
+        ``coarse``: empty, or the tile belief around the region from an earlier call of this tick (a swarm's
+        robot hears hundreds of claims a tick; coarsening the whole map for each made xBOA's cost grow with
+        robots x map area; now only the region plus the sensor's range is coarsened, once a tick)."""
         region = self.regions[0] if self.regions else None
         if region is None or len(region) == 0:
             return False
         f = self.params.tile_cells
-        if not coarse:
-            unknown, occupied, _ = coarsen(known, np.zeros(known.shape, bool), f)
-            coarse.append((unknown, occupied))
-        unknown, occupied = coarse[0]
-        seen = predicted_observed(Belief(unknown, occupied, self.tile_m), _tile_poses(poses, f, unknown.shape,
-                                                                                      self.lidar), self.lidar)
         tiles = np.stack(np.unravel_index(region[:, 0], known.shape), axis=1) // f
-        return float(seen[tiles[:, 0], tiles[:, 1]].mean()) >= CONFLICT_SHARE
+        t0, u0 = tiles.min(axis=0)
+        t1, u1 = tiles.max(axis=0) + 1
+        seen = self._seen_from(known, (int(t0), int(t1), int(u0), int(u1)), poses, coarse)
+        return float(seen[tiles[:, 0] - t0, tiles[:, 1] - u0].mean()) >= CONFLICT_SHARE
 
     def _claimed(self, known: np.ndarray, view: TileView, tick: int) -> np.ndarray | None:
         """Cells of the window that other robots' live claims will observe (departure 8)."""
         if not self.params.overlap_penalty or not self.claims:
             return None
-        f = view.factor
-        unknown, occupied, _ = coarsen(known, view.reach, f)
-        full = Belief(unknown, occupied, self.tile_m)
-        poses = np.concatenate([c.poses for c in self.claims.values()])
-        seen = predicted_observed(full, _tile_poses(poses, f, view.shape, self.lidar), self.lidar)
         r0, c0 = view.origin
         h, w = view.belief.shape
-        return seen[r0:r0 + h, c0:c0 + w]
+        poses = np.concatenate([c.poses for c in self.claims.values()])
+        return self._seen_from(known, (r0, r0 + h, c0, c0 + w), poses)
+
+    def _seen_from(self, known: np.ndarray, tiles: tuple[int, int, int, int], poses: np.ndarray,
+                   crop: list[Any] | None = None) -> np.ndarray:
+        """``predicted_observed`` on the whole tile belief at knowledge-cell ``poses``, read at tile rows
+        ``t0:t1`` and columns ``u0:u1`` (``tiles``), computed on those tiles plus the sensor's range: no
+        farther pose sees into them, and a beam that leaves that box (a box around its pose) never comes
+        back, so the answer is the whole map's bit for bit. ``crop``: empty, or the cropped belief of an
+        earlier call with the same ``tiles`` and map (kept by the caller for the tick)."""
+        f = self.params.tile_cells
+        m = int(math.ceil(self.lidar.range_m / self.tile_m)) + 1
+        t0, t1, u0, u1 = tiles
+        shape = (-(-known.shape[0] // f), -(-known.shape[1] // f))
+        e0, e1, g0, g1 = max(t0 - m, 0), min(t1 + m, shape[0]), max(u0 - m, 0), min(u1 + m, shape[1])
+        if crop:
+            belief = crop[0]
+        else:
+            unknown, occupied, _ = coarsen_window(known, None, f, (e0, e1, g0, g1))
+            belief = Belief(unknown, occupied, self.tile_m)
+            if crop is not None:
+                crop.append(belief)
+        p = _tile_poses(poses, f, shape, self.lidar, (e0, e1, g0, g1))
+        seen = predicted_observed(belief, p, self.lidar)
+        return seen[t0 - e0:t1 - e0, u0 - g0:u1 - g0]
 
     def _announcement(self, tick: int, view: TileView, choice: Choice) -> TargetAnnouncement:
         assert choice.plan is not None
@@ -597,16 +724,29 @@ def _leg_ends(plan: Plan) -> list[int]:
     return [min(e, len(plan.poses) - 1) for e in ends]
 
 
-def _tile_poses(poses: np.ndarray, f: int, shape: tuple[int, int], lidar: Lidar) -> list[tuple[int, int, int]]:
-    """Distinct tile poses of knowledge-cell poses, inside the tile grid (with a full-circle lidar the
-    heading does not change what a pose sees, so it is dropped before de-duplication)."""
+def _tile_poses(poses: np.ndarray, f: int, shape: tuple[int, int], lidar: Lidar,
+                box: tuple[int, int, int, int] | None = None) -> np.ndarray:
+    """Distinct tile poses (int64[N, 3]) of knowledge-cell poses, inside the tile grid (with a full-circle
+    lidar the heading does not change what a pose sees, so it is dropped before de-duplication). With a
+    ``box`` (tile rows t0:t1, columns u0:u1) only the poses inside it, relative to its corner."""
     p = np.asarray(poses, np.int64).reshape(-1, 3).copy()
     p[:, 0] //= f
     p[:, 1] //= f
     if lidar.fov_deg >= 360.0:
         p[:, 2] = 0
-    p = p[(p[:, 0] < shape[0]) & (p[:, 1] < shape[1])]
-    return [tuple(int(v) for v in row) for row in np.unique(p, axis=0)]
+    t0, t1, u0, u1 = (0, shape[0], 0, shape[1]) if box is None else box
+    p = p[(p[:, 0] >= t0) & (p[:, 0] < min(t1, shape[0])) & (p[:, 1] >= u0) & (p[:, 1] < min(u1, shape[1]))]
+    p[:, 0] -= t0
+    p[:, 1] -= u0
+    width = max(min(u1, shape[1]) - u0, 1)
+    key = (p[:, 0] * width + p[:, 1]) * 65536 + (p[:, 2] + 32768)   # headings are int16: one int per pose
+    key = np.unique(key)                                             # (a 1-D unique: ~10x np.unique(axis=0))
+    out = np.empty((len(key), 3), np.int64)
+    out[:, 2] = key % 65536 - 32768
+    cell = key // 65536
+    out[:, 0], out[:, 1] = np.divmod(cell, width)
+    return out
 
 
-__all__ = ["Params", "TargetAnnouncement", "TileView", "XBOA", "XBOAParams", "coarsen", "search", "tile_view"]
+__all__ = ["XBOA", "Params", "TargetAnnouncement", "TileView", "XBOAParams", "coarsen", "coarsen_window", "local_reach",
+           "local_tile_view", "search", "tile_view"]
