@@ -20,8 +20,9 @@ from itertools import compress
 from operator import is_not
 
 import numpy as np
+from numba import njit
 
-from swarm.api import CELL_M, cell_of
+from swarm.api import CELL_M
 
 from .doorways import Doorway, DoorwayBook, Wire, valid_wire
 from .messages import DoorwayList, Heading
@@ -100,16 +101,12 @@ class Peers:
         fresh = [(x, y) for x, y, t in self.targets.values() if tick - t <= max_age]
         if not fresh:
             return None
-        h, w = shape
-        mask = np.zeros((h, w), dtype=bool)
+        mask = np.zeros(shape, dtype=bool)
         k = math.ceil(radius_m / CELL_M)
-        disc = _disc(k)
-        for x, y in fresh:
-            r, c = cell_of(x, y)
-            r0, r1, c0, c1 = max(r - k, 0), min(r + k + 1, h), max(c - k, 0), min(c + k + 1, w)
-            if r0 >= r1 or c0 >= c1:
-                continue
-            mask[r0:r1, c0:c1] |= disc[r0 - (r - k):r1 - (r - k), c0 - (c - k):c1 - (c - k)]
+        xy = np.array(fresh, dtype=np.float64)
+        rows = np.floor(xy[:, 1] / CELL_M).astype(np.int64)        # cell_of, for every target at once
+        cols = np.floor(xy[:, 0] / CELL_M).astype(np.int64)
+        _stamp(mask, rows, cols, _disc(k), k)
         return mask
 
 
@@ -120,6 +117,19 @@ def _disc(k: int) -> np.ndarray:
     disc = yy * yy + xx * xx <= k * k
     disc.flags.writeable = False
     return disc
+
+
+@njit(cache=True)
+def _stamp(mask, rows, cols, disc, k):  # pragma: no cover - compiled
+    """``mask |= disc`` centred on each (row, col), clipped to the mask: a swarm's robot hears hundreds of
+    targets, and a slice per target in Python was a tenth of Minotaur's loop at 256 robots (issue 47)."""
+    h, w = mask.shape
+    for i in range(rows.shape[0]):
+        r, c = rows[i], cols[i]
+        for dr in range(max(-k, -r), min(k, h - 1 - r) + 1):
+            for dc in range(max(-k, -c), min(k, w - 1 - c) + 1):
+                if disc[dr + k, dc + k]:
+                    mask[r + dr, c + dc] = True
 
 
 _NO_COUNTS: dict = {}

@@ -232,6 +232,27 @@ def test_peers_merge_changed_doorways_and_remember_targets_and_claims() -> None:
     assert peers.targets_mask((40, 40), 41, 30, 1.0) is None and peers.claimed(41, 100) == []
 
 
+def test_targets_mask_is_every_cell_within_the_radius_of_a_fresh_target_clipped_to_the_map() -> None:
+    """The compiled stamp against the definition, cell by cell, with targets on, near and off the edges."""
+    from algorithms.minotaur.peers import Peers
+
+    rng = np.random.default_rng(3)
+    for _ in range(50):
+        shape = (int(rng.integers(4, 40)), int(rng.integers(4, 40)))
+        peers = Peers()
+        xy = rng.uniform(-3.0, 23.0, size=(int(rng.integers(1, 12)), 2))
+        for i, (x, y) in enumerate(xy):
+            peers.targets[i] = (float(x), float(y), 5)
+        got = peers.targets_mask(shape, 6, 10, 1.5)
+        k = math.ceil(1.5 / 0.5)
+        rr, cc = np.mgrid[0:shape[0], 0:shape[1]]
+        want = np.zeros(shape, bool)
+        for x, y in xy:
+            r, c = math.floor(y / 0.5), math.floor(x / 0.5)
+            want |= (rr - r) ** 2 + (cc - c) ** 2 <= k * k
+        assert got is not None and np.array_equal(got, want)
+
+
 def test_same_run_over_zenoh() -> None:
     """Minotaur's messages and debug survive the wire: the zenoh transport gives the in-process result."""
     spec = {"map": {"kind": "building", "size": 50}, "robots": {"count": 3}, "algorithm": {"name": "minotaur"},

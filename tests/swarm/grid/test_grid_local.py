@@ -201,3 +201,24 @@ def test_the_memo_holds_one_map_size_at_a_time() -> None:
         assert found is not None
         assert memo.recall(known, (0.3, 0.05, False), start, found[0]) is not None
     assert {entry.shape for entry in memo._MEMO.entries.values()} == {big.shape}
+
+
+def test_nearest_reachable_by_windows_is_the_whole_map_search(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Random spaces and targets (sparse ones force the windows to grow; walls force detours that leave a
+    window), random first windows: the answer, its length and the tie-break are the whole map's."""
+    from swarm.grid import search
+
+    rng = np.random.default_rng(0)
+    grew = 0
+    for _ in range(400):
+        h, w = int(rng.integers(5, 160)), int(rng.integers(5, 160))
+        space = rng.random((h, w)) < rng.uniform(0.55, 0.9)
+        targets = rng.random((h, w)) < rng.choice([0.0005, 0.003, 0.03])
+        start = (int(rng.integers(0, h)), int(rng.integers(0, w)))
+        monkeypatch.setattr(search, "NEAREST_WINDOW_CELLS", 10**6)
+        want = grid.nearest_reachable(space, start, targets)
+        half = int(rng.integers(1, 30))
+        monkeypatch.setattr(search, "NEAREST_WINDOW_CELLS", half)
+        assert grid.nearest_reachable(space, start, targets) == want
+        grew += want is not None and want[1] / 0.5 > half
+    assert grew > 20, "the cases must include answers beyond the first window"
