@@ -12,15 +12,14 @@ import io
 from pathlib import Path
 
 import numpy as np
-from PIL import Image, ImageDraw
+from PIL import Image
 
 from maps import CELL_M, Map
-from maps.render import add_legend, auto_scale, palette
+from maps.render import add_legend, auto_scale
 
-ROBOT_COLOURS = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189), (140, 86, 75),
-                 (227, 119, 194), (127, 127, 127), (188, 189, 34), (23, 190, 207)]
-UNSEEN_FREE = (205, 205, 205)
-SEEN_FREE = (252, 252, 250)
+from .drawing import ROBOT_COLOURS, SEEN_FREE, UNSEEN_FREE, draw_robots, union_layer, upscale
+
+__all__ = ["ROBOT_COLOURS", "SEEN_FREE", "UNSEEN_FREE", "GifRecorder"]
 
 
 class GifRecorder:
@@ -73,39 +72,19 @@ class GifRecorder:
         return path
 
     def frames(self) -> list[Image.Image]:
+        """One picture per snapshot: the map with every wall drawn (the building is the backdrop), the
+        floor seen so far, each robot with its trail (:mod:`swarm.record.drawing`), a legend and the tick."""
         truth = self.truth
         scale = auto_scale(truth, 600)
-        colours = palette(truth)
-        base = colours[truth.material].copy()
         h, w = truth.shape
         out = []
         for tick, packed in self.snapshots or [(0, np.packbits(np.zeros(truth.shape, bool)))]:
             seen = np.unpackbits(packed, count=h * w).reshape(h, w).astype(bool)
-            rgb = base.copy()
-            free = ~truth.solid
-            rgb[free & ~seen] = UNSEEN_FREE
-            rgb[free & seen] = SEEN_FREE
-            image = Image.fromarray(np.repeat(np.repeat(rgb[::-1], scale, 0), scale, 1), "RGB")
-            self._draw_robots(image, tick, scale)
+            image = upscale(union_layer(truth, seen, fade_unseen_walls=False), scale)
+            if self.poses:
+                poses = np.stack(self.poses[: tick + 1])
+                n = poses.shape[1]
+                draw_robots(image, poses[-1], h, scale, [ROBOT_COLOURS[i % len(ROBOT_COLOURS)] for i in range(n)],
+                            max(2.0, 0.3 * scale / CELL_M), trails=poses[::5, :, :2])
             out.append(add_legend(image, truth, title=f"tick {tick}"))
         return out
-
-    def _draw_robots(self, image: Image.Image, tick: int, scale: int) -> None:
-        draw = ImageDraw.Draw(image)
-        h = self.truth.shape[0]
-        poses = np.stack(self.poses[: tick + 1]) if self.poses else np.zeros((0, 0, 3))
-        px = scale / CELL_M
-
-        def to_px(x: float, y: float) -> tuple[float, float]:
-            return x * px, (h * CELL_M - y) * px
-
-        for i in range(poses.shape[1] if poses.size else 0):
-            colour = ROBOT_COLOURS[i % len(ROBOT_COLOURS)]
-            trail = [to_px(float(x), float(y)) for x, y in poses[::5, i, :2]]
-            if len(trail) > 1:
-                draw.line(trail, fill=colour, width=1)
-            x, y, theta = (float(v) for v in poses[-1, i])
-            cx, cy = to_px(x, y)
-            r = max(2.0, 0.3 * px)
-            draw.ellipse([cx - r, cy - r, cx + r, cy + r], fill=colour, outline=(0, 0, 0))
-            draw.line([cx, cy, cx + 1.6 * r * np.cos(theta), cy - 1.6 * r * np.sin(theta)], fill=(0, 0, 0), width=2)

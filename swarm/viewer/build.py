@@ -21,7 +21,7 @@ from typing import Any
 from maps.io import atomic_write_bytes
 
 from swarm.record import Recording
-from swarm.record.animation import ROBOT_COLOURS, SEEN_FREE, UNSEEN_FREE
+from swarm.record.drawing import ROBOT_COLOURS, SEEN_FREE, UNSEEN_FREE, UNSEEN_WALL_FADE
 from swarm.record.container import bad
 from swarm.record.reader import read_bytes
 
@@ -56,6 +56,7 @@ def build_html(data: bytes, source: str = "<bytes>") -> str:
     rec = Recording(data, source)
     config: dict[str, Any] = {"robotColours": [list(c) for c in ROBOT_COLOURS], "unseenFree": list(UNSEEN_FREE),
                               "seenFree": list(SEEN_FREE), "othersFree": list(OTHERS_FREE),
+                              "unseenWallFade": UNSEEN_WALL_FADE,
                               "source": Path(source).name}
     parts = {
         "TITLE": html.escape(title_of(rec)),

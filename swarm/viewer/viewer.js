@@ -1004,7 +1004,7 @@
     paintCell(cell, rm) {
       if (!this.palette) {
         const unseenFree = this.cfg.unseenFree, othersFree = this.cfg.othersFree;
-        this.palette = { faded: this.colours.map((c) => mix(c, unseenFree, 0.55)),
+        this.palette = { faded: this.colours.map((c) => mix(c, unseenFree, this.cfg.unseenWallFade)),
                          half: this.colours.map((c) => mix(c, othersFree, 0.35)) };
       }
       const { faded, half } = this.palette, W = this.rec.W, H = this.rec.H;

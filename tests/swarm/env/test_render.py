@@ -1,5 +1,6 @@
 """``render()`` of the RL environments: a readable picture (about ``render_px`` on its longer side), the
-team's knowledge shaded, every robot drawn where the runtime has it, learners blue and teammates red."""
+team's knowledge painted by the viewer's rules (:mod:`swarm.record.drawing`), every robot drawn where the
+runtime has it, learners blue and teammates red."""
 
 from __future__ import annotations
 
@@ -11,15 +12,16 @@ pytest.importorskip("pettingzoo")
 
 import swarm.env as senv
 from maps import InvalidInput
+from maps.materials import colour_of
 from swarm.env.render import (
     FREE,
     LEARNER,
     SCRIPTED,
     UNKNOWN,
-    WALL,
     cell_px,
     world_to_pixel,
 )
+from swarm.record.drawing import UNSEEN_WALL_FADE, mix
 
 SPEC = {"robots": {"count": 3, "spawn": "random"}, "size": 20, "stop": {"max_ticks": 300}}
 
@@ -60,7 +62,9 @@ def test_robots_are_drawn_where_they_are_in_their_colours():
     assert nearest.max() < 3.0
 
 
-def test_knowledge_is_shaded_known_free_white_walls_black_unknown_grey():
+def test_knowledge_is_painted_as_the_viewer_paints_it():
+    """Seen floor near-white, unseen floor grey, seen walls in their material's colour, unseen walls that
+    colour faded towards the unseen grey (viewer.js ``paintCell``, union view)."""
     env = senv.SwarmParallelEnv(**SPEC, render_mode="rgb_array")
     frame = _frame_after(env, 5)
     sim = env.core.sim
@@ -71,11 +75,17 @@ def test_knowledge_is_shaded_known_free_white_walls_black_unknown_grey():
     rows, cols = np.indices(union.shape)
     far = np.min(np.hypot((cols[..., None] + 0.5) * 0.5 - poses[:, 0], (rows[..., None] + 0.5) * 0.5 - poses[:, 1]),
                  axis=2) > 2.5  # away from discs and ids
-    for value, colour in [(1, FREE), (2, WALL)]:
-        mask = (union == value) & far
-        assert mask.any() and np.all(centre[mask] == colour)
-    unknown = (union == 0) & ~sim.truth.solid & far
-    assert unknown.any() and np.all(centre[unknown] == UNKNOWN)
+    truth = sim.truth
+    seen = union != 0
+    free = ~truth.solid & far
+    assert (free & seen).any() and np.all(centre[free & seen] == FREE)
+    assert (free & ~seen).any() and np.all(centre[free & ~seen] == UNKNOWN)
+    walls = truth.solid & far
+    assert (walls & seen).any() and (walls & ~seen).any()
+    for r, c in zip(*np.nonzero(walls)):
+        colour = colour_of(truth.materials[truth.material[r, c]])
+        want = colour if seen[r, c] else mix(colour, UNKNOWN, UNSEEN_WALL_FADE)
+        assert tuple(centre[r, c]) == tuple(want), (r, c)
 
 
 def test_single_agent_env_renders_the_same_way_and_none_without_a_mode():
