@@ -152,6 +152,9 @@ TARGET_AVOID_M = 3.0
 START_MAX_TICKS = 100
 VIEW_REACH = 2
 """Cells from a frontier a greedy target may be (swarm.grid's default for a 0.3 m robot)."""
+ROOM_WINDOW_CELLS = 48
+"""Half-width (cells, 24 m) of the first window the room step searches (``Minotaur._room_target_nearby``);
+each further one is twice as wide, up to a quarter of the map."""
 PASS_CHECK_M = 3.0
 """Passages through a doorway are watched while the robot is this close to it."""
 GREEDY_MODES = ("room-greedy", "greedy")
@@ -566,6 +569,10 @@ class Minotaur:
         if self._follow_target(obs) is not None:
             return
         here = (obs.pose.x, obs.pose.y)
+        room = self._room_target_nearby(obs)
+        if room is not None and room[0] is not None:
+            self._set_greedy("room", "room-greedy", room[0], obs)
+            return
         space, cut = self._spaces(obs)
         blocked = mask(self.excluded, obs.known.shape)
         views = rooms.view_cells(obs.known, space, VIEW_REACH)
@@ -576,7 +583,8 @@ class Minotaur:
         else:
             avoid = self.peers.targets_mask(obs.known.shape, tick, TARGET_FRESH_TICKS, TARGET_AVOID_M)
         start = rooms.snap(cut, here)
-        if start is not None:      # MAES's MoveToNearestUnseenWithinRoom excludes door tiles only (683-707)
+        if start is not None and room is None:  # (room: the nearby search found the room empty)
+            # MAES's MoveToNearestUnseenWithinRoom excludes door tiles only (683-707)
             room_avoid = None if self.maes else avoid
             found = rooms.nearest_in_room(cut, start, views & ~room_avoid) if room_avoid is not None else None
             if found is None:
@@ -613,6 +621,57 @@ class Minotaur:
         self.state, self.mode = "done", "done"
         self.target = None
         self.idle_until = tick + IDLE_RECHECK_TICKS
+
+    def _room_target_nearby(self, obs: Observation) -> tuple[tuple[int, int] | None] | None:
+        """The room step of :meth:`_choose` (the nearest view cell in the robot's room, avoiding others'
+        targets if possible) decided on windows around the robot: ``(cell,)`` when the room has one,
+        ``(None,)`` when it has none (or the robot has no start in the room), None when no window small
+        enough decides it (then :meth:`_choose` does it on the whole map).
+
+        Exact: the window's configuration space, door cuts, view cells and masks are the whole map's
+        there (computed with the erosion's and the view reach's depth more), and
+        ``grid.nearest_reachable_window`` answers only when no path through the rest of the map could
+        change the answer. Why: at 256 robots these whole-map rasters, built for every decision, were a
+        fifth of Minotaur's cost per robot-tick and grew with the map's area (issue 47); most decisions
+        find the room's nearest unseen cell a few metres away."""
+        known = obs.known
+        h, w = known.shape
+        r, c = clip(cell_of(obs.pose.x, obs.pose.y), known.shape)
+        depth = max(max(abs(dr), abs(dc)) for dr, dc in grid.inflation_offsets(self.robot.radius,
+                                                                               grid.DEFAULT_MARGIN_M))
+        extra = max(depth, VIEW_REACH + 2)
+        half = ROOM_WINDOW_CELLS
+        while True:
+            r0, r1, c0, c1 = max(r - half, 0), min(r + half + 1, h), max(c - half, 0), min(c + half + 1, w)
+            if (r1 - r0) * (c1 - c0) * 4 > h * w:
+                return None
+            e0, e1, g0, g1 = max(r0 - extra, 0), min(r1 + extra, h), max(c0 - extra, 0), min(c1 + extra, w)
+            ext = known[e0:e1, g0:g1]
+            inner = (slice(r0 - e0, r1 - e0), slice(c0 - g0, c1 - g0))
+            space = grid.configuration_space(ext, radius_m=self.robot.radius)[inner]
+            cut = rooms.cut_doors(space, self.book, (r0, c0))
+            views = grid.view_cells(ext, VIEW_REACH)[inner] & space
+            blocked = mask(self.excluded, space.shape, (r0, c0))
+            if blocked is not None:
+                views &= ~blocked
+            start = grid.nearest_in(cut, (r - r0, c - c0), rooms.SNAP_CELLS)
+            if start is None:
+                return (None,)
+            sides = (r0 > 0, r1 < h, c0 > 0, c1 < w)
+            searches = [views]
+            if not self.maes:
+                avoid = self.peers.targets_mask(space.shape, obs.tick, TARGET_FRESH_TICKS, TARGET_AVOID_M, (r0, c0))
+                if avoid is not None:
+                    searches.insert(0, views & ~avoid)
+            for targets in searches:
+                found, decided = grid.nearest_reachable_window(cut, start, targets & cut, sides)
+                if not decided:
+                    break
+                if found is not None:
+                    return ((found[0][0] + r0, found[0][1] + c0),)
+            else:
+                return (None,)
+            half *= 2
 
     def _own_destinations(self, shape: tuple[int, int]) -> np.ndarray | None:
         """MAES's ``_otherRobotDestinations`` (MinotaurAlgorithm.cs 55-58): HeartbeatMessage.cs 54 stores, for each
@@ -818,28 +877,37 @@ class Minotaur:
 def _well_formed(m: Any) -> bool:
     """A Minotaur message whose fields are safe to use (the codec validates what comes over the wire;
     in-process delivery hands over the sender's object, so check again). A doorway list is checked
-    entry by entry when merged, only for the entries that changed: it is the bulk of the traffic."""
+    entry by entry when merged, only for the entries that changed: it is the bulk of the traffic.
+
+    In-process, one message object reaches every receiver: a swarm's robot hears hundreds a tick, and
+    checking each once per receiver made the checks grow with robots x robots (issue 47). So a message
+    found well formed is remembered by identity (it is frozen: it cannot change after the check) and
+    not checked again; each receiver gets exactly the answer it would have computed."""
+    seen = _VALID.get(id(m))
+    if seen is not None and seen() is m:
+        return True
     if isinstance(m, DoorwayList):
-        return isinstance(m.doors, tuple) and valid_heading(m.target, m.door)
-    check = getattr(m, "validate", None)
-    if check is None:
-        return False
-    if isinstance(m, Tried):   # one object reaches every receiver in the process: check its cells once
-        seen = _VALID_TRIED.get(id(m))
-        if seen is not None and seen() is m:
-            return True
-    try:
-        check()
-    except (MessageError, TypeError, ValueError, AttributeError):
-        return False
-    if isinstance(m, Tried):
+        ok = isinstance(m.doors, tuple) and valid_heading(m.target, m.door)
+    else:
+        check = getattr(m, "validate", None)
+        if check is None:
+            return False
+        try:
+            check()
+            ok = True
+        except (MessageError, TypeError, ValueError, AttributeError):
+            ok = False
+    if ok:
         key = id(m)
-        _VALID_TRIED[key] = weakref.ref(m, lambda _ref, key=key: _VALID_TRIED.pop(key, None))
-    return True
+        try:
+            _VALID[key] = weakref.ref(m, lambda _ref, key=key: _VALID.pop(key, None))
+        except TypeError:                       # an object that takes no weak reference: not remembered
+            pass
+    return ok
 
 
-_VALID_TRIED: dict[int, weakref.ref] = {}
-"""Tried messages already found well formed, by identity (frozen: they cannot change after the check); an
+_VALID: dict[int, weakref.ref] = {}
+"""Messages already found well formed, by identity (frozen: they cannot change after the check); an
 entry leaves when its message is collected."""
 
 

@@ -44,16 +44,18 @@ class Peers:
                 yield robot, x, y
 
     def heard(self, tick: int, m: DoorwayList | Heading, book: DoorwayBook) -> None:
-        """Merge a heartbeat or heading into ``book`` and remember the sender's target and doorway."""
+        """Merge a heartbeat or heading into ``book`` and remember the sender's target and doorway. ``m``
+        is well formed (``explorer._well_formed``): its target a pair of numbers (NaN: none), its doorway
+        ``()`` or a valid wire; the doorway list's entries are checked here, when they are new."""
         if isinstance(m, DoorwayList):
             for w in self._new_entries(m.sender, m.doors):
                 book.add_wire(w, tick)
-        t = m.target
-        if all(isinstance(v, (int, float)) and math.isfinite(v) for v in t):
-            self.targets[m.sender] = (float(t[0]), float(t[1]), tick)
+        x, y = m.target
+        if math.isfinite(x) and math.isfinite(y):
+            self.targets[m.sender] = (float(x), float(y), tick)
         else:
             self.targets.pop(m.sender, None)
-        if valid_wire(m.door):
+        if m.door != ():
             door, _ = book.add_wire(m.door, tick)  # type: ignore[arg-type]
             self.doors[m.sender] = (door, tick)
         else:
@@ -96,16 +98,18 @@ class Peers:
         """Doorways other robots said (within ``max_age`` ticks) they are going through."""
         return [d for d, t in self.doors.values() if tick - t <= max_age]
 
-    def targets_mask(self, shape: tuple[int, int], tick: int, max_age: int, radius_m: float) -> np.ndarray | None:
-        """Cells within ``radius_m`` of other robots' current targets (heard within ``max_age``), or None."""
+    def targets_mask(self, shape: tuple[int, int], tick: int, max_age: int, radius_m: float,
+                     origin: tuple[int, int] = (0, 0)) -> np.ndarray | None:
+        """Cells within ``radius_m`` of other robots' current targets (heard within ``max_age``), or None
+        when there are none; ``shape`` is the map's, or a window's whose cell (0, 0) is map cell ``origin``."""
         fresh = [(x, y) for x, y, t in self.targets.values() if tick - t <= max_age]
         if not fresh:
             return None
         mask = np.zeros(shape, dtype=bool)
         k = math.ceil(radius_m / CELL_M)
         xy = np.array(fresh, dtype=np.float64)
-        rows = np.floor(xy[:, 1] / CELL_M).astype(np.int64)        # cell_of, for every target at once
-        cols = np.floor(xy[:, 0] / CELL_M).astype(np.int64)
+        rows = np.floor(xy[:, 1] / CELL_M).astype(np.int64) - origin[0]   # cell_of, for every target at once
+        cols = np.floor(xy[:, 0] / CELL_M).astype(np.int64) - origin[1]
         _stamp(mask, rows, cols, _disc(k), k)
         return mask
 

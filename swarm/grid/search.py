@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from swarm.base.errors import InvalidInput
 from swarm.base.types import CELL_M
 from ._kernels import (NO_TOUCHED, grid_bucket_search, grid_bucket_settle, grid_descend_path, grid_field_metres,
                        grid_read_metres)
@@ -260,25 +261,55 @@ def nearest_reachable_in(space: np.ndarray, start: tuple[int, int], targets: np.
         c0, c1 = max(start[1] - half, 0), min(start[1] + half + 1, w)
         if (r1 - r0) * (c1 - c0) * 4 > h * w:
             r0, r1, c0, c1 = 0, h, 0, w
-        edges = [start[0] - r0 + 1] if r0 > 0 else []
-        edges += [r1 - start[0]] if r1 < h else []
-        edges += [start[1] - c0 + 1] if c0 > 0 else []
-        edges += [c1 - start[1]] if c1 < w else []
-        window = space[r0:r1, c0:c1]
-        free, wp = _WORK.padded(window, 0)
-        tflat, _ = _WORK.padded(targets[r0:r1, c0:c1] & window, 1)
-        ring = _WORK.ring_for(free.shape[0])
-        dist, touched, _ = _WORK.clean(free.shape[0])
-        seed = _seed((start[0] - r0, start[1] - c0), wp)
-        best, best_d, nt = grid_bucket_search(free, wp, seed, -1, tflat, np.inf, dist, ring, touched)
-        enclosed = best < 0 and edges and not _reaches_cut(touched[:nt], wp, r1 - r0, c1 - c0,
-                                                           (r0 > 0, r1 < h, c0 > 0, c1 < w))
-        _forget(dist, touched, nt)
-        if not edges or enclosed:     # the whole map, or a search that ran out without meeting a cut edge
-            if best < 0:
-                return None
-            break
-        if best >= 0 and best_d < min(edges) - 1e-6:
-            break
+        window = (slice(r0, r1), slice(c0, c1))
+        found, decided = _window_search(space[window], (start[0] - r0, start[1] - c0), targets[window],
+                                        (r0 > 0, r1 < h, c0 > 0, c1 < w))
+        if decided:
+            return None if found is None else ((found[0][0] + r0, found[0][1] + c0), found[1])
         half *= 2
-    return (int(best // wp - 1) + r0, int(best % wp - 1) + c0), float(best_d * CELL_M)
+
+
+def nearest_reachable_window(space: np.ndarray, start: tuple[int, int], targets: np.ndarray,
+                             cut: tuple[bool, bool, bool, bool]) -> tuple[tuple[tuple[int, int], float] | None, bool]:
+    """:func:`nearest_reachable` on a window of a larger map, and whether the window decides it.
+
+    ``space`` and ``targets`` are the window's cells (equal to the map's there), ``start`` a cell of the
+    window, ``cut`` whether its top, bottom, left and right sides are cut out of the map (False: the map's
+    own edge). Returns (answer, True) when the answer, or None, is the whole map's: the answer is nearer
+    than every cut side, or the search met no cut side before it ran out; else (None, False), and the
+    caller searches a larger window or the whole map. For callers that build the search's inputs
+    (configuration space, targets) for a window only, so that a near answer costs the window's area.
+    Cost: that of :func:`nearest_reachable` on the window."""
+    sp = check_space(space)
+    s = check_cell(start, sp.shape, "start")
+    tg = check_space(targets, "targets")
+    check_same_shape(tg, sp.shape, "targets")
+    if not isinstance(cut, tuple) or len(cut) != 4 or not all(isinstance(v, bool) for v in cut):
+        raise InvalidInput("cut", cut, "a tuple of 4 bools (top, bottom, left, right cut out of the map)")
+    if not sp[s]:
+        return None, True
+    return _window_search(sp, s, tg, cut)
+
+
+def _window_search(window: np.ndarray, start: tuple[int, int], targets: np.ndarray,
+                   cut: tuple[bool, bool, bool, bool]) -> tuple[tuple[tuple[int, int], float] | None, bool]:
+    """The search of :func:`nearest_reachable_window` for checked inputs, ``start`` in the space."""
+    h, w = window.shape
+    top, bottom, left, right = cut
+    edges = [start[0] + 1] if top else []
+    edges += [h - start[0]] if bottom else []
+    edges += [start[1] + 1] if left else []
+    edges += [w - start[1]] if right else []
+    free, wp = _WORK.padded(window, 0)
+    tflat, _ = _WORK.padded(targets & window, 1)
+    ring = _WORK.ring_for(free.shape[0])
+    dist, touched, _ = _WORK.clean(free.shape[0])
+    best, best_d, nt = grid_bucket_search(free, wp, _seed(start, wp), -1, tflat, np.inf, dist, ring, touched)
+    enclosed = best < 0 and bool(edges) and not _reaches_cut(touched[:nt], wp, h, w, cut)
+    _forget(dist, touched, nt)
+    found = None if best < 0 else ((int(best // wp - 1), int(best % wp - 1)), float(best_d * CELL_M))
+    if not edges or enclosed:     # the whole map, or a search that ran out without meeting a cut side
+        return found, True
+    if best >= 0 and best_d < min(edges) - 1e-6:
+        return found, True
+    return None, False

@@ -261,3 +261,60 @@ def test_same_run_over_zenoh() -> None:
     b = Simulation({**spec, "transport": "zenoh"}).run().summary
     assert a["final_poses"] == b["final_poses"] and a["messages"]["sent"] == b["messages"]["sent"]
     assert b["messages"]["malformed"] == 0 and b["acts"]["malformed"] == [0, 0, 0]
+
+
+def test_the_room_step_on_windows_is_the_whole_maps_room_step() -> None:
+    """Minotaur's room step decided around the robot (issue 47) picks what the whole-map rasters pick:
+    buildings seen in patches, doorways cut, cells excluded, other robots' targets avoided; windows that
+    cannot decide say so instead of guessing."""
+    from maps import generate
+    from swarm.api import Observation, Pose, RobotInfo, cell_centre
+
+    from algorithms.minotaur import explorer as mex
+    from algorithms.minotaur.cells import mask
+    from algorithms.minotaur.doorways import Doorway
+
+    decided = found_near = 0
+    for seed in range(6):
+        truth = generate("building", 100, seed)
+        rng = np.random.default_rng(seed)
+        known = np.where(truth.solid, SOLID, FREE).astype(np.uint8)
+        known[rng.random(known.shape) < 0.02] = UNSEEN
+        for _ in range(4):
+            r, c = rng.integers(0, known.shape[0] - 40, size=2)
+            known[r:r + int(rng.integers(10, 40)), c:c + int(rng.integers(10, 40))] = UNSEEN
+        free = np.argwhere(known == FREE)
+        for trial in range(8):
+            agent = Minotaur()
+            agent.reset(RobotInfo(id=1, n_robots=4, map_shape=known.shape), MinotaurParams(),
+                        np.random.default_rng(trial))
+            for k in range(int(rng.integers(0, 6))):        # doorways, cut out of the room
+                x, y = cell_centre(*free[rng.integers(len(free))])
+                agent.book.add(Doorway(x, y, int(rng.integers(0, 2)), 2.0, 0.5))
+            for k in range(int(rng.integers(0, 20))):
+                agent.excluded[tuple(int(v) for v in free[rng.integers(len(free))])] = 10**6
+            for k in range(int(rng.integers(0, 8))):        # others' fresh targets
+                x, y = cell_centre(*free[rng.integers(len(free))])
+                agent.peers.targets[10 + k] = (x, y, 0)
+            x, y = cell_centre(*free[rng.integers(len(free))])
+            obs = Observation(tick=1, robot_id=1, pose=Pose(x, y, 0.0), known=known)
+            got = agent._room_target_nearby(obs)
+            space = grid.configuration_space(known, radius_m=agent.robot.radius)
+            cut = rooms.cut_doors(space, agent.book)
+            views = rooms.view_cells(known, space, mex.VIEW_REACH)
+            blocked = mask(agent.excluded, known.shape)
+            if blocked is not None:
+                views &= ~blocked
+            avoid = agent.peers.targets_mask(known.shape, 1, mex.TARGET_FRESH_TICKS, mex.TARGET_AVOID_M)
+            start = rooms.snap(cut, (x, y))
+            want = None
+            if start is not None:
+                if avoid is not None:
+                    want = rooms.nearest_in_room(cut, start, views & ~avoid)
+                if want is None:
+                    want = rooms.nearest_in_room(cut, start, views)
+            if got is not None:
+                decided += 1
+                assert got == ((want[0] if want is not None else None),), (seed, trial)
+                found_near += got[0] is not None
+    assert decided > 20 and found_near > 10, "most room steps must be decided near the robot"

@@ -222,3 +222,23 @@ def test_nearest_reachable_by_windows_is_the_whole_map_search(monkeypatch: pytes
         assert grid.nearest_reachable(space, start, targets) == want
         grew += want is not None and want[1] / 0.5 > half
     assert grew > 20, "the cases must include answers beyond the first window"
+
+
+def test_nearest_reachable_window_decides_only_what_the_rest_of_the_map_cannot_change() -> None:
+    """A target beyond a cut side is not the window's to decide; the same window with the side being the
+    map's edge decides; a closed room decides None; a bad ``cut`` is one clear error."""
+    from swarm.base.errors import InvalidInput
+
+    space = np.ones((20, 20), bool)
+    targets = np.zeros((20, 20), bool)
+    targets[10, 0] = True      # 10 cells west: as far as the nearest cell beyond the east and south sides
+    assert grid.nearest_reachable_window(space, (10, 10), targets, (True, True, True, True)) == (None, False)
+    found, decided = grid.nearest_reachable_window(space, (10, 10), targets, (False, False, False, False))
+    assert decided and found == ((10, 0), 5.0)
+    targets[10, 12] = True                           # 2 cells away: nearer than every cut side
+    assert grid.nearest_reachable_window(space, (10, 10), targets, (True, True, True, True)) == (((10, 12), 1.0), True)
+    room = np.zeros((20, 20), bool)
+    room[8:13, 8:13] = True                          # closed: the search ends before any cut side
+    assert grid.nearest_reachable_window(room, (10, 10), targets & ~room, (True,) * 4) == (None, True)
+    with pytest.raises(InvalidInput, match="cut"):
+        grid.nearest_reachable_window(space, (10, 10), targets, (True, True))
