@@ -30,25 +30,29 @@ class _Scratch(threading.local):
         self.flat = np.zeros(0, dtype=np.int64)
 
     def get(self, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        if self.a.shape[0] != n:
+        """The first ``n`` cells of each (grown when a larger map comes; a smaller one, e.g. a decision's
+        window, uses the front, which keeps the all -1 invariant as the whole does)."""
+        if self.a.shape[0] < n:
             self.a = np.full(n, -1, dtype=np.int32)
             self.b = np.full(n, -1, dtype=np.int32)
             self.flat = np.empty(n, dtype=np.int64)
-        return self.a, self.b, self.flat
+        return self.a[:n], self.b[:n], self.flat[:n]
 
 
 _SCRATCH = _Scratch()
 _NO_EXCLUDE = np.zeros((0, 0), dtype=np.bool_)
 
 
-def frontier_clusters(known: np.ndarray, exclude: np.ndarray | None, min_size: int
-                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def frontier_clusters(known: np.ndarray, exclude: np.ndarray | None, min_size: int,
+                      origin: tuple[int, int] = (0, 0)) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """(cells int64[N, 2], owner int64[N], sizes int64[F], representative int64[F, 2]) of
-    :func:`algorithms.tnf_utility.frontiers` for a uint8 map (C-contiguous)."""
+    :func:`algorithms.tnf_utility.frontiers` for a uint8 map (C-contiguous). ``origin``: the map cell of
+    ``known``'s cell (0, 0) when ``known`` is a window; centroids are summed in map coordinates, so the
+    representatives are the whole map's bit for bit (the cells returned are the window's)."""
     h, w = known.shape
     index, _, flat = _SCRATCH.get(h * w)
     ex = _NO_EXCLUDE if exclude is None else np.ascontiguousarray(exclude, dtype=np.bool_)
-    return _clusters(known, ex, max(int(min_size), 1), index, flat)
+    return _clusters(known, ex, max(int(min_size), 1), index, flat, int(origin[0]), int(origin[1]))
 
 
 def view_labels(known: np.ndarray, cells: np.ndarray, owner: np.ndarray, reach: int
@@ -114,11 +118,12 @@ def _join(parent, i, j):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _clusters(known, exclude, min_size, index, flat):  # pragma: no cover - compiled
+def _clusters(known, exclude, min_size, index, flat, r_off, c_off):  # pragma: no cover - compiled
     """:func:`frontier_clusters`: 8-connected clusters numbered by their first cell in row-major order
     (scipy's labelling order), cells grouped by cluster and row-major within, centroids summed in that
     order (as ``np.bincount`` sums), excluded cells removed after clustering, small clusters dropped, and
-    the representative the first cell nearest the centroid. ``index``: int32[H * W] all -1 (left so)."""
+    the representative the first cell nearest the centroid. ``index``: int32[H * W] all -1 (left so).
+    ``r_off, c_off``: added to every cell's row and column in the centroid arithmetic (a window's origin)."""
     h, w = known.shape
     n = _frontier_flat(known, flat)
     for i in range(n):
@@ -165,8 +170,8 @@ def _clusters(known, exclude, min_size, index, flat):  # pragma: no cover - comp
     cy = np.zeros(m)
     cx = np.zeros(m)
     for j in range(n):
-        cy[glab[j]] += rows[j] + 0.5
-        cx[glab[j]] += cols[j] + 0.5
+        cy[glab[j]] += rows[j] + r_off + 0.5
+        cx[glab[j]] += cols[j] + c_off + 0.5
     for q in range(m):
         cy[q] = cy[q] / size0[q]
         cx[q] = cx[q] / size0[q]
@@ -203,8 +208,8 @@ def _clusters(known, exclude, min_size, index, flat):  # pragma: no cover - comp
         cells[t, 0] = rows[j]
         cells[t, 1] = cols[j]
         owner[t] = o
-        a = rows[j] + 0.5 - cy[q]
-        b = cols[j] + 0.5 - cx[q]
+        a = rows[j] + r_off + 0.5 - cy[q]
+        b = cols[j] + c_off + 0.5 - cx[q]
         d2 = a * a + b * b
         if d2 < best[o]:   # strictly: ties keep the first cell
             best[o] = d2

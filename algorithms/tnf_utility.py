@@ -202,7 +202,108 @@ def _terms(known: np.ndarray, start: tuple[int, int], destinations: np.ndarray, 
            margin_m: float, variant: str, position_m: tuple[float, float] | None, sensed_m: np.ndarray | None
            ) -> _Terms | None:
     """The candidates of :func:`score_frontiers` and their terms: (target cells, frontiers, index of each
-    candidate's frontier, raw gain, I, path length, D, C), or None when there is no candidate."""
+    candidate's frontier, raw gain, I, path length, D, C), or None when there is no candidate.
+
+    swarm's variant works on the window of the map that holds everything the robot knows (see
+    :func:`_known_window`); the target cells come back in map coordinates."""
+    if variant != "maes":
+        window = _known_window(known, start, reach, robot_radius_m, margin_m, penalty_radius_m)
+        if window is not None:
+            r0, r1, c0, c1 = window
+            w_known = known[r0:r1, c0:c1]
+            w_exclude = None if exclude is None else exclude[r0:r1, c0:c1]
+            dest = np.asarray(destinations, dtype=np.int64).reshape(-1, 2)
+            terms = _terms_on(w_known, (start[0] - r0, start[1] - c0), dest, (r0, c0), known.shape, alpha=alpha,
+                              beta=beta, robot_radius_m=robot_radius_m, penalty_radius_m=penalty_radius_m,
+                              reach=reach, exclude=w_exclude, min_size=min_size, margin_m=margin_m)
+            if terms is None:
+                return None
+            cells = terms[0] + np.array([r0, c0])
+            return (cells, *terms[1:])
+    return _terms_whole(known, start, destinations, alpha=alpha, beta=beta, robot_radius_m=robot_radius_m,
+                        penalty_radius_m=penalty_radius_m, reach=reach, exclude=exclude, min_size=min_size,
+                        margin_m=margin_m, variant=variant, position_m=position_m, sensed_m=sensed_m)
+
+
+WINDOW_SHARE = 0.5
+"""A decision crops the map to what the robot knows only while that window is at most this share of it."""
+
+
+def _known_window(known: np.ndarray, start: tuple[int, int], reach: int, robot_radius_m: float, margin_m: float,
+                  penalty_radius_m: float) -> tuple[int, int, int, int] | None:
+    """Rows ``r0:r1`` and columns ``c0:c1`` of the bounding box of the robot's known (not UNSEEN) cells and
+    its own cell, widened by every distance a term reads beyond a known cell, or None when that window is
+    more than ``WINDOW_SHARE`` of the map (the whole map is then as cheap).
+
+    Why the terms are the whole map's: the configuration space, the frontiers, the view cells and the
+    robot's paths lie in known free cells; the erosion reads ``depth`` cells beyond them, the frontier
+    test and the information term one, the snap ``reach + 1``; the coordination wavefront runs through
+    unseen cells too, but only ``penalty_radius_m`` from a target cell, and a destination farther than
+    that (snapped at most 4 cells) changes nothing. Cells the window leaves out are UNSEEN, as the
+    kernels take the outside of a map to be, or beyond every bound. Why: TNF scores every frontier of
+    the map, so each decision built whole-map rasters; early in a swarm's run a robot knows a small
+    part of a large map (issue 47)."""
+    h, w = known.shape
+    k = np.asarray(known)
+    if k.dtype == np.uint8 and k.flags.c_contiguous and w % 8 == 0:
+        rows = np.flatnonzero(k.view(np.uint64).reshape(h, w // 8).any(axis=1))   # 8 cells a word
+    else:
+        rows = np.flatnonzero(k.any(axis=1))
+    if len(rows) == 0:
+        return None
+    cols = np.flatnonzero(k[rows[0]:rows[-1] + 1].any(axis=0))
+    depth = max(max(abs(dr), abs(dc)) for dr, dc in grid.inflation_offsets(robot_radius_m, margin_m))
+    m = max(depth, reach + 2, int(math.ceil(penalty_radius_m / CELL_M)) + 6) + 2
+    r0 = max(min(int(rows[0]), start[0]) - m, 0)
+    r1 = min(max(int(rows[-1]), start[0]) + m + 1, h)
+    c0 = max(min(int(cols[0]), start[1]) - m, 0)
+    c1 = min(max(int(cols[-1]), start[1]) + m + 1, w)
+    if (r1 - r0) * (c1 - c0) > WINDOW_SHARE * h * w:
+        return None
+    return r0, r1, c0, c1
+
+
+def _terms_on(known: np.ndarray, start: tuple[int, int], destinations: np.ndarray, origin: tuple[int, int],
+              shape: tuple[int, int], *, alpha: float, beta: float, robot_radius_m: float, penalty_radius_m: float,
+              reach: int, exclude: np.ndarray | None, min_size: int, margin_m: float) -> _Terms | None:
+    """swarm's terms on a window (:func:`_known_window`) whose cell (0, 0) is map cell ``origin``, of a map
+    of ``shape``; ``destinations`` in map cells (clipped to the map, then kept if inside the window)."""
+    space = grid.configuration_space(known, robot_radius_m, margin_m)
+    here = grid.nearest_in(space, start, reach + 1)
+    if here is None:
+        return None
+    k = _as_map(known)
+    fr = frontiers(k, exclude, min_size, origin)
+    if not fr.count:
+        return None
+    targets, dist_all = frontier_targets(k, fr, space, here, reach, exclude)
+    keep = np.flatnonzero(targets[:, 0] >= 0)
+    if not len(keep):
+        return None
+    _, raw_all = tnf_kernels.information(k, fr.cells, fr.owner, fr.count, G_UNSEEN, G_KNOWN)
+    raw = raw_all[keep]
+    cells = targets[keep]
+    dist = dist_all[keep].astype(np.float64)
+    d_max = float(dist.max())
+    w = dist / d_max if d_max > 0.0 else np.zeros_like(dist)
+    gain = raw / raw.max()
+    dterm = distance_term(w, alpha, beta)
+    penalty = np.zeros(len(keep))
+    if len(destinations) and penalty_radius_m > 0.0:
+        dest = np.column_stack((np.clip(destinations[:, 0], 0, shape[0] - 1),
+                                np.clip(destinations[:, 1], 0, shape[1] - 1))) - np.array(origin)
+        inside = (dest[:, 0] >= 0) & (dest[:, 0] < k.shape[0]) & (dest[:, 1] >= 0) & (dest[:, 1] < k.shape[1])
+        d_dest = (_destination_distance(known, dest[inside], cells, penalty_radius_m) if inside.any()
+                  else np.full(len(cells), math.inf))
+        penalty = coordination_penalty(d_dest, penalty_radius_m)
+    return cells, fr, keep, raw, gain, dist, dterm, penalty
+
+
+def _terms_whole(known: np.ndarray, start: tuple[int, int], destinations: np.ndarray, *, alpha: float, beta: float,
+                 robot_radius_m: float, penalty_radius_m: float, reach: int, exclude: np.ndarray | None,
+                 min_size: int, margin_m: float, variant: str, position_m: tuple[float, float] | None,
+                 sensed_m: np.ndarray | None) -> _Terms | None:
+    """:func:`_terms` on the whole map (MAES's variant, and maps the robot knows most of)."""
     space = grid.configuration_space(known, robot_radius_m, margin_m)
     here = grid.nearest_in(space, start, reach + 1)
     if here is None:
@@ -275,7 +376,8 @@ class Frontiers:
         return int(self.sizes.shape[0])
 
 
-def frontiers(known: np.ndarray, exclude: np.ndarray | None = None, min_size: int = 1) -> Frontiers:
+def frontiers(known: np.ndarray, exclude: np.ndarray | None = None, min_size: int = 1,
+              origin: tuple[int, int] = (0, 0)) -> Frontiers:
     """The frontier clusters of ``known`` (see :class:`Frontiers`).
 
     Excluded cells are removed *after* clustering: a frontier cut by an exclusion disc stays one frontier
@@ -284,9 +386,10 @@ def frontiers(known: np.ndarray, exclude: np.ndarray | None = None, min_size: in
     separate clusters instead was measured 7-13 % slower on 50 x 50 caves and buildings with 1-2 robots.)
 
     Compiled (:func:`algorithms.tnf_kernels.frontier_clusters`): one pass finds the frontier cells, the
-    rest touches only them.
+    rest touches only them. ``origin``: the map cell of ``known``'s (0, 0) when ``known`` is a window of
+    the map (the representatives are then the whole map's, in window coordinates).
     """
-    cells, owner, sizes, rep = tnf_kernels.frontier_clusters(_as_map(known), exclude, min_size)
+    cells, owner, sizes, rep = tnf_kernels.frontier_clusters(_as_map(known), exclude, min_size, origin)
     return Frontiers(cells=cells, owner=owner, sizes=sizes, representative=rep)
 
 
