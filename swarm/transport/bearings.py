@@ -34,3 +34,28 @@ def bearings(poses: np.ndarray) -> np.ndarray:
     out = np.empty((p.shape[0], p.shape[0]))
     _bearing_matrix(p, out)
     return out
+
+
+@njit(cache=True)
+def _bearing_pairs(poses: np.ndarray, row: int, cols: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
+    for k in range(cols.shape[0]):
+        j = cols[k]
+        out[k] = _bearing(poses[row, 0], poses[row, 1], poses[row, 2], poses[j, 0], poses[j, 1])
+
+
+class BearingRows:
+    """``bearings(poses)`` read as ``b[row, cols]`` without building the (R, R) matrix: each read computes
+    only its pairs, with the same compiled definition (the same bits). A robot in a swarm reads the
+    bearings of its few near neighbours; the whole matrix was R^2 arctangents a tick (issue 47)."""
+
+    __slots__ = ("_poses",)
+
+    def __init__(self, poses: np.ndarray) -> None:
+        self._poses = np.ascontiguousarray(poses, dtype=np.float64)
+
+    def __getitem__(self, key: tuple[int, np.ndarray]) -> np.ndarray:
+        row, cols = key
+        cols = np.asarray(cols, dtype=np.int64).reshape(-1)
+        out = np.empty(cols.shape[0])
+        _bearing_pairs(self._poses, int(row), cols, out)
+        return out

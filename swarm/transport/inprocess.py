@@ -16,7 +16,7 @@ from swarm.base.types import DRIVES, Action, Neighbours, Observation, frozen_bui
 from swarm.comm.medium import Inboxes
 from swarm.plugins import explorers as registry
 from .base import HostStats, TickBatch
-from .bearings import bearings
+from .bearings import BearingRows
 from .timing import PhaseTimes, timed
 from .wire import ResetPacket
 
@@ -83,7 +83,7 @@ def _neighbours(batch: TickBatch) -> list[Sequence[Any]]:
     p = batch.poses.copy()
     near = _Lazy(lambda: batch.sight()[1])
     distance = _Lazy(lambda: batch.sight()[0])
-    bearing = _Lazy(lambda: bearings(p))
+    bearing = BearingRows(p)                    # per row and read: robots read few bearings
     xy = p[:, :2].copy()
     return [Neighbours(i, near, distance, bearing, xy) for i in range(n)]
 

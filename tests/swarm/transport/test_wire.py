@@ -17,7 +17,7 @@ from swarm.transport.agent import AgentRunner, InboxDecoder
 from swarm.transport.wire import (NAV_STATES, NEIGHBOUR, OBS_STATE, RAW_CELLS_BELOW, WIRE_VERSION, ObsDecoder,
                                   ResetPacket, WireError, decode_act, decode_obs, encode_act, encode_obs,
                                   pack_neighbours)
-from swarm.transport.bearings import bearings
+from swarm.transport.bearings import BearingRows, bearings
 from swarm.transport.packing import ObsEncoder
 
 MAP_CELLS = 40 * 40
@@ -174,6 +174,10 @@ def test_bearings_follow_the_plain_definition_bit_for_bit():
         assert b.shape == (n, n) and np.all((-math.pi <= b) & (b < math.pi))
         expected = [[reference_bearing(p, q) for q in poses.tolist()] for p in poses.tolist()]
         assert b.tolist() == expected
+        rows = BearingRows(poses)                # what the in-process transport hands out: read per row
+        for i in range(n):
+            cols = np.flatnonzero(rng.random(n) < 0.6)
+            assert rows[i, cols].tolist() == [expected[i][j] for j in cols.tolist()]
 
 
 def random_tick(rng: np.random.Generator, n: int) -> dict:
