@@ -90,26 +90,68 @@ def _radio_link_columns(blocks, xy, params, cross_db, metre_db, per_metre, code,
 
 @njit(cache=True)
 def _radio_link_all(blocks, free_ids, xy, params, cross_db, metre_db, per_metre, code, tx, sens,
-                    link):  # pragma: no cover
+                    reach, link):  # pragma: no cover
     """:func:`_radio_evaluate`'s ``link`` alone: each pair walked once (from its lower index, the same walk),
     eqs. 1-2 as :func:`radio.pathloss._radio_link_budget` computes them, both directions; none of the
     float planes or the material counts (n^2 x 61 bytes: 6 GB for 10,000 robots). A walk stops once the
     walls so far rule out both directions (:func:`radio.crossings._radio_walk_until`), a pair inside one free
     rectangle (``free_ids``, :attr:`radio.crossings.WallRaster.free_ids`) is not walked (it crosses nothing,
-    the walk's answer), and the global model walks nothing. Returns the first bad row (nothing filled) or -1."""
+    the walk's answer), and the global model walks nothing.
+
+    ``reach`` (m, ``inf`` for none): no link holds between robots farther apart (:meth:`LinkModel.reach`);
+    robots are then put in square buckets of at least that side and only pairs in neighbouring buckets are judged,
+    the others left unlinked, so a spread swarm judges its near pairs, not all n^2 / 2. Returns the first
+    bad row (nothing filled) or -1."""
     bad = _radio_first_outside(xy, params[WIDTH], params[HEIGHT])
     if bad >= 0:
         return bad
     n = xy.shape[0]
     run_start, run_end, run_len = _run_buffers(blocks, cross_db.shape[0])
     rect = _free_rectangles(free_ids, xy, params[CELL])
+    gx = 1
+    gy = 1
+    side = reach
+    if np.isfinite(reach) and reach > 0.0:
+        side = max(reach, params[WIDTH] / 1024.0, params[HEIGHT] / 1024.0)   # at most 1024 x 1024 buckets
+        gx = max(int(math.ceil(params[WIDTH] / side)), 1)
+        gy = max(int(math.ceil(params[HEIGHT] / side)), 1)
+    if gx < 4 and gy < 4:                  # at most 3 x 3 buckets: every pair is near another one
+        for i in range(n):
+            link[i, i] = False
+            for j in range(i + 1, n):
+                ij, ji = _pair_link(blocks, rect[i] != 0 and rect[i] == rect[j], xy, params, cross_db, metre_db,
+                                    per_metre, code, tx, sens, i, j, run_start, run_end, run_len)
+                link[i, j] = ij
+                link[j, i] = ji
+        return -1
+    link[:, :] = False
+    cx = np.empty(n, np.int64)
+    cy = np.empty(n, np.int64)
+    count = np.zeros(gx * gy + 1, np.int64)
     for i in range(n):
-        link[i, i] = False
-        for j in range(i + 1, n):
-            ij, ji = _pair_link(blocks, rect[i] != 0 and rect[i] == rect[j], xy, params, cross_db, metre_db,
-                                per_metre, code, tx, sens, i, j, run_start, run_end, run_len)
-            link[i, j] = ij
-            link[j, i] = ji
+        cx[i] = min(max(int(xy[i, 0] / side), 0), gx - 1)
+        cy[i] = min(max(int(xy[i, 1] / side), 0), gy - 1)
+        count[cx[i] * gy + cy[i] + 1] += 1
+    for b in range(gx * gy):
+        count[b + 1] += count[b]
+    fill = count[:-1].copy()
+    order = np.empty(n, np.int64)
+    for i in range(n):                     # robots by bucket, in robot order within one
+        b = cx[i] * gy + cy[i]
+        order[fill[b]] = i
+        fill[b] += 1
+    for i in range(n):
+        for bx in range(max(cx[i] - 1, 0), min(cx[i] + 2, gx)):
+            for by in range(max(cy[i] - 1, 0), min(cy[i] + 2, gy)):
+                b = bx * gy + by
+                for t in range(count[b], count[b + 1]):
+                    j = order[t]
+                    if j <= i:
+                        continue
+                    ij, ji = _pair_link(blocks, rect[i] != 0 and rect[i] == rect[j], xy, params, cross_db,
+                                        metre_db, per_metre, code, tx, sens, i, j, run_start, run_end, run_len)
+                    link[i, j] = ij
+                    link[j, i] = ji
     return -1
 
 
@@ -197,9 +239,10 @@ def _pair_link(blocks, clear, xy, params, cross_db, metre_db, per_metre, code, t
 
 @njit(cache=True)
 def _radio_link_columns_only(blocks, free_ids, xy, params, cross_db, metre_db, per_metre, code, tx, sens,
-                             senders, link):  # pragma: no cover
+                             senders, reach, link):  # pragma: no cover
     """:func:`_radio_link_columns`' ``link`` alone, each pair's walk stopped once its walls rule out the link
-    (as :func:`_radio_link_all`). Returns the first bad row (nothing filled) or -1."""
+    (as :func:`_radio_link_all`); pairs farther apart than ``reach`` (m) are not judged (no link holds
+    there). Returns the first bad row (nothing filled) or -1."""
     bad = _radio_first_outside(xy, params[WIDTH], params[HEIGHT])
     if bad >= 0:
         return bad
@@ -210,6 +253,11 @@ def _radio_link_columns_only(blocks, free_ids, xy, params, cross_db, metre_db, p
         j = senders[k]
         for i in range(n):
             if i == j:
+                link[i, k] = False
+                continue
+            dx = xy[i, 0] - xy[j, 0]
+            dy = xy[i, 1] - xy[j, 1]
+            if dx * dx + dy * dy > reach * reach:
                 link[i, k] = False
                 continue
             a, b = min(i, j), max(i, j)

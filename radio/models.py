@@ -38,10 +38,11 @@ from swarm.base.errors import InvalidInput
 
 from .config import RadioConfig
 from .crossings import WallCrossing, WallRaster, _radio_clear_within, _radio_price_runs
-from .evaluate import (CHARGED, DISTANCE, PATH_LOSS, RSSI, _radio_distances, _radio_evaluate, _radio_first_outside,
-                       _radio_groups_mutual, _radio_link_all, _radio_link_columns, _radio_link_columns_only)
+from .evaluate import (ALPHA, BETA, CHARGED, DISTANCE, FREQ_TERM, MAX_RANGE, PATH_LOSS, RSSI, _radio_distances,
+                       _radio_evaluate, _radio_first_outside, _radio_groups_mutual, _radio_link_all, _radio_link_columns,
+                       _radio_link_columns_only)
 from .materials import resolve_table
-from .pathloss import GLOBAL, LOS, MAES, MULTIWALL, _radio_link_budget
+from .pathloss import GLOBAL, LOS, MAES, MIN_DISTANCE_M, MULTIWALL, _radio_link_budget
 from .per import PacketErrorCurve
 from .shadowing import ShadowingField, _radio_shadow_links
 
@@ -274,10 +275,28 @@ class LinkModel:
             return self._columns(xy, which, tx, sens)[0]
         link = np.empty((r, which.size), dtype=np.bool_)
         bad = _radio_link_columns_only(self.raster.blocks, self.raster.free_ids, xy, self._params, self.cross_db,
-                                       self.metre_db, self.per_metre, self.code, tx, sens, which, link)
+                                       self.metre_db, self.per_metre, self.code, tx, sens, which, self.reach(tx, sens),
+                                       link)
         if bad >= 0:
             raise self._outside("positions", xy[bad])
         return link
+
+    def reach(self, tx: np.ndarray, sens: np.ndarray) -> float:
+        """Metres beyond which no link can hold whatever the walls, or ``inf``: for the multi-wall model the
+        distance at which eq. 1's path loss alone uses up the best budget (the strongest transmitter to the
+        most sensitive receiver), since walls only add loss; for line of sight its range. Slightly widened
+        (1e-6 relative) so that rounding never drops a pair the budget keeps: a bound for skipping pairs,
+        never a link decision (:func:`radio.evaluate._pair_link` still judges every pair within it)."""
+        walls_add = bool((self.cross_db >= 0).all() and (self.metre_db >= 0).all())
+        if self.code == LOS:
+            limit = float(self._params[MAX_RANGE])
+        elif self.code == MULTIWALL and walls_add and len(tx) and float(self._params[ALPHA]) > 0.0:
+            budget = float(tx.max()) - float(sens.min()) - float(self._params[BETA]) - float(self._params[FREQ_TERM])
+            exponent = budget / (10.0 * float(self._params[ALPHA]))
+            limit = math.inf if exponent > 300 else max(10.0 ** exponent, MIN_DISTANCE_M)
+        else:
+            return math.inf
+        return limit * (1.0 + 1e-6) + 1e-6 if math.isfinite(limit) else math.inf
 
     def link_matrix(self, positions: np.ndarray) -> np.ndarray:
         """:meth:`evaluate`'s ``link`` alone (bool[R, R]), bit for bit: each pair walked once, none of the
@@ -293,7 +312,7 @@ class LinkModel:
             return self.evaluate(xy).link
         link = np.empty((r, r), dtype=np.bool_)
         bad = _radio_link_all(self.raster.blocks, self.raster.free_ids, xy, self._params, self.cross_db,
-                              self.metre_db, self.per_metre, self.code, tx, sens, link)
+                              self.metre_db, self.per_metre, self.code, tx, sens, self.reach(tx, sens), link)
         if bad >= 0:
             raise self._outside("positions", xy[bad])
         return link

@@ -361,3 +361,30 @@ def test_the_groups_alone_are_the_states(config, kind, spawn_kind):
         sizes.add(len(alone))
     strong = config.get("model") == "global" or config.get("sensitivity_dbm") == -95.0  # one group anywhere
     assert sizes != {1} or strong or spawn_kind == "together"
+
+
+@pytest.mark.parametrize("config", [{"sensitivity_dbm": -52.0}, {"tx_power_dbm": -10.0, "sensitivity_dbm": -75.0},
+                                    {"tx_power_overrides": {"3": 20.0}, "sensitivity_dbm": -50.0},
+                                    {"model": "los", "max_range_m": 15.0},
+                                    {"wall_mode": "per_metre", "sensitivity_dbm": -52.0}])
+def test_robots_beyond_the_radios_reach_are_not_judged_and_nothing_changes(config):
+    """Issue 47: a link budget bounds the distance of any link (walls only add loss), so the link matrix
+    and columns judge only pairs in neighbouring buckets of that size; every bit is evaluate()'s, on a
+    map many buckets wide, with a stronger transmitter that widens the reach."""
+    from maps import generate
+    from radio import build_link_model, config_from_mapping
+    from swarm.world.spawn import spawn
+
+    truth = generate("building", 300, 2)
+    model = build_link_model(truth, config_from_mapping(config))
+    xy = spawn(truth, "random", 150, np.random.default_rng(4))[:, :2]
+    tx, sens = model._radio_arrays(150)
+    reach = model.reach(tx, sens)
+    assert reach < truth.width_m / 4, "the case must use the buckets"
+    state = build_link_model(truth, config_from_mapping(config)).evaluate(xy)
+    assert np.array_equal(model.link_matrix(xy), state.link)
+    senders = np.arange(0, 150, 7)
+    assert np.array_equal(build_link_model(truth, config_from_mapping(config)).link_columns(xy, senders),
+                          state.link[:, senders])
+    d = state.distance[state.link]
+    assert state.link.sum() > 20 and d.max() <= reach, "links exist, and none beyond the reach"
