@@ -206,23 +206,18 @@ def _terms(known: np.ndarray, start: tuple[int, int], destinations: np.ndarray, 
 
     swarm's variant works on the window of the map that holds everything the robot knows (see
     :func:`_known_window`); the target cells come back in map coordinates."""
-    if variant != "maes":
-        window = _known_window(known, start, reach, robot_radius_m, margin_m, penalty_radius_m)
-        if window is not None:
-            r0, r1, c0, c1 = window
-            w_known = known[r0:r1, c0:c1]
-            w_exclude = None if exclude is None else exclude[r0:r1, c0:c1]
-            dest = np.asarray(destinations, dtype=np.int64).reshape(-1, 2)
-            terms = _terms_on(w_known, (start[0] - r0, start[1] - c0), dest, (r0, c0), known.shape, alpha=alpha,
-                              beta=beta, robot_radius_m=robot_radius_m, penalty_radius_m=penalty_radius_m,
-                              reach=reach, exclude=w_exclude, min_size=min_size, margin_m=margin_m)
-            if terms is None:
-                return None
-            cells = terms[0] + np.array([r0, c0])
-            return (cells, *terms[1:])
-    return _terms_whole(known, start, destinations, alpha=alpha, beta=beta, robot_radius_m=robot_radius_m,
-                        penalty_radius_m=penalty_radius_m, reach=reach, exclude=exclude, min_size=min_size,
-                        margin_m=margin_m, variant=variant, position_m=position_m, sensed_m=sensed_m)
+    known = np.asarray(known)
+    dest = np.asarray(destinations, dtype=np.int64).reshape(-1, 2)
+    window = None if variant == "maes" else _known_window(known, start, reach, robot_radius_m, margin_m,
+                                                              penalty_radius_m)
+    r0, r1, c0, c1 = (0, known.shape[0], 0, known.shape[1]) if window is None else window
+    terms = _terms_on(known[r0:r1, c0:c1], (start[0] - r0, start[1] - c0), dest, (r0, c0), known.shape,
+                      alpha=alpha, beta=beta, robot_radius_m=robot_radius_m, penalty_radius_m=penalty_radius_m,
+                      reach=reach, exclude=None if exclude is None else exclude[r0:r1, c0:c1], min_size=min_size,
+                      margin_m=margin_m, variant=variant, position_m=position_m, sensed_m=sensed_m)
+    if terms is None or window is None:
+        return terms
+    return (terms[0] + np.array([r0, c0]), *terms[1:])
 
 
 WINDOW_SHARE = 0.5
@@ -265,51 +260,17 @@ def _known_window(known: np.ndarray, start: tuple[int, int], reach: int, robot_r
 
 def _terms_on(known: np.ndarray, start: tuple[int, int], destinations: np.ndarray, origin: tuple[int, int],
               shape: tuple[int, int], *, alpha: float, beta: float, robot_radius_m: float, penalty_radius_m: float,
-              reach: int, exclude: np.ndarray | None, min_size: int, margin_m: float) -> _Terms | None:
-    """swarm's terms on a window (:func:`_known_window`) whose cell (0, 0) is map cell ``origin``, of a map
-    of ``shape``; ``destinations`` in map cells (clipped to the map, then kept if inside the window)."""
+              reach: int, exclude: np.ndarray | None, min_size: int, margin_m: float, variant: str,
+              position_m: tuple[float, float] | None, sensed_m: np.ndarray | None) -> _Terms | None:
+    """:func:`_terms` on ``known``: the whole map, or a window of it (:func:`_known_window`) whose cell (0, 0)
+    is map cell ``origin``, of a map of ``shape``; ``start`` and the target cells in ``known``'s
+    coordinates, ``destinations`` in map cells (clipped to the map, then kept if inside ``known``)."""
     space = grid.configuration_space(known, robot_radius_m, margin_m)
     here = grid.nearest_in(space, start, reach + 1)
     if here is None:
         return None
     k = _as_map(known)
     fr = frontiers(k, exclude, min_size, origin)
-    if not fr.count:
-        return None
-    targets, dist_all = frontier_targets(k, fr, space, here, reach, exclude)
-    keep = np.flatnonzero(targets[:, 0] >= 0)
-    if not len(keep):
-        return None
-    _, raw_all = tnf_kernels.information(k, fr.cells, fr.owner, fr.count, G_UNSEEN, G_KNOWN)
-    raw = raw_all[keep]
-    cells = targets[keep]
-    dist = dist_all[keep].astype(np.float64)
-    d_max = float(dist.max())
-    w = dist / d_max if d_max > 0.0 else np.zeros_like(dist)
-    gain = raw / raw.max()
-    dterm = distance_term(w, alpha, beta)
-    penalty = np.zeros(len(keep))
-    if len(destinations) and penalty_radius_m > 0.0:
-        dest = np.column_stack((np.clip(destinations[:, 0], 0, shape[0] - 1),
-                                np.clip(destinations[:, 1], 0, shape[1] - 1))) - np.array(origin)
-        inside = (dest[:, 0] >= 0) & (dest[:, 0] < k.shape[0]) & (dest[:, 1] >= 0) & (dest[:, 1] < k.shape[1])
-        d_dest = (_destination_distance(known, dest[inside], cells, penalty_radius_m) if inside.any()
-                  else np.full(len(cells), math.inf))
-        penalty = coordination_penalty(d_dest, penalty_radius_m)
-    return cells, fr, keep, raw, gain, dist, dterm, penalty
-
-
-def _terms_whole(known: np.ndarray, start: tuple[int, int], destinations: np.ndarray, *, alpha: float, beta: float,
-                 robot_radius_m: float, penalty_radius_m: float, reach: int, exclude: np.ndarray | None,
-                 min_size: int, margin_m: float, variant: str, position_m: tuple[float, float] | None,
-                 sensed_m: np.ndarray | None) -> _Terms | None:
-    """:func:`_terms` on the whole map (MAES's variant, and maps the robot knows most of)."""
-    space = grid.configuration_space(known, robot_radius_m, margin_m)
-    here = grid.nearest_in(space, start, reach + 1)
-    if here is None:
-        return None
-    k = _as_map(known)
-    fr = frontiers(k, exclude, min_size)
     if not fr.count:
         return None
     targets, dist_all = frontier_targets(k, fr, space, here, reach, exclude)
@@ -333,7 +294,11 @@ def _terms_whole(known: np.ndarray, start: tuple[int, int], destinations: np.nda
     dterm = distance_term(w, alpha, beta)
     penalty = np.zeros(len(keep))
     if len(destinations) and penalty_radius_m > 0.0:
-        d_dest = _destination_distance(known, destinations, cells, penalty_radius_m)
+        dest = np.column_stack((np.clip(destinations[:, 0], 0, shape[0] - 1),
+                                np.clip(destinations[:, 1], 0, shape[1] - 1))) - np.array(origin)
+        inside = (dest[:, 0] >= 0) & (dest[:, 0] < k.shape[0]) & (dest[:, 1] >= 0) & (dest[:, 1] < k.shape[1])
+        d_dest = (_destination_distance(known, dest[inside], cells, penalty_radius_m) if inside.any()
+                  else np.full(len(cells), math.inf))
         penalty = coordination_penalty(d_dest, penalty_radius_m)
     return cells, fr, keep, raw, gain, dist, dterm, penalty
 
