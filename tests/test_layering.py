@@ -28,7 +28,7 @@ LAYERS: list[tuple[str, ...]] = [
     ("swarm.base", "swarm.util"),
     ("maps",),
     ("radio",),
-    ("swarm.knowledge", "swarm.results"),
+    ("swarm.knowledge", "swarm.results", "swarm.draw"),
     ("swarm.grid", "swarm.world"),
     ("swarm.plugins", "swarm.comm"),
     ("swarm.navigation", "swarm.transport", "swarm.api"),

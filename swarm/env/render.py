@@ -1,7 +1,7 @@
 """``render()`` of the RL environments: the team's knowledge scaled to a readable picture, robots drawn
 as discs with their heading and id (learning robots blue, scripted teammates red), north up.
 
-Drawn by :mod:`swarm.record.drawing`, the rules and colours of the browser viewer's union view (walls in
+Drawn by :mod:`swarm.draw`, the rules and colours of the browser viewer's union view (walls in
 their material's colour once seen, faded before; floor seen or unseen), so a frame reads like the viewer
 at that tick and like the run's GIF."""
 
@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from swarm.api import CELL_M, UNSEEN, check_int
-from swarm.record.drawing import SEEN_FREE, UNSEEN_FREE, draw_robots, to_pixel, union_layer, upscale
+from swarm.draw import SEEN_FREE, UNSEEN_FREE, draw_robots, to_pixel, union_layer, upscale
 
 if TYPE_CHECKING:
     from .core import ExplorationCore

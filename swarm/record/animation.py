@@ -17,7 +17,7 @@ from PIL import Image
 from maps import CELL_M, Map
 from maps.render import add_legend, auto_scale
 
-from .drawing import ROBOT_COLOURS, SEEN_FREE, UNSEEN_FREE, draw_robots, union_layer, upscale
+from swarm.draw import ROBOT_COLOURS, SEEN_FREE, UNSEEN_FREE, draw_robots, union_layer, upscale
 
 __all__ = ["ROBOT_COLOURS", "SEEN_FREE", "UNSEEN_FREE", "GifRecorder"]
 
@@ -73,7 +73,7 @@ class GifRecorder:
 
     def frames(self) -> list[Image.Image]:
         """One picture per snapshot: the map with every wall drawn (the building is the backdrop), the
-        floor seen so far, each robot with its trail (:mod:`swarm.record.drawing`), a legend and the tick."""
+        floor seen so far, each robot with its trail (:mod:`swarm.draw`), a legend and the tick."""
         truth = self.truth
         scale = auto_scale(truth, 600)
         h, w = truth.shape

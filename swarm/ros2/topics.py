@@ -178,7 +178,7 @@ class RunTopics:
     goals, doorways and markers it has published, to publish only changes and remove markers that go."""
 
     def __init__(self, info: RunInfo, map_every: int = 10) -> None:
-        from swarm.record.drawing import ROBOT_COLOURS
+        from swarm.draw import ROBOT_COLOURS
         from swarm.world.sensing import Lidar, LidarParams
 
         if not isinstance(map_every, int) or map_every < 1:

@@ -21,7 +21,7 @@ from typing import Any
 from maps.io import atomic_write_bytes
 
 from swarm.record import Recording
-from swarm.record.drawing import ROBOT_COLOURS, SEEN_FREE, UNSEEN_FREE, UNSEEN_WALL_FADE
+from swarm.draw import ROBOT_COLOURS, SEEN_FREE, UNSEEN_FREE, UNSEEN_WALL_FADE
 from swarm.record.container import bad
 from swarm.record.reader import read_bytes
 

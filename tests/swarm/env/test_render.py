@@ -1,5 +1,5 @@
 """``render()`` of the RL environments: a readable picture (about ``render_px`` on its longer side), the
-team's knowledge painted by the viewer's rules (:mod:`swarm.record.drawing`), every robot drawn where the
+team's knowledge painted by the viewer's rules (:mod:`swarm.draw`), every robot drawn where the
 runtime has it, learners blue and teammates red."""
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from swarm.env.render import (
     cell_px,
     world_to_pixel,
 )
-from swarm.record.drawing import UNSEEN_WALL_FADE, mix
+from swarm.draw import UNSEEN_WALL_FADE, mix
 
 SPEC = {"robots": {"count": 3, "spawn": "random"}, "size": 20, "stop": {"max_ticks": 300}}
 

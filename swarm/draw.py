@@ -1,6 +1,7 @@
 """The pictures of a run drawn in Python, by the browser viewer's rules: the GIF/MP4 animation
 (:mod:`swarm.record.animation`) and the RL environments' ``render()`` (:mod:`swarm.env.render`) both draw
-with these functions, and the viewer (:mod:`swarm.viewer`) is given the same colours.
+with these functions, and the viewer (:mod:`swarm.viewer`) is given the same colours. It sits just above
+:mod:`maps` (its material colours), under every tool that draws a run.
 
 The map layer follows the viewer's union view (``paintCell`` in ``swarm/viewer/viewer.js``): a wall in
 its material's colour once anyone has seen it, faded towards the unseen-floor grey before; floor seen or
