@@ -194,3 +194,20 @@ def test_explorer_comparison_runs_every_registered_explorer_on_the_same_maps() -
     assert all(len(w) == 1 for w in worlds.values()), "every explorer meets the same maps"
     orders = {dim: [o.label for o in opts] for dim, opts in spec.grid.items()}
     check_layout(load_layout(ROOT / "examples" / "explorer-comparison-figures.toml"), orders)
+
+
+def test_the_maes_experiments_slice_is_the_full_campaigns_first_two_maps():
+    """examples/maes-experiments-slice.toml (issue 49, published in docs/results/maes-experiments) runs
+    exactly the first two replicates of examples/maes-experiments.toml: every cell, the same run specs
+    (maps, spawns, seeds), and its figure layout names only what the grid has."""
+    from swarm.campaign.report.layout import check_layout, load_layout
+
+    full = {(tuple(sorted(r.cell.items())), r.replicate): r for r in
+            load_campaign(ROOT / "examples" / "maes-experiments.toml").runs() if r.replicate < 2}
+    slice_spec = load_campaign(ROOT / "examples" / "maes-experiments-slice.toml")
+    runs = slice_spec.runs()
+    assert len(runs) == len(full) == 1080
+    for r in runs:
+        assert full[(tuple(sorted(r.cell.items())), r.replicate)].spec == r.spec
+    orders = {dim: [o.label for o in opts] for dim, opts in slice_spec.grid.items()}
+    check_layout(load_layout(ROOT / "examples" / "maes-experiments-figures.toml"), orders)
