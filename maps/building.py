@@ -128,6 +128,9 @@ def generate_building(width: int, height: int, seed: int, params: BuildingParams
     layout_rng, material_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
     table = _table(params)
     interior = Rect(params.border, params.border, width - params.border, height - params.border)
+    if interior.x1 <= interior.x0 or interior.y1 <= interior.y0:
+        raise InvalidInput("border", params.border, f"at most {max((min(width, height) - 1) // 2, 0)} for a "
+                           f"{width} x {height} map (the border leaves no inside)")
     halls, blocks = _cut_halls(interior, params, layout_rng)
 
     material = np.full((height, width), table.index(params.exterior_material), dtype=np.uint8)

@@ -418,3 +418,23 @@ def test_a_building_too_small_inside_its_border_is_an_error_naming_the_size(capf
     assert info.value.field == "size" and "22" in info.value.allowed
     cli_error(capfd, "map", "generate", "--size", "30x20", "--seed", "1", "--param", "border=8")
     assert generate("building", 20, 0, {"border": 8}).free_cells > 0, "a single room inside a thick border is fine"
+
+
+def test_a_building_border_that_leaves_no_inside_is_refused_in_one_line():
+    """Found by the fuzz test: a border of half the map's side (20 tiles, border 10) left an empty inside,
+    and the hall cutter divided by its area (ZeroDivisionError). One tile more is an inside (too thin for
+    rooms with doors: refused as a size, as before); a wider map is a building."""
+    with pytest.raises(InvalidInput, match="border") as info:
+        generate("building", 20, 0, {"border": 10})
+    assert "at most 9" in one_line(str(info.value))
+    try:
+        generate("building", 21, 0, {"border": 10})
+    except InvalidInput as e:
+        assert "size" in one_line(str(e))
+    assert generate("building", 40, 0, {"border": 10}).solid.any()
+
+
+def test_cli_map_generate_with_a_border_past_the_middle_exits_2(capfd, tmp_path):
+    err = cli_error(capfd, "map", "generate", "--kind", "building", "--size", "20", "--seed", "0", "--param",
+                    "hall_width=2", "--param", "border=10", "-o", str(tmp_path / "gen.npz"))
+    assert "border" in err
