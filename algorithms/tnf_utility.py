@@ -247,7 +247,7 @@ def _known_window(known: np.ndarray, start: tuple[int, int], reach: int, robot_r
     if len(rows) == 0:
         return None
     cols = np.flatnonzero(k[rows[0]:rows[-1] + 1].any(axis=0))
-    depth = max(max(abs(dr), abs(dc)) for dr, dc in grid.inflation_offsets(robot_radius_m, margin_m))
+    depth = grid.erosion_depth(robot_radius_m, margin_m)
     m = max(depth, reach + 2, int(math.ceil(penalty_radius_m / CELL_M)) + 6) + 2
     r0 = max(min(int(rows[0]), start[0]) - m, 0)
     r1 = min(max(int(rows[-1]), start[0]) + m + 1, h)

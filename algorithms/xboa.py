@@ -303,7 +303,7 @@ def local_reach(known: np.ndarray, radius_m: float, here: tuple[int, int], f: in
     from scipy import ndimage
 
     H, W = known.shape
-    depth = max(max(abs(dr), abs(dc)) for dr, dc in grid.inflation_offsets(radius_m, grid.DEFAULT_MARGIN_M))
+    depth = grid.erosion_depth(radius_m, grid.DEFAULT_MARGIN_M)
 
     def space_of(r0: int, r1: int, c0: int, c1: int) -> np.ndarray:
         s0, s1, q0, q1 = max(r0 - depth, 0), min(r1 + depth, H), max(c0 - depth, 0), min(c1 + depth, W)

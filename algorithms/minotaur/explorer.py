@@ -637,8 +637,7 @@ class Minotaur:
         known = obs.known
         h, w = known.shape
         r, c = clip(cell_of(obs.pose.x, obs.pose.y), known.shape)
-        depth = max(max(abs(dr), abs(dc)) for dr, dc in grid.inflation_offsets(self.robot.radius,
-                                                                               grid.DEFAULT_MARGIN_M))
+        depth = grid.erosion_depth(self.robot.radius, grid.DEFAULT_MARGIN_M)
         extra = max(depth, VIEW_REACH + 2)
         half = ROOM_WINDOW_CELLS
         while True:

@@ -11,9 +11,10 @@ turn a frontier, which lies in inflated space, into a reachable goal.
 from __future__ import annotations
 
 from swarm.grid import (DEFAULT_MARGIN_M, FrontierCluster, any_angle_length_m, cells_to_metres, configuration_space,
-                    distance_field, field_at, frontier_clusters, frontier_mask, grid_length_m, inflation_offsets,
-                    nearest_in, nearest_reachable, nearest_reachable_unseen, nearest_reachable_window, passable,
-                    path_length_m, plan, segment_clear, simplify, steps_length, view_cells)
+                    distance_field, erosion_depth, field_at, frontier_clusters, frontier_mask, grid_length_m,
+                    inflation_offsets, nearest_in, nearest_reachable, nearest_reachable_unseen,
+                    nearest_reachable_window, passable, path_length_m, plan, segment_clear, simplify, steps_length,
+                    view_cells)
 from swarm.grid.targets import default_view_reach_cells
 
 DEFAULT_MARGIN_M: float
@@ -22,7 +23,8 @@ default, so ``configuration_space(known)`` is the space the navigator plans on."
 
 __all__ = [
     "DEFAULT_MARGIN_M", "FrontierCluster", "any_angle_length_m", "cells_to_metres", "configuration_space",
-    "default_view_reach_cells", "distance_field", "field_at", "frontier_clusters", "frontier_mask", "grid_length_m",
-    "inflation_offsets", "nearest_in", "nearest_reachable", "nearest_reachable_unseen", "nearest_reachable_window",
-    "passable", "path_length_m", "plan", "segment_clear", "simplify", "steps_length", "view_cells",
+    "default_view_reach_cells", "distance_field", "erosion_depth", "field_at", "frontier_clusters", "frontier_mask",
+    "grid_length_m", "inflation_offsets", "nearest_in", "nearest_reachable", "nearest_reachable_unseen",
+    "nearest_reachable_window", "passable", "path_length_m", "plan", "segment_clear", "simplify", "steps_length",
+    "view_cells",
 ]

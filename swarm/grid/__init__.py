@@ -24,6 +24,7 @@ line kernels).
 
 from .cspace import DEFAULT_MARGIN_M, configuration_space, inflation_offsets, nearest_in, passable
 from .frontiers import FrontierCluster, frontier_clusters, frontier_mask
+from .local import erosion_depth
 from .path import cells_to_metres, path_length_m, segment_clear, simplify
 from .reference import any_angle_length_m, grid_length_m, steps_length
 from .search import distance_field, field_at, nearest_reachable, nearest_reachable_window, plan
@@ -31,7 +32,7 @@ from .targets import nearest_reachable_unseen, view_cells
 
 __all__ = [
     "DEFAULT_MARGIN_M", "FrontierCluster", "any_angle_length_m", "cells_to_metres", "configuration_space",
-    "distance_field", "field_at", "frontier_clusters", "frontier_mask", "grid_length_m", "inflation_offsets",
-    "nearest_in", "nearest_reachable", "nearest_reachable_unseen", "nearest_reachable_window", "passable",
-    "path_length_m", "plan", "segment_clear", "simplify", "steps_length", "view_cells",
+    "distance_field", "erosion_depth", "field_at", "frontier_clusters", "frontier_mask", "grid_length_m",
+    "inflation_offsets", "nearest_in", "nearest_reachable", "nearest_reachable_unseen", "nearest_reachable_window",
+    "passable", "path_length_m", "plan", "segment_clear", "simplify", "steps_length", "view_cells",
 ]

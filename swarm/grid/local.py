@@ -55,7 +55,10 @@ _NO_TARGETS = np.zeros(0, dtype=np.uint8)
 @lru_cache(maxsize=64)
 def erosion_depth(radius_m: float, margin_m: float) -> int:
     """How many rings of cells beside a blocked one can leave the configuration space: the largest
-    Chebyshev offset of :func:`swarm.grid.inflation_offsets` (the erosion's rows and their half widths)."""
+    Chebyshev offset of :func:`swarm.grid.inflation_offsets` (the erosion's rows and their half widths), 0
+    without clearance. A window's configuration space equals the map's at least this far inside the
+    window's cut edges, so a decision that reads a window computes the space on that much more. Cost:
+    O(1) (cached per radius and margin)."""
     rows, widths = _erosion_rows(radius_m, margin_m)
     return int(max(np.abs(rows).max(), widths.max()))
 
