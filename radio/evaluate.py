@@ -110,20 +110,13 @@ def _radio_link_all(blocks, free_ids, xy, params, cross_db, metre_db, per_metre,
     rect = _free_rectangles(free_ids, xy, params[CELL])
     gx = 1
     gy = 1
-    side = reach
+    side = max(params[WIDTH], params[HEIGHT]) + 1.0
     if np.isfinite(reach) and reach > 0.0:
         side = max(reach, params[WIDTH] / 1024.0, params[HEIGHT] / 1024.0)   # at most 1024 x 1024 buckets
         gx = max(int(math.ceil(params[WIDTH] / side)), 1)
         gy = max(int(math.ceil(params[HEIGHT] / side)), 1)
-    if gx < 4 and gy < 4:                  # at most 3 x 3 buckets: every pair is near another one
-        for i in range(n):
-            link[i, i] = False
-            for j in range(i + 1, n):
-                ij, ji = _pair_link(blocks, rect[i] != 0 and rect[i] == rect[j], xy, params, cross_db, metre_db,
-                                    per_metre, code, tx, sens, i, j, run_start, run_end, run_len)
-                link[i, j] = ij
-                link[j, i] = ji
-        return -1
+        if gx < 4 and gy < 4:              # every pair is in neighbouring buckets anyway: one bucket
+            gx = gy = 1
     link[:, :] = False
     cx = np.empty(n, np.int64)
     cy = np.empty(n, np.int64)
