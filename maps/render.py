@@ -42,11 +42,16 @@ def check_scale(m: Map, scale: int | None, field: str = "scale") -> int:
     return scale
 
 
+def upscale(rgb: np.ndarray, scale: int) -> Image.Image:
+    """A layer of cell colours (uint8[H, W, 3], row 0 at the bottom, as a map's rows) as a north-up picture
+    of ``scale`` pixels per cell: what the map, the radio heatmap and a run's frames are drawn on."""
+    return Image.fromarray(np.ascontiguousarray(np.repeat(np.repeat(rgb[::-1], scale, 0), scale, 1)), "RGB")
+
+
 def render(m: Map, scale: int | None = None, legend: bool = True, title: str | None = None) -> Image.Image:
     """The map as a PIL image; ``scale`` pixels per 0.5 m cell (automatic if None)."""
     scale = check_scale(m, scale)
-    rgb = np.repeat(np.repeat(map_rgb(m), scale, axis=0), scale, axis=1)
-    image = Image.fromarray(rgb, "RGB")
+    image = upscale(palette(m)[m.material], scale)
     if not legend:
         return image
     return add_legend(image, m, title)

@@ -19,7 +19,7 @@ from PIL import Image, ImageDraw, ImageFont
 
 from maps.io import atomic_write_bytes
 from maps.model import CELL_M, Map
-from maps.render import check_scale, palette
+from maps.render import check_scale, palette, upscale
 
 from .models import LinkModel, Point
 
@@ -109,7 +109,7 @@ def render_heatmap(truth: Map, field: RssiField, scale: int | None = None, title
     rgb = rgb.astype(np.uint8)
     rgb[~free] = palette(truth)[truth.material[~free]]
     rgb[contour_mask(field.link, free)] = CONTOUR_RGB
-    image = Image.fromarray(np.repeat(np.repeat(rgb[::-1], scale, axis=0), scale, axis=1), "RGB")
+    image = upscale(rgb, scale)
     draw = ImageDraw.Draw(image)
     px = field.tx[0] / CELL_M * scale
     py = image.height - field.tx[1] / CELL_M * scale

@@ -52,11 +52,6 @@ def union_layer(truth: Map, seen: np.ndarray, fade_unseen_walls: bool = True) ->
     return rgb
 
 
-def upscale(rgb: np.ndarray, scale: int) -> Image.Image:
-    """A map layer (row 0 at the bottom) as a north-up picture of ``scale`` pixels per cell."""
-    return Image.fromarray(np.ascontiguousarray(np.repeat(np.repeat(rgb[::-1], scale, 0), scale, 1)), "RGB")
-
-
 def to_pixel(x: float, y: float, rows: int, scale: int) -> tuple[float, float]:
     """Picture coordinates (column, row) of the world point (x, y) m on a map of ``rows`` cells, north up."""
     return x / CELL_M * scale, (rows - y / CELL_M) * scale

@@ -11,8 +11,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from maps.render import upscale
 from swarm.api import CELL_M, UNSEEN, check_int
-from swarm.draw import SEEN_FREE, UNSEEN_FREE, draw_robots, to_pixel, union_layer, upscale
+from swarm.draw import SEEN_FREE, UNSEEN_FREE, draw_robots, to_pixel, union_layer
 
 if TYPE_CHECKING:
     from .core import ExplorationCore

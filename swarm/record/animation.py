@@ -15,9 +15,9 @@ import numpy as np
 from PIL import Image
 
 from maps import CELL_M, Map
-from maps.render import add_legend, auto_scale
+from maps.render import add_legend, auto_scale, upscale
 
-from swarm.draw import ROBOT_COLOURS, SEEN_FREE, UNSEEN_FREE, draw_robots, union_layer, upscale
+from swarm.draw import ROBOT_COLOURS, SEEN_FREE, UNSEEN_FREE, draw_robots, union_layer
 
 __all__ = ["ROBOT_COLOURS", "SEEN_FREE", "UNSEEN_FREE", "GifRecorder"]
 
