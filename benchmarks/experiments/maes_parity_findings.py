@@ -134,14 +134,6 @@ def verdict(r: pd.Series) -> str:
     return "**holds**" if r["ratio"] < 1 else "**reversed**"
 
 
-def unit_log_ratios(runs: pd.DataFrame, fa: dict[str, Any], fb: dict[str, Any]) -> pd.Series:
-    """Per map (map, size, replicate): the mean log ratio of the contrast's pairs."""
-    p = effects.contrast_pairs(runs, fa, fb)
-    lr = effects.log_ratios(p["t_a"].to_numpy(float), p["t_b"].to_numpy(float), p["ok_a"].to_numpy(bool),
-                            p["ok_b"].to_numpy(bool))
-    return pd.Series(lr, index=pd.MultiIndex.from_frame(p[list(effects.UNITS)].astype(str))).groupby(level=[0, 1, 2]).mean()
-
-
 def shift_row(f: Finding, c: Condition, parity: pd.Series, other: pd.Series) -> dict[str, Any]:
     """The change of the contrast's per-map log ratio from parity to condition ``c``."""
     both = pd.concat([parity.rename("p"), other.rename("o")], axis=1, join="inner")
@@ -172,8 +164,8 @@ def analyse(runs: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
         df.insert(0, "finding", f.key)
         df["verdict"] = [verdict(r) for _, r in df.iterrows()]
         rows.append(df)
-        parity = unit_log_ratios(runs, *filters(f, conds[0], motion))
-        fs = [shift_row(f, c, parity, unit_log_ratios(runs, *filters(f, c, motion))) for c in conds[1:]]
+        parity = effects.unit_log_ratios(runs, *filters(f, conds[0], motion))
+        fs = [shift_row(f, c, parity, effects.unit_log_ratios(runs, *filters(f, c, motion))) for c in conds[1:]]
         if fs:
             sf = pd.DataFrame(fs)
             sf["p_holm"] = effects.holm(sf["p_value"].to_numpy(float))

@@ -66,11 +66,7 @@ def stat_text(r: pd.Series, maps_faster: int) -> str:
 
 def maps_faster(runs: pd.DataFrame, fa: dict, fb: dict) -> int:
     """Maps whose mean log ratio a/b is below 0 (a faster on that map), as ``compare_runs`` counts units."""
-    p = effects.contrast_pairs(runs, fa, fb)
-    lr = effects.log_ratios(p["t_a"].to_numpy(float), p["t_b"].to_numpy(float),
-                            p["ok_a"].to_numpy(bool), p["ok_b"].to_numpy(bool))
-    per_map = pd.Series(lr).groupby([p["map"].to_numpy(), p["size"].to_numpy(), p["replicate"].to_numpy()]).mean()
-    return int((per_map < 0).sum())
+    return int((effects.unit_log_ratios(runs, fa, fb) < 0).sum())
 
 
 def name(kind: str, a: str, b: str) -> str:

@@ -208,6 +208,20 @@ def test_compare_runs_pairs_by_map_and_applies_holm_across_the_list():
     assert tested.sum() == 2 and out.loc["TNF", "p_holm"] == pytest.approx(min(1, 2 * out.loc["TNF", "p_value"]))
 
 
+def test_unit_log_ratios_are_the_values_compare_runs_tests():
+    """Per map, the mean log ratio of the contrast's pairs (a DNF at its limit): the median of them is the
+    summary's ratio, and one per map."""
+    slow = [200, 220, 240, 260, 280, 300]
+    fast = [100, 120, 130, 150, None, 160]
+    runs = runs_frame({("TNF", "maes", "4"): fast, ("TNF", "materials", "4"): slow})
+    a, b = {"algorithm": "TNF", "radio": "maes"}, {"algorithm": "TNF", "radio": "materials"}
+    values = effects.unit_log_ratios(runs, a, b)
+    assert list(values) == pytest.approx(list(np.log([1 / 2, 120 / 220, 130 / 240, 150 / 260, 1000 / 280, 160 / 300])))
+    assert len(values.index.names) == len(effects.UNITS)
+    summary = effects.compare_runs(runs, [("x", a, b)]).iloc[0]
+    assert summary["ratio"] == pytest.approx(float(np.exp(np.median(values)))) and summary["maps"] == len(values)
+
+
 def test_compare_runs_keeps_single_robot_cells_when_asked():
     runs = runs_frame({("TNF", "maes", "1"): [100] * 6, ("TNF", "materials", "1"): [100] * 6})
     kept = effects.compare_runs(runs, [("x", {"radio": "maes"}, {"radio": "materials"})], single_robot=True)
