@@ -112,8 +112,8 @@ class ResultsStore:
         among someone else's files (``-o .``, ``-o ~``). Call before writing anything into it."""
         if not (self.folder / SPEC_FILE).exists() and self.folder.is_dir():
             others = sorted(p.name for p in self.folder.iterdir()  # (a writer starting beside us may be
-                            if p.name not in (PARTS, "writers")      # writing campaign.toml right now)
-                            and not p.name.startswith(f".{SPEC_FILE}."))
+                            if p.name not in (PARTS, "writers", SPEC_FILE)  # writing campaign.toml right now,
+                            and not p.name.startswith(f".{SPEC_FILE}."))     # or have just renamed it in)
             if others:
                 raise InvalidInput("-o", str(self.folder), "an empty folder or one holding results of this same "
                                                            f"spec (it holds {clip(others[0])} and no {SPEC_FILE})")

@@ -214,6 +214,26 @@ def test_a_folder_of_other_files_is_refused_and_left_alone(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["thesis.tex"]
 
 
+def test_a_campaign_toml_renamed_in_by_a_writer_starting_beside_us_is_not_a_foreign_file(tmp_path, monkeypatch):
+    """Two shards started at once: ours finds no campaign.toml, then the other renames its copy in before
+    ours lists the folder. That file is the campaign's own, not someone else's (a race CI once hit)."""
+    store = ResultsStore(tmp_path)
+    real_exists = Path.exists
+
+    def exists_then_appears(self: Path, *args, **kwargs) -> bool:
+        if self.name == "campaign.toml" and not real_exists(self):
+            self.write_text("[campaign]\n")  # the other writer's rename lands right after our check
+            return False
+        return real_exists(self, *args, **kwargs)
+
+    monkeypatch.setattr(Path, "exists", exists_then_appears)
+    store.refuse_foreign()  # no refusal
+    (tmp_path / "thesis.tex").write_text("mine")
+    (tmp_path / "campaign.toml").unlink()
+    with pytest.raises(InvalidInput, match=r"holds thesis.tex and no campaign.toml"):
+        store.refuse_foreign()
+
+
 @pytest.mark.timeout(600)
 def test_kill_9_then_resume_gives_every_run_once_and_identical_results(tmp_path):
     spec_file = tmp_path / "tiny.toml"
