@@ -23,6 +23,7 @@ message and counts it).
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import math
 import zlib
 from typing import Any, Callable, TypeVar
@@ -46,6 +47,10 @@ MAP_ZLIB_LEVEL = 6
 """zlib level of MapUpdate payloads. Part of the results: it sets the bytes counted and what a bandwidth cap
 lets through (level 1 was measured on one full 300 x 300 benchmark map: 25 against 118 us, 647 against 414
 bytes)."""
+KEEP_PLAIN_BYTES = 1 << 19
+"""The largest full map (in plain bytes, 2 bits a cell: 2 million cells, a 700-tile map) whose plain bytes an
+update built here keeps for its receivers here; a larger one is decompressed by each message's receivers
+(a few milliseconds a megabyte), the same bytes either way."""
 _REGISTRY: dict[str, type] = {}
 _NAMES: dict[type, str] = {}
 _FIELDS: dict[type, tuple[str, ...]] = {}  # field names in declaration order: encode reads them per message
@@ -343,20 +348,23 @@ def map_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[
 
 
 def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
-                payloads: dict[bytes, tuple[bytes, bytes]] | None = None) -> MapUpdate:
+                payloads: dict[bytes, tuple[bytes | None, bytes]] | None = None) -> MapUpdate:
     """The full-map MapUpdate of ``known`` (``pose``: three Python floats).
 
-    ``payloads`` (plain bytes -> (plain, payload)): the full maps of one sharing tick so far.
-    Robots whose maps have converged send byte-identical full maps in the same tick (a fifth to a quarter of
-    the full maps of the paper's 16-robot runs under the materials radio: docs/performance-history.md), and
-    zlib gives the same bytes for the same input, so one compression serves them all and their updates
-    hold one copy of the plain bytes."""
+    ``payloads`` (a digest of the plain bytes -> (plain or None, payload)): the full maps of one sharing tick
+    so far. Robots whose maps have converged send byte-identical full maps in the same tick (a fifth to a
+    quarter of the full maps of the paper's 16-robot runs under the materials radio:
+    docs/performance-history.md), and zlib gives the same bytes for the same input, so one compression
+    serves them all. The plain bytes stay on the update (its receivers here skip zlib) only up to
+    :data:`KEEP_PLAIN_BYTES`: a swarm asked for its full maps in one tick would otherwise hold a megabyte or
+    more per robot until they are delivered (10,000 robots on 2,000 tiles: 40 GB)."""
     plain = _cellcodec.pack2(known.reshape(-1)).tobytes()
-    shared = None if payloads is None else payloads.get(plain)
+    key = hashlib.blake2b(plain, digest_size=32).digest()  # (not the bytes themselves: see KEEP_PLAIN_BYTES)
+    shared = None if payloads is None else payloads.get(key)
     if shared is None:
-        shared = (plain, zlib.compress(plain, MAP_ZLIB_LEVEL))
+        shared = (plain if len(plain) <= KEEP_PLAIN_BYTES else None, zlib.compress(plain, MAP_ZLIB_LEVEL))
         if payloads is not None:
-            payloads[plain] = shared
+            payloads[key] = shared
     return _update_of(*shared, sender=sender, seq=seq, tick=tick, full=True,
                       shape=(int(known.shape[0]), int(known.shape[1])), count=int(np.count_nonzero(known)), pose=pose)
 
@@ -377,11 +385,12 @@ _BUILDERS: dict[type, Callable[..., Any]] = {MapUpdate: _new_update}
 the map updates every robot decodes every sharing tick, whose generated ``__init__`` only stores the fields."""
 
 
-def _update_of(plain: bytes, payload: bytes, **fields: Any) -> MapUpdate:
+def _update_of(plain: bytes | None, payload: bytes, **fields: Any) -> MapUpdate:
     """A MapUpdate of ``payload`` (``plain`` compressed), keeping ``plain`` for receivers in this process
-    (:meth:`MapUpdate._raw`)."""
+    (:meth:`MapUpdate._raw`; None: they decompress it)."""
     update = _new_update(payload=payload, **fields)
-    update.__dict__["_plain"] = plain
+    if plain is not None:
+        update.__dict__["_plain"] = plain
     return update
 
 

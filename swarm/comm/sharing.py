@@ -102,7 +102,7 @@ class MapSharing:
         if not (due or any(self.full_requested) or any(self.requests)):  # most ticks
             return out
         pose_rows = poses.tolist()
-        payloads: dict[bytes, tuple[bytes, bytes]] = {}  # this tick's full maps (full_update)
+        payloads: dict[bytes, tuple[bytes | None, bytes]] = {}  # this tick's full maps (full_update)
         for i in range(self.n):
             for target in self.requests[i]:
                 out[i].append(MapRequest(sender=i, target=target))
@@ -190,6 +190,11 @@ class MapSharing:
             if not isinstance(msg, (MapUpdate, MapRequest)):
                 continue
             rows = np.asarray(receivers, dtype=np.int64)
+            if isinstance(msg, MapRequest):  # only its target acts on it (a swarm sends tens a robot a tick)
+                target = msg.target
+                if 0 <= target < self.n and live[target] and np.count_nonzero(rows == target):
+                    self.full_requested[target] = True
+                continue
             if not everyone_live:
                 rows = rows[live[rows]]
             if not len(rows):

@@ -417,6 +417,10 @@ def test_medium_delivers_as_the_receiver_by_receiver_reference(loss, bandwidth):
         got = fast.deliver(tick, boxes_fast, link)
         want = _deliver_reference(slow, tick, boxes_slow, link)
         assert [[(e.sender, e.seq) for e in inbox] for inbox in got] == [[(e.sender, e.seq) for e in inbox] for inbox in want]
+        for i in range(n):  # (without loss or a budget a sender's envelopes are held as one group)
+            assert len(got[i]) == len(want[i]) and got.messages(i) == tuple(e.message for e in want[i])
+            assert [(e.sender, e.seq) for e in got[i][1:]] == [(e.sender, e.seq) for e in want[i][1:]]
+            assert not want[i] or (got[i][-1].sender, got[i][-1].seq) == (want[i][-1].sender, want[i][-1].seq)
         assert [[list(e.delivered_to) for e in row] for row in boxes_fast] == \
             [[list(e.delivered_to) for e in row] for row in boxes_slow]
         assert fast.stats.as_dict() == slow.stats.as_dict()
@@ -548,3 +552,28 @@ def test_identical_full_maps_of_one_tick_share_one_compression_and_keep_their_by
     assert full[0]._plain is full[2]._plain is full[3]._plain, "robots with the same map hold one plain copy"
     later = sharing.outgoing(1, known, np.zeros((4, 3)))[0][0]
     assert later.payload == full[0].payload and later._plain is not full[0]._plain, "shared within a tick only"
+
+
+def test_a_large_full_map_keeps_no_plain_bytes_and_its_receivers_merge_the_same_cells(monkeypatch):
+    """Over KEEP_PLAIN_BYTES a full map built here holds only its compressed payload (a swarm asked for all
+    its full maps at once would hold a megabyte or more per robot until delivery); its receivers here
+    decompress it and merge exactly what the kept bytes would have given, and identical maps still share one
+    compression."""
+    import swarm.comm.messages as messages
+
+    rng = np.random.default_rng(11)
+    shape = (40, 52)
+    common = rng.integers(0, 3, shape).astype(np.uint8)
+    known = np.stack([common, common.copy(), np.zeros(shape, np.uint8)])
+    kept = MapSharing(3, shape, CommSpec(map_sharing="full", share_every=1)).outgoing(0, known, np.zeros((3, 3)))
+    monkeypatch.setattr(messages, "KEEP_PLAIN_BYTES", 64)  # these maps now count as large
+    out = MapSharing(3, shape, CommSpec(map_sharing="full", share_every=1)).outgoing(0, known, np.zeros((3, 3)))
+    for small, large in zip(kept, out):
+        assert "_plain" in small[0].__dict__ and "_plain" not in large[0].__dict__
+        assert large[0].payload == small[0].payload
+        assert all(np.array_equal(a, b) for a, b in zip(large[0].known_cells(), small[0].known_cells()))
+    assert out[0][0].payload is out[1][0].payload, "identical maps: one compression"
+    into = MapSharing(3, shape, CommSpec(map_sharing="full", share_every=1))
+    maps = np.zeros((3, *shape), np.uint8)
+    into.receive_tick([(out[0][0], [2])], maps, np.ones(3, dtype=bool))
+    assert np.array_equal(maps[2], common)
