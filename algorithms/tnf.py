@@ -177,6 +177,20 @@ class Destination:
                 raise MessageError("tnf.destination: x and y must be finite numbers")
 
 
+def _destination_cell(msg: Destination, h: int, w: int) -> tuple[int, int]:
+    """The map cell of an announced destination, clamped onto an ``h`` x ``w`` map. Computed once per
+    message object: in-process one announcement reaches every robot in range, and a swarm's robots each
+    computing the same cell made reading the inbox grow with robots x robots (issue 47). The message is
+    frozen, so the memo cannot go stale; each receiver gets exactly what it would have computed."""
+    memo = msg.__dict__.get("_cell")
+    if memo is not None and memo[0] == h and memo[1] == w:
+        return memo[2]
+    r, c = cell_of(msg.x, msg.y)
+    cell = (min(max(r, 0), h - 1), min(max(c, 0), w - 1))
+    msg.__dict__["_cell"] = (h, w, cell)
+    return cell
+
+
 @dataclass(frozen=True)
 class TNFParams:
     # "swarm" (the departures below) | "maes" (MAES's utility, bugs included); left out of the canonical spec
@@ -302,12 +316,12 @@ class TNF:
 
     # ------------------------------------------------------------------------------------- messages ----
     def _read_inbox(self, obs: Observation) -> None:
+        h, w = obs.known.shape
+        me = self.robot.id
         for msg in obs.inbox:
-            if not isinstance(msg, Destination) or msg.sender == self.robot.id:
+            if not isinstance(msg, Destination) or msg.sender == me:
                 continue
-            h, w = obs.known.shape
-            r, c = cell_of(msg.x, msg.y)
-            cell = (min(max(r, 0), h - 1), min(max(c, 0), w - 1))
+            cell = _destination_cell(msg, h, w)
             known_before = self.destinations.get(msg.sender)
             self.destinations[msg.sender] = (cell, obs.tick)
             news = known_before is None or known_before[0] != cell   # a re-announcement changes nothing

@@ -7,7 +7,7 @@ shared matrices): most algorithms never read them.
 
 from __future__ import annotations
 
-from typing import Any, Callable, Sequence
+from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
@@ -31,7 +31,9 @@ class InProcessHost:
         self.agents: list = []
         self._acts: list = []
         self._times = times
-        self._observations = timed(times, "host: inputs", observations)
+        # Unmeasured, each robot's observation is built just before it acts and dropped after: a swarm's
+        # inboxes (tens of thousands of messages a robot) then never all live at once
+        self._observations = iter_observations if times is None else timed(times, "host: inputs", observations)
 
     def start(self, resets: Sequence[ResetPacket]) -> None:
         for reset in resets:
@@ -52,26 +54,29 @@ class InProcessHost:
 
 def observations(batch: TickBatch) -> list[Observation | None]:
     """Each live robot's Observation of the tick (None for the others)."""
+    return list(iter_observations(batch))
+
+
+def iter_observations(batch: TickBatch) -> Iterator[Observation | None]:
+    """:func:`observations` one robot at a time, in robot order."""
     distance = batch.travelled.tolist()
     energy = [d + r for d, r in zip(distance, batch.rotation.tolist())]  # float64 sums, as numpy's
     neighbours = _neighbours(batch)
     hit = batch.collided.tolist()
     live = batch.live.tolist()
-    out: list[Observation | None] = []
     tick, views, navs, inboxes = batch.tick, batch.views, batch.navs, batch.inboxes
     messages = inboxes.messages if isinstance(inboxes, Inboxes) else None
     for i, pose in enumerate(batch.pose_tuples):
         if not live[i]:
-            out.append(None)
+            yield None
             continue
         if messages is not None:
             inbox = messages(i)
         else:
             inbox = tuple([env.message for env in inboxes[i]]) if inboxes[i] else ()
-        out.append(_observation(tick=tick, robot_id=i, pose=pose, known=views[i], inbox=inbox,
-                                neighbours=neighbours[i], collided=hit[i], nav=navs[i],
-                                distance_travelled=distance[i], energy_used=energy[i]))
-    return out
+        yield _observation(tick=tick, robot_id=i, pose=pose, known=views[i], inbox=inbox,
+                           neighbours=neighbours[i], collided=hit[i], nav=navs[i],
+                           distance_travelled=distance[i], energy_used=energy[i])
 
 
 def _neighbours(batch: TickBatch) -> list[Sequence[Any]]:

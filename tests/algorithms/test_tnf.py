@@ -211,3 +211,17 @@ def test_second_robot_avoids_the_first_ones_destination_with_global_comm():
 def test_bad_parameters_are_rejected(bad):
     with pytest.raises(InvalidInput):
         TNFParams(**bad)
+
+
+def test_a_destination_read_by_many_robots_gives_each_the_cell_it_would_compute():
+    """One announcement object reaches every robot in range (in-process); its cell is computed once and
+    reused, clamped onto the map, and recomputed for a map of another shape."""
+    from algorithms.tnf import _destination_cell
+    from swarm.api import cell_of
+
+    for x, y in [(3.2, 7.9), (-4.0, 2.0), (500.0, 500.0), (0.0, 0.24)]:
+        msg = Destination(sender=1, x=x, y=y)
+        for h, w in [(40, 60), (40, 60), (20, 10), (40, 60)]:
+            r, c = cell_of(x, y)
+            assert _destination_cell(msg, h, w) == (min(max(r, 0), h - 1), min(max(c, 0), w - 1))
+        assert decode(encode(msg)) == msg, "the memo is not part of the message"
