@@ -378,6 +378,70 @@ def _radio_clear_within(blocks, cell, xy, tol, n_mat, max_distance, distance, cl
 
 
 @njit(cache=True)
+def _radio_bucket_robots(xy, side, gx, gy, order, starts):  # pragma: no cover - compiled
+    """Robots by square bucket of ``side`` metres (``gx`` x ``gy`` of them, positions clamped onto the grid),
+    in robot order within one: bucket b holds ``order[starts[b]:starts[b + 1]]``. A counting sort."""
+    n = xy.shape[0]
+    starts[:] = 0
+    for i in range(n):
+        b = _bucket_of(xy[i, 0], xy[i, 1], side, gx, gy)
+        starts[b + 1] += 1
+    for b in range(gx * gy):
+        starts[b + 1] += starts[b]
+    fill = starts[:-1].copy()
+    for i in range(n):
+        b = _bucket_of(xy[i, 0], xy[i, 1], side, gx, gy)
+        order[fill[b]] = i
+        fill[b] += 1
+
+
+@njit(cache=True, inline="always")
+def _bucket_of(x, y, side, gx, gy):  # pragma: no cover - compiled
+    return min(max(int(x / side), 0), gx - 1) * gy + min(max(int(y / side), 0), gy - 1)
+
+
+@njit(cache=True)
+def _radio_clear_near(blocks, cell, xy, tol, n_mat, max_distance, row, range_m, side, gx, gy, order, starts,
+                      cols, dist):  # pragma: no cover - compiled
+    """:func:`_radio_clear_within`'s row ``row`` restricted to robots nearer than ``range_m``: the robots j
+    with ``clear[row, j]`` and ``distance[row, j] < range_m``, ascending, into ``cols`` and their distances
+    into ``dist``; returns how many. The same values bit for bit (the distance and the walk of the pair
+    from its lower index), but only the robots of the buckets within ``range_m`` are looked at."""
+    k = int(math.ceil(range_m / side)) + 1  # (a rounded distance below range_m cannot hide one more bucket)
+    b = _bucket_of(xy[row, 0], xy[row, 1], side, gx, gy)
+    bx, by = b // gy, b % gy
+    count = 0
+    run_start = np.empty(0)
+    run_end = np.empty(0)
+    run_len = np.empty((0, n_mat))
+    for ix in range(max(bx - k, 0), min(bx + k + 1, gx)):
+        for iy in range(max(by - k, 0), min(by + k + 1, gy)):
+            q = ix * gy + iy
+            for t in range(starts[q], starts[q + 1]):
+                j = order[t]
+                if j == row:
+                    continue
+                lo, hi = (row, j) if row < j else (j, row)
+                d = _distance(xy[lo, 0], xy[lo, 1], xy[hi, 0], xy[hi, 1])
+                if not (d < range_m and d <= max_distance):
+                    continue
+                if run_start.shape[0] == 0:
+                    run_start, run_end, run_len = _run_buffers(blocks, n_mat)
+                if _radio_walk_segment(blocks, cell, xy[lo, 0], xy[lo, 1], xy[hi, 0], xy[hi, 1], tol,
+                                       run_start, run_end, run_len) != 0:
+                    continue
+                m = count  # insertion in robot order
+                while m > 0 and cols[m - 1] > j:
+                    cols[m] = cols[m - 1]
+                    dist[m] = dist[m - 1]
+                    m -= 1
+                cols[m] = j
+                dist[m] = d
+                count += 1
+    return count
+
+
+@njit(cache=True)
 def _radio_one_to_many(blocks, cell, x0, y0, targets, tol, cross_db, metre_db, per_metre,
                        distance, walls, wall_db):  # pragma: no cover
     """Walk from one point to each target (the heatmap's inner loop)."""

@@ -37,7 +37,8 @@ from maps.model import Map
 from swarm.base.errors import InvalidInput
 
 from .config import RadioConfig
-from .crossings import WallCrossing, WallRaster, _radio_clear_within, _radio_price_runs
+from .crossings import (WallCrossing, WallRaster, _radio_bucket_robots, _radio_clear_near, _radio_clear_within,
+                        _radio_price_runs)
 from .evaluate import (ALPHA, BETA, CHARGED, DISTANCE, FREQ_TERM, MAX_RANGE, PATH_LOSS, RSSI, _radio_distances,
                        _radio_evaluate, _radio_first_outside, _radio_groups_mutual, _radio_link_all, _radio_link_columns,
                        _radio_link_columns_only)
@@ -391,6 +392,11 @@ class LinkModel:
                             float(max_distance), distance, clear)
         return distance, clear
 
+    def sight_index(self, positions: np.ndarray, max_distance: float) -> "SightIndex":
+        """Robots at ``positions`` (float64[R, 2]) bucketed for :meth:`SightIndex.near`: the robots near one
+        robot that :meth:`in_sight` would give, without its (R, R) matrices. Positions are not checked."""
+        return SightIndex(self, positions, max_distance)
+
     def trace(self, p: Point, q: Point) -> list[WallCrossing]:
         """The walls crossed from ``p`` to ``q`` in order, each with its materials, lengths and dB charged."""
         p = self._check_point(p, "p")
@@ -602,3 +608,36 @@ def _component_labels(adjacency: np.ndarray) -> np.ndarray:  # pragma: no cover 
             count += 1
         labels[i] = relabel[c]
     return labels
+
+
+class SightIndex:
+    """One tick's robots in square buckets, for the robots near one robot: :meth:`near` gives, bit for bit,
+    the columns of :meth:`LinkModel.in_sight`'s row that are clear and nearer than a range, and their
+    distances, looking only at the buckets within that range. A check such as "is anyone right behind me"
+    then costs the robots around, not the (R, R) matrices (1,000 robots: a million pairs a tick)."""
+
+    SIDE_M = 2.0
+    """The buckets' side: a few robots each in a packed crowd."""
+
+    def __init__(self, model: LinkModel, positions: np.ndarray, max_distance: float) -> None:
+        self._model = model
+        self._xy = np.ascontiguousarray(positions, dtype=np.float64)
+        self._max = float(max_distance)
+        n = self._xy.shape[0]
+        top = self._xy.max(axis=0) if n else np.zeros(2)
+        self._gx = max(int(math.ceil(max(float(top[0]), 0.0) / self.SIDE_M)) + 1, 1)
+        self._gy = max(int(math.ceil(max(float(top[1]), 0.0) / self.SIDE_M)) + 1, 1)
+        self._order = np.empty(n, dtype=np.int64)
+        self._starts = np.zeros(self._gx * self._gy + 1, dtype=np.int64)
+        _radio_bucket_robots(self._xy, self.SIDE_M, self._gx, self._gy, self._order, self._starts)
+        self._cols = np.empty(n, dtype=np.int64)
+        self._dist = np.empty(n, dtype=np.float64)
+
+    def near(self, row: int, range_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(cols, distances)``: the robots j != ``row`` in sight of it (as :meth:`LinkModel.in_sight` with
+        this index's ``max_distance``) and nearer than ``range_m`` (finite), in robot order."""
+        raster = self._model.raster
+        count = _radio_clear_near(raster.blocks, raster.cell_m, self._xy, self._model.tol,
+                                  self._model.cross_db.shape[0], self._max, int(row), float(range_m), self.SIDE_M,
+                                  self._gx, self._gy, self._order, self._starts, self._cols, self._dist)
+        return self._cols[:count].copy(), self._dist[:count].copy()

@@ -96,11 +96,17 @@ class Neighbours(Sequence[Neighbour]):
         if self._source is None:
             return tuple(n for n in self._all() if n.distance < range_m)
         row, near, distance, bearing, xy = self._source
-        cols = np.flatnonzero(near[row])
-        cols = cols[distance[row, cols] < range_m]
-        return tuple(Neighbour(*r) for r in zip(cols.tolist(), distance[row, cols].tolist(),
-                                                bearing[row, cols].tolist(), xy[cols, 0].tolist(),
-                                                xy[cols, 1].tolist()))
+        query = getattr(near, "near", None)  # the runtime's: a spatial index, not the (R, R) matrices
+        if query is not None:
+            cols, dist = query(row, range_m)
+        else:
+            cols = np.flatnonzero(near[row])
+            cols = cols[distance[row, cols] < range_m]
+            dist = distance[row, cols]
+        if not len(cols):
+            return ()
+        return tuple(Neighbour(*r) for r in zip(cols.tolist(), dist.tolist(), bearing[row, cols].tolist(),
+                                                xy[cols, 0].tolist(), xy[cols, 1].tolist()))
 
     def __getitem__(self, index):  # type: ignore[override]
         return self._all()[index]

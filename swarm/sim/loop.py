@@ -490,8 +490,10 @@ class Simulation:
         if self._mirror is not None:
             cast = self.lidar.cast.copy()  # whose lidar may have written this tick (the next scan overwrites it)
             changed = lambda: self._changed_cells(at, cast, merged)  # noqa: E731
+        index = getattr(self.links, "sight_index", None)
+        near = None if index is None else (lambda: index(seen_from[:, :2], self.neighbour_range))  # noqa: E731
         return TickBatch(tick, live, poses, pose_tuples, collided, self.world.distance, self.world.rotation, navs,
-                         self.known, self._views, inboxes, lambda: self._sight(seen_from), changed)
+                         self.known, self._views, inboxes, lambda: self._sight(seen_from), changed, near)
 
     def _changed_cells(self, poses: np.ndarray, cast: np.ndarray,
                        merged: list[list[np.ndarray | None]]) -> tuple[np.ndarray, np.ndarray]:

@@ -10,6 +10,7 @@ the radio medium and steps in lockstep, so the transport never changes a result.
 from __future__ import annotations
 
 import copy
+import math
 from dataclasses import dataclass, field
 from typing import Any, Callable, Protocol, Sequence
 
@@ -25,13 +26,14 @@ class TickBatch:
     changed since the last observation) are computed on first read and then shared. Read-only for hosts."""
 
     __slots__ = ("tick", "live", "poses", "pose_tuples", "collided", "travelled", "rotation", "navs", "known",
-                 "views", "inboxes", "_sight", "_sight_value", "_changed", "_changed_value")
+                 "views", "inboxes", "_sight", "_sight_value", "_changed", "_changed_value", "_near", "_near_value")
 
     def __init__(self, tick: int, live: np.ndarray, poses: np.ndarray, pose_tuples: list[Pose],
                  collided: np.ndarray, travelled: np.ndarray, rotation: np.ndarray, navs: list[NavStatus | None],
                  known: np.ndarray, views: Sequence[np.ndarray], inboxes: list[list[Any]],
                  sight: Callable[[], tuple[np.ndarray, np.ndarray]],
-                 changed: Callable[[], tuple[np.ndarray, np.ndarray]] | None = None) -> None:
+                 changed: Callable[[], tuple[np.ndarray, np.ndarray]] | None = None,
+                 near: Callable[[], Any] | None = None) -> None:
         self.tick = tick
         self.live = live                # bool[R]: robots to ask (not failed)
         self.poses = poses              # float64[R, 3]
@@ -45,6 +47,7 @@ class TickBatch:
         self.inboxes = inboxes          # the envelopes delivered to each robot (.message, .data: wire bytes)
         self._sight, self._sight_value = sight, None
         self._changed, self._changed_value = changed, None
+        self._near, self._near_value = near, None  # builds an index with .near(row, range_m) (radio.SightIndex)
 
     def asking(self, live: np.ndarray) -> TickBatch:
         """This batch asking only the robots of ``live`` (a host that decides some robots itself hands the
@@ -59,6 +62,19 @@ class TickBatch:
         if self._sight_value is None:
             self._sight_value = self._sight()
         return self._sight_value
+
+    def sight_near(self, row: int, range_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(cols, distances)``: the robots robot ``row`` senses (:meth:`sight`) nearer than ``range_m``, in
+        robot order, the same values as :meth:`sight`'s row. Read from the matrices once they exist, else
+        from a spatial index of the tick's robots, which looks only at the robots within ``range_m``."""
+        if self._sight_value is None and self._near is not None and math.isfinite(range_m):
+            if self._near_value is None:
+                self._near_value = self._near()
+            return self._near_value.near(row, range_m)
+        distance, near = self.sight()
+        cols = np.flatnonzero(near[row])
+        cols = cols[distance[row, cols] < range_m]
+        return cols, distance[row, cols]
 
     def changed(self) -> tuple[np.ndarray, np.ndarray]:
         """``(cells, ends)``: per robot, the flat indices of its knowledge cells changed since its last

@@ -86,7 +86,7 @@ def _neighbours(batch: TickBatch) -> list[Sequence[Any]]:
     if n == 1:
         return [()]
     p = batch.poses.copy()
-    near = _Lazy(lambda: batch.sight()[1])
+    near = _Lazy(lambda: batch.sight()[1], batch.sight_near)
     distance = _Lazy(lambda: batch.sight()[0])
     bearing = BearingRows(p)                    # per row and read: robots read few bearings
     xy = p[:, :2].copy()
@@ -95,13 +95,16 @@ def _neighbours(batch: TickBatch) -> list[Sequence[Any]]:
 
 class _Lazy:
     """A tick's (R, R) matrix computed on first read and then shared by every robot's
-    :class:`~swarm.api.Neighbours` (most algorithms never read their neighbours), which only index it."""
+    :class:`~swarm.api.Neighbours` (most algorithms never read their neighbours), which only index it.
+    ``near`` (the near mask's): the robots near one robot without the matrix (:meth:`TickBatch.sight_near`)."""
 
-    __slots__ = ("_make", "_value")
+    __slots__ = ("_make", "_value", "near")
 
-    def __init__(self, make: Callable[[], np.ndarray]) -> None:
+    def __init__(self, make: Callable[[], np.ndarray],
+                 near: Callable[[int, float], tuple[np.ndarray, np.ndarray]] | None = None) -> None:
         self._make = make
         self._value: np.ndarray | None = None
+        self.near = near
 
     def value(self) -> np.ndarray:
         if self._value is None:

@@ -222,6 +222,33 @@ def test_in_sight_is_evaluate_restricted_to_pairs_in_range(kind, seed):
             assert np.array_equal(clear, expected)
 
 
+@pytest.mark.parametrize("kind, seed", [("building", 6), ("cave", 7)])
+def test_sight_index_near_is_in_sights_row_within_the_range(kind, seed):
+    """The bucketed query gives in_sight's clear robots nearer than the range, in robot order, with its
+    distances bit for bit: crowds on one spot, robots on bucket edges, ranges past the sensing range."""
+    m = generate(kind, 60, seed)
+    model = build_link_model(m)
+    free = np.argwhere(~m.solid)
+    rng = np.random.default_rng(seed)
+    for trial in range(12):
+        n = int(rng.integers(2, 120))
+        xy = (free[rng.integers(0, len(free), n)][:, ::-1] + rng.random((n, 2))) * 0.5
+        if trial % 3 == 0:
+            xy[n // 2:] = xy[0] + rng.random((n - n // 2, 2)) * 2.0  # a packed crowd
+        if trial % 3 == 1:
+            xy = np.round(xy / 2.0) * 2.0  # on the buckets' edges
+        for reach in (3.0, 7.0):
+            distance, clear = model.in_sight(xy, reach)
+            index = model.sight_index(xy, reach)
+            for row in range(n):
+                for range_m in (0.0, 1.2, 2.0, 4.5, 10.0):
+                    cols, dist = index.near(row, range_m)
+                    want = np.flatnonzero(clear[row])
+                    want = want[distance[row, want] < range_m]
+                    assert cols.tolist() == want.tolist()
+                    assert dist.view(np.int64).tolist() == distance[row, want].view(np.int64).tolist()
+
+
 @pytest.mark.parametrize("positions, value", [
     ([[5.0, 10.0], [130.0, 10.0]], [130.0, 10.0]),
     ([[5.0, 10.0], [float("nan"), 10.0]], [float("nan"), 10.0]),
