@@ -201,16 +201,21 @@ def test_evaluate_is_cached_and_read_only():
     assert model.evaluate(xy + 0.1) is not first
 
 
+def _robots_in_free_cells(m, n: int, rng: np.random.Generator) -> np.ndarray:
+    """``n`` positions (x, y metres) at random points of random free cells of ``m``."""
+    free = np.argwhere(~m.solid)
+    return (free[rng.integers(0, len(free), n)][:, ::-1] + rng.random((n, 2))) * 0.5
+
+
 @pytest.mark.parametrize("kind, seed", [("building", 4), ("cave", 5)])
 def test_in_sight_is_evaluate_restricted_to_pairs_in_range(kind, seed):
     """The in-range walk gives evaluate's distances bit for bit and its ``walls == 0`` within the range."""
     m = generate(kind, 40, seed)
     model = build_link_model(m)
-    free = np.argwhere(~m.solid)
     rng = np.random.default_rng(seed)
     for trial in range(20):
         n = int(rng.integers(1, 20))
-        xy = (free[rng.integers(0, len(free), n)][:, ::-1] + rng.random((n, 2))) * 0.5
+        xy = _robots_in_free_cells(m, n, rng)
         if trial % 4 == 0:
             xy[n // 2:] = xy[0]  # robots on the same spot
         state = model.evaluate(xy)
@@ -228,11 +233,10 @@ def test_sight_index_near_is_in_sights_row_within_the_range(kind, seed):
     distances bit for bit: crowds on one spot, robots on bucket edges, ranges past the sensing range."""
     m = generate(kind, 60, seed)
     model = build_link_model(m)
-    free = np.argwhere(~m.solid)
     rng = np.random.default_rng(seed)
     for trial in range(12):
         n = int(rng.integers(2, 120))
-        xy = (free[rng.integers(0, len(free), n)][:, ::-1] + rng.random((n, 2))) * 0.5
+        xy = _robots_in_free_cells(m, n, rng)
         if trial % 3 == 0:
             xy[n // 2:] = xy[0] + rng.random((n - n // 2, 2)) * 2.0  # a packed crowd
         if trial % 3 == 1:
