@@ -380,7 +380,8 @@ def _radio_clear_within(blocks, cell, xy, tol, n_mat, max_distance, distance, cl
 @njit(cache=True)
 def _radio_bucket_robots(xy, side, gx, gy, order, starts):  # pragma: no cover - compiled
     """Robots by square bucket of ``side`` metres (``gx`` x ``gy`` of them, positions clamped onto the grid),
-    in robot order within one: bucket b holds ``order[starts[b]:starts[b + 1]]``. A counting sort."""
+    in robot order within one: bucket b holds ``order[starts[b]:starts[b + 1]]``. A counting sort, shared by
+    the link matrix's reach buckets and :class:`radio.models.SightIndex`."""
     n = xy.shape[0]
     starts[:] = 0
     for i in range(n):

@@ -14,8 +14,8 @@ import math
 import numpy as np
 from numba import njit
 
-from .crossings import (_distance, _radio_all_pairs, _radio_pairs_with, _radio_walk_segment, _radio_walk_until,
-                        _run_buffers)
+from .crossings import (_bucket_of, _distance, _radio_all_pairs, _radio_bucket_robots, _radio_pairs_with,
+                        _radio_walk_segment, _radio_walk_until, _run_buffers)
 from .pathloss import GLOBAL, LOS, MAES, MIN_DISTANCE_M, MULTIWALL, _radio_link_budget
 
 
@@ -118,24 +118,14 @@ def _radio_link_all(blocks, free_ids, xy, params, cross_db, metre_db, per_metre,
         if gx < 4 and gy < 4:              # every pair is in neighbouring buckets anyway: one bucket
             gx = gy = 1
     link[:, :] = False
-    cx = np.empty(n, np.int64)
-    cy = np.empty(n, np.int64)
     count = np.zeros(gx * gy + 1, np.int64)
-    for i in range(n):
-        cx[i] = min(max(int(xy[i, 0] / side), 0), gx - 1)
-        cy[i] = min(max(int(xy[i, 1] / side), 0), gy - 1)
-        count[cx[i] * gy + cy[i] + 1] += 1
-    for b in range(gx * gy):
-        count[b + 1] += count[b]
-    fill = count[:-1].copy()
     order = np.empty(n, np.int64)
-    for i in range(n):                     # robots by bucket, in robot order within one
-        b = cx[i] * gy + cy[i]
-        order[fill[b]] = i
-        fill[b] += 1
+    _radio_bucket_robots(xy, side, gx, gy, order, count)  # robots by bucket, in robot order within one
     for i in range(n):
-        for bx in range(max(cx[i] - 1, 0), min(cx[i] + 2, gx)):
-            for by in range(max(cy[i] - 1, 0), min(cy[i] + 2, gy)):
+        home = _bucket_of(xy[i, 0], xy[i, 1], side, gx, gy)
+        cx, cy = home // gy, home % gy
+        for bx in range(max(cx - 1, 0), min(cx + 2, gx)):
+            for by in range(max(cy - 1, 0), min(cy + 2, gy)):
                 b = bx * gy + by
                 for t in range(count[b], count[b + 1]):
                     j = order[t]
