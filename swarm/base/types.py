@@ -65,6 +65,14 @@ class Neighbour(NamedTuple):
     """Its position estimate, metres."""
 
 
+def sensed_within(near: Any, distance: Any, row: int, range_m: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(cols, distances)`` of row ``row`` of a tick's (R, R) ``near`` mask and ``distance`` matrix: the
+    robots it senses nearer than ``range_m``, in robot order."""
+    cols = np.flatnonzero(near[row])
+    cols = cols[distance[row, cols] < range_m]
+    return cols, distance[row, cols]
+
+
 class Neighbours(Sequence[Neighbour]):
     """A robot's sensed neighbours, built into :class:`Neighbour` tuples only when first read (most
     algorithms never look, and building them for 16 packed robots costs more than the rest of a tick).
@@ -97,12 +105,7 @@ class Neighbours(Sequence[Neighbour]):
             return tuple(n for n in self._all() if n.distance < range_m)
         row, near, distance, bearing, xy = self._source
         query = getattr(near, "near", None)  # the runtime's: a spatial index, not the (R, R) matrices
-        if query is not None:
-            cols, dist = query(row, range_m)
-        else:
-            cols = np.flatnonzero(near[row])
-            cols = cols[distance[row, cols] < range_m]
-            dist = distance[row, cols]
+        cols, dist = query(row, range_m) if query is not None else sensed_within(near, distance, row, range_m)
         if not len(cols):
             return ()
         return tuple(Neighbour(*r) for r in zip(cols.tolist(), dist.tolist(), bearing[row, cols].tolist(),
@@ -269,5 +272,5 @@ class NoParams:
 
 __all__ = [
     "Action", "CELL_M", "DRIVES", "Explorer", "FREE", "NavStatus", "Neighbour", "Neighbours", "NoParams", "Observation", "Pose",
-    "ROBOT_RADIUS_M", "RobotInfo", "SOLID", "UNSEEN", "cell_centre", "cell_of",
+    "ROBOT_RADIUS_M", "RobotInfo", "SOLID", "UNSEEN", "cell_centre", "cell_of", "sensed_within",
 ]

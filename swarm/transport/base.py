@@ -16,7 +16,7 @@ from typing import Any, Callable, Protocol, Sequence
 
 import numpy as np
 
-from swarm.base.types import Action, NavStatus, Pose
+from swarm.base.types import Action, NavStatus, Pose, sensed_within
 from .wire import ResetPacket
 
 
@@ -72,9 +72,7 @@ class TickBatch:
                 self._near_value = self._near()
             return self._near_value.near(row, range_m)
         distance, near = self.sight()
-        cols = np.flatnonzero(near[row])
-        cols = cols[distance[row, cols] < range_m]
-        return cols, distance[row, cols]
+        return sensed_within(near, distance, row, range_m)
 
     def changed(self) -> tuple[np.ndarray, np.ndarray]:
         """``(cells, ends)``: per robot, the flat indices of its knowledge cells changed since its last
