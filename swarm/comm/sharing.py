@@ -190,13 +190,11 @@ class MapSharing:
             if not isinstance(msg, (MapUpdate, MapRequest)):
                 continue
             rows = np.asarray(receivers, dtype=np.int64)
-            if isinstance(msg, MapRequest):  # only its target acts on it (a swarm sends tens a robot a tick)
-                target = msg.target
-                if 0 <= target < self.n and live[target] and np.count_nonzero(rows == target):
-                    self.full_requested[target] = True
-                continue
             if not everyone_live:
                 rows = rows[live[rows]]
+            if isinstance(msg, MapRequest):  # only its target acts on it (a swarm sends tens a robot a tick)
+                self._note_request(msg, rows)
+                continue
             if not len(rows):
                 continue
             if isinstance(msg, MapUpdate) and msg.shape != known.shape[1:]:
@@ -219,8 +217,7 @@ class MapSharing:
         whole map: all after a full map; after a delta, those that merged every earlier update of the sender
         since their last full map of it (a gap leaves a receiver partial until the full map it asks for)."""
         if isinstance(msg, MapRequest):
-            if msg.target in ids:
-                self.full_requested[msg.target] = True
+            self._note_request(msg, robots)
             return
         if not isinstance(msg, MapUpdate):
             return
@@ -278,6 +275,12 @@ class MapSharing:
         if whole:  # (the order of the receivers does not matter: swarm.results.metrics.InfoAges.merged)
             self._merges.append((robots if len(whole) == everyone else np.array(whole, dtype=np.int64), sender,
                                  msg.tick))
+
+    def _note_request(self, msg: MapRequest, robots: np.ndarray) -> None:
+        """A map request reached ``robots``: its target, if among them, broadcasts its full map next tick.
+        (Checked on the array: a swarm's robot sends tens of requests a tick to a thousand receivers.)"""
+        if np.count_nonzero(robots == msg.target):
+            self.full_requested[msg.target] = True
 
     def _take_delta(self, ids: list[int], stack: np.ndarray, rows: np.ndarray, robots: np.ndarray,
                     idx: np.ndarray, values: np.ndarray, sender: int, seq: int,
