@@ -180,28 +180,35 @@ class ResultsStore:
         """Commit a batch of finished runs (``robots``: their per-robot rows, if any); returns the part id. On
         an OSError nothing of the part is left (no temporary file, no time-series or robots file without its
         runs) and :class:`CommitError` is raised."""
+        return self.write_tables(runs_table(runs), timeseries_table(timeseries) if timeseries else None,
+                                 robots_table(robots) if robots else None, writer)
+
+    def write_tables(self, runs: pa.Table, timeseries: pa.Table | None, robots: pa.Table | None,
+                     writer: str | None = None, level: int | None = None) -> str:
+        """:meth:`write_part` for rows already in tables (``level``: the zstd level, default pyarrow's; a
+        compacted folder is written once and kept, so it is worth a higher one)."""
         part = self.new_part_id(writer)
         ts_path = self.parts / f"{part}{TS_SUFFIX}"
         robots_path = self.parts / f"{part}{ROBOTS_SUFFIX}"
         runs_path = self.parts / f"{part}{RUNS_SUFFIX}"
+        owned = writer is not None
         try:
             written = {}
-            if timeseries:
-                _write_table(ts_path, timeseries_table(timeseries), owned=writer is not None)
+            if timeseries is not None and timeseries.num_rows:
+                _write_table(ts_path, timeseries, owned=owned, level=level)
                 written[TS_SUFFIX] = ts_path
-            if robots:
-                _write_table(robots_path, robots_table(robots), owned=writer is not None)
+            if robots is not None and robots.num_rows:
+                _write_table(robots_path, robots, owned=owned, level=level)
                 written[ROBOTS_SUFFIX] = robots_path
-            table = runs_table(runs)  # recording its companions' size and CRC-32: see .parts
-            table = table.replace_schema_metadata({**(table.schema.metadata or {}),
-                                                   **companion_record(written, table)})
-            _write_table(runs_path, table, owned=writer is not None)
+            table = runs.replace_schema_metadata({**(runs.schema.metadata or {}),  # recording its companions'
+                                                  **companion_record(written, runs)})  # size and CRC-32: .parts
+            _write_table(runs_path, table, owned=owned, level=level)
         except OSError as exc:
             if not runs_path.exists():
                 for path in (ts_path, robots_path):
                     with contextlib.suppress(OSError):
                         path.unlink(missing_ok=True)
-            raise CommitError(self.folder, exc, len(runs)) from None
+            raise CommitError(self.folder, exc, runs.num_rows) from None
         return part
 
     # ----------------------------------------------------------------------------------- reading ----
@@ -337,12 +344,12 @@ def _stamp(path: Path) -> tuple[int, int] | None:
     return st.st_size, st.st_mtime_ns
 
 
-def _write_table(path: Path, table: pa.Table, owned: bool = False) -> None:
+def _write_table(path: Path, table: pa.Table, owned: bool = False, level: int | None = None) -> None:
     """Write ``table`` to a temporary file, fsync it and rename it into place (``owned``: the final name
-    carries the writer id, so the temporary name needs no extra randomness)."""
+    carries the writer id, so the temporary name needs no extra randomness; ``level``: zstd level)."""
     tmp = path.with_name(f".{path.name}.tmp" if owned else f".{path.name}.{uuid.uuid4().hex[:8]}.tmp")
     try:
-        pq.write_table(table, tmp, compression="zstd", write_page_checksum=True)
+        pq.write_table(table, tmp, compression="zstd", compression_level=level, write_page_checksum=True)
         with open(tmp, "rb") as f:
             os.fsync(f.fileno())
         os.replace(tmp, path)

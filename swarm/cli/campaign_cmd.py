@@ -239,6 +239,25 @@ def status_cmd(folder: Path) -> None:
         click.echo(f"  writing now: {writer.describe()}")
 
 
+@campaign_group.command("compact")
+@click.argument("folder", metavar="DIR", type=click.Path(exists=True, file_okay=False, path_type=Path))
+def compact_cmd(folder: Path) -> None:
+    """Rewrite a results folder's parts as one part, to keep or publish it.
+
+    Every run's latest row, time series and per-robot rows, copied unedited into one zstd-compressed part;
+    the old parts are removed once it is committed (safe under kill -9; refused while a campaign writes the
+    folder or when a part is damaged). A resumed campaign and a report read the folder as before.
+    """
+    from swarm.campaign.compact import compact
+
+    done = compact(folder)
+    if done.parts_before < 2:
+        click.echo(f"{folder}: {done.runs} runs in {done.parts_before} part(s); nothing to compact")
+        return
+    click.echo(f"{folder}: {done.runs} runs from {done.parts_before} parts into part {done.part}; "
+               f"{done.bytes_before / 1e6:.1f} MB -> {done.bytes_after / 1e6:.1f} MB")
+
+
 @campaign_group.command("report")
 @click.argument("folder", metavar="DIR", type=click.Path(path_type=Path))
 @click.option("-o", "--output", type=click.Path(path_type=Path), default=None,
