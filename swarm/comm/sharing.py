@@ -13,6 +13,7 @@ when the runtime reports its scans (``lidar_reach``), else over the whole map: t
 
 from __future__ import annotations
 
+from collections import deque
 from typing import Any, Sequence
 
 import numpy as np
@@ -29,6 +30,15 @@ from swarm.util.memory import lazy_zeros
 from .medium import CommSpec
 from .messages import MapRequest, MapUpdate, MessageError, delta_update, full_update
 
+
+HISTORY_UPDATES = 8
+"""How many of its latest updates each robot remembers the cells of, so that a full map it broadcasts reaches
+a receiver that missed some of them as the cells of those updates (:meth:`MapSharing._merge_full`)."""
+HISTORY_CELLS = 16_384
+"""...and at most this many cells in all (int64: 128 KB a robot); a receiver further behind takes the whole map."""
+CATCH_UP = True
+"""Merge a full map into a receiver that missed a few of its sender's updates as just their cells (exact on
+monotone maps; off: such receivers take the sender's whole map, as before; the tests compare both)."""
 
 TILE = 32
 """Merges note the places they changed in a robot's map as tiles of TILE x TILE cells, which its next delta
@@ -63,6 +73,12 @@ class MapSharing:
         self.last_shared = (lazy_zeros((n, packed_size(shape[0] * shape[1])), np.uint8)
                             if spec.map_sharing == "delta" else None)
         self.seq = [0] * n
+        # Each robot's latest updates (seq, the cells that changed since the one before), oldest first, and
+        # [receiver, sender] -> the last update of the sender it had merged in an unbroken run when it missed
+        # one (it holds at least the sender's map as of that update): see _merge_full
+        self._history: list[deque[tuple[int, np.ndarray]]] = [deque() for _ in range(n)]
+        self._history_cells = [0] * n
+        self._gapped: dict[tuple[int, int], int] = {}
         # [receiver, sender]: the last update merged; merged each of the sender's updates so far; holds all of
         # them (arrays, so that a delta's receivers are booked in the compiled merge: a swarm's sharing round
         # books n^2 of them)
@@ -115,10 +131,14 @@ class MapSharing:
                 since = None
                 if self.last_shared is not None and self.monotone:  # the cells since the previous update: _merge_full
                     changed = self._changed_since_update(i, known[i])  # last_shared[i] becomes known[i]
-                    since = (self.seq[i], changed, known[i].reshape(-1)[changed])
-                elif self.last_shared is not None:
-                    self.last_shared[i] = packed_copy(known[i])
-                    self._forget_writes(i)
+                    since = (self.seq[i], changed, known[i].reshape(-1)[changed], tuple(self._history[i]))
+                    self._remember(i, self.seq[i] + 1, changed)
+                else:
+                    self._history[i].clear()  # no note of the cells: the history would have a hole
+                    self._history_cells[i] = 0
+                    if self.last_shared is not None:
+                        self.last_shared[i] = packed_copy(known[i])
+                        self._forget_writes(i)
                 self.seq[i] += 1
                 update = full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), payloads)
                 update.__dict__["_since"] = since  # this process's note (see _take); never on the wire
@@ -128,12 +148,22 @@ class MapSharing:
             changed = self._changed_since_update(i, known[i])  # ascending, as delta_update wants them
             if len(changed):
                 self.seq[i] += 1
+                self._remember(i, self.seq[i], changed)
                 update = delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed)
                 update.__dict__["_since"] = None  # built here (see _take): never on the wire
                 out[i].append(update)
         if self.ages is not None:
             self.ages.sent(tick)
         return out
+
+    def _remember(self, i: int, seq: int, changed: np.ndarray) -> None:
+        """Note robot i's update ``seq`` and the cells it changed (kept unchanged: the update carries them
+        too), dropping the oldest beyond :data:`HISTORY_UPDATES` or :data:`HISTORY_CELLS`."""
+        history = self._history[i]
+        history.append((seq, changed))
+        self._history_cells[i] += len(changed)
+        while history and (len(history) > HISTORY_UPDATES or self._history_cells[i] > HISTORY_CELLS):
+            self._history_cells[i] -= len(history.popleft()[1])
 
     def _changed_since_update(self, i: int, known: np.ndarray) -> np.ndarray:
         """Robot i's cells that differ from its last update, copied into ``last_shared[i]``."""
@@ -227,14 +257,17 @@ class MapSharing:
         whole: list[int] = []  # the receivers that now hold the sender's whole map (for ages)
         everyone = len(ids)
         if msg.full:
-            quick = self._merge_full(msg, ids, stack, rows)
+            quick, caught = self._merge_full(msg, ids, stack, rows)
             if self.free is not None:
                 self.free.dirty[robots] = True  # counted afresh when next read
             if lists is None:  # the books of every receiver at once (a swarm's full map reaches hundreds)
-                self._book_full(msg, robots, quick, stack.shape[-1], ours)
+                self._book_full(msg, robots, quick, caught, stack.shape[-1], ours)
                 return
             since = msg.__dict__["_since"][1] if quick.any() else None
             carried = [since if q else None for q in quick.tolist()]
+            for members, cells in caught:
+                for k in np.flatnonzero(members).tolist():
+                    carried[k] = cells
         else:
             idx, values = msg.cells()  # int64 and uint8, in range: checked when decoded
             if ours and tracking:  # the common case: merged and its receivers' books kept in one tight loop
@@ -262,6 +295,10 @@ class MapSharing:
             if delta_gap and seq != last + 1 and sender not in self.requests[r]:
                 self.requests[r].append(sender)
             if not ours or msg.full or seq != last + 1:  # an update an algorithm sent counts as a gap
+                if not ours or msg.full:
+                    self._gapped.pop((r, sender), None)
+                elif self._complete[r, sender]:  # the first update it missed: it holds the sender's map as of
+                    self._gapped[(r, sender)] = last  # `last` (merges take maxima) until a full map (_merge_full)
                 self._complete[r, sender] = ours and msg.full
             if msg.full:
                 self.whole[r, sender] = True
@@ -342,37 +379,48 @@ class MapSharing:
         """The planes, when the merge is into the maps they mirror (every robot's: :meth:`receive_tick`)."""
         return self.planes if self.planes is not None and stack.shape[0] == self.n else None
 
-    def _merge_full(self, msg: MapUpdate, ids: list[int], stack: np.ndarray, rows: np.ndarray) -> np.ndarray:
-        """Merge a full map into robots ``ids`` (maps ``stack[rows]``); returns per receiver whether the merge
-        took only the cells since the sender's previous update (``msg``'s ``_since`` note), else any of its
-        cells may have changed. A full map this service built in delta mode on monotone maps notes the cells
-        where it differs from its sender's previous update (``outgoing``). A receiver that merged every update
-        of the sender up to that one already holds at least the previous update everywhere (merges take
-        maxima and no cell decreases), so taking just those cells gives the same map: a broadcast full map
-        then costs its receivers a delta's work instead of the whole map's each, which grew with the square of
-        the team (docs/performance-history.md). The other receivers take the sender's known cells, which
-        are all that can raise theirs: in a swarm (with knowledge planes) only those cells are merged, so a map
-        is written (and its memory taken, swarm.util.memory) only where it changes; in a team the whole
-        decoded map is, which costs less than listing its known cells."""
+    def _merge_full(self, msg: MapUpdate, ids: list[int], stack: np.ndarray,
+                    rows: np.ndarray) -> tuple[np.ndarray, list[tuple[np.ndarray, np.ndarray]]]:
+        """Merge a full map into robots ``ids`` (maps ``stack[rows]``). Returns per receiver whether the merge
+        took only the cells since the sender's previous update (``msg``'s ``_since`` note), and the groups
+        (receivers as a mask over ``ids``, cells) that took only the cells of the few updates they missed;
+        every other receiver may have changed anywhere.
+
+        A full map this service built in delta mode on monotone maps notes the cells where it differs from
+        its sender's previous update, and the cells of the updates before (``outgoing``). A receiver that
+        merged every update of the sender up to the previous one already holds at least that update
+        everywhere (merges take maxima and no cell decreases), so taking just those cells gives the same map:
+        a broadcast full map then costs its receivers a delta's work instead of the whole map's each, which
+        grew with the square of the team (docs/performance-history.md). The same holds for a receiver that
+        missed a few updates (it asked for this map): it holds the sender's map as of the last update it
+        merged in an unbroken run, so the cells of the updates since are all it can lack, read from this
+        map (a swarm's gap repairs were most of a 1,000-robot run once its robots had explored much).
+        The other receivers take the sender's known cells, which are all that can raise theirs: in a swarm
+        (with knowledge planes) only those cells are merged, so a map is written (and its memory taken,
+        swarm.util.memory) only where it changes; in a team the whole decoded map is, which costs less than
+        listing its known cells."""
         since = msg.__dict__.get("_since")
         robots = np.asarray(rows, dtype=np.int64)
         quick = np.zeros(len(ids), dtype=np.bool_)
+        caught: list[tuple[np.ndarray, np.ndarray]] = []
+        rest = np.ones(len(ids), dtype=np.bool_)
+        planes = self._planes_for(stack)
         if since is not None:
-            prev, cells, values = since
+            prev, cells, values, history = since
             if stack.shape[0] == self.n:  # the receivers' books are their rows (receive_tick)
                 quick = self._complete[robots, msg.sender] & (self.seen_seq[robots, msg.sender] == prev)
             else:
                 quick = np.array([self._complete[r, msg.sender] and self.seen_seq[r, msg.sender] == prev
                                   for r in ids], dtype=np.bool_)
-        planes = self._planes_for(stack)
-        if quick.any():
-            if planes is not None:
-                merge_into_many(stack, planes.free, planes.solid, planes.mask(robots[quick]), cells, values,
-                                _NO_CELLS, _NO_DIRTY, TILE)
-            else:
-                merge_cells_many(stack, robots[quick], cells, values)
-        if not quick.all():
-            others = robots[~quick]
+            rest &= ~quick
+            if quick.any():
+                self._merge_cells(stack, planes, robots[quick], cells, values)
+            if CATCH_UP and history and rest.any():
+                caught = self._catch_up(msg, ids, stack, robots, rest, prev, cells, history, planes)
+                for members, _ in caught:
+                    rest &= ~members
+        if rest.any():
+            others = robots[rest]
             if planes is not None:  # a swarm: the sender's known cells, so only the pages they raise are written
                 known_cells, known_values = msg.known_cells()
                 merge_into_many(stack, planes.free, planes.solid, planes.mask(others), known_cells, known_values,
@@ -386,27 +434,82 @@ class MapSharing:
             # delivery of it decodes again.
             msg.__dict__.pop("_known", None)
             msg.__dict__.pop("_dense", None)
-        return quick
+        return quick, caught
 
-    def _book_full(self, msg: MapUpdate, robots: np.ndarray, quick: np.ndarray, width: int, ours: bool) -> None:
+    def _merge_cells(self, stack: np.ndarray, planes: KnowledgePlanes | None, robots: np.ndarray,
+                     cells: np.ndarray, values: np.ndarray) -> None:
+        """Merge ``values`` at ``cells`` (ascending) into the maps of ``robots`` (their rows of ``stack``)."""
+        if planes is not None:
+            merge_into_many(stack, planes.free, planes.solid, planes.mask(robots), cells, values, _NO_CELLS,
+                            _NO_DIRTY, TILE)
+        else:
+            merge_cells_many(stack, robots, cells, values)
+
+    def _catch_up(self, msg: MapUpdate, ids: list[int], stack: np.ndarray, robots: np.ndarray, rest: np.ndarray,
+                  prev: int, cells: np.ndarray, history: tuple[tuple[int, np.ndarray], ...],
+                  planes: KnowledgePlanes | None) -> list[tuple[np.ndarray, np.ndarray]]:
+        """:meth:`_merge_full` for the receivers in ``rest`` that missed some of the sender's updates after
+        an unbroken run up to update ``a`` (the last they merged, or ``_gapped`` once they noticed the gap)
+        still in the sender's ``history`` (its updates up to
+        ``prev``, oldest first, each with the cells it changed; ``cells``: those since ``prev``): each takes
+        the union of the cells of updates ``a + 1`` .. ``msg.seq`` with this map's values there. Returns the
+        groups that did, one per ``a``."""
+        first = history[0][0]
+        if history[-1][0] != prev:
+            return []
+        groups: dict[int, list[int]] = {}
+        sender = msg.sender
+        for k in np.flatnonzero(rest).tolist():
+            r = ids[k]
+            a = int(self.seen_seq[r, sender]) if self._complete[r, sender] else self._gapped.get((r, sender))
+            if a is not None and first - 1 <= a < prev:
+                groups.setdefault(a, []).append(k)
+        if not groups:
+            return []
+        packed = np.frombuffer(msg._raw(), dtype=np.uint8)
+        out = []
+        for a in sorted(groups):
+            union = np.unique(np.concatenate([c for seq, c in history if seq > a] + [cells]))
+            values = ((packed[union >> 2] >> ((union & 3) << 1).astype(np.uint8)) & 3).astype(np.uint8)
+            members = np.zeros(len(ids), dtype=np.bool_)
+            members[groups[a]] = True
+            self._merge_cells(stack, planes, robots[members], union, values)
+            out.append((members, union))
+        return out
+
+    def _book_full(self, msg: MapUpdate, robots: np.ndarray, quick: np.ndarray,
+                   caught: list[tuple[np.ndarray, np.ndarray]], width: int, ours: bool) -> None:
         """:meth:`_take`'s books after a full map reached ``robots`` (``quick``: those that took only the
-        cells since the sender's previous update), for every receiver at once: a quick one's next delta
-        compares the tiles of those cells, another one's the whole map; each now holds the sender's whole
-        map, has merged its update ``msg.seq`` and is complete unless an algorithm sent the map."""
+        cells since the sender's previous update; ``caught``: groups that took the cells of the updates they
+        missed), for every receiver at once: a quick or caught-up one's next delta compares the tiles of those
+        cells, another one's the whole map; each now holds the sender's whole map, has merged its update
+        ``msg.seq`` and is complete unless an algorithm sent the map."""
         sender = msg.sender
         if self.lidar_reach is not None:
-            self._whole[robots[~quick]] = True
+            narrow = quick.copy()
+            for members, _ in caught:
+                narrow |= members
+            self._whole[robots[~narrow]] = True
             if quick.any():
-                cells = msg.__dict__["_since"][1]
-                if len(cells):
-                    rows, cols = np.divmod(cells, width)
-                    tiles = np.unique((rows // TILE) * self._dirty.shape[2] + cols // TILE)
-                    tr, tc = np.divmod(tiles, self._dirty.shape[2])
-                    self._dirty[robots[quick][:, None], tr[None, :], tc[None, :]] = 1
+                self._mark_cells(robots[quick], msg.__dict__["_since"][1], width)
+            for members, cells in caught:
+                self._mark_cells(robots[members], cells, width)
+        if self._gapped:
+            for r in robots.tolist():
+                self._gapped.pop((r, sender), None)
         self._complete[robots, sender] = ours
         self.whole[robots, sender] = True
         self.seen_seq[robots, sender] = msg.seq
         self._merges.append((robots, sender, msg.tick))
+
+    def _mark_cells(self, robots: np.ndarray, cells: np.ndarray, width: int) -> None:
+        """Note the tiles of ``cells`` as written in the maps of ``robots`` (for their next deltas)."""
+        assert self._dirty is not None
+        if len(cells):
+            rows, cols = np.divmod(cells, width)
+            tiles = np.unique((rows // TILE) * self._dirty.shape[2] + cols // TILE)
+            tr, tc = np.divmod(tiles, self._dirty.shape[2])
+            self._dirty[robots[:, None], tr[None, :], tc[None, :]] = 1
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)
 _NO_DIRTY = np.zeros((0, 1, 1), dtype=np.uint8)

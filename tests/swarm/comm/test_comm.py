@@ -577,3 +577,57 @@ def test_a_large_full_map_keeps_no_plain_bytes_and_its_receivers_merge_the_same_
     maps = np.zeros((3, *shape), np.uint8)
     into.receive_tick([(out[0][0], [2])], maps, np.ones(3, dtype=bool))
     assert np.array_equal(maps[2], common)
+
+
+def test_a_receiver_that_missed_updates_takes_a_full_map_as_their_cells_with_the_same_result():
+    """Robot 1 merges robot 0's updates 1-3, misses 4 and 5, hears 6 and asks for the full map: on monotone maps
+    it takes only the cells of updates 4-8 (the full map is update 8; the values read from it), and every map, book and later message is
+    that of a service that merges the whole map into it (``CATCH_UP`` off). Robot 3 first hears robot 0 at
+    tick 8, further back than robot 0's history reaches: it takes the whole map."""
+    from swarm.comm import sharing as sharing_module
+
+    shape, n = (40, 40), 4
+    results = []
+    for catch_up in (True, False):
+        rng = np.random.default_rng(4)  # the same knowledge both times
+        sharing_module.CATCH_UP = catch_up
+        try:
+            service = MapSharing(n, shape, CommSpec(share_every=1), lidar_reach=3, monotone=True)
+            known = np.zeros((n, *shape), np.uint8)
+            caught: list[tuple[list[int], int]] = []
+            original = service._catch_up
+
+            def spy(msg, ids, *args, _original=original, _caught=caught):
+                groups = _original(msg, ids, *args)
+                _caught.extend(([ids[k] for k in np.flatnonzero(m)], msg.seq) for m, _ in groups)
+                return groups
+
+            service._catch_up = spy
+            live = np.ones(n, bool)
+            pending: list = []
+            sent = []
+            for tick in range(12):
+                poses = np.column_stack([rng.uniform(1, 19, n), rng.uniform(1, 19, n), np.zeros(n)])
+                for r in range(n):  # what a ternary lidar writes around each robot: maxima only
+                    rr = np.clip(int(poses[r, 1] / CELL_M) + rng.integers(-3, 4, 6), 0, shape[0] - 1)
+                    cc = np.clip(int(poses[r, 0] / CELL_M) + rng.integers(-3, 4, 6), 0, shape[1] - 1)
+                    known[r, rr, cc] = np.maximum(known[r, rr, cc], rng.integers(1, 3, 6).astype(np.uint8))
+                service.scanned(poses)
+                service.receive_tick(pending, known, live, tick=tick)
+                out = service.outgoing(tick, known, poses)
+                sent.append([[encode(m) for m in msgs] for msgs in out])
+                pending = []
+                for s in range(n):
+                    for m in out[s]:
+                        to = [r for r in range(n) if r != s]
+                        if s == 0:
+                            to = [2] if isinstance(m, MapUpdate) and m.seq in (4, 5) else [1, 2]
+                            to += [3] if tick >= 8 else []
+                        pending.append((m, to))
+            results.append((known.copy(), service.seen_seq.copy(), sent, caught))
+        finally:
+            sharing_module.CATCH_UP = True
+    (maps_on, seen_on, sent_on, caught), (maps_off, seen_off, sent_off, none) = results
+    assert np.array_equal(maps_on, maps_off) and np.array_equal(seen_on, seen_off) and sent_on == sent_off
+    assert caught == [([1], 8)], "robot 1 caught up from robot 0's full map (its update 8); robot 3 took the whole map"
+    assert not none, "with CATCH_UP off nothing is caught up"
