@@ -43,7 +43,8 @@ PHASES = (("swarm.transport.inprocess:InProcessHost.act", "algorithms"),
           ("swarm.sim.loop:Lidar.scan", "lidar"),
           ("swarm.sim.loop:ExplorationTracker.update_coverage", "coverage"),
           ("swarm.sim.loop:Simulation._record", "metrics"),
-          ("swarm.sim.loop:Simulation.observe", "observations"))
+          ("swarm.sim.loop:Simulation.observe", "observations"),
+          ("swarm.grid.targets:_TargetSearch.run", "whole-map target searches"))
 """The loop's steps timed in each row (module:Owner.method as the loop module sees it, label)."""
 
 
@@ -107,8 +108,8 @@ def child(args: argparse.Namespace) -> None:
                                                                      "max_ticks": args.max_ticks}
     t0 = time.process_time()
     sim = Simulation({"seed": args.seed, "map": {"kind": args.kind, "size": args.size},
-                      "robots": {"count": args.robots, "spawn": "together"}, "algorithm": {"name": args.algorithm},
-                      "stop": stop})
+                      "robots": {"count": args.robots, "spawn": "together"},
+                      "algorithm": {"name": args.algorithm, "params": params_of(args.param)}, "stop": stop})
     setup_cpu = time.process_time() - t0
     totals.clear()
     t1 = time.process_time()
@@ -118,10 +119,25 @@ def child(args: argparse.Namespace) -> None:
     wall = time.perf_counter() - wall0
     s = result.summary
     print(json.dumps({"robots": args.robots, "size": args.size, "kind": args.kind, "algorithm": args.algorithm,
+                      "params": params_of(args.param),
                       "ticks": s["ticks"], "explored": s["explored"], "stop_reason": s["stop_reason"],
                       "cpu_s": cpu, "wall_s": wall, "setup_cpu_s": setup_cpu,
                       "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                       "phases": totals, "compiled": compiled[0]}))
+
+
+def params_of(items: list[str]) -> dict:
+    """``--param KEY=VALUE`` items as the algorithm's params (each VALUE read as JSON, else kept as text)."""
+    out = {}
+    for item in items:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise SystemExit(f"bench_scale.py: error: --param: got {item[:60]!r}; allowed: KEY=VALUE")
+        try:
+            out[key] = json.loads(value)
+        except json.JSONDecodeError:
+            out[key] = value
+    return out
 
 
 def run_row(args: argparse.Namespace, robots: int, size: int, kind: str) -> dict | None:
@@ -130,6 +146,8 @@ def run_row(args: argparse.Namespace, robots: int, size: int, kind: str) -> dict
             "--max-ticks", str(args.max_ticks)]
     if args.explored is not None:
         argv += ["--explored", str(args.explored)]
+    for item in args.param:
+        argv += ["--param", item]
     proc = subprocess.run(argv, capture_output=True, text=True)
     if proc.returncode != 0:
         tail = proc.stderr.strip().splitlines()[-1:] or [f"exit status {proc.returncode}"]
@@ -158,6 +176,8 @@ def main() -> None:
     ap.add_argument("--kind", default="building", choices=["building", "cave"])
     ap.add_argument("--cave", action="store_true", help="add a cave row for every count")
     ap.add_argument("--algorithm", default="frontier")
+    ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
+                    help="an algorithm parameter (repeatable; VALUE read as JSON, else text), e.g. recheck_ticks=100")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--ticks", type=int, default=300)
     ap.add_argument("--explored", type=float, default=None, help="run to this explored fraction instead")
