@@ -21,6 +21,7 @@ from pathlib import Path
 
 import pyarrow as pa
 import pyarrow.compute as pc
+import pyarrow.parquet as pq
 
 from swarm.base.errors import InvalidInput
 
@@ -30,34 +31,40 @@ from .writers import WRITERS, _scan, new_writer_id, registry_lock
 
 LEVEL = 12
 """zstd level of the compacted part (pyarrow's default is 1): ~2x smaller time series, written once."""
+MARK = b"swarm.compacted"
+"""Runs-file metadata key of a part :func:`compact` wrote: a later compaction leaves it as it is."""
 
 
 @dataclass(frozen=True)
 class Compacted:
-    """What :func:`compact` did: runs kept, parts replaced, bytes of ``parts/`` before and after."""
+    """What :func:`compact` did: the runs it rewrote, the parts it replaced, the new part (None: nothing to
+    do), the bytes of ``parts/`` before and after, and the parts of earlier compactions it left alone."""
 
     runs: int
     parts_before: int
     part: str | None
     bytes_before: int
     bytes_after: int
+    kept: int = 0
 
 
-def compact(folder: str | Path, level: int = LEVEL) -> Compacted:
+def compact(folder: str | Path, level: int = LEVEL, everything: bool = False) -> Compacted:
     """Rewrite the sound parts of the results folder ``folder`` as one part (every run's latest row and its
-    companions' rows) and remove them. A folder of one part or none is left as it is. Raises
+    companions' rows) and remove them. Parts an earlier compaction wrote are left as they are (a folder kept
+    in version control then grows by one file per compaction, and nothing kept is rewritten), unless
+    ``everything``; fewer than two parts to merge is nothing to do. Raises
     :class:`InvalidInput` (field ``DIR``) for a folder that is not a campaign's, has a damaged part or is
     being written."""
     store = ResultsStore(folder)
     store.spec_source()  # a campaign results folder, or the one-line refusal
     try:
         (store.folder / WRITERS).mkdir(exist_ok=True)
-        return _compact(store, level)
+        return _compact(store, level, everything)
     except OSError as exc:
         raise store.folder_error(exc) from None
 
 
-def _compact(store: ResultsStore, level: int) -> Compacted:
+def _compact(store: ResultsStore, level: int, everything: bool) -> Compacted:
     with registry_lock(store.folder, wait_s=5.0):
         live, dead = _scan(store.folder)
         for d in dead:
@@ -73,19 +80,29 @@ def _compact(store: ResultsStore, level: int) -> Compacted:
                                                          f"{bad[0].describe()}; 'swarm campaign run' on it moves "
                                                          "damaged parts to quarantine/ and runs their runs again)")
         before = _parts_bytes(store)
-        if len(checks) < 2:
+        kept = set() if everything else {c.part for c in checks if _is_compacted(store, c.part)}
+        merged = [c.part for c in checks if c.part not in kept]
+        if len(merged) < 2:
             n = sum(c.runs.num_rows for c in checks if c.runs is not None)
-            return Compacted(n, len(checks), checks[0].part if checks else None, before, before)
-        runs = _latest_runs(store, [c.part for c in checks])
+            return Compacted(n, len(checks), None, before, before, len(kept))
+        latest = _latest_runs(store, [c.part for c in checks])  # over every part: a kept part may win a key
+        mine = pc.is_in(latest.column("part"), value_set=pa.array(merged, pa.string()))
+        runs = latest.filter(mine)
         winners = runs.column("part").to_pylist()
         keys = runs.column("key").to_pylist()
         companions = {suffix: _companion(store, suffix, keys, winners) for suffix in COMPANIONS}
         new = store.write_tables(runs.drop_columns(["part"]), *(companions[s] for s in COMPANIONS),
-                                 writer=new_writer_id(), level=level)
-        for check in checks:  # the runs file first: its companions alone are a leftover, never a damaged part
+                                 writer=new_writer_id(), level=level, metadata={MARK: b"1"})
+        for part in merged:  # the runs file first: its companions alone are a leftover, never a damaged part
             for suffix in (RUNS_SUFFIX, *COMPANIONS):
-                (store.parts / f"{check.part}{suffix}").unlink(missing_ok=True)
-        return Compacted(runs.num_rows, len(checks), new, before, _parts_bytes(store))
+                (store.parts / f"{part}{suffix}").unlink(missing_ok=True)
+        return Compacted(runs.num_rows, len(merged), new, before, _parts_bytes(store), len(kept))
+
+
+def _is_compacted(store: ResultsStore, part: str) -> bool:
+    """Whether ``part`` was written by :func:`compact` (its runs file's metadata says so)."""
+    meta = pq.read_schema(store.parts / f"{part}{RUNS_SUFFIX}").metadata or {}
+    return meta.get(MARK) == b"1"
 
 
 def _latest_runs(store: ResultsStore, parts: list[str]) -> pa.Table:

@@ -184,9 +184,11 @@ class ResultsStore:
                                  robots_table(robots) if robots else None, writer)
 
     def write_tables(self, runs: pa.Table, timeseries: pa.Table | None, robots: pa.Table | None,
-                     writer: str | None = None, level: int | None = None) -> str:
+                     writer: str | None = None, level: int | None = None,
+                     metadata: dict[bytes, bytes] | None = None) -> str:
         """:meth:`write_part` for rows already in tables (``level``: the zstd level, default pyarrow's; a
-        compacted folder is written once and kept, so it is worth a higher one)."""
+        compacted folder is written once and kept, so it is worth a higher one; ``metadata``: more keys for
+        the runs file's metadata)."""
         part = self.new_part_id(writer)
         ts_path = self.parts / f"{part}{TS_SUFFIX}"
         robots_path = self.parts / f"{part}{ROBOTS_SUFFIX}"
@@ -200,8 +202,8 @@ class ResultsStore:
             if robots is not None and robots.num_rows:
                 _write_table(robots_path, robots, owned=owned, level=level)
                 written[ROBOTS_SUFFIX] = robots_path
-            table = runs.replace_schema_metadata({**(runs.schema.metadata or {}),  # recording its companions'
-                                                  **companion_record(written, runs)})  # size and CRC-32: .parts
+            table = runs.replace_schema_metadata({**(runs.schema.metadata or {}), **(metadata or {}),
+                                                  **companion_record(written, runs)})  # companions' size, CRC-32
             _write_table(runs_path, table, owned=owned, level=level)
         except OSError as exc:
             if not runs_path.exists():

@@ -241,21 +241,26 @@ def status_cmd(folder: Path) -> None:
 
 @campaign_group.command("compact")
 @click.argument("folder", metavar="DIR", type=click.Path(exists=True, file_okay=False, path_type=Path))
-def compact_cmd(folder: Path) -> None:
+@click.option("--all", "everything", is_flag=True,
+              help="Also merge the parts of earlier compactions (by default they are left as they are).")
+def compact_cmd(folder: Path, everything: bool) -> None:
     """Rewrite a results folder's parts as one part, to keep or publish it.
 
     Every run's latest row, time series and per-robot rows, copied unedited into one zstd-compressed part;
     the old parts are removed once it is committed (safe under kill -9; refused while a campaign writes the
-    folder or when a part is damaged). A resumed campaign and a report read the folder as before.
+    folder or when a part is damaged). Parts of earlier compactions are left alone unless --all, so a folder
+    kept in version control grows by one file per compaction. A resumed campaign and a report read the
+    folder as before.
     """
     from swarm.campaign.compact import compact
 
-    done = compact(folder)
-    if done.parts_before < 2:
-        click.echo(f"{folder}: {done.runs} runs in {done.parts_before} part(s); nothing to compact")
+    done = compact(folder, everything=everything)
+    kept = f" ({done.kept} part(s) of earlier compactions left as they are)" if done.kept else ""
+    if done.part is None:
+        click.echo(f"{folder}: {done.runs} runs; nothing to compact{kept}")
         return
     click.echo(f"{folder}: {done.runs} runs from {done.parts_before} parts into part {done.part}; "
-               f"{done.bytes_before / 1e6:.1f} MB -> {done.bytes_after / 1e6:.1f} MB")
+               f"{done.bytes_before / 1e6:.1f} MB -> {done.bytes_after / 1e6:.1f} MB{kept}")
 
 
 @campaign_group.command("report")

@@ -76,7 +76,36 @@ def test_compacting_keeps_every_runs_latest_rows_and_a_resume_runs_nothing(tmp_p
     assert resumed.ran == 0
     assert len(load(out).runs) == before[0].num_rows
     again = compact(out)
-    assert again.parts_before == 1 and again.bytes_after == again.bytes_before
+    assert again.part is None and again.kept == 1 and again.bytes_after == again.bytes_before
+
+
+def retry_of(store, runs, key, extra):
+    """A new part holding ``key``'s row of ``runs`` with ``extra`` ticks more (a retried run's later row)."""
+    row = runs.filter(pc.equal(runs.column("key"), key))
+    row = row.set_column(row.schema.get_field_index("ticks"), "ticks", pc.add(row.column("ticks"), extra))
+    return store.write_tables(row, None, None, writer=None)
+
+
+def test_a_second_compaction_leaves_the_first_ones_part_and_loses_no_later_row(tmp_path):
+    _, out, _ = folder_of_parts(tmp_path)
+    first = compact(out)
+    store = ResultsStore(out)
+    runs = store.read_part(out / "parts" / f"{first.part}{RUNS_SUFFIX}").replace_schema_metadata(None)
+    keys = runs.column("key").to_pylist()
+    stale = retry_of(store, runs, keys[2], 5)  # an older row than the compacted part's: renamed to sort first
+    for path in (out / "parts").glob(f"{stale}*"):
+        path.rename(path.with_name("0" * 20 + path.name[20:]))
+    retry_of(store, runs, keys[0], 2000)
+    retry_of(store, runs, keys[1], 3000)
+    before = snapshot(out)
+    second = compact(out)
+    assert second.kept == 1 and second.parts_before == 3 and second.runs == 2
+    assert {p.name for p in ResultsStore(out).run_files()} == {f"{first.part}{RUNS_SUFFIX}",
+                                                               f"{second.part}{RUNS_SUFFIX}"}
+    assert_same(before, snapshot(out))  # keys 0 and 1 from the new part, key 2 still from the first
+    everything = compact(out, everything=True)
+    assert everything.parts_before == 2 and len(ResultsStore(out).run_files()) == 1
+    assert_same(before, snapshot(out))
 
 
 def test_a_kill_between_commit_and_clean_up_loses_and_doubles_nothing(tmp_path, monkeypatch):
@@ -100,8 +129,8 @@ def test_a_kill_between_commit_and_clean_up_loses_and_doubles_nothing(tmp_path, 
     assert calls[0].endswith(RUNS_SUFFIX), "an old part's runs file goes before its companions"
     assert_same(before, snapshot(out))  # every run once, from the new part where it is in two
     assert not ResultsStore(out).damaged()
-    compact(out)
-    assert len(ResultsStore(out).run_files()) == 1
+    again = compact(out)  # the killed one's part stays; the rest of the old parts become one more
+    assert again.kept == 1 and len(ResultsStore(out).run_files()) == 2
     assert_same(before, snapshot(out))
 
 
