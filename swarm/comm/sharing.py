@@ -78,7 +78,7 @@ class MapSharing:
         # one (it holds at least the sender's map as of that update): see _merge_full
         self._history: list[deque[tuple[int, np.ndarray]]] = [deque() for _ in range(n)]
         self._history_cells = [0] * n
-        self._gapped: dict[tuple[int, int], int] = {}
+        self._gapped: dict[int, dict[int, int]] = {}  # sender -> {receiver: a}
         # [receiver, sender]: the last update merged; merged each of the sender's updates so far; holds all of
         # them (arrays, so that a delta's receivers are booked in the compiled merge: a swarm's sharing round
         # books n^2 of them)
@@ -296,9 +296,10 @@ class MapSharing:
                 self.requests[r].append(sender)
             if not ours or msg.full or seq != last + 1:  # an update an algorithm sent counts as a gap
                 if not ours or msg.full:
-                    self._gapped.pop((r, sender), None)
+                    self._gapped.get(sender, _NONE_GAPPED).pop(r, None)
                 elif self._complete[r, sender]:  # the first update it missed: it holds the sender's map as of
-                    self._gapped[(r, sender)] = last  # `last` (merges take maxima) until a full map (_merge_full)
+                    self._gapped.setdefault(sender, {})[r] = last  # `last` (merges take maxima) until a full
+                                                                  # map (_merge_full)
                 self._complete[r, sender] = ours and msg.full
             if msg.full:
                 self.whole[r, sender] = True
@@ -459,9 +460,10 @@ class MapSharing:
             return []
         groups: dict[int, list[int]] = {}
         sender = msg.sender
+        gapped = self._gapped.get(sender, _NONE_GAPPED)
         for k in np.flatnonzero(rest).tolist():
             r = ids[k]
-            a = int(self.seen_seq[r, sender]) if self._complete[r, sender] else self._gapped.get((r, sender))
+            a = int(self.seen_seq[r, sender]) if self._complete[r, sender] else gapped.get(r)
             if a is not None and first - 1 <= a < prev:
                 groups.setdefault(a, []).append(k)
         if not groups:
@@ -494,9 +496,11 @@ class MapSharing:
                 self._mark_cells(robots[quick], msg.__dict__["_since"][1], width)
             for members, cells in caught:
                 self._mark_cells(robots[members], cells, width)
-        if self._gapped:
-            for r in robots.tolist():
-                self._gapped.pop((r, sender), None)
+        gapped = self._gapped.get(sender)
+        if gapped:  # (a few receivers; a swarm's full map reaches hundreds)
+            waiting = np.fromiter(gapped, dtype=np.int64, count=len(gapped))
+            for r in waiting[np.isin(waiting, robots)].tolist():
+                del gapped[r]
         self._complete[robots, sender] = ours
         self.whole[robots, sender] = True
         self.seen_seq[robots, sender] = msg.seq
@@ -512,6 +516,7 @@ class MapSharing:
             self._dirty[robots[:, None], tr[None, :], tc[None, :]] = 1
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)
+_NONE_GAPPED: dict[int, int] = {}  # (read only)
 _NO_DIRTY = np.zeros((0, 1, 1), dtype=np.uint8)
 _EMPTY_BOX = np.array([0, 0, 0, 0], dtype=np.int64)
 
