@@ -32,3 +32,23 @@ def test_departures_the_campaign_did_not_run_are_left_out():
     names = set(res["name"]) | set(shifts["condition"])
     assert "full MAES parity" in names and "swarm's Minotaur" in names
     assert "swarm's motion (continuous)" not in names and "swarm's Greed" not in names
+
+
+def test_the_kept_ablation_results_folder_is_sound_and_resumes_the_example_campaign():
+    """docs/results/maes-parity/campaign/ holds the ablation's runs so far (compacted): its parts pass the
+    results check, its spec is examples/minotaur-ablation.toml's (so `swarm campaign run` resumes it), and
+    every run it holds is one of that campaign's and was computed by one clean commit."""
+    from swarm.campaign import load_campaign, status
+    from swarm.campaign.identity import difference
+    from swarm.campaign.store import ResultsStore
+
+    folder = REPORT / "campaign"
+    example = _ROOT / "examples" / "minotaur-ablation.toml"
+    assert difference((folder / "campaign.toml").read_text(), example.read_text()) is None
+    s = status(folder)
+    assert not s.get("damaged") and s["done"] > 0 and s["done"] + s["failed"] + s["pending"] == s["total"] == 7040
+    runs = ResultsStore(folder).runs_table(columns=("key", "swarm_version")).to_pydict()
+    keys = {key for _, key in load_campaign(example).iter_keys()}
+    assert set(runs["key"]) <= keys
+    versions = set(runs["swarm_version"])
+    assert len(versions) == 1 and "+git." in next(iter(versions)) and not next(iter(versions)).endswith("-dirty")
