@@ -16,7 +16,7 @@ compiled says so (run the script once more). Pin to one core for reference figur
 
     python benchmarks/speed/bench_scale.py --robots 16 64 256 1000 --ticks 300 --cave
     python benchmarks/speed/bench_scale.py --robots 1000@600 --ticks 1000 --algorithm greed
-    python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 20000
+    python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 20000 --progress 60
     python benchmarks/speed/bench_scale.py --robots 10000@2000 --ticks 200
     python benchmarks/speed/bench_scale.py --robots 16@150 1000@600 --ticks 1000 --pairs 3   # the 2x ratio
 """
@@ -112,6 +112,8 @@ def child(args: argparse.Namespace) -> None:
                       "algorithm": {"name": args.algorithm, "params": params_of(args.param)}, "stop": stop})
     setup_cpu = time.process_time() - t0
     totals.clear()
+    if args.progress > 0:
+        report_progress(sim, args.progress)
     t1 = time.process_time()
     wall0 = time.perf_counter()
     result = sim.run()
@@ -124,6 +126,25 @@ def child(args: argparse.Namespace) -> None:
                       "cpu_s": cpu, "wall_s": wall, "setup_cpu_s": setup_cpu,
                       "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                       "phases": totals, "compiled": compiled[0]}))
+
+
+def report_progress(sim, every_s: float) -> None:
+    """Print the tick, explored fraction, CPU time and RSS to stderr every ``every_s`` CPU-seconds of the run
+    (a long ``--explored`` run can then be judged, or stopped, before it ends)."""
+    sense = type(sim).sense
+    start = time.process_time()
+    due = [start + every_s]
+
+    def sense_and_report(self, state, _sense=sense):
+        now = time.process_time()
+        if now >= due[0]:
+            due[0] = now + every_s
+            rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+            print(f"  tick {state.tick}: explored {100 * self.tracker.explored:.1f} %, {now - start:.0f} s CPU, "
+                  f"peak RSS {rss:.0f} MB", file=sys.stderr, flush=True)
+        return _sense(self, state)
+
+    type(sim).sense = sense_and_report
 
 
 def params_of(items: list[str]) -> dict:
@@ -148,9 +169,11 @@ def run_row(args: argparse.Namespace, robots: int, size: int, kind: str) -> dict
         argv += ["--explored", str(args.explored)]
     for item in args.param:
         argv += ["--param", item]
-    proc = subprocess.run(argv, capture_output=True, text=True)
+    argv += ["--progress", str(args.progress)]
+    proc = subprocess.run(argv, stdout=subprocess.PIPE, stderr=None if args.progress > 0 else subprocess.PIPE,
+                          text=True)
     if proc.returncode != 0:
-        tail = proc.stderr.strip().splitlines()[-1:] or [f"exit status {proc.returncode}"]
+        tail = (proc.stderr or "").strip().splitlines()[-1:] or [f"exit status {proc.returncode}"]
         print(f"{robots:>6} {kind} {size}: failed ({tail[0][:120]})", flush=True)
         return None
     return json.loads(proc.stdout.strip().splitlines()[-1])
@@ -186,6 +209,8 @@ def main() -> None:
     ap.add_argument("--pairs", type=int, default=1, help="repeat the rows, alternating their order, and print each "
                     "row's median us per robot-tick and its ratio to the first row's")
     ap.add_argument("--json", type=Path, default=None, help="write every row's figures here")
+    ap.add_argument("--progress", type=float, default=0.0, metavar="SECONDS",
+                    help="each child prints its tick, explored fraction and RSS to stderr every SECONDS of CPU")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--robots-n", type=int, default=16, help=argparse.SUPPRESS)
     ap.add_argument("--size", type=int, default=150, help=argparse.SUPPRESS)
