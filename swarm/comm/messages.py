@@ -286,6 +286,20 @@ class MapUpdate:
             cached = self.__dict__["_known"] = (idx, values)
         return cached
 
+    def values_at(self, cells: np.ndarray) -> np.ndarray:
+        """A full update's values at ``cells`` (int64 flat indices inside its map), uint8, read off the packed
+        bytes without decoding the rest (a receiver that needs only a few cells of it)."""
+        if not self.full:
+            raise MessageError("map_update: values_at() needs a full update")
+        h, w = self.shape
+        packed = np.frombuffer(self._raw(), dtype=np.uint8)
+        if len(packed) != (h * w + 3) // 4:
+            raise MessageError("map_update: wrong payload length")
+        values = _cellcodec.values_at2(packed, np.ascontiguousarray(cells, dtype=np.int64))
+        if len(values) and values.max() > 2:
+            raise MessageError("map_update: cell values outside 0..2")
+        return values
+
     def _raw(self) -> bytes:
         """The payload before zlib: kept by an update built in this process (:func:`full_update`,
         :func:`delta_update`), so its receivers here skip the decompression (lossless, so the same bytes);

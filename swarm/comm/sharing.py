@@ -468,11 +468,13 @@ class MapSharing:
                 groups.setdefault(a, []).append(k)
         if not groups:
             return []
-        packed = np.frombuffer(msg._raw(), dtype=np.uint8)
         out = []
+        every: np.ndarray | None = None  # the furthest-behind group's cells and values: the others' hold subsets
         for a in sorted(groups):
             union = np.unique(np.concatenate([c for seq, c in history if seq > a] + [cells]))
-            values = ((packed[union >> 2] >> ((union & 3) << 1).astype(np.uint8)) & 3).astype(np.uint8)
+            if every is None:
+                every, all_values = union, msg.values_at(union)  # (one read of the map's bytes per message)
+            values = all_values[np.searchsorted(every, union)]
             members = np.zeros(len(ids), dtype=np.bool_)
             members[groups[a]] = True
             self._merge_cells(stack, planes, robots[members], union, values)

@@ -109,6 +109,17 @@ def unpack2(packed: np.ndarray, n: int, out: np.ndarray) -> int:  # pragma: no c
     return 1 if low & 0x55 else 0
 
 
+@njit(cache=True)
+def values_at2(packed: np.ndarray, idx: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """The 2-bit values of ``packed`` (:func:`pack2`'s layout) at the flat indices ``idx`` (each below the
+    packed cell count), as uint8: a few cells of a full map without unpacking all of it."""
+    out = np.empty(idx.shape[0], dtype=np.uint8)
+    for k in range(idx.shape[0]):
+        i = idx[k]
+        out[k] = (packed[i >> 2] >> (2 * (i & 3))) & 3
+    return out
+
+
 DELTA_OK, DELTA_REPEATED, DELTA_OUTSIDE = 0, 1, 2
 
 

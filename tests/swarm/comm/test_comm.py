@@ -631,3 +631,17 @@ def test_a_receiver_that_missed_updates_takes_a_full_map_as_their_cells_with_the
     assert np.array_equal(maps_on, maps_off) and np.array_equal(seen_on, seen_off) and sent_on == sent_off
     assert caught == [([1], 8)], "robot 1 caught up from robot 0's full map (its update 8); robot 3 took the whole map"
     assert not none, "with CATCH_UP off nothing is caught up"
+
+
+def test_a_full_updates_values_at_some_cells_are_its_decoded_maps():
+    from swarm.comm.messages import MessageError, delta_update, full_update
+
+    rng = np.random.default_rng(9)
+    known = rng.integers(0, 3, (37, 23)).astype(np.uint8)  # 851 cells: not a multiple of 4
+    cells = np.sort(rng.choice(known.size, 200, replace=False)).astype(np.int64)
+    for msg in (full_update(0, 1, 0, known, (0.0, 0.0, 0.0)),
+                decode(encode(full_update(0, 1, 0, known, (0.0, 0.0, 0.0))))):  # kept plain bytes, or zlib
+        assert np.array_equal(msg.values_at(cells), known.reshape(-1)[cells])
+        assert np.array_equal(msg.values_at(np.array([known.size - 1])), known.reshape(-1)[-1:])
+    with pytest.raises(MessageError, match="needs a full update"):
+        delta_update(0, 1, 0, known, (0.0, 0.0, 0.0), cells).values_at(cells)
