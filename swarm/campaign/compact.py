@@ -27,7 +27,7 @@ from swarm.base.errors import InvalidInput
 
 from .parts import COMPANIONS, RUNS_SUFFIX
 from .store import ResultsStore, _latest_per_key
-from .writers import WRITERS, _scan, new_writer_id, registry_lock
+from .writers import WRITERS, live_writers_locked, new_writer_id, registry_lock
 
 LEVEL = 12
 """zstd level of the compacted part (pyarrow's default is 1): ~2x smaller time series, written once."""
@@ -66,19 +66,12 @@ def compact(folder: str | Path, level: int = LEVEL, everything: bool = False) ->
 
 def _compact(store: ResultsStore, level: int, everything: bool) -> Compacted:
     with registry_lock(store.folder, wait_s=5.0):
-        live, dead = _scan(store.folder)
-        for d in dead:
-            if d.fd is not None:
-                os.close(d.fd)
+        live = live_writers_locked(store.folder)
         if live:
             raise InvalidInput("DIR", str(store.folder), "a results folder nobody is writing (a campaign is "
-                                                         f"writing it now: {live[0].info.describe()})")
-        checks = store.check()
-        bad = [c for c in checks if not c.sound]
-        if bad:
-            raise InvalidInput("DIR", str(store.folder), f"a results folder whose parts are sound (part "
-                                                         f"{bad[0].describe()}; 'swarm campaign run' on it moves "
-                                                         "damaged parts to quarantine/ and runs their runs again)")
+                                                         f"writing it now: {live[0].describe()})")
+        store.require_sound()
+        checks = store.check()  # (each part's verdict is kept: read once)
         before = _parts_bytes(store)
         kept = set() if everything else {c.part for c in checks if _is_compacted(store, c.part)}
         merged = [c.part for c in checks if c.part not in kept]

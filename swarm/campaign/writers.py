@@ -191,9 +191,15 @@ def live_writers(folder: str | Path) -> list[WriterInfo] | None:
     folder = Path(folder)
     try:
         with registry_lock(folder, wait_s=5.0):  # a test lock taken meanwhile would make a start-up misjudge
-            live, dead = _scan(folder)
+            return live_writers_locked(folder)
     except (OSError, InvalidInput):
         return None
+
+
+def live_writers_locked(folder: Path) -> list[WriterInfo]:
+    """:func:`live_writers` for a caller that holds ``folder``'s :func:`registry_lock` (so that none starts
+    until it lets go, e.g. while compacting); removes nothing."""
+    live, dead = _scan(folder)
     for d in dead:
         os.close(d.fd)
     return [w.info for w in live]
