@@ -175,8 +175,14 @@ def test_clock_and_poses_reach_a_peer_that_knows_only_rmw_zenohs_key_format():
 
         def act(batch):  # query the graph mid-run, as `ros2 node list` / `ros2 topic list` would
             actions = original(batch)
-            if batch.tick == 5:
-                tokens.extend(str(r.ok.key_expr) for r in router.liveliness().get("@ros2_lv/**", timeout=2) if r.ok)
+            if batch.tick == 5:  # declarations reach the router asynchronously: ask until all four
+                deadline = time.monotonic() + 5  # (node, /clock, two poses) have arrived
+                while time.monotonic() < deadline:
+                    found = [str(r.ok.key_expr) for r in router.liveliness().get("@ros2_lv/**", timeout=2) if r.ok]
+                    if len(found) >= 4:
+                        break
+                    time.sleep(0.05)
+                tokens.extend(found)
             return actions
         wrapped.act = act
         return wrapped
