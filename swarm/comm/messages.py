@@ -23,7 +23,6 @@ message and counts it).
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import math
 import zlib
 from typing import Any, Callable, TypeVar
@@ -362,24 +361,32 @@ def map_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[
 
 
 def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
-                payloads: dict[bytes, tuple[bytes | None, bytes]] | None = None) -> MapUpdate:
+                payloads: dict[tuple[int, int, int], tuple[np.ndarray, bytes | None, bytes]] | None = None,
+                packed: np.ndarray | None = None) -> MapUpdate:
     """The full-map MapUpdate of ``known`` (``pose``: three Python floats).
 
-    ``payloads`` (a digest of the plain bytes -> (plain or None, payload)): the full maps of one sharing tick
-    so far. Robots whose maps have converged send byte-identical full maps in the same tick (a fifth to a
-    quarter of the full maps of the paper's 16-robot runs under the materials radio:
-    docs/performance-history.md), and zlib gives the same bytes for the same input, so one compression
-    serves them all. The plain bytes stay on the update (its receivers here skip zlib) only up to
-    :data:`KEEP_PLAIN_BYTES`: a swarm asked for its full maps in one tick would otherwise hold a megabyte or
-    more per robot until they are delivered (10,000 robots on 2,000 tiles: 40 GB)."""
-    plain = _cellcodec.pack2(known.reshape(-1)).tobytes()
-    key = hashlib.blake2b(plain, digest_size=32).digest()  # (not the bytes themselves: see KEEP_PLAIN_BYTES)
+    ``payloads``: the full maps of one sharing tick so far (a fingerprint of the packed map -> (packed map,
+    plain bytes or None, payload)). Robots whose maps have converged send byte-identical full maps in the
+    same tick (a fifth to a quarter of the full maps of the paper's 16-robot runs under the materials radio,
+    docs/performance-history.md; nearly all in a 1,000-robot crowd), and zlib gives the same bytes for the
+    same input, so one compression serves them all. A match is confirmed by comparing the packed maps, so
+    the payload is always this map's. The plain bytes stay on the update (its receivers here skip zlib)
+    only up to :data:`KEEP_PLAIN_BYTES`: a swarm asked for its full maps in one tick would otherwise hold a
+    megabyte or more per robot until they are delivered (10,000 robots on 2,000 tiles: 40 GB).
+    ``packed``: ``known`` already packed 2 bits a cell (:func:`swarm.knowledge.packed.packed_copy`; the
+    map-sharing service keeps it), unchanged while ``payloads`` is in use."""
+    if packed is None:
+        packed = _cellcodec.pack2(known.reshape(-1))
+    key = (*_cellcodec.fingerprint(packed), len(packed))
     shared = None if payloads is None else payloads.get(key)
+    if shared is not None and not np.array_equal(shared[0], packed):
+        shared, payloads = None, None  # a fingerprint collision: compress this one apart
     if shared is None:
-        shared = (plain if len(plain) <= KEEP_PLAIN_BYTES else None, zlib.compress(plain, MAP_ZLIB_LEVEL))
+        plain = packed.tobytes()
+        shared = (packed, plain if len(plain) <= KEEP_PLAIN_BYTES else None, zlib.compress(plain, MAP_ZLIB_LEVEL))
         if payloads is not None:
             payloads[key] = shared
-    return _update_of(*shared, sender=sender, seq=seq, tick=tick, full=True,
+    return _update_of(shared[1], shared[2], sender=sender, seq=seq, tick=tick, full=True,
                       shape=(int(known.shape[0]), int(known.shape[1])), count=int(np.count_nonzero(known)), pose=pose)
 
 

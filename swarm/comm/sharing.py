@@ -118,7 +118,8 @@ class MapSharing:
         if not (due or any(self.full_requested) or any(self.requests)):  # most ticks
             return out
         pose_rows = poses.tolist()
-        payloads: dict[bytes, tuple[bytes | None, bytes]] = {}  # this tick's full maps (full_update)
+        payloads: dict[tuple[int, int, int], tuple[np.ndarray, bytes | None, bytes]] = {}  # this tick's full
+        # maps (full_update; each keyed packed map is a row of last_shared, which only its robot's turn changes)
         for i in range(self.n):
             for target in self.requests[i]:
                 out[i].append(MapRequest(sender=i, target=target))
@@ -140,7 +141,8 @@ class MapSharing:
                         self.last_shared[i] = packed_copy(known[i])
                         self._forget_writes(i)
                 self.seq[i] += 1
-                update = full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), payloads)
+                packed = None if self.last_shared is None else self.last_shared[i]  # known[i], packed
+                update = full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), payloads, packed)
                 update.__dict__["_since"] = since  # this process's note (see _take); never on the wire
                 out[i].append(update)
                 continue

@@ -68,6 +68,29 @@ def pack2(values: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def fingerprint(data: np.ndarray) -> tuple[np.uint64, np.uint64]:  # pragma: no cover - compiled
+    """Two 64-bit hashes of ``data`` (uint8, any length; multiply-rotate lanes of 8-byte words, the tail
+    bytewise): a cheap key under which equal byte strings meet (a few tens of microseconds for a 360 KB
+    packed map, against ~0.4 ms for blake2b). Not collision-proof: callers compare the bytes on a match."""
+    n = data.shape[0]
+    words = n // 8
+    w = data[: 8 * words].view(np.uint64)
+    h1 = np.uint64(0x9E3779B97F4A7C15) ^ np.uint64(n)
+    h2 = np.uint64(0xC2B2AE3D27D4EB4F)
+    p1, p2 = np.uint64(0x87C37B91114253D5), np.uint64(0x4CF5AD432745937F)
+    for i in range(words):
+        v = w[i]
+        h1 = (h1 ^ (v * p1)) * p2
+        h1 = (h1 << np.uint64(31)) | (h1 >> np.uint64(33))
+        h2 = (h2 + v) * p1
+        h2 = (h2 << np.uint64(27)) | (h2 >> np.uint64(37))
+    for i in range(8 * words, n):
+        h1 = (h1 ^ np.uint64(data[i])) * p2
+        h2 = (h2 + np.uint64(data[i])) * p1
+    return h1, h2
+
+
+@njit(cache=True)
 def pack_delta(flat: np.ndarray, idx: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
     """The delta layout of the cells ``idx`` (ascending flat indices) of ``flat``."""
     n = idx.shape[0]

@@ -645,3 +645,33 @@ def test_a_full_updates_values_at_some_cells_are_its_decoded_maps():
         assert np.array_equal(msg.values_at(np.array([known.size - 1])), known.reshape(-1)[-1:])
     with pytest.raises(MessageError, match="needs a full update"):
         delta_update(0, 1, 0, known, (0.0, 0.0, 0.0), cells).values_at(cells)
+
+
+def test_a_ticks_equal_full_maps_share_one_compression_and_a_fingerprint_match_is_checked(monkeypatch):
+    """full_update's per-tick cache: equal maps get the very same payload object (one zlib pass), different
+    maps their own; a fingerprint collision (forced) still gives each map its own, correct payload."""
+    import zlib
+
+    from swarm.comm import messages
+    from swarm.knowledge import cellcodec
+    from swarm.knowledge.packed import packed_copy
+
+    rng = np.random.default_rng(3)
+    a = rng.integers(0, 3, (40, 50)).astype(np.uint8)
+    b = a.copy()
+    b[7, 9] = (b[7, 9] + 1) % 3
+
+    def payload_of(update):
+        return zlib.decompress(update.payload)
+
+    for collide in (False, True):
+        if collide:
+            monkeypatch.setattr(cellcodec, "fingerprint", lambda data: (np.uint64(1), np.uint64(2)))
+        payloads: dict = {}
+        first = messages.full_update(0, 1, 0, a, (0.0, 0.0, 0.0), payloads, packed_copy(a))
+        same = messages.full_update(1, 1, 0, a.copy(), (0.0, 0.0, 0.0), payloads)
+        other = messages.full_update(2, 1, 0, b, (0.0, 0.0, 0.0), payloads, packed_copy(b))
+        assert same.payload is first.payload
+        assert payload_of(first) == cellcodec.pack2(a.reshape(-1)).tobytes()
+        assert payload_of(other) == cellcodec.pack2(b.reshape(-1)).tobytes() != payload_of(first)
+        assert np.array_equal(other.dense(), b.reshape(-1)) and np.array_equal(same.dense(), a.reshape(-1))
