@@ -102,6 +102,9 @@ class MapSharing:
         self._whole = np.zeros(n, dtype=np.bool_)  # a full map was merged: compare the whole maps
         self._rest = np.empty(n, dtype=np.int64)   # scratch of the compiled delta merge: receivers it did not book
         self._held = np.empty(n, dtype=np.int64)   # and those it booked that hold the sender's whole map
+        # This tick's decoded full maps, by payload object (and shape): robots whose maps converged send the
+        # very same payload (messages.full_update), which each message's far-behind receivers would decode
+        self._decoded: dict[tuple[int, tuple[int, int], str], tuple[bytes, Any]] = {}
 
     def scanned(self, poses: np.ndarray) -> None:
         """The lidar scanned from ``poses`` (``float64[R, 3]``) this tick: widen each robot's box of places to
@@ -205,6 +208,7 @@ class MapSharing:
         if self.ages is not None:
             self.ages.merged(self._merges, tick)
         self._merges = []
+        self._decoded.clear()
         return touched
 
     def receive_tick(self, deliveries: Sequence[tuple[Any, Sequence[int]]], known: np.ndarray,
@@ -237,6 +241,7 @@ class MapSharing:
         if self.ages is not None:
             self.ages.merged(self._merges, tick)
         self._merges = []
+        self._decoded.clear()
         return touched
 
     def _take(self, msg: Any, ids: list[int], stack: np.ndarray, rows: np.ndarray,
@@ -425,11 +430,11 @@ class MapSharing:
         if rest.any():
             others = robots[rest]
             if planes is not None:  # a swarm: the sender's known cells, so only the pages they raise are written
-                known_cells, known_values = msg.known_cells()
+                known_cells, known_values = self._decode(msg, "known")
                 merge_into_many(stack, planes.free, planes.solid, planes.mask(others), known_cells, known_values,
                                 _NO_CELLS, _NO_DIRTY, TILE)
             else:  # a team: the whole decoded map, cheaper than listing its known cells
-                dense = msg.dense()
+                dense = self._decode(msg, "dense")
                 for row in others.tolist():
                     flat = stack[row].reshape(-1)
                     np.maximum(flat, dense, out=flat)
@@ -438,6 +443,17 @@ class MapSharing:
             msg.__dict__.pop("_known", None)
             msg.__dict__.pop("_dense", None)
         return quick, caught
+
+    def _decode(self, msg: MapUpdate, kind: str) -> Any:
+        """``msg.known_cells()`` (kind "known") or ``msg.dense()``, decoded once per payload in a tick: the same
+        payload object holds the same map (it is immutable bytes, kept alive here while the key is in use)."""
+        key = (id(msg.payload), msg.shape, kind)
+        hit = self._decoded.get(key)
+        if hit is not None and hit[0] is msg.payload:
+            return hit[1]
+        value = msg.known_cells() if kind == "known" else msg.dense()
+        self._decoded[key] = (msg.payload, value)
+        return value
 
     def _merge_cells(self, stack: np.ndarray, planes: KnowledgePlanes | None, robots: np.ndarray,
                      cells: np.ndarray, values: np.ndarray) -> None:

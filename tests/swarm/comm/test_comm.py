@@ -675,3 +675,25 @@ def test_a_ticks_equal_full_maps_share_one_compression_and_a_fingerprint_match_i
         assert payload_of(first) == cellcodec.pack2(a.reshape(-1)).tobytes()
         assert payload_of(other) == cellcodec.pack2(b.reshape(-1)).tobytes() != payload_of(first)
         assert np.array_equal(other.dense(), b.reshape(-1)) and np.array_equal(same.dense(), a.reshape(-1))
+
+
+def test_full_maps_with_one_payload_are_decoded_once_a_tick():
+    """Robots whose maps converged send the same payload object: the service decodes it once per tick (per
+    shape) and afresh after the tick, and a different payload is decoded on its own."""
+    from swarm.comm.messages import full_update
+
+    rng = np.random.default_rng(5)
+    a = rng.integers(0, 3, (30, 20)).astype(np.uint8)
+    b = a.copy()
+    b[0, 0] = 2 if b[0, 0] != 2 else 1
+    payloads: dict = {}
+    first, second = (full_update(s, 1, 0, a.copy(), (0.0, 0.0, 0.0), payloads) for s in (0, 1))
+    other = full_update(2, 1, 0, b, (0.0, 0.0, 0.0), payloads)
+    assert first.payload is second.payload and other.payload is not first.payload
+    sharing = MapSharing(3, a.shape, CommSpec())
+    cells = sharing._decode(first, "known")
+    assert sharing._decode(second, "known") is cells
+    assert np.array_equal(cells[0], np.flatnonzero(a)) and np.array_equal(cells[1], a.reshape(-1)[cells[0]])
+    assert np.array_equal(sharing._decode(other, "dense"), b.reshape(-1))
+    sharing.receive_tick([], np.zeros((3, *a.shape), np.uint8), np.ones(3, dtype=np.bool_))
+    assert sharing._decode(second, "known") is not cells  # a new tick decodes again
