@@ -361,15 +361,15 @@ def map_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[
 
 
 def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
-                payloads: dict[tuple[int, int, int], tuple[np.ndarray, bytes | None, bytes]] | None = None,
+                payloads: dict[tuple[int, int, int], tuple[np.ndarray, bytes | None, bytes, int]] | None = None,
                 packed: np.ndarray | None = None) -> MapUpdate:
     """The full-map MapUpdate of ``known`` (``pose``: three Python floats).
 
     ``payloads``: the full maps of one sharing tick so far (a fingerprint of the packed map -> (packed map,
-    plain bytes or None, payload)). Robots whose maps have converged send byte-identical full maps in the
-    same tick (a fifth to a quarter of the full maps of the paper's 16-robot runs under the materials radio,
-    docs/performance-history.md; nearly all in a 1,000-robot crowd), and zlib gives the same bytes for the
-    same input, so one compression serves them all. A match is confirmed by comparing the packed maps, so
+    plain bytes or None, payload, count of known cells)). Robots whose maps have converged send
+    byte-identical full maps in the same tick (a fifth to a quarter of the full maps of the paper's 16-robot
+    runs under the materials radio, docs/performance-history.md; nearly all in a 1,000-robot crowd), and zlib
+    gives the same bytes for the same input, so one compression (and one count) serves them all. A match is confirmed by comparing the packed maps, so
     the payload is always this map's. The plain bytes stay on the update (its receivers here skip zlib)
     only up to :data:`KEEP_PLAIN_BYTES`: a swarm asked for its full maps in one tick would otherwise hold a
     megabyte or more per robot until they are delivered (10,000 robots on 2,000 tiles: 40 GB).
@@ -383,11 +383,12 @@ def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple
         shared, payloads = None, None  # a fingerprint collision: compress this one apart
     if shared is None:
         plain = packed.tobytes()
-        shared = (packed, plain if len(plain) <= KEEP_PLAIN_BYTES else None, zlib.compress(plain, MAP_ZLIB_LEVEL))
+        shared = (packed, plain if len(plain) <= KEEP_PLAIN_BYTES else None, zlib.compress(plain, MAP_ZLIB_LEVEL),
+                  int(np.count_nonzero(known)))
         if payloads is not None:
             payloads[key] = shared
     return _update_of(shared[1], shared[2], sender=sender, seq=seq, tick=tick, full=True,
-                      shape=(int(known.shape[0]), int(known.shape[1])), count=int(np.count_nonzero(known)), pose=pose)
+                      shape=(int(known.shape[0]), int(known.shape[1])), count=shared[3], pose=pose)
 
 
 def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],

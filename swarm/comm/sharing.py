@@ -121,7 +121,7 @@ class MapSharing:
         if not (due or any(self.full_requested) or any(self.requests)):  # most ticks
             return out
         pose_rows = poses.tolist()
-        payloads: dict[tuple[int, int, int], tuple[np.ndarray, bytes | None, bytes]] = {}  # this tick's full
+        payloads: dict[tuple[int, int, int], tuple[np.ndarray, bytes | None, bytes, int]] = {}  # this tick's full
         # maps (full_update; each keyed packed map is a row of last_shared, which only its robot's turn changes)
         for i in range(self.n):
             for target in self.requests[i]:

@@ -675,6 +675,7 @@ def test_a_ticks_equal_full_maps_share_one_compression_and_a_fingerprint_match_i
         assert payload_of(first) == cellcodec.pack2(a.reshape(-1)).tobytes()
         assert payload_of(other) == cellcodec.pack2(b.reshape(-1)).tobytes() != payload_of(first)
         assert np.array_equal(other.dense(), b.reshape(-1)) and np.array_equal(same.dense(), a.reshape(-1))
+        assert (first.count, same.count, other.count) == (np.count_nonzero(a),) * 2 + (np.count_nonzero(b),)
 
 
 def test_full_maps_with_one_payload_are_decoded_once_a_tick():
