@@ -1,8 +1,8 @@
 """Swarm scale: ``python benchmarks/speed/bench_scale.py [--robots 16 64 256 1000] [--ticks 300] [--cave]``.
 
 For each robot count, one run in a fresh process: building maps sized to keep the density of the 16-robot,
-150-tile case (``--density``), robots spawned together, the frontier explorer (``--algorithm``), the full
-stack (lidar, own maps, multiwall radio, delta map sharing, metrics). Each row prints simulated ticks per
+150-tile case (``--density``), robots spawned together (``--spawn``), the frontier explorer
+(``--algorithm``), the full stack (lidar, own maps, multiwall radio, delta map sharing, metrics). Each row prints simulated ticks per
 second of the run loop (CPU time of the process, so other load on the machine counts less), microseconds
 per robot-tick, peak RSS and the loop's biggest costs (each step's share of the loop's CPU time).
 
@@ -17,6 +17,7 @@ compiled says so (run the script once more). Pin to one core for reference figur
     python benchmarks/speed/bench_scale.py --robots 16 64 256 1000 --ticks 300 --cave
     python benchmarks/speed/bench_scale.py --robots 1000@600 --ticks 1000 --algorithm greed
     python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 20000 --progress 60
+    python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 400 --spawn random
     python benchmarks/speed/bench_scale.py --robots 10000@2000 --ticks 200
     python benchmarks/speed/bench_scale.py --robots 16@150 1000@600 --ticks 1000 --pairs 3   # the 2x ratio
 """
@@ -108,7 +109,7 @@ def child(args: argparse.Namespace) -> None:
                                                                      "max_ticks": args.max_ticks}
     t0 = time.process_time()
     sim = Simulation({"seed": args.seed, "map": {"kind": args.kind, "size": args.size},
-                      "robots": {"count": args.robots, "spawn": "together"},
+                      "robots": {"count": args.robots, "spawn": args.spawn},
                       "algorithm": {"name": args.algorithm, "params": params_of(args.param)}, "stop": stop})
     setup_cpu = time.process_time() - t0
     totals.clear()
@@ -120,7 +121,8 @@ def child(args: argparse.Namespace) -> None:
     cpu = time.process_time() - t1
     wall = time.perf_counter() - wall0
     s = result.summary
-    print(json.dumps({"robots": args.robots, "size": args.size, "kind": args.kind, "algorithm": args.algorithm,
+    print(json.dumps({"robots": args.robots, "size": args.size, "kind": args.kind, "spawn": args.spawn,
+                      "algorithm": args.algorithm,
                       "params": params_of(args.param),
                       "ticks": s["ticks"], "explored": s["explored"], "stop_reason": s["stop_reason"],
                       "cpu_s": cpu, "wall_s": wall, "setup_cpu_s": setup_cpu,
@@ -164,7 +166,7 @@ def params_of(items: list[str]) -> dict:
 def run_row(args: argparse.Namespace, robots: int, size: int, kind: str) -> dict | None:
     argv = [sys.executable, __file__, "--child", "--kind", kind, "--robots-n", str(robots), "--size", str(size),
             "--algorithm", args.algorithm, "--seed", str(args.seed), "--ticks", str(args.ticks),
-            "--max-ticks", str(args.max_ticks)]
+            "--max-ticks", str(args.max_ticks), "--spawn", args.spawn]
     if args.explored is not None:
         argv += ["--explored", str(args.explored)]
     for item in args.param:
@@ -202,6 +204,8 @@ def main() -> None:
     ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
                     help="an algorithm parameter (repeatable; VALUE read as JSON, else text), e.g. recheck_ticks=100")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--spawn", default="together", choices=["together", "random"],
+                    help="robots spawned together (default) or at random over the map")
     ap.add_argument("--ticks", type=int, default=300)
     ap.add_argument("--explored", type=float, default=None, help="run to this explored fraction instead")
     ap.add_argument("--max-ticks", type=int, default=20_000, help="the cap of an --explored run")
