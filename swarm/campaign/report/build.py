@@ -109,7 +109,7 @@ def build_report(results_dir: str | Path, report_dir: str | Path, *, target: flo
     stage("loading results")
     data = load(results_dir)
     if layout_figs:
-        check_layout(layout_figs, {d: data.orders[d] for d in data.dims})
+        check_layout(layout_figs, {d: data.orders[d] for d in data.all_dims})  # a constant one too
     out = ReportWriter(report_dir, on_write=progress.wrote if progress is not None else None)
     store = ResultsStore(data.folder)
     dims = list(data.dims)

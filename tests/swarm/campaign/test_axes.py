@@ -271,3 +271,21 @@ def test_benchmark_metrics_reach_the_runs_table_and_report(tmp_path):
         assert float(row4["t90_s"]) == pytest.approx(runs.loc[4, "t90"] * 0.1)
     readme = (tmp_path / "report" / "README.md").read_text()
     assert "## Benchmark metrics" in readme and "Coverage spread" in readme
+
+
+def test_a_report_accepts_panels_that_fix_an_axis_with_one_value_so_far(tmp_path):
+    """A campaign part-way through (issue 49's ablation before its motion slice ran) has one value of an
+    axis the figures fix: the report is built, not refused for a dimension "not of this campaign"."""
+    from swarm.campaign.report import build_report
+
+    spec = parse_campaign(HEAD + 'radio = ["global"]\nmotion.model = ["maes"]\n[stop]\nmax_ticks = 20\n')
+    run_campaign(spec, tmp_path / "out", executor=make_executor(inline=True), progress=False)
+    figures = tmp_path / "figures.toml"
+    figures.write_text('[[figure]]\nname = "f"\ntitle = "t"\n[[figure.panel]]\ncompare = "algorithm"\n'
+                       '"motion.model" = "maes"\n')
+    readme = build_report(tmp_path / "out", tmp_path / "report", figures_file=figures, cell_figures=False)
+    assert (tmp_path / "report" / "figures" / "f.png").is_file() and readme.is_file()
+    figures.write_text(figures.read_text().replace('= "maes"', '= "continuous"'))
+    with pytest.raises(InvalidInput) as info:
+        build_report(tmp_path / "out", tmp_path / "report2", figures_file=figures, cell_figures=False)
+    assert info.value.field == "figure[0].panel[0].motion.model"
