@@ -69,10 +69,15 @@ class InfoAges:
     """
 
     KEEP_TICKS = 64
-    """Snapshots kept for this many ticks (deliveries take a tick, relayed ones a few; older ones are forgotten)."""
+    """Snapshots kept for at most this many ticks (deliveries take a tick, relayed ones a few; older ones are
+    forgotten)."""
 
-    def __init__(self, n: int) -> None:
+    def __init__(self, n: int, keep_ticks: int | None = None) -> None:
+        """``keep_ticks``: how long a snapshot may still be read, at most :data:`KEEP_TICKS`: one more than
+        the longest a map update can take to arrive (:func:`keep_ticks_for`), so a run keeps one or two
+        snapshots, not one per sending tick of 64 (each n^2 int32: 400 MB at 10,000 robots)."""
         self.n = n
+        self.keep = self.KEEP_TICKS if keep_ticks is None else max(1, min(int(keep_ticks), self.KEEP_TICKS))
         self.merged_at = np.zeros((n, n), dtype=np.int32)  # ticks (< 2^31: stop.max_ticks is at most 10^7)
         self.merges = 0
         # merged_at as of each tick within the last KEEP_TICKS at which updates were sent: a slot each, taken
@@ -85,7 +90,7 @@ class InfoAges:
         merges them (once per tick, whoever sends)."""
         if np.any(self._ring_tick == tick):
             return
-        stale = np.flatnonzero(self._ring_tick <= tick - self.KEEP_TICKS)
+        stale = np.flatnonzero(self._ring_tick <= tick - self.keep)
         if stale.size:
             slot = int(stale[0])
         else:
@@ -99,7 +104,7 @@ class InfoAges:
     def merged(self, merges: list[tuple[np.ndarray, int, int]], tick: int) -> None:
         """A tick's merges, each ``(receivers, sender, sent)`` (``receivers``: int64 robot ids): they merged
         the update ``sender`` broadcast at tick ``sent`` and now hold its whole map as of then. Each merge
-        reads the snapshot of when its update was sent (none older than ``KEEP_TICKS``: then only the
+        reads the snapshot of when its update was sent (none older than ``keep`` ticks: then only the
         sender's own entry counts), so their order does not matter."""
         if not merges:
             return
@@ -107,7 +112,7 @@ class InfoAges:
         ends = np.cumsum([len(m[0]) for m in merges])
         _merge_ages(self.merged_at, self._ring, self._ring_tick, receivers, ends,
                     np.array([m[1] for m in merges], dtype=np.int64), np.array([m[2] for m in merges], dtype=np.int64),
-                    tick, self.KEEP_TICKS)
+                    tick, self.keep)
         self.merges += len(receivers)
 
     def group(self, members: list[int], tick: int) -> None:
@@ -125,6 +130,14 @@ class InfoAges:
             return np.zeros(n)
         off = self.merged_at.sum(axis=1) - self.merged_at.diagonal()
         return tick - off / (n - 1)
+
+
+def keep_ticks_for(relay: str, relay_hops: int) -> int:
+    """:class:`InfoAges`'s ``keep_ticks`` for a run's ``comm.relay``: the runtime's map updates are merged one
+    tick after they are sent, or, flooded, up to ``relay_hops`` ticks after (one tick a hop), so a snapshot
+    older than that is never read for them. (An update an algorithm builds carries a tick of its choosing:
+    older than this, it counts only for its sender's own entry, as any update older than KEEP_TICKS did.)"""
+    return (relay_hops if relay == "flood" else 1) + 1
 
 
 TOP = 8

@@ -102,6 +102,36 @@ def test_an_update_merged_keep_ticks_after_it_was_sent_counts_only_for_its_sende
     assert ages.merged_at[2].tolist() == [0, now, 0]
 
 
+def test_a_run_keeps_snapshots_only_as_long_as_its_updates_travel(monkeypatch):
+    """InfoAges keeps a snapshot for one tick more than a map update can take to arrive (a tick; flooded, a
+    tick a hop): one or two of them, not one per sending tick of KEEP_TICKS (n^2 int32 each). Ages, merges
+    and every other result are those of the 64-tick window, direct and flooded."""
+    from swarm.sim import loop
+    from swarm.results.metrics import keep_ticks_for
+
+    assert keep_ticks_for("none", 4) == 2 and keep_ticks_for("flood", 4) == 5
+    ages = InfoAges(3, keep_ticks=2)
+    for tick in range(1, 30):
+        ages.sent(tick)                                   # full maps asked for: updates every tick
+    assert len(ages._ring) == 2
+    ages.merged([(np.array([0]), 1, 29)], tick=30)        # a tick old: read from its snapshot
+    ages.merged([(np.array([1]), 2, 28)], tick=30)        # two: older than any update of the run
+    assert ages.merged_at[0, 1] == 30 and ages.merged_at[1, 2] == 30
+    for comm in ({"share_every": 1}, {"relay": "flood", "relay_hops": 3, "loss": 0.2}):
+        spec = {"seed": 4, "map": {"kind": "building", "size": 40}, "robots": {"count": 6, "spawn": "random"},
+                "algorithm": {"name": "frontier"}, "comm": comm, "stop": {"max_ticks": 150}}
+        kept = Simulation(spec)
+        result = kept.run()
+        assert len(kept.ages._ring) <= keep_ticks_for(kept.comm.relay, kept.comm.relay_hops)
+        monkeypatch.setattr(loop, "keep_ticks_for", lambda relay, hops: InfoAges.KEEP_TICKS)
+        wide = Simulation(spec)
+        other = wide.run()
+        assert other.comm == result.comm and other.timeseries == result.timeseries
+        assert len(wide.ages._ring) > len(kept.ages._ring)
+        assert result.comm["summary"]["map_merges"] > 0
+        monkeypatch.undo()
+
+
 def test_a_gap_in_deltas_stops_counting_merges_until_the_full_map():
     """A delta after a lost one leaves the receiver without the sender's whole map: no merge counted (age
     keeps growing) until the full map it asks for arrives."""
