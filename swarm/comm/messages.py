@@ -369,10 +369,11 @@ def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple
     plain bytes or None, payload, count of known cells)). Robots whose maps have converged send
     byte-identical full maps in the same tick (a fifth to a quarter of the full maps of the paper's 16-robot
     runs under the materials radio, docs/performance-history.md; nearly all in a 1,000-robot crowd), and zlib
-    gives the same bytes for the same input, so one compression (and one count) serves them all. A match is confirmed by comparing the packed maps, so
-    the payload is always this map's. The plain bytes stay on the update (its receivers here skip zlib)
-    only up to :data:`KEEP_PLAIN_BYTES`: a swarm asked for its full maps in one tick would otherwise hold a
-    megabyte or more per robot until they are delivered (10,000 robots on 2,000 tiles: 40 GB).
+    gives the same bytes for the same input, so one compression (and one count) serves them all. A match is
+    confirmed by comparing the packed maps, so the payload is always this map's. The plain bytes stay on the
+    update (its receivers here skip zlib) only up to :data:`KEEP_PLAIN_BYTES`: a swarm asked for its full
+    maps in one tick would otherwise hold a megabyte or more per robot until they are delivered (10,000
+    robots on 2,000 tiles: 40 GB).
     ``packed``: ``known`` already packed 2 bits a cell (:func:`swarm.knowledge.packed.packed_copy`; the
     map-sharing service keeps it), unchanged while ``payloads`` is in use."""
     if packed is None:
