@@ -81,7 +81,7 @@ class InfoAges:
         self.merged_at = np.zeros((n, n), dtype=np.int32)  # ticks (< 2^31: stop.max_ticks is at most 10^7)
         self.merges = 0
         # merged_at as of each tick within the last `keep` at which updates were sent: a slot each, taken
-        # as needed (robots sharing every 10 ticks fill 7, not 64: 8 MB each for 1,000 robots)
+        # as needed (one or two with keep_ticks_for; 4 MB each for 1,000 robots)
         self._ring = np.zeros((0, n, n), dtype=np.int32)
         self._ring_tick = np.zeros(0, dtype=np.int64)
 
