@@ -2,9 +2,10 @@
 
 For each robot count, one run in a fresh process: building maps sized to keep the density of the 16-robot,
 150-tile case (``--density``), robots spawned together (``--spawn``), the frontier explorer
-(``--algorithm``), the full stack (lidar, own maps, multiwall radio, delta map sharing, metrics). Each row prints simulated ticks per
-second of the run loop (CPU time of the process, so other load on the machine counts less), microseconds
-per robot-tick, peak RSS and the loop's biggest costs (each step's share of the loop's CPU time).
+(``--algorithm``), the full stack (lidar, own maps, multiwall radio, delta map sharing, metrics). Each row
+prints simulated ticks per second of the run loop (CPU time of the process, so other load on the machine
+counts less), microseconds per robot-tick, peak RSS and the loop's biggest costs (each step's share of the
+loop's CPU time).
 
 A row is ``R`` (robots; the map sized for the density) or ``R@S`` (robots on an S-tile map: ``1000@600``);
 ``--cave`` adds a cave row for every count. ``--ticks T`` runs T ticks; ``--explored F`` runs until a
