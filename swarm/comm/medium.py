@@ -78,6 +78,12 @@ class CommSpec:
         check_int("comm.bandwidth", self.bandwidth, 0)
         check_float("comm.neighbour_range_m", self.neighbour_range_m, 0.0)
 
+    @property
+    def longest_delivery_ticks(self) -> int:
+        """The most ticks after it is sent that a broadcast can still reach a robot: the next tick, or flooded,
+        one tick a hop (what the age-of-information snapshots must outlast, swarm.results.metrics.InfoAges)."""
+        return self.relay_hops if self.relay == "flood" else 1
+
 
 @dataclass
 class Envelope:

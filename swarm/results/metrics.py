@@ -74,14 +74,16 @@ class InfoAges:
 
     def __init__(self, n: int, keep_ticks: int | None = None) -> None:
         """``keep_ticks``: how long a snapshot may still be read, at most :data:`KEEP_TICKS`: one more than
-        the longest a map update can take to arrive (:func:`keep_ticks_for`), so a run keeps one or two
-        snapshots, not one per sending tick of 64 (each n^2 int32: 400 MB at 10,000 robots)."""
+        the longest a map update can take to arrive (``CommSpec.longest_delivery_ticks``), so a run keeps one
+        or two snapshots, not one per sending tick of 64 (each n^2 int32: 400 MB at 10,000 robots). An update
+        an algorithm builds carries a tick of its choosing: older than that, it counts only for its sender's
+        own entry, as any update older than KEEP_TICKS did."""
         self.n = n
         self.keep = self.KEEP_TICKS if keep_ticks is None else max(1, min(int(keep_ticks), self.KEEP_TICKS))
         self.merged_at = np.zeros((n, n), dtype=np.int32)  # ticks (< 2^31: stop.max_ticks is at most 10^7)
         self.merges = 0
         # merged_at as of each tick within the last `keep` at which updates were sent: a slot each, taken
-        # as needed (one or two with keep_ticks_for; 4 MB each for 1,000 robots)
+        # as needed (one or two for a run without flooding; 4 MB each for 1,000 robots)
         self._ring = np.zeros((0, n, n), dtype=np.int32)
         self._ring_tick = np.zeros(0, dtype=np.int64)
 
@@ -130,14 +132,6 @@ class InfoAges:
             return np.zeros(n)
         off = self.merged_at.sum(axis=1) - self.merged_at.diagonal()
         return tick - off / (n - 1)
-
-
-def keep_ticks_for(relay: str, relay_hops: int) -> int:
-    """:class:`InfoAges`'s ``keep_ticks`` for a run's ``comm.relay``: the runtime's map updates are merged one
-    tick after they are sent, or, flooded, up to ``relay_hops`` ticks after (one tick a hop), so a snapshot
-    older than that is never read for them. (An update an algorithm builds carries a tick of its choosing:
-    older than this, it counts only for its sender's own entry, as any update older than KEEP_TICKS did.)"""
-    return (relay_hops if relay == "flood" else 1) + 1
 
 
 TOP = 8

@@ -49,7 +49,7 @@ from swarm.navigation.maes_drive import MaesDriveFleet
 from swarm.navigation.navigator import NavigationFleet
 from swarm.plugins import explorers as registry
 from swarm.results.mapquality import CorrectlyExplored
-from swarm.results.metrics import CommMetrics, FreeCounts, InfoAges, Metrics, keep_ticks_for
+from swarm.results.metrics import CommMetrics, FreeCounts, InfoAges, Metrics
 from swarm.results.result import RunResult
 from swarm.transport import AgentHost, PhaseTimes, TickBatch, make_host
 from swarm.transport.auth import RunSecret
@@ -172,7 +172,7 @@ class Simulation:
                              packet_errors=self.links.packet_errors, error_rng=self.streams.channel)
         self._reach = int(np.ceil(self.lidar_params.range_m / CELL_M)) + 2  # cells the lidar may change, around a robot
         # who last merged whose map, when (age of information); snapshots kept as long as updates travel
-        self.ages = InfoAges(n, keep_ticks_for(self.comm.relay, self.comm.relay_hops))
+        self.ages = InfoAges(n, self.comm.longest_delivery_ticks + 1)
         # With a localisation error robots map from where they believe they are (swarm.world.localization),
         # so a cell may turn from FREE to SOLID: maps are then not monotone, as under the log-odds lidar.
         loc = self.spec.localization

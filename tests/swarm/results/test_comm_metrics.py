@@ -106,10 +106,10 @@ def test_a_run_keeps_snapshots_only_as_long_as_its_updates_travel(monkeypatch):
     """InfoAges keeps a snapshot for one tick more than a map update can take to arrive (a tick; flooded, a
     tick a hop): one or two of them, not one per sending tick of KEEP_TICKS (n^2 int32 each). Ages, merges
     and every other result are those of the 64-tick window, direct and flooded."""
-    from swarm.sim import loop
-    from swarm.results.metrics import keep_ticks_for
+    from swarm.comm.medium import CommSpec
 
-    assert keep_ticks_for("none", 4) == 2 and keep_ticks_for("flood", 4) == 5
+    assert CommSpec(relay_hops=4).longest_delivery_ticks + 1 == 2
+    assert CommSpec(relay="flood", relay_hops=4).longest_delivery_ticks + 1 == 5
     ages = InfoAges(3, keep_ticks=2)
     for tick in range(1, 30):
         ages.sent(tick)                                   # full maps asked for: updates every tick
@@ -122,8 +122,8 @@ def test_a_run_keeps_snapshots_only_as_long_as_its_updates_travel(monkeypatch):
                 "algorithm": {"name": "frontier"}, "comm": comm, "stop": {"max_ticks": 150}}
         kept = Simulation(spec)
         result = kept.run()
-        assert len(kept.ages._ring) <= keep_ticks_for(kept.comm.relay, kept.comm.relay_hops)
-        monkeypatch.setattr(loop, "keep_ticks_for", lambda relay, hops: InfoAges.KEEP_TICKS)
+        assert len(kept.ages._ring) <= kept.comm.longest_delivery_ticks + 1
+        monkeypatch.setattr(CommSpec, "longest_delivery_ticks", property(lambda self: InfoAges.KEEP_TICKS))
         wide = Simulation(spec)
         other = wide.run()
         assert other.comm == result.comm and other.timeseries == result.timeseries
