@@ -35,6 +35,7 @@ import numba
 import numpy as np
 import pymunk
 import pymunk.batch as batch
+from scipy.spatial import cKDTree
 
 from maps import CELL_M, Map
 from swarm.base.errors import InvalidInput
@@ -432,15 +433,30 @@ def _check_poses(truth: Map, poses: Any, radius: float) -> np.ndarray:
         if disc_hits_solid(truth.solid, x, y, radius):
             raise InvalidInput(f"poses[{i}]", (float(x), float(y)),
                                f"a position whose {radius:g} m disc lies in free space")
-    if arr.shape[0] > 1:
-        d = np.hypot(arr[:, None, 0] - arr[None, :, 0], arr[:, None, 1] - arr[None, :, 1])
-        d[np.diag_indices_from(d)] = np.inf
-        i, j = np.unravel_index(int(np.argmin(d)), d.shape)
-        if d[i, j] < 2.0 * radius * (1.0 - 1e-9):
-            raise InvalidInput(f"poses[{max(i, j)}]", tuple(float(v) for v in arr[max(i, j), :2]),
-                               f"a position at least {2 * radius:g} m from every other robot "
-                               f"(robot {min(i, j)} is {d[i, j]:.3f} m away)")
+    close = _closest_overlap(arr[:, :2], 2.0 * radius * (1.0 - 1e-9))
+    if close is not None:
+        i, j, d = close
+        raise InvalidInput(f"poses[{j}]", tuple(float(v) for v in arr[j, :2]),
+                           f"a position at least {2 * radius:g} m from every other robot "
+                           f"(robot {i} is {d:.3f} m away)")
     return arr
+
+
+def _closest_overlap(xy: np.ndarray, limit: float) -> tuple[int, int, float] | None:
+    """The closest pair of points ``(i, j, distance)``, ``i < j``, if it is closer than ``limit`` (ties: the
+    smallest ``i``, then ``j``), else None. Candidates come from a k-d tree (a 10,000-robot swarm's all-pairs
+    matrix would take 800 MB); their distances are ``numpy.hypot``'s, as the all-pairs check computed them."""
+    if len(xy) < 2:
+        return None
+    pairs = cKDTree(xy).query_pairs(limit * (1.0 + 1e-6) + 1e-12, output_type="ndarray")
+    if not len(pairs):
+        return None
+    pairs = np.sort(pairs, axis=1)
+    d = np.hypot(xy[pairs[:, 0], 0] - xy[pairs[:, 1], 0], xy[pairs[:, 0], 1] - xy[pairs[:, 1], 1])
+    best = np.flatnonzero(d == d.min())
+    i, j = min((int(pairs[k, 0]), int(pairs[k, 1])) for k in best)
+    dist = float(d[best[0]])
+    return (i, j, dist) if dist < limit else None
 
 
 def _wrap(angle: np.ndarray) -> np.ndarray:

@@ -77,17 +77,21 @@ def _bfs_order(region: np.ndarray, start: tuple[int, int]):
 
 
 def _spaced(order, count: int) -> list[tuple[int, int]]:
-    """Greedily take cells in ``order`` whose centres are at least SPACING_M from those already taken."""
+    """Greedily take cells in ``order`` whose centres are at least SPACING_M from those already taken.
+
+    The cells taken so far are kept in a set and each candidate looks only at the offsets closer than the
+    spacing (a swarm's 10,000 robots would otherwise compare every candidate with every robot taken)."""
     min_cells2 = (SPACING_M / 0.5) ** 2
+    reach = int(np.ceil(np.sqrt(min_cells2)))
+    near = [(dr, dc) for dr in range(-reach, reach + 1) for dc in range(-reach, reach + 1)
+            if dr * dr + dc * dc < min_cells2]
     taken: list[tuple[int, int]] = []
-    arr = np.empty((count, 2), dtype=np.float64)
+    occupied: set[tuple[int, int]] = set()
     for cell in order:
         r, c = int(cell[0]), int(cell[1])
-        if taken:
-            d2 = (arr[:len(taken), 0] - r) ** 2 + (arr[:len(taken), 1] - c) ** 2
-            if d2.min() < min_cells2:
-                continue
-        arr[len(taken)] = (r, c)
+        if any((r + dr, c + dc) in occupied for dr, dc in near):
+            continue
+        occupied.add((r, c))
         taken.append((r, c))
         if len(taken) == count:
             break

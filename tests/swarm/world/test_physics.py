@@ -393,3 +393,21 @@ def test_disc_hits_solid() -> None:
     assert disc_hits_solid(solid, 0.7, 0.7, 0.3)                # the corner cell (0.5, 0.5)-(1.0, 1.0)
     assert not disc_hits_solid(solid, 0.5 + 0.3 / math.sqrt(2) + 0.5, 0.5 + 0.3 / math.sqrt(2) + 0.5, 0.3)
     assert disc_hits_solid(solid, 4.9, 2.5, 0.3)                # off the raster
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_the_overlap_check_finds_the_pair_the_all_pairs_matrix_finds(seed: int) -> None:
+    from swarm.world.physics import _closest_overlap
+
+    rng = np.random.default_rng(seed)
+    limit = 0.6 * (1.0 - 1e-9)
+    for _ in range(200):
+        n = int(rng.integers(2, 40))
+        xy = rng.uniform(0, 6, (n, 2))
+        if seed % 2:  # on a 0.3 m grid: exact ties and pairs exactly at the limit
+            xy = np.round(xy / 0.3) * 0.3
+        d = np.hypot(xy[:, None, 0] - xy[None, :, 0], xy[:, None, 1] - xy[None, :, 1])
+        d[np.diag_indices_from(d)] = np.inf
+        i, j = np.unravel_index(int(np.argmin(d)), d.shape)
+        expected = (min(i, j), max(i, j), float(d[i, j])) if d[i, j] < limit else None
+        assert _closest_overlap(xy, limit) == expected

@@ -34,3 +34,25 @@ def test_together_is_packed_and_random_is_spread():
 def test_too_many_robots_is_a_clear_error():
     with pytest.raises(InvalidInput, match="robots.count"):
         spawn(generate("building", 20, 0), "random", 5000, np.random.default_rng(0))
+
+
+def _spaced_all_pairs(order, count):
+    """The greedy spacing rule as first written: each candidate against every cell taken so far."""
+    taken = []
+    for r, c in order:
+        if taken and min((r - a) ** 2 + (c - b) ** 2 for a, b in taken) < (SPACING_M / 0.5) ** 2:
+            continue
+        taken.append((int(r), int(c)))
+        if len(taken) == count:
+            break
+    return taken
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_spacing_by_neighbour_lookup_takes_the_cells_the_all_pairs_rule_takes(seed):
+    from swarm.world.spawn import _spaced
+
+    rng = np.random.default_rng(seed)
+    order = rng.integers(0, 25, size=(600, 2))  # repeats and clusters, as a together spawn's BFS gives
+    assert _spaced(order, 80) == _spaced_all_pairs(order, 80)
+    assert _spaced(order, 10_000) == _spaced_all_pairs(order, 10_000)  # fewer fit: both stop at the same place
