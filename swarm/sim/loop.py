@@ -209,10 +209,11 @@ class Simulation:
 
     def _read_only(self, i: int) -> np.ndarray:
         """Robot i's map as its algorithm sees it: read-only, and vouched for (values 0..2 by construction),
-        so the grid helpers the algorithm calls on it every few ticks do not rescan it."""
+        so the grid helpers the algorithm calls on it every few ticks do not rescan it. Called on the new
+        all-zero maps only (set-up)."""
         view = self.known[i].view()
         view.flags.writeable = False
-        return vouch_known(view)
+        return vouch_known(view, zeros=True)
 
     def knowledge_journal(self) -> KnowledgeJournal:
         """A new journal of where each robot's map is written from now on (:mod:`swarm.knowledge.journal`),

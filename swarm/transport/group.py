@@ -45,7 +45,8 @@ class AgentGroup:
         self.ids = [r.robot.id for r in resets]
         self.row_of = {robot: k for k, robot in enumerate(self.ids)}
         self.maps: np.ndarray | None = np.zeros((len(resets), *first.map_shape), dtype=np.uint8)
-        self._views = [vouch_known(_read_only(m)) for m in self.maps]  # values are checked (0..2) before written
+        # new zeros (not scanned); a packet's cells are checked (0..2) before they are written
+        self._views = [vouch_known(_read_only(m), zeros=True) for m in self.maps]
         self._shared: Sequence[np.ndarray] | None = None
         self._decode = ObsBatchDecoder(self.n_robots, self.maps[0].size)
         self._acts = []

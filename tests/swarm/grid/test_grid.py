@@ -276,6 +276,18 @@ def test_vouched_runtime_view_is_not_rescanned_but_nothing_else_is_trusted() -> 
         vouch_known(bad)
 
 
+def test_new_zero_maps_are_vouched_for_without_a_scan_but_still_shape_checked() -> None:
+    from swarm.grid._validate import check_known, vouch_known
+
+    fresh = np.zeros((5, 7), dtype=np.uint8)
+    view = fresh.view()
+    view.flags.writeable = False
+    assert vouch_known(view, zeros=True) is view and check_known(view) is view
+    for bad in (np.zeros((5, 7), dtype=np.uint8), np.zeros(5, dtype=np.uint8), np.zeros((2, 2), dtype=np.int16)):
+        with pytest.raises(InvalidInput, match="view"):
+            vouch_known(bad, zeros=True)  # writable, not 2-D, not uint8: refused before anything is trusted
+
+
 # -------------------------------------------------------------------------------------------- plan ----
 def test_plan_in_open_space_has_the_octile_length() -> None:
     space = np.ones((20, 30), dtype=bool)
