@@ -22,6 +22,7 @@ from numba import njit
 from swarm.base.types import CELL_M
 from swarm.knowledge.maps import (check_writable_map, mark_tiles, merge_cells_many, merge_cells_many_changed,
                                   merge_cells_many_counted, merge_delta_booked_kernel as _merge_delta_booked)
+from swarm.knowledge.cellcodec import values_at2
 from swarm.knowledge.packed import packed_copy, packed_size, sync_box_tiles_packed, sync_changes_packed
 from swarm.knowledge.planes import KnowledgePlanes, book_receivers, merge_into_many, note_cells, note_map
 from swarm.results.metrics import FreeCounts, InfoAges
@@ -65,6 +66,7 @@ class MapSharing:
         knowledge planes (:mod:`swarm.knowledge.planes`), which every merge then goes through: an update
         costs a few words a cell for all its receivers, and writes only the maps it raises."""
         self.n = n
+        self.shape = (int(shape[0]), int(shape[1]))
         self.planes = planes
         self.spec = spec
         self.enabled = spec.map_sharing in ("delta", "full") and n > 1  # the maes modes: swarm.comm.maes_merge
@@ -487,17 +489,29 @@ class MapSharing:
         if not groups:
             return []
         out = []
-        every: np.ndarray | None = None  # the furthest-behind group's cells and values: the others' hold subsets
-        for a in sorted(groups):
-            union = np.unique(np.concatenate([c for seq, c in history if seq > a] + [cells]))
-            if every is None:
-                every, all_values = union, msg.values_at(union)  # (one read of the map's bytes per message)
-            values = all_values[np.searchsorted(every, union)]
+        values_at = self._full_values(msg)
+        union, upto = cells, prev  # the cells of updates upto + 1 .. msg.seq, grown from the nearest group back
+        steps = dict(history)
+        for a in sorted(groups, reverse=True):
+            while upto > a:
+                union = union_sorted(union, steps[upto])
+                upto -= 1
             members = np.zeros(len(ids), dtype=np.bool_)
             members[groups[a]] = True
-            self._merge_cells(stack, planes, robots[members], union, values)
+            self._merge_cells(stack, planes, robots[members], union, values_at(union))
             out.append((members, union))
+        out.reverse()  # furthest behind first, as before
         return out
+
+    def _full_values(self, msg: MapUpdate) -> Any:
+        """How to read full map ``msg``'s values at given cells: from its sender's packed copy while that still
+        holds the map sent (the sender has built no update since: its sequence number is the message's, and
+        ``last_shared[sender]`` changes only with a new update), else from the message's bytes (a swarm's
+        full maps keep only their zlib payload: each read would decompress a megabyte)."""
+        if self.last_shared is not None and self.seq[msg.sender] == msg.seq and msg.shape == self.shape:
+            packed = self.last_shared[msg.sender]
+            return lambda cells: values_at2(packed, cells)
+        return msg.values_at
 
     def _book_full(self, msg: MapUpdate, robots: np.ndarray, quick: np.ndarray,
                    caught: list[tuple[np.ndarray, np.ndarray]], width: int, ours: bool) -> None:
@@ -555,3 +569,32 @@ def _grow_boxes(boxes: np.ndarray, poses: np.ndarray, reach: int, cell: float) -
             boxes[k, 1] = max(boxes[k, 1], r + reach + 1)
             boxes[k, 2] = min(boxes[k, 2], c - reach)
             boxes[k, 3] = max(boxes[k, 3], c + reach + 1)
+
+
+@njit(cache=True)
+def union_sorted(a: np.ndarray, b: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """The ascending distinct union of two ascending distinct int64 arrays, in one pass (the cells of a sender's
+    missed updates: each update's cells are sorted)."""
+    out = np.empty(a.shape[0] + b.shape[0], dtype=np.int64)
+    i = j = m = 0
+    while i < a.shape[0] and j < b.shape[0]:
+        if a[i] < b[j]:
+            out[m] = a[i]
+            i += 1
+        elif b[j] < a[i]:
+            out[m] = b[j]
+            j += 1
+        else:
+            out[m] = a[i]
+            i += 1
+            j += 1
+        m += 1
+    while i < a.shape[0]:
+        out[m] = a[i]
+        i += 1
+        m += 1
+    while j < b.shape[0]:
+        out[m] = b[j]
+        j += 1
+        m += 1
+    return out[:m]

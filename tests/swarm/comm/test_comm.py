@@ -698,3 +698,80 @@ def test_full_maps_with_one_payload_are_decoded_once_a_tick():
     assert np.array_equal(sharing._decode(other, "dense"), b.reshape(-1))
     sharing.receive_tick([], np.zeros((3, *a.shape), np.uint8), np.ones(3, dtype=np.bool_))
     assert sharing._decode(second, "known") is not cells  # a new tick decodes again
+
+
+def test_catching_up_several_receivers_from_kept_or_delayed_full_maps_gives_the_same_result(monkeypatch):
+    """Receivers that missed different runs of robot 0's updates catch up from one full map in groups (each the
+    union of the updates it missed), read from robot 0's kept packed map while that still holds the map sent,
+    or from the message's bytes when the map arrives after robot 0 built a newer update (a delivery delayed a
+    tick): every map, book and message is that of a service that merges whole maps (``CATCH_UP`` off), tick by
+    tick. (Only robot 0's updates travel, so no relay brings its cells to a receiver another way.)"""
+    from swarm.comm import sharing as sharing_module
+
+    shape, n = (48, 48), 6
+    drops = {2: {3, 4, 12}, 3: {4, 12, 13}, 4: {2, 3, 4, 12}, 5: {3, 13}}  # receiver: robot 0's updates it misses
+    results = []
+    for catch_up in (True, False):
+        rng = np.random.default_rng(9)
+        monkeypatch.setattr(sharing_module, "CATCH_UP", catch_up)
+        reads = {"kept": 0, "bytes": 0}
+        monkeypatch.setattr(sharing_module, "values_at2",
+                            lambda packed, cells, _f=sharing_module.values_at2, _r=reads: (
+                                _r.__setitem__("kept", _r["kept"] + 1), _f(packed, cells))[1])
+        original_values_at = MapUpdate.values_at
+        monkeypatch.setattr(MapUpdate, "values_at", lambda self, cells, _r=reads: (
+            _r.__setitem__("bytes", _r["bytes"] + 1), original_values_at(self, cells))[1])
+        service = MapSharing(n, shape, CommSpec(share_every=1), lidar_reach=3, monotone=True)
+        known = np.zeros((n, *shape), np.uint8)
+        groups_seen: list[int] = []
+        original = service._catch_up
+
+        def spy(msg, ids, *args, _original=original, _seen=groups_seen):
+            groups = _original(msg, ids, *args)
+            _seen.append(len(groups))
+            return groups
+
+        service._catch_up = spy
+        live = np.ones(n, bool)
+        pending: list = []
+        later: list = []
+        sent = []
+        for tick in range(20):
+            poses = np.column_stack([rng.uniform(1, 23, n), rng.uniform(1, 23, n), np.zeros(n)])
+            for r in range(n):
+                rr = np.clip(int(poses[r, 1] / CELL_M) + rng.integers(-3, 4, 8), 0, shape[0] - 1)
+                cc = np.clip(int(poses[r, 0] / CELL_M) + rng.integers(-3, 4, 8), 0, shape[1] - 1)
+                known[r, rr, cc] = np.maximum(known[r, rr, cc], rng.integers(1, 3, 8).astype(np.uint8))
+            service.scanned(poses)
+            service.receive_tick(pending, known, live, tick=tick)
+            out = service.outgoing(tick, known, poses)
+            sent.append(([[encode(m) for m in msgs] for msgs in out], known.tobytes()))
+            pending, later = later, []
+            for s in range(n):
+                for m in out[s]:
+                    to = [r for r in range(n) if r != s]
+                    if s != 0 and isinstance(m, MapUpdate):
+                        to = []  # only robot 0's updates travel: no relay brings its cells another way
+                    if s == 0 and isinstance(m, MapUpdate) and not m.full:
+                        to = [r for r in to if m.seq not in drops.get(r, ())]
+                    if s == 0 and isinstance(m, MapUpdate) and m.full and tick >= 10:
+                        later.append((m, to))  # arrives after robot 0's next update
+                    else:
+                        pending.append((m, to))
+        results.append((known.copy(), service.seen_seq.copy(), sent, groups_seen, dict(reads)))
+    (maps_on, seen_on, sent_on, groups_on, reads_on), (maps_off, seen_off, sent_off, groups_off, _) = results
+    assert np.array_equal(maps_on, maps_off) and np.array_equal(seen_on, seen_off) and sent_on == sent_off
+    assert max(groups_on) >= 2, "one full map caught up receivers that had missed different updates"
+    assert reads_on["kept"] and reads_on["bytes"], "both ways of reading the full map were taken"
+    assert not groups_off
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_union_of_sorted_cell_lists_is_numpys(seed):
+    from swarm.comm.sharing import union_sorted
+
+    rng = np.random.default_rng(seed)
+    for _ in range(50):
+        a = np.unique(rng.integers(0, 300, rng.integers(0, 80)))
+        b = np.unique(rng.integers(0, 300, rng.integers(0, 80)))
+        assert np.array_equal(union_sorted(a, b), np.union1d(a, b))
