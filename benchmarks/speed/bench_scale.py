@@ -108,6 +108,14 @@ def child(args: argparse.Namespace) -> None:
     time_phases(totals)
     stop = {"max_ticks": args.ticks} if args.explored is None else {"explored": args.explored,
                                                                      "max_ticks": args.max_ticks}
+    tick = [-1]  # the tick being run, for the memory watchdog's report
+    sense = Simulation.sense
+
+    def sense_and_note(self, state, _sense=sense):
+        tick[0] = state.tick
+        return _sense(self, state)
+    Simulation.sense = sense_and_note
+    memory_watchdog(args.limit_gb, tick)
     t0 = time.process_time()
     sim = Simulation({"seed": args.seed, "map": {"kind": args.kind, "size": args.size},
                       "robots": {"count": args.robots, "spawn": args.spawn},
@@ -129,6 +137,34 @@ def child(args: argparse.Namespace) -> None:
                       "cpu_s": cpu, "wall_s": wall, "setup_cpu_s": setup_cpu,
                       "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
                       "phases": totals, "compiled": compiled[0]}))
+
+
+def memory_limit_gb(text: str | None) -> float:
+    """``--limit-gb``: the value given, else 80 % of the machine's memory."""
+    if text is not None:
+        return float(text)
+    with open("/proc/meminfo") as f:
+        total_kb = next(int(line.split()[1]) for line in f if line.startswith("MemTotal"))
+    return 0.8 * total_kb / 2**20
+
+
+def memory_watchdog(limit_gb: float, tick: list[int]) -> None:
+    """End this child (exit 3) once its resident memory passes ``limit_gb``, printing a JSON line with the tick
+    it was at: a 10,000-robot row can otherwise take the machine's memory (and the other rows with it)."""
+    import os
+    import threading
+
+    def watch() -> None:
+        while True:
+            with open("/proc/self/status") as f:
+                rss_gb = next(int(line.split()[1]) for line in f if line.startswith("VmRSS")) / 2**20
+            if rss_gb > limit_gb:
+                print(json.dumps({"stopped": "memory", "rss_gb": rss_gb, "limit_gb": limit_gb, "tick": tick[0],
+                                  "cpu_s": time.process_time()}), flush=True)
+                os._exit(3)
+            time.sleep(0.5)
+
+    threading.Thread(target=watch, daemon=True).start()
 
 
 def report_progress(sim, every_s: float) -> None:
@@ -172,14 +208,21 @@ def run_row(args: argparse.Namespace, robots: int, size: int, kind: str) -> dict
         argv += ["--explored", str(args.explored)]
     for item in args.param:
         argv += ["--param", item]
-    argv += ["--progress", str(args.progress)]
+    argv += ["--progress", str(args.progress), "--limit-gb", str(args.limit_gb)]
     proc = subprocess.run(argv, stdout=subprocess.PIPE, stderr=None if args.progress > 0 else subprocess.PIPE,
                           text=True)
+    lines = proc.stdout.strip().splitlines()
+    if proc.returncode == 3 and lines and '"stopped"' in lines[-1]:
+        stop = json.loads(lines[-1])
+        where = "in set-up" if stop["tick"] < 0 else f"at tick {stop['tick']}"
+        print(f"{robots:>6} {kind} {size}: stopped {where}: RSS passed {stop['limit_gb']:g} GB "
+              f"({stop['rss_gb']:.1f} GB after {stop['cpu_s']:.0f} s CPU)", flush=True)
+        return None
     if proc.returncode != 0:
         tail = (proc.stderr or "").strip().splitlines()[-1:] or [f"exit status {proc.returncode}"]
         print(f"{robots:>6} {kind} {size}: failed ({tail[0][:120]})", flush=True)
         return None
-    return json.loads(proc.stdout.strip().splitlines()[-1])
+    return json.loads(lines[-1])
 
 
 def show(row: dict, top: int) -> None:
@@ -216,16 +259,19 @@ def main() -> None:
     ap.add_argument("--json", type=Path, default=None, help="write every row's figures here")
     ap.add_argument("--progress", type=float, default=0.0, metavar="SECONDS",
                     help="each child prints its tick, explored fraction and RSS to stderr every SECONDS of CPU")
+    ap.add_argument("--limit-gb", type=float, default=None,
+                    help="stop a row whose resident memory passes this many GB (default: 80 %% of the machine's)")
     ap.add_argument("--child", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--robots-n", type=int, default=16, help=argparse.SUPPRESS)
     ap.add_argument("--size", type=int, default=150, help=argparse.SUPPRESS)
     args = ap.parse_args()
+    args.limit_gb = memory_limit_gb(None if args.limit_gb is None else str(args.limit_gb))
     if args.child:
         args.robots = args.robots_n
         child(args)
         return
-    if args.ticks < 1 or args.max_ticks < 1 or args.density <= 0 or args.pairs < 1:
-        ap.error("--ticks, --max-ticks and --pairs must be >= 1 and --density > 0")
+    if args.ticks < 1 or args.max_ticks < 1 or args.density <= 0 or args.pairs < 1 or args.limit_gb <= 0:
+        ap.error("--ticks, --max-ticks and --pairs must be >= 1, --density and --limit-gb > 0")
     rows = [parse_row(text, args.density) for text in args.robots]
     kinds = [args.kind] + (["cave"] if args.cave and args.kind != "cave" else [])
     print(f"{'robots':>6} {'map':>8} {'tiles':>5} {'ticks':>6} {'ticks/s':>9} {'us/r-t':>9} {'RSS MB':>8} "
