@@ -12,6 +12,8 @@ A row is ``R`` (robots; the map sized for the density) or ``R@S`` (robots on an 
 fraction F of the map is explored (capped by ``--max-ticks``). Each child first runs a tiny warm-up (8
 robots, 20 ticks) so that the timed run does not pay numba's kernel loads; a row whose kernels had to be
 compiled says so (run the script once more). Pin to one core for reference figures: ``taskset -c 0``.
+A row whose resident memory passes ``--limit-gb`` (default 80 % of the machine's) is stopped and reported
+with the tick it reached (``--limit-gb 8``: the issue-47 bound for 10,000 robots).
 
 ``--json FILE`` writes every row's figures. The issue-47 figures:
 
@@ -19,7 +21,7 @@ compiled says so (run the script once more). Pin to one core for reference figur
     python benchmarks/speed/bench_scale.py --robots 1000@600 --ticks 1000 --algorithm greed
     python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 20000 --progress 60
     python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 400 --spawn random
-    python benchmarks/speed/bench_scale.py --robots 10000@2000 --ticks 200
+    python benchmarks/speed/bench_scale.py --robots 10000@2000 --ticks 200 --limit-gb 8
     python benchmarks/speed/bench_scale.py --robots 16@150 1000@600 --ticks 1000 --pairs 3   # the 2x ratio
 """
 
