@@ -502,7 +502,7 @@ def _cover_blocks_kernel(free: np.ndarray, positions: np.ndarray, active: np.nda
     return new
 
 
-_NO_OWN = np.zeros((0, 1, 1), dtype=np.uint8)
+_NO_OWN = np.zeros((0, 1), dtype=np.uint64)
 """The own-sight mask of a tracker that does not track robots (:meth:`ExplorationTracker.track_robots`)."""
 
 
@@ -515,8 +515,9 @@ class ExplorationTracker:
       explored triangles; on our raster the cell is the unit.
     - ``covered[r, c]``: a free cell in the 3x3 block of 0.5 m cells around a robot's cell at some tick
       (docs/maes.md section 5.2; a cell is coverable iff it is free). ``coverage = covered / free cells``.
-    - With :meth:`track_robots`, who saw what by its own lidar (not through shared maps): a ``uint8[R, H, W]``
-      own-sight mask (memory only where written), ``seers[r, c]`` the number of distinct robots whose own
+    - With :meth:`track_robots`, who saw what by its own lidar (not through shared maps): an own-sight mask
+      of a bit per robot and cell (memory only where written: a byte a cell took 1 GB in a 10,000-robot
+      swarm's first tick), ``seers[r, c]`` the number of distinct robots whose own
       lidar saw the cell (``uint16``), and each robot's own-seen cell count. The lidar kernels
       update them where they mark ``seen``, so the cost is linear in the cells the rays touch. They give
       :attr:`overlap_rate` and :attr:`coverage_spread` (docs/benchmark-metrics.md).
@@ -542,13 +543,14 @@ class ExplorationTracker:
 
         if not 0 < n_robots <= 65535:
             raise InvalidInput("n_robots", n_robots, "1 ... 65535 (the per-cell robot count is a uint16)")
-        self._own = lazy_zeros((n_robots, *self.shape), np.uint8)
+        self._own = lazy_zeros((n_robots, -(-self.shape[0] * self.shape[1] // 64)), np.uint64)
         self._seers = np.zeros(self.shape, dtype=np.uint16)
         self._own_cells = np.zeros(n_robots, dtype=np.int64)
 
     @property
     def sight_buffers(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """The writable own-sight mask (``uint8[R, H, W]``), ``seers`` (``uint16[H, W]``) and own-seen counts
+        """The writable own-sight mask (``uint64[R, ceil(H * W / 64)]``: bit ``k`` of robot r's row for flat cell
+        ``k``, memory only where written), ``seers`` (``uint16[H, W]``) and own-seen counts
         (``int64[R]``), for the sensor kernels only; empty arrays unless :meth:`track_robots` was called."""
         return self._own, self._seers, self._own_cells
 

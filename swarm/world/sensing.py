@@ -223,15 +223,25 @@ def _lidar_advance(t_x: float, t_y: float, d_x: float, d_y: float) -> tuple[bool
 
 @njit(cache=True, inline="always")
 def _note_own_sight(own: np.ndarray, i: int, seers: np.ndarray, at: np.uint64) -> int:
-    """Mark cell ``at`` seen by a robot's own lidar (flat ``own[i]``, 0 or 1); returns 1 on the robot's first
-    own sighting of it, which also counts in ``seers[at]``. Branch-free: a compare-and-write here made the walk
-    three times slower (measured); at most 65,535 robots (:meth:`ExplorationTracker.track_robots`), so the
-    uint16 count cannot overflow."""
+    """Mark cell ``at`` seen by a robot's own lidar (bit ``i`` of the flat uint64 mask ``own``); returns 1 on
+    the robot's first own sighting of it, which also counts in ``seers[at]``. Branch-free: a compare-and-write
+    here made the walk three times slower (measured); at most 65,535 robots
+    (:meth:`ExplorationTracker.track_robots`), so the uint16 count cannot overflow."""
     o = np.uint64(i)
-    first = 1 - own[o]
-    own[o] = 1
+    w = o >> np.uint64(6)
+    b = o & np.uint64(63)
+    word = own[w]
+    first = np.int64(((word >> b) & np.uint64(1)) ^ np.uint64(1))
+    own[w] = word | (np.uint64(1) << b)
     seers[at] += first
     return first
+
+
+@njit(cache=True, inline="always")
+def _own_bit(own: np.ndarray, i: int) -> int:  # pragma: no cover - compiled
+    """Bit ``i`` of the flat uint64 own-sight mask ``own``."""
+    o = np.uint64(i)
+    return np.int64((own[o >> np.uint64(6)] >> (o & np.uint64(63))) & np.uint64(1))
 
 
 @njit(cache=True, inline="always")
@@ -317,7 +327,7 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     if bad >= 0:
         return -(bad + 1)
     solid_flat, known_flat, seen_flat = solid.reshape(solid.size), known.reshape(known.size), seen.reshape(seen.size)
-    own_flat, seers_flat = own.reshape(own.size), seers.reshape(seers.size)
+    own_flat, seers_flat, own_bits = own.reshape(own.size), seers.reshape(seers.size), own.shape[1] * 64
     skip_settled = required.shape[0] == rows
     required_flat = required.reshape(required.size)
     new = 0
@@ -331,7 +341,7 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
         y = poses[r, 1]
         if skip_settled and _lidar_settled(required_flat, known_flat, r * rows * cols, seen_flat, rows, cols,
                                            int(math.floor(y / cell)), int(math.floor(x / cell)), half_widths,
-                                           own_flat):
+                                           own_flat, r * own_bits):
             for i in range(cos_a.shape[0]):
                 ranges[r, i] = np.nan
             continue
@@ -343,7 +353,7 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
             dy = sh * cos_a[i] + ch * sin_a[i]
             t_hit, n_new, n_fresh = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, True,
                                                         seen_flat, x, y, dx, dy, range_m, cell, p_free, p_solid, r,
-                                                        own_flat, r * rows * cols, seers_flat, own_cells)
+                                                        own_flat, r * own_bits, seers_flat, own_cells)
             new += n_new
             fresh[r] += n_fresh
             ranges[r, i] = t_hit
@@ -364,7 +374,7 @@ def _lidar_measure_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     if bad >= 0:
         return -(bad + 1)
     solid_flat, seen_flat = solid.reshape(solid.size), seen.reshape(seen.size)
-    own_flat, seers_flat = own.reshape(own.size), seers.reshape(seers.size)
+    own_flat, seers_flat, own_bits = own.reshape(own.size), seers.reshape(seers.size), own.shape[1] * 64
     unused = np.zeros(1, dtype=np.uint8)
     p_none = np.zeros((0, 1), dtype=np.uint64)
     limited = limits.shape[0] > 0
@@ -382,7 +392,7 @@ def _lidar_measure_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
             reach = min(range_m, limits[r, i]) if limited else range_m
             t_hit, n_new, _ = _lidar_walk_visible(solid_flat, cols, unused, 0, False, seen_flat, poses[r, 0],
                                                   poses[r, 1], dx, dy, reach, cell, p_none, p_none, r, own_flat,
-                                                  r * rows * cols, seers_flat, own_cells)
+                                                  r * own_bits, seers_flat, own_cells)
             new += n_new
             ranges[r, i] = t_hit
     return new
@@ -444,7 +454,7 @@ def _lidar_belief_kernel(poses: np.ndarray, ranges: np.ndarray, cos_a: np.ndarra
 
 @njit(cache=True, inline="always")
 def _lidar_settled(required: np.ndarray, known: np.ndarray, known_base: int, seen: np.ndarray, rows: int,
-                   cols: int, row0: int, col0: int, half_widths: np.ndarray, own: np.ndarray) -> bool:
+                   cols: int, row0: int, col0: int, half_widths: np.ndarray, own: np.ndarray, own_base: int) -> bool:
     """Whether a ternary scan from a pose in cell (row0, col0) would write nothing: every cell its rays
     can reach (the cells within range of any point of the robot's cell, rows ``row0 - K .. row0 + K`` with
     ``half_widths[k]`` columns each side) already holds what a ray would leave there, in the robot's map
@@ -452,8 +462,9 @@ def _lidar_settled(required: np.ndarray, known: np.ndarray, known_base: int, see
     it at least FREE), 2 for a solid cell a ray can enter (it becomes exactly SOLID), 0 for a solid cell
     enclosed by solid 4-neighbours, which no ray enters (rays step 4-connected and stop at the first solid
     cell). A robot in a solid cell (``required`` not 1) writes it at distance 0, so it is never settled.
-    Flat views, as in :func:`_lidar_walk_visible`. With an own-sight mask (``own`` not empty, laid out as
-    ``known``) every such cell must also be marked in it, so a robot crossing cells only others saw is cast."""
+    Flat views, as in :func:`_lidar_walk_visible`. With an own-sight mask (``own`` not empty: flat uint64
+    bits, this robot's from bit ``own_base``) every such cell must also be marked in it, so a robot crossing
+    cells only others saw is cast."""
     if required[row0 * cols + col0] != 1:
         return False
     reach = (half_widths.shape[0] - 1) // 2
@@ -472,9 +483,8 @@ def _lidar_settled(required: np.ndarray, known: np.ndarray, known_base: int, see
             m = mine[c]
             unsettled |= (m < q) | ((q == 2) & (m != 2)) | ((q != 0) & (was_seen[c] == 0))
         if not unsettled and own.shape[0] > 0:
-            owned = own[known_base + a:known_base + b]
             for c in range(b - a):
-                unsettled |= (req[c] != 0) & (owned[c] == 0)
+                unsettled |= (req[c] != 0) & (_own_bit(own, own_base + a + c) == 0)
         if unsettled:
             return False
     return True
@@ -536,7 +546,7 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     if bad >= 0:
         return -(bad + 1)
     solid_flat, known_flat, seen_flat = solid.reshape(solid.size), known.reshape(known.size), seen.reshape(seen.size)
-    own_flat, seers_flat = own.reshape(own.size), seers.reshape(seers.size)
+    own_flat, seers_flat, own_bits = own.reshape(own.size), seers.reshape(seers.size), own.shape[1] * 64
     noisy = noise_std > 0.0 or noise_per_metre > 0.0
     hit32 = np.float32(hit)
     miss32 = np.float32(miss)
@@ -565,7 +575,7 @@ def _lidar_logodds_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
             dy = sh * cos_a[i] + ch * sin_a[i]
             t_hit, n_new, _ = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, False, seen_flat,
                                                   x, y, dx, dy, range_m, cell, _NO_PLANE, _NO_PLANE, r,
-                                                  own_flat, r * rows * cols, seers_flat, own_cells)
+                                                  own_flat, r * own_bits, seers_flat, own_cells)
             new += n_new
             z = t_hit
             if noisy and t_hit <= range_m:

@@ -739,3 +739,21 @@ def test_a_tracker_of_other_robot_count_is_refused() -> None:
     with pytest.raises(InvalidInput):
         Lidar(truth, LidarParams(), tracker=tracker).scan(np.array([[5.0, 5.0, 0.0]] * 2),
                                                          empty_knowledge(truth.shape, 2))
+
+
+def test_own_sight_takes_a_bit_per_robot_and_cell_and_keeps_robots_apart() -> None:
+    """The own-sight mask holds a bit per robot and cell (a byte took 1 GB in a 10,000-robot swarm's first
+    tick); a map whose cell count is no multiple of 64 still keeps each robot's bits apart: the same scan by
+    robot 1 alone counts as its own first sight, not robot 0's."""
+    truth = two_rooms()  # 800 cells: 12.5 words a robot
+    tracker = ExplorationTracker(truth)
+    tracker.track_robots(3)
+    own = tracker.sight_buffers[0]
+    assert own.dtype == np.uint64 and own.shape == (3, 13)
+    lidar = Lidar(truth, LidarParams(), tracker=tracker)
+    pose = np.array([[5.0, 5.0, 0.0]] * 3)
+    lidar.scan(pose, empty_knowledge(truth.shape, 3), active=np.array([True, False, False]))
+    first = int(tracker.own_seen_cells[0])
+    lidar.scan(pose, empty_knowledge(truth.shape, 3), active=np.array([False, True, False]))
+    assert tracker.own_seen_cells.tolist() == [first, first, 0]
+    assert int(tracker.seers.max()) == 2
