@@ -10,7 +10,7 @@ from radio import RadioConfig, build_link_model
 from swarm.api import CELL_M, FREE
 from swarm.comm.medium import CommSpec, Medium
 from swarm.comm.sharing import MapSharing
-from swarm.comm.messages import MapUpdate, decode, encode
+from swarm.comm.messages import MapRequest, MapUpdate, decode, encode
 from swarm.sim.loop import Simulation
 from tests.swarm.agents import Ping, Talker
 
@@ -579,6 +579,40 @@ def test_a_large_full_map_keeps_no_plain_bytes_and_its_receivers_merge_the_same_
     assert np.array_equal(maps[2], common)
 
 
+def scan_at_random(known: np.ndarray, rng: np.random.Generator, extent_m: float, cells: int) -> np.ndarray:
+    """Poses drawn in [1, extent_m) m, and around each robot what a ternary lidar writes: ``cells`` random cells
+    within 3 of its cell raised to FREE or SOLID (maxima only). Returns the poses."""
+    n, rows, cols = known.shape
+    poses = np.column_stack([rng.uniform(1, extent_m, n), rng.uniform(1, extent_m, n), np.zeros(n)])
+    for r in range(n):
+        rr = np.clip(int(poses[r, 1] / CELL_M) + rng.integers(-3, 4, cells), 0, rows - 1)
+        cc = np.clip(int(poses[r, 0] / CELL_M) + rng.integers(-3, 4, cells), 0, cols - 1)
+        known[r, rr, cc] = np.maximum(known[r, rr, cc], rng.integers(1, 3, cells).astype(np.uint8))
+    return poses
+
+
+def run_sharing(service: MapSharing, known: np.ndarray, rng: np.random.Generator, ticks: int, extent_m: float,
+                cells: int, route) -> list:
+    """``ticks`` ticks of ``service`` over maps written by :func:`scan_at_random`; ``route(sender, message,
+    tick)`` gives a message's receivers and its delay (0: merged next tick, 1: the tick after). Returns, per
+    tick, the messages sent (encoded) and the maps after them."""
+    n = known.shape[0]
+    live = np.ones(n, bool)
+    queue: dict[int, list] = {}
+    sent = []
+    for tick in range(ticks):
+        poses = scan_at_random(known, rng, extent_m, cells)
+        service.scanned(poses)
+        service.receive_tick(queue.pop(tick, []), known, live, tick=tick)
+        out = service.outgoing(tick, known, poses)
+        sent.append(([[encode(m) for m in msgs] for msgs in out], known.tobytes()))
+        for s in range(n):
+            for m in out[s]:
+                to, delay = route(s, m, tick)
+                queue.setdefault(tick + 1 + delay, []).append((m, to))
+    return sent
+
+
 def test_a_receiver_that_missed_updates_takes_a_full_map_as_their_cells_with_the_same_result():
     """Robot 1 merges robot 0's updates 1-3, misses 4 and 5, hears 6 and asks for the full map: on monotone maps
     it takes only the cells of updates 4-8 (the full map is update 8; the values read from it), and every map, book and later message is
@@ -603,27 +637,14 @@ def test_a_receiver_that_missed_updates_takes_a_full_map_as_their_cells_with_the
                 return groups
 
             service._catch_up = spy
-            live = np.ones(n, bool)
-            pending: list = []
-            sent = []
-            for tick in range(12):
-                poses = np.column_stack([rng.uniform(1, 19, n), rng.uniform(1, 19, n), np.zeros(n)])
-                for r in range(n):  # what a ternary lidar writes around each robot: maxima only
-                    rr = np.clip(int(poses[r, 1] / CELL_M) + rng.integers(-3, 4, 6), 0, shape[0] - 1)
-                    cc = np.clip(int(poses[r, 0] / CELL_M) + rng.integers(-3, 4, 6), 0, shape[1] - 1)
-                    known[r, rr, cc] = np.maximum(known[r, rr, cc], rng.integers(1, 3, 6).astype(np.uint8))
-                service.scanned(poses)
-                service.receive_tick(pending, known, live, tick=tick)
-                out = service.outgoing(tick, known, poses)
-                sent.append([[encode(m) for m in msgs] for msgs in out])
-                pending = []
-                for s in range(n):
-                    for m in out[s]:
-                        to = [r for r in range(n) if r != s]
-                        if s == 0:
-                            to = [2] if isinstance(m, MapUpdate) and m.seq in (4, 5) else [1, 2]
-                            to += [3] if tick >= 8 else []
-                        pending.append((m, to))
+
+            def route(s, m, tick):
+                if s != 0:
+                    return [r for r in range(n) if r != s], 0
+                to = [2] if isinstance(m, MapUpdate) and m.seq in (4, 5) else [1, 2]
+                return to + ([3] if tick >= 8 else []), 0
+
+            sent = run_sharing(service, known, rng, 12, 19, 6, route)
             results.append((known.copy(), service.seen_seq.copy(), sent, caught))
         finally:
             sharing_module.CATCH_UP = True
@@ -732,32 +753,16 @@ def test_catching_up_several_receivers_from_kept_or_delayed_full_maps_gives_the_
             return groups
 
         service._catch_up = spy
-        live = np.ones(n, bool)
-        pending: list = []
-        later: list = []
-        sent = []
-        for tick in range(20):
-            poses = np.column_stack([rng.uniform(1, 23, n), rng.uniform(1, 23, n), np.zeros(n)])
-            for r in range(n):
-                rr = np.clip(int(poses[r, 1] / CELL_M) + rng.integers(-3, 4, 8), 0, shape[0] - 1)
-                cc = np.clip(int(poses[r, 0] / CELL_M) + rng.integers(-3, 4, 8), 0, shape[1] - 1)
-                known[r, rr, cc] = np.maximum(known[r, rr, cc], rng.integers(1, 3, 8).astype(np.uint8))
-            service.scanned(poses)
-            service.receive_tick(pending, known, live, tick=tick)
-            out = service.outgoing(tick, known, poses)
-            sent.append(([[encode(m) for m in msgs] for msgs in out], known.tobytes()))
-            pending, later = later, []
-            for s in range(n):
-                for m in out[s]:
-                    to = [r for r in range(n) if r != s]
-                    if s != 0 and isinstance(m, MapUpdate):
-                        to = []  # only robot 0's updates travel: no relay brings its cells another way
-                    if s == 0 and isinstance(m, MapUpdate) and not m.full:
-                        to = [r for r in to if m.seq not in drops.get(r, ())]
-                    if s == 0 and isinstance(m, MapUpdate) and m.full and tick >= 10:
-                        later.append((m, to))  # arrives after robot 0's next update
-                    else:
-                        pending.append((m, to))
+
+        def route(s, m, tick):
+            to = [r for r in range(n) if r != s]
+            if s != 0:  # only robot 0's updates travel: no relay brings its cells another way
+                return (to if isinstance(m, MapRequest) else []), 0
+            if isinstance(m, MapUpdate) and not m.full:
+                return [r for r in to if m.seq not in drops.get(r, ())], 0
+            return to, int(isinstance(m, MapUpdate) and tick >= 10)  # a late full map: after robot 0's next update
+
+        sent = run_sharing(service, known, rng, 20, 23, 8, route)
         results.append((known.copy(), service.seen_seq.copy(), sent, groups_seen, dict(reads)))
     (maps_on, seen_on, sent_on, groups_on, reads_on), (maps_off, seen_off, sent_off, groups_off, _) = results
     assert np.array_equal(maps_on, maps_off) and np.array_equal(seen_on, seen_off) and sent_on == sent_off
