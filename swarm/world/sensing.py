@@ -65,6 +65,7 @@ from swarm.base.errors import InvalidInput
 from swarm.base.params import OMIT_DEFAULT, check_choice, check_float, check_int
 from swarm.base.types import CELL_M, FREE, SOLID
 from swarm.knowledge.maps import ExplorationTracker, LogOddsGrid, active_flags
+from swarm.knowledge.tiles import TiledLayout, tile_offset
 from swarm.knowledge.planes import KnowledgePlanes, no_planes, note_raise
 from swarm.util.jitops import opaque, select
 
@@ -248,7 +249,8 @@ def _own_bit(own: np.ndarray, i: int) -> int:  # pragma: no cover - compiled
 def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_base: int, write_known: bool,
                         seen: np.ndarray, x: float, y: float, dx: float, dy: float, range_m: float,
                         cell: float, p_free: np.ndarray, p_solid: np.ndarray, robot: int, own: np.ndarray,
-                        own_base: int, seers: np.ndarray, own_cells: np.ndarray) -> tuple[float, int, int]:
+                        own_base: int, seers: np.ndarray, own_cells: np.ndarray,
+                        tiles_w: int = 0) -> tuple[float, int, int]:
     """Walk one ray by the exact rule (module docstring). ``solid``, ``seen`` and ``known`` are flat views
     of the rasters, ``cols`` wide (``known`` of all robots: this robot's map starts at ``known_base``).
     Marks ``seen`` (and the robot's map with a maximum when ``write_known``); returns (entry distance of
@@ -257,7 +259,8 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
     planes (``p_free`` not empty, :mod:`swarm.knowledge.planes`) every cell it raises in robot ``robot``'s
     map is noted there too. With an own-sight mask (``own`` not empty: flat, this robot's mask from
     ``own_base``; :meth:`~swarm.knowledge.maps.ExplorationTracker.track_robots`) every cell marked in ``seen``
-    is marked in it too, and a first own sighting counts in ``own_cells[robot]`` and ``seers``."""
+    is marked in it too, and a first own sighting counts in ``own_cells[robot]`` and ``seers``. ``tiles_w``
+    above 0: ``known`` holds tiled maps that many tiles wide (:mod:`swarm.knowledge.tiles`)."""
     planes = p_free.shape[0] > 0
     tracking = own.shape[0] > 0
     mine = 0
@@ -272,11 +275,12 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
     step_k = step_r * cols
     while True:
         at = np.uint64(k)
+        mine_at = np.uint64(known_base + (k if tiles_w == 0 else tile_offset(row, col, tiles_w)))
         if solid[at]:
             if write_known:
-                if planes and known[np.uint64(known_base + k)] != SOLID:
+                if planes and known[mine_at] != SOLID:
                     note_raise(p_free, p_solid, k, robot, SOLID)
-                known[np.uint64(known_base + k)] = SOLID
+                known[mine_at] = SOLID
             seen[at] = True
             if tracking:
                 own_cells[robot] += mine + _note_own_sight(own, own_base + k, seers, at)
@@ -288,8 +292,8 @@ def _lidar_walk_visible(solid: np.ndarray, cols: int, known: np.ndarray, known_b
             cy = (row + 0.5) * cell - y
             in_range = cx * cx + cy * cy <= r2
         if in_range:
-            if write_known and known[np.uint64(known_base + k)] < FREE:
-                known[np.uint64(known_base + k)] = FREE
+            if write_known and known[mine_at] < FREE:
+                known[mine_at] = FREE
                 fresh += 1
                 if planes:
                     note_raise(p_free, p_solid, k, robot, FREE)
@@ -314,14 +318,15 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
                           sin_a: np.ndarray, range_m: float, cell: float, known: np.ndarray,
                           seen: np.ndarray, ranges: np.ndarray, required: np.ndarray, half_widths: np.ndarray,
                           cast: np.ndarray, fresh: np.ndarray, p_free: np.ndarray, p_solid: np.ndarray,
-                          own: np.ndarray, seers: np.ndarray, own_cells: np.ndarray) -> int:
+                          own: np.ndarray, seers: np.ndarray, own_cells: np.ndarray, tiles_w: int = 0) -> int:
     """One tick of the ternary lidar for every robot and ray. Returns the number of newly seen free
     cells, or ``-(r + 1)`` (nothing written) if robot r's pose is invalid. With a ``required`` raster
     (:func:`_required_raster`; empty: cast every robot) a robot whose scan would write nothing
     (:func:`_lidar_settled`) is not cast: its ranges are NaN and ``cast[r]`` is False (True for robots
     cast). ``fresh[r]`` grows by the cells of robot r's map the scan turned from UNSEEN to FREE. ``own``,
     ``seers``, ``own_cells``: the tracker's own-sight buffers (empty: not kept); kept, a robot is settled only
-    if its own lidar has also seen every cell in reach."""
+    if its own lidar has also seen every cell in reach. ``tiles_w`` above 0: ``known`` is a tiled stack
+    ``uint8[R, size]`` that many tiles wide (:mod:`swarm.knowledge.tiles`)."""
     rows, cols = solid.shape
     bad = _lidar_first_bad_pose(poses, active, rows, cols, cell)
     if bad >= 0:
@@ -330,6 +335,7 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
     own_flat, seers_flat, own_bits = own.reshape(own.size), seers.reshape(seers.size), own.shape[1] * 64
     skip_settled = required.shape[0] == rows
     required_flat = required.reshape(required.size)
+    map_cells = rows * cols if tiles_w == 0 else known.shape[1]
     new = 0
     for r in range(poses.shape[0]):
         cast[r] = False
@@ -339,9 +345,9 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
             continue
         x = poses[r, 0]
         y = poses[r, 1]
-        if skip_settled and _lidar_settled(required_flat, known_flat, r * rows * cols, seen_flat, rows, cols,
+        if skip_settled and _lidar_settled(required_flat, known_flat, r * map_cells, seen_flat, rows, cols,
                                            int(math.floor(y / cell)), int(math.floor(x / cell)), half_widths,
-                                           own_flat, r * own_bits):
+                                           own_flat, r * own_bits, tiles_w):
             for i in range(cos_a.shape[0]):
                 ranges[r, i] = np.nan
             continue
@@ -351,9 +357,9 @@ def _lidar_ternary_kernel(solid: np.ndarray, poses: np.ndarray, active: np.ndarr
         for i in range(cos_a.shape[0]):
             dx = ch * cos_a[i] - sh * sin_a[i]
             dy = sh * cos_a[i] + ch * sin_a[i]
-            t_hit, n_new, n_fresh = _lidar_walk_visible(solid_flat, cols, known_flat, r * rows * cols, True,
+            t_hit, n_new, n_fresh = _lidar_walk_visible(solid_flat, cols, known_flat, r * map_cells, True,
                                                         seen_flat, x, y, dx, dy, range_m, cell, p_free, p_solid, r,
-                                                        own_flat, r * own_bits, seers_flat, own_cells)
+                                                        own_flat, r * own_bits, seers_flat, own_cells, tiles_w)
             new += n_new
             fresh[r] += n_fresh
             ranges[r, i] = t_hit
@@ -454,7 +460,8 @@ def _lidar_belief_kernel(poses: np.ndarray, ranges: np.ndarray, cos_a: np.ndarra
 
 @njit(cache=True, inline="always")
 def _lidar_settled(required: np.ndarray, known: np.ndarray, known_base: int, seen: np.ndarray, rows: int,
-                   cols: int, row0: int, col0: int, half_widths: np.ndarray, own: np.ndarray, own_base: int) -> bool:
+                   cols: int, row0: int, col0: int, half_widths: np.ndarray, own: np.ndarray, own_base: int,
+                   tiles_w: int = 0) -> bool:
     """Whether a ternary scan from a pose in cell (row0, col0) would write nothing: every cell its rays
     can reach (the cells within range of any point of the robot's cell, rows ``row0 - K .. row0 + K`` with
     ``half_widths[k]`` columns each side) already holds what a ray would leave there, in the robot's map
@@ -476,12 +483,19 @@ def _lidar_settled(required: np.ndarray, known: np.ndarray, known_base: int, see
         hi = min(col0 + half_widths[k] + 1, cols)
         a = row * cols + lo
         b = row * cols + hi
-        req, mine, was_seen = required[a:b], known[known_base + a:known_base + b], seen[a:b]
+        req, was_seen = required[a:b], seen[a:b]
         unsettled = False
-        for c in range(b - a):  # branch-free on slices (no index arithmetic), so the row's test vectorises
-            q = req[c]
-            m = mine[c]
-            unsettled |= (m < q) | ((q == 2) & (m != 2)) | ((q != 0) & (was_seen[c] == 0))
+        if tiles_w == 0:
+            mine = known[known_base + a:known_base + b]
+            for c in range(b - a):  # branch-free on slices (no index arithmetic), so the row's test vectorises
+                q = req[c]
+                m = mine[c]
+                unsettled |= (m < q) | ((q == 2) & (m != 2)) | ((q != 0) & (was_seen[c] == 0))
+        else:
+            for c in range(b - a):
+                q = req[c]
+                m = known[known_base + tile_offset(row, lo + c, tiles_w)]
+                unsettled |= (m < q) | ((q == 2) & (m != 2)) | ((q != 0) & (was_seen[c] == 0))
         if not unsettled and own.shape[0] > 0:
             for c in range(b - a):
                 unsettled |= (req[c] != 0) & (_own_bit(own, own_base + a + c) == 0)
@@ -745,7 +759,10 @@ class Lidar:
         if pose.ndim != 2 or pose.shape[1] != 3:
             raise InvalidInput("poses", pose.shape, "an array of shape (R, 3): x, y (m), theta (rad)")
         n = pose.shape[0]
-        self._check_known(known, n)
+        tiles_w = self._check_known(known, n)
+        if tiles_w and (self.params.mode != "ternary" or not write):
+            raise InvalidInput("known", "tiled maps", f"dense maps for a {self.params.mode} lidar"
+                               f"{'' if write else ' measuring without writing'}")
         act = active_flags(n, active)
         ranges = np.empty((n, self.n_rays), dtype=np.float32)
         p = self.params
@@ -772,7 +789,7 @@ class Lidar:
             new = _lidar_ternary_kernel(self._solid, pose, act, self._cos, self._sin, p.range_m, CELL_M,
                                         known, trk.seen_buffer, ranges, required, self._half_widths, self._cast,
                                         self._freed if freed is None else freed, p_free, p_solid,
-                                        *self._sight(trk, n))
+                                        *self._sight(trk, n), tiles_w)
         else:
             if planes is not None:
                 raise InvalidInput("planes", "given", "none: a log-odds lidar may lower cells, which planes cannot mirror")
@@ -810,7 +827,8 @@ class Lidar:
         pose = np.ascontiguousarray(poses, dtype=np.float64)
         if pose.ndim != 2 or pose.shape[1] != 3 or ranges.shape != (pose.shape[0], self.n_rays):
             raise InvalidInput("poses", pose.shape, f"(R, 3) poses with ranges of shape (R, {self.n_rays})")
-        self._check_known(known, pose.shape[0])
+        if self._check_known(known, pose.shape[0]):
+            raise InvalidInput("known", "tiled maps", "dense maps for robots writing from estimated poses")
         return int(_lidar_belief_kernel(pose, np.ascontiguousarray(ranges, dtype=np.float64), self._cos, self._sin,
                                         self.params.range_m, CELL_M, known, _NO_LIMITS if limits is None else limits))
 
@@ -853,13 +871,18 @@ class Lidar:
                                f"an ExplorationTracker of this map (shape {self.truth.shape})")
         return tracker
 
-    def _check_known(self, known: np.ndarray, n: int) -> None:
+    def _check_known(self, known: np.ndarray, n: int) -> int:
+        """Check the maps a scan writes: dense ``uint8[n, H, W]`` (returns 0) or tiled ``uint8[n, size]``
+        (:class:`swarm.knowledge.tiles.TiledLayout`; returns its width in tiles)."""
         want = (n, *self.shape)
-        if not isinstance(known, np.ndarray) or known.dtype != np.uint8 or known.shape != want:
+        layout = TiledLayout(self.shape)
+        if (not isinstance(known, np.ndarray) or known.dtype != np.uint8
+                or known.shape not in (want, (n, layout.size))):
             got = (getattr(known, "dtype", type(known).__name__), getattr(known, "shape", None))
-            raise InvalidInput("known", got, f"a uint8 array of shape {want}")
+            raise InvalidInput("known", got, f"a uint8 array of shape {want} (or tiled, {(n, layout.size)})")
         if not (known.flags.c_contiguous and known.flags.writeable):
             raise InvalidInput("known", "a non-contiguous or read-only array", "a writable C-contiguous array")
+        return layout.tiles[1] if known.ndim == 2 else 0
 
     def _logodds_for(self, n: int) -> LogOddsGrid:
         if self.logodds is None:

@@ -1,0 +1,110 @@
+"""Knowledge maps stored by tiles: memory in proportion to what each robot knows.
+
+The dense stack ``uint8[R, H, W]`` is resident page by page, and a 4 KB page holds a row (or more) of one
+robot's map: a robot that knows a few cells in each of 300 rows holds 300 pages. A swarm spawned together
+knows a tall, narrow region, and its maps hold about ten times the cells they know (docs/performance.md,
+"10,000 robots"). The tiled stack keeps each robot's map as ``TILE x TILE``-cell tiles, each one page,
+``uint8[R, tiles_h * tiles_w * TILE * TILE]`` allocated lazily (:func:`swarm.util.memory.lazy_zeros`), so
+a map costs a page for each 64 x 64 block in which it knows a cell.
+
+Cell ``(row, col)`` of a robot's map sits at offset :func:`tile_offset` of that robot's flat row. Cells
+keep their row-major index ``row * W + col`` everywhere outside the stack (messages, planes, journals,
+metrics), and the kernels that read or write a map translate at the access.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from swarm.util.memory import lazy_zeros
+
+TILE_SHIFT = 6
+TILE = 1 << TILE_SHIFT
+"""Cells per tile side: 64 x 64 one-byte cells fill one 4 KB page."""
+TILE_CELLS = TILE * TILE
+_MASK = TILE - 1
+
+
+class TiledLayout:
+    """Where each cell of an ``(H, W)`` map sits in a tiled map's flat array."""
+
+    __slots__ = ("shape", "tiles", "size")
+
+    def __init__(self, shape: tuple[int, int]) -> None:
+        h, w = int(shape[0]), int(shape[1])
+        self.shape = (h, w)
+        self.tiles = (-(-h // TILE), -(-w // TILE))
+        self.size = self.tiles[0] * self.tiles[1] * TILE_CELLS
+        """Cells of one tiled map, padding included (the padding is never written)."""
+
+    def stack(self, n_robots: int) -> np.ndarray:
+        """An all-UNSEEN tiled stack ``uint8[n_robots, size]``, resident only where written."""
+        return lazy_zeros((n_robots, self.size), np.uint8)
+
+    def offsets(self, cells: np.ndarray) -> np.ndarray:
+        """The tiled offsets of row-major ``cells`` (int64)."""
+        return tile_offsets(np.ascontiguousarray(cells, dtype=np.int64), self.shape[1], self.tiles[1])
+
+    def cells(self, offsets: np.ndarray) -> np.ndarray:
+        """The row-major cells of tiled ``offsets`` (int64): the inverse of :meth:`offsets`."""
+        return row_major_cells(np.ascontiguousarray(offsets, dtype=np.int64), self.shape[1], self.tiles[1])
+
+    def untile(self, tiled: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """One robot's tiled map (flat ``uint8[size]``) as a dense ``uint8[H, W]`` map (into ``out``)."""
+        if out is None:
+            out = np.empty(self.shape, dtype=np.uint8)
+        untile_into(tiled, out, self.tiles[1])
+        return out
+
+    def tile(self, dense: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """A dense ``uint8[H, W]`` map as a flat tiled map (into ``out``; padding left as it is)."""
+        if out is None:
+            out = np.zeros(self.size, dtype=np.uint8)
+        tile_into(np.ascontiguousarray(dense, dtype=np.uint8), out, self.tiles[1])
+        return out
+
+
+@njit(cache=True, inline="always")
+def tile_offset(row: int, col: int, tiles_w: int) -> int:  # pragma: no cover - compiled
+    """The offset of cell ``(row, col)`` in a tiled map ``tiles_w`` tiles wide."""
+    return ((((row >> TILE_SHIFT) * tiles_w + (col >> TILE_SHIFT)) << (2 * TILE_SHIFT))
+            | ((row & _MASK) << TILE_SHIFT) | (col & _MASK))
+
+
+@njit(cache=True)
+def tile_offsets(cells: np.ndarray, width: int, tiles_w: int) -> np.ndarray:  # pragma: no cover - compiled
+    out = np.empty(cells.shape[0], dtype=np.int64)
+    for k in range(cells.shape[0]):
+        row = cells[k] // width
+        out[k] = tile_offset(row, cells[k] - row * width, tiles_w)
+    return out
+
+
+@njit(cache=True)
+def row_major_cells(offsets: np.ndarray, width: int, tiles_w: int) -> np.ndarray:  # pragma: no cover - compiled
+    out = np.empty(offsets.shape[0], dtype=np.int64)
+    for k in range(offsets.shape[0]):
+        t = offsets[k] >> (2 * TILE_SHIFT)
+        within = offsets[k] & (TILE_CELLS - 1)
+        tr = t // tiles_w
+        row = (tr << TILE_SHIFT) | (within >> TILE_SHIFT)
+        col = ((t - tr * tiles_w) << TILE_SHIFT) | (within & _MASK)
+        out[k] = row * width + col
+    return out
+
+
+@njit(cache=True)
+def untile_into(tiled: np.ndarray, out: np.ndarray, tiles_w: int) -> None:  # pragma: no cover - compiled
+    h, w = out.shape
+    for row in range(h):
+        for col in range(w):
+            out[row, col] = tiled[tile_offset(row, col, tiles_w)]
+
+
+@njit(cache=True)
+def tile_into(dense: np.ndarray, out: np.ndarray, tiles_w: int) -> None:  # pragma: no cover - compiled
+    h, w = dense.shape
+    for row in range(h):
+        for col in range(w):
+            out[tile_offset(row, col, tiles_w)] = dense[row, col]
