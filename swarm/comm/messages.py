@@ -393,13 +393,20 @@ def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple
 
 
 def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
-                 changed: np.ndarray) -> MapUpdate:
+                 changed: np.ndarray, *, values: np.ndarray | None = None,
+                 shape: tuple[int, int] | None = None) -> MapUpdate:
     """The delta MapUpdate of cells ``changed`` of ``known``: distinct ascending int64 flat indices, as
     :func:`swarm.knowledge.maps.sync_changes` gives them, and ``pose`` three Python floats, so nothing is sorted
-    or converted again (the map-sharing service builds one per robot per sharing tick)."""
-    plain = _cellcodec.pack_delta(known.reshape(-1), changed).tobytes()
+    or converted again (the map-sharing service builds one per robot per sharing tick). A map not stored
+    row-major (:mod:`swarm.knowledge.tiles`) gives its ``values`` at ``changed`` and its ``shape``."""
+    if values is None:
+        plain = _cellcodec.pack_delta(known.reshape(-1), changed).tobytes()
+        shape = (int(known.shape[0]), int(known.shape[1]))
+    else:
+        assert shape is not None
+        plain = _cellcodec.pack_delta_values(changed, np.ascontiguousarray(values, dtype=np.uint8)).tobytes()
     return _update_of(plain, zlib.compress(plain, MAP_ZLIB_LEVEL), sender=sender, seq=seq, tick=tick, full=False,
-                      shape=(int(known.shape[0]), int(known.shape[1])), count=len(changed), pose=pose)
+                      shape=(int(shape[0]), int(shape[1])), count=len(changed), pose=pose)
 
 
 _new_update = frozen_builder(MapUpdate)

@@ -19,12 +19,15 @@ from typing import Any, Sequence
 import numpy as np
 from numba import njit
 
+from swarm.base.errors import InvalidInput
 from swarm.base.types import CELL_M
 from swarm.knowledge.maps import (check_writable_map, mark_tiles, merge_cells_many, merge_cells_many_changed,
                                   merge_cells_many_counted, merge_delta_booked_kernel as _merge_delta_booked)
-from swarm.knowledge.cellcodec import values_at2
+from swarm.knowledge.cellcodec import pack2, values_at2
 from swarm.knowledge.packed import packed_copy, packed_size, sync_box_tiles_packed, sync_changes_packed
-from swarm.knowledge.planes import KnowledgePlanes, book_receivers, merge_into_many, note_cells, note_map
+from swarm.knowledge.planes import (KnowledgePlanes, book_receivers, merge_into_many, merge_into_many_tiled,
+                                    note_cells, note_map)
+from swarm.knowledge.tiles import TiledLayout, sync_tiles_packed
 from swarm.results.metrics import FreeCounts, InfoAges
 from swarm.util.memory import lazy_zeros
 
@@ -51,7 +54,7 @@ class MapSharing:
 
     def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None,
                  monotone: bool = False, ages: InfoAges | None = None, free: FreeCounts | None = None,
-                 planes: KnowledgePlanes | None = None) -> None:
+                 planes: KnowledgePlanes | None = None, layout: TiledLayout | None = None) -> None:
         """``ages``: told of every update sent and of every merge that leaves a receiver holding the sender's
         whole map; ``free``: told how the merges change each map's count of FREE cells (age of information,
         docs/comm-metrics.md).
@@ -64,15 +67,22 @@ class MapSharing:
         ever decreases (the ternary lidar; a log-odds lidar may turn SOLID back to FREE), which lets a
         broadcast full map reach most receivers as a delta (:meth:`_merge_full`). ``planes``: the maps'
         knowledge planes (:mod:`swarm.knowledge.planes`), which every merge then goes through: an update
-        costs a few words a cell for all its receivers, and writes only the maps it raises."""
+        costs a few words a cell for all its receivers, and writes only the maps it raises. ``layout``: the
+        maps are a tiled stack of this layout (:mod:`swarm.knowledge.tiles`), which needs the planes; the
+        copies of the last updates are then kept in the same tiled order."""
         self.n = n
         self.shape = (int(shape[0]), int(shape[1]))
+        self.layout = layout
+        if layout is not None and (planes is None or layout.shape != self.shape):
+            raise InvalidInput("layout", "tiled maps", "dense maps unless knowledge planes are kept (64 robots or "
+                               "more, the ternary lidar, swarm map sharing)")
+        cells = shape[0] * shape[1] if layout is None else layout.size
         self.planes = planes
         self.spec = spec
         self.enabled = spec.map_sharing in ("delta", "full") and n > 1  # the maes modes: swarm.comm.maes_merge
         # Each robot's map as of its last update, 2 bits a cell (swarm.knowledge.packed): deltas are the cells
         # that differ from it
-        self.last_shared = (lazy_zeros((n, packed_size(shape[0] * shape[1])), np.uint8)
+        self.last_shared = (lazy_zeros((n, packed_size(cells)), np.uint8)
                             if spec.map_sharing == "delta" else None)
         self.seq = [0] * n
         # Each robot's latest updates (seq, the cells that changed since the one before), oldest first, and
@@ -137,7 +147,7 @@ class MapSharing:
                 since = None
                 if self.last_shared is not None and self.monotone:  # the cells since the previous update: _merge_full
                     changed = self._changed_since_update(i, known[i])  # last_shared[i] becomes known[i]
-                    since = (self.seq[i], changed, known[i].reshape(-1)[changed], tuple(self._history[i]))
+                    since = (self.seq[i], changed, self._values(known[i], changed), tuple(self._history[i]))
                     self._remember(i, self.seq[i] + 1, changed)
                 else:
                     self._history[i].clear()  # no note of the cells: the history would have a hole
@@ -147,7 +157,11 @@ class MapSharing:
                         self._forget_writes(i)
                 self.seq[i] += 1
                 packed = None if self.last_shared is None else self.last_shared[i]  # known[i], packed
-                update = full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), payloads, packed)
+                mine = known[i]
+                if self.layout is not None:  # the wire's map is row-major
+                    mine = self.layout.untile(known[i])
+                    packed = pack2(mine.reshape(-1))
+                update = full_update(i, self.seq[i], tick, mine, tuple(pose_rows[i]), payloads, packed)
                 update.__dict__["_since"] = since  # this process's note (see _take); never on the wire
                 out[i].append(update)
                 continue
@@ -156,7 +170,9 @@ class MapSharing:
             if len(changed):
                 self.seq[i] += 1
                 self._remember(i, self.seq[i], changed)
-                update = delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed)
+                update = delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed,
+                                      values=None if self.layout is None else self._values(known[i], changed),
+                                      shape=self.shape)
                 update.__dict__["_since"] = None  # built here (see _take): never on the wire
                 out[i].append(update)
         if self.ages is not None:
@@ -175,6 +191,12 @@ class MapSharing:
     def _changed_since_update(self, i: int, known: np.ndarray) -> np.ndarray:
         """Robot i's cells that differ from its last update, copied into ``last_shared[i]``."""
         assert self.last_shared is not None
+        if self.layout is not None:
+            whole = self.lidar_reach is None or self._whole[i]
+            changed = sync_tiles_packed(known, self.last_shared[i], self.layout, None if whole else self._boxes[i],
+                                        None if whole else self._dirty[i], TILE)
+            self._forget_writes(i)
+            return changed
         if self.lidar_reach is None or self._whole[i]:
             self._forget_writes(i)
             return sync_changes_packed(known, self.last_shared[i])
@@ -195,6 +217,8 @@ class MapSharing:
         """Handle one receiver's service messages of a tick: merge every MapUpdate and note MapRequests
         addressed to it. Returns, per merged update, the flat indices it carried (None for a full map: any
         cell may have changed). Other messages are left to the algorithm. ``tick``: now (for :attr:`ages`)."""
+        if self.layout is not None:
+            raise InvalidInput("known", "tiled maps", "receive_tick (the runtime's), not receive, for tiled maps")
         for msg in messages:
             if isinstance(msg, MapUpdate) and msg.shape != known.shape:
                 raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape}")
@@ -235,8 +259,8 @@ class MapSharing:
                 continue
             if not len(rows):
                 continue
-            if isinstance(msg, MapUpdate) and msg.shape != known.shape[1:]:
-                raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {known.shape[1:]}")
+            if isinstance(msg, MapUpdate) and msg.shape != self.shape:
+                raise MessageError(f"map_update: shape {msg.shape} does not match the receiver's {self.shape}")
             ids = rows.tolist()
             lists = [touched[r] for r in ids] if cells else None
             self._take(msg, ids, known, rows, lists, rows)
@@ -270,7 +294,7 @@ class MapSharing:
             if self.free is not None:
                 self.free.dirty[robots] = True  # counted afresh when next read
             if lists is None:  # the books of every receiver at once (a swarm's full map reaches hundreds)
-                self._book_full(msg, robots, quick, caught, stack.shape[-1], ours)
+                self._book_full(msg, robots, quick, caught, self.shape[1], ours)
                 return
             since = msg.__dict__["_since"][1] if quick.any() else None
             carried = [since if q else None for q in quick.tolist()]
@@ -283,7 +307,7 @@ class MapSharing:
                 ids, at, whole = self._take_delta(ids, stack, rows, robots, idx, values, sender, seq, lists)
                 lists = None if lists is None else [lists[k] for k in at]
             elif self._planes_for(stack) is not None:
-                merge_into_many(stack, self.planes.free, self.planes.solid, self.planes.mask(robots), idx, values,
+                self._into_many(stack, self.planes.mask(robots), idx, values,
                                 _NO_CELLS if self.free is None else self.free.freed, _NO_DIRTY, TILE)
             elif self.free is not None:
                 merge_cells_many_counted(stack, rows, idx, values, robots, self.free.freed)
@@ -299,7 +323,7 @@ class MapSharing:
                 if cells is None:
                     self._whole[r] = True  # any cell may have changed: the next delta compares all
                 elif len(cells):
-                    mark_tiles(self._dirty[r], cells, stack.shape[-1], TILE)
+                    mark_tiles(self._dirty[r], cells, self.shape[1], TILE)
             last = int(self.seen_seq[r, sender])
             if delta_gap and seq != last + 1 and sender not in self.requests[r]:
                 self.requests[r].append(sender)
@@ -346,7 +370,7 @@ class MapSharing:
         planes = self._planes_for(stack)
         if lists is None:
             if planes is not None:
-                merge_into_many(stack, planes.free, planes.solid, planes.mask(robots), idx, values, freed,
+                self._into_many(stack, planes.mask(robots), idx, values, freed,
                                 self._dirty, TILE)
                 n_rest, n_held = book_receivers(robots, self.seen_seq, self.whole, sender, seq, self._rest,
                                                 self._held)
@@ -370,7 +394,7 @@ class MapSharing:
         for k, (r, end) in enumerate(zip(ids, ends.tolist())):
             if end > start:
                 cells = raised[start:end].copy()
-                mark_tiles(self._dirty[r], cells, stack.shape[-1], TILE)
+                mark_tiles(self._dirty[r], cells, self.shape[1], TILE)
                 if planes is not None:
                     note_cells(planes.free, planes.solid, stack[r].reshape(-1), r, cells)
             if self.seen_seq[r, sender] == before:
@@ -433,7 +457,7 @@ class MapSharing:
             others = robots[rest]
             if planes is not None:  # a swarm: the sender's known cells, so only the pages they raise are written
                 known_cells, known_values = self._decode(msg, "known")
-                merge_into_many(stack, planes.free, planes.solid, planes.mask(others), known_cells, known_values,
+                self._into_many(stack, planes.mask(others), known_cells, known_values,
                                 _NO_CELLS, _NO_DIRTY, TILE)
             else:  # a team: the whole decoded map, cheaper than listing its known cells
                 dense = self._decode(msg, "dense")
@@ -461,7 +485,7 @@ class MapSharing:
                      cells: np.ndarray, values: np.ndarray) -> None:
         """Merge ``values`` at ``cells`` (ascending) into the maps of ``robots`` (their rows of ``stack``)."""
         if planes is not None:
-            merge_into_many(stack, planes.free, planes.solid, planes.mask(robots), cells, values, _NO_CELLS,
+            self._into_many(stack, planes.mask(robots), cells, values, _NO_CELLS,
                             _NO_DIRTY, TILE)
         else:
             merge_cells_many(stack, robots, cells, values)
@@ -503,6 +527,22 @@ class MapSharing:
         out.reverse()  # furthest behind first, as before
         return out
 
+    def _into_many(self, stack: np.ndarray, mask: np.ndarray, idx: np.ndarray, values: np.ndarray,
+                   counts: np.ndarray, dirty: np.ndarray, tile: int) -> None:
+        """:func:`swarm.knowledge.planes.merge_into_many` into the maps ``stack``, dense or tiled."""
+        assert self.planes is not None
+        if self.layout is None:
+            merge_into_many(stack, self.planes.free, self.planes.solid, mask, idx, values, counts, dirty, tile)
+        else:
+            merge_into_many_tiled(stack, self.shape[1], self.layout.tiles[1], self.planes.free, self.planes.solid,
+                                  mask, idx, values, counts, dirty, tile)
+
+    def _values(self, known: np.ndarray, cells: np.ndarray) -> np.ndarray:
+        """Robot's map ``known`` (dense, or flat tiled) at row-major ``cells``."""
+        if self.layout is None:
+            return known.reshape(-1)[cells]
+        return known[self.layout.offsets(cells)]
+
     def _full_values(self, msg: MapUpdate) -> Any:
         """How to read full map ``msg``'s values at given cells: from its sender's packed copy while that still
         holds the map sent (the sender has built no update since: its sequence number is the message's, and
@@ -510,6 +550,8 @@ class MapSharing:
         full maps keep only their zlib payload: each read would decompress a megabyte)."""
         if self.last_shared is not None and self.seq[msg.sender] == msg.seq and msg.shape == self.shape:
             packed = self.last_shared[msg.sender]
+            if self.layout is not None:
+                return lambda cells: values_at2(packed, self.layout.offsets(cells))
             return lambda cells: values_at2(packed, cells)
         return msg.values_at
 

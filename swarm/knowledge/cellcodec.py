@@ -104,6 +104,20 @@ def pack_delta(flat: np.ndarray, idx: np.ndarray) -> np.ndarray:  # pragma: no c
 
 
 @njit(cache=True)
+def pack_delta_values(idx: np.ndarray, values: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """:func:`pack_delta` of cells ``idx`` (ascending) whose values are given (``values[i]`` for ``idx[i]``),
+    for maps not stored row-major (:mod:`swarm.knowledge.tiles`): the same bytes."""
+    n = idx.shape[0]
+    out = np.zeros(4 * n + (n + 3) // 4, dtype=np.uint8)
+    prev = 0
+    for i in range(n):
+        put_u32(out, 4 * i, idx[i] - prev)
+        prev = idx[i]
+        out[4 * n + (i >> 2)] |= np.uint8((values[i] & 3) << (2 * (i & 3)))
+    return out
+
+
+@njit(cache=True)
 def unpack2(packed: np.ndarray, n: int, out: np.ndarray) -> int:  # pragma: no cover - compiled
     """Unpack ``n`` 2-bit values of ``packed`` into ``out``; returns the largest value (3 is invalid). Whole
     bytes are split at once and the largest value read off or-ed bit masks, not compared per cell: 4x

@@ -23,6 +23,7 @@ import numpy as np
 from numba import njit
 
 from swarm.base.types import FREE, SOLID
+from swarm.knowledge.tiles import tile_offset
 from swarm.util.memory import lazy_zeros
 
 MIN_ROBOTS = 64
@@ -89,8 +90,25 @@ def merge_into_many(stack: np.ndarray, free: np.ndarray, solid: np.ndarray, mask
     FREE cells map r gained less those it lost; ``dirty[r]`` (unless empty) marks the tiles of ``tile`` x
     ``tile`` cells in which map r changed."""
     n, h, w = stack.shape
-    size = h * w
-    flat = stack.reshape(-1)
+    _merge_into_many(stack.reshape(-1), h * w, w, 0, free, solid, mask, idx, values, counts, dirty, tile)
+
+
+@njit(cache=True)
+def merge_into_many_tiled(stack: np.ndarray, width: int, tiles_w: int, free: np.ndarray, solid: np.ndarray,
+                          mask: np.ndarray, idx: np.ndarray, values: np.ndarray, counts: np.ndarray,
+                          dirty: np.ndarray, tile: int) -> None:  # pragma: no cover - compiled
+    """:func:`merge_into_many` into a tiled stack ``uint8[R, size]`` (:mod:`swarm.knowledge.tiles`) of maps
+    ``width`` cells and ``tiles_w`` tiles wide; ``idx`` are row-major cells, as the planes and ``dirty`` use."""
+    _merge_into_many(stack.reshape(-1), stack.shape[1], width, tiles_w, free, solid, mask, idx, values, counts,
+                     dirty, tile)
+
+
+@njit(cache=True, inline="always")
+def _merge_into_many(flat: np.ndarray, size: int, w: int, tiles_w: int, free: np.ndarray, solid: np.ndarray,
+                     mask: np.ndarray, idx: np.ndarray, values: np.ndarray, counts: np.ndarray, dirty: np.ndarray,
+                     tile: int) -> None:  # pragma: no cover - compiled
+    """The body of :func:`merge_into_many` on a flat stack of maps of ``size`` cells (tiled when ``tiles_w``
+    is above 0)."""
     counting = counts.shape[0] > 0
     marking = dirty.shape[0] > 0
     active = np.empty(mask.shape[0], np.int64)  # the words with a receiver: a spread-out swarm's update reaches
@@ -105,6 +123,7 @@ def merge_into_many(stack: np.ndarray, free: np.ndarray, solid: np.ndarray, mask
         v = values[j]
         if v == 0:
             continue
+        at = c if tiles_w == 0 else tile_offset(c // w, c % w, tiles_w)
         for a in range(words):
             q = active[a]
             m = mask[q]
@@ -124,7 +143,7 @@ def merge_into_many(stack: np.ndarray, free: np.ndarray, solid: np.ndarray, mask
                 low = bits & (~bits + one)
                 b = _bit_index(low)
                 r = q * 64 + b
-                flat[r * size + c] = v
+                flat[r * size + at] = v
                 if counting:
                     if v == FREE:
                         counts[r] += 1

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from swarm.knowledge.packed import differing_words, sync_changes_packed, sync_chunk
 from swarm.util.memory import lazy_zeros
 
 TILE_SHIFT = 6
@@ -108,3 +109,50 @@ def tile_into(dense: np.ndarray, out: np.ndarray, tiles_w: int) -> None:  # prag
     for row in range(h):
         for col in range(w):
             out[tile_offset(row, col, tiles_w)] = dense[row, col]
+
+
+def sync_tiles_packed(current: np.ndarray, prev: np.ndarray, layout: TiledLayout, box: np.ndarray | None,
+                      dirty: np.ndarray | None, dirty_tile: int) -> np.ndarray:
+    """The row-major cells (ascending) where the tiled map ``current`` (flat ``uint8[size]``) differs from its
+    2-bit copy ``prev`` (packed in the same tiled order), written into ``prev``: the tiled form of
+    :func:`swarm.knowledge.packed.sync_box_tiles_packed` (``box`` rows and columns ``[r0, r1, c0, c1)`` and
+    the ``dirty_tile``-cell tiles marked in ``dirty``, each compared as the whole 64 x 64 tiles holding
+    them; cells outside are unchanged by the same promise) or, with ``box`` None, of
+    :func:`swarm.knowledge.packed.sync_changes_packed` (the whole map)."""
+    if box is None:
+        offsets = sync_changes_packed(current, prev)
+    else:
+        offsets = _sync_tiles_kernel(current, prev, box, dirty, dirty_tile, layout.shape[0], layout.shape[1],
+                                     layout.tiles[1])
+    cells = layout.cells(offsets)
+    cells.sort()
+    return cells
+
+
+@njit(cache=True)
+def _sync_tiles_kernel(cur: np.ndarray, prev: np.ndarray, box: np.ndarray, dirty: np.ndarray, dirty_tile: int,
+                       h: int, w: int, tiles_w: int) -> np.ndarray:  # pragma: no cover - compiled
+    tiles_h = cur.shape[0] // (TILE_CELLS * tiles_w)
+    chosen = np.zeros(tiles_h * tiles_w, dtype=np.bool_)
+    r0, r1, c0, c1 = max(box[0], 0), min(box[1], h), max(box[2], 0), min(box[3], w)
+    if r1 > r0 and c1 > c0:
+        for tr in range(r0 >> TILE_SHIFT, ((r1 - 1) >> TILE_SHIFT) + 1):
+            for tc in range(c0 >> TILE_SHIFT, ((c1 - 1) >> TILE_SHIFT) + 1):
+                chosen[tr * tiles_w + tc] = True
+    for dr in range(dirty.shape[0]):
+        for dc in range(dirty.shape[1]):
+            if dirty[dr, dc]:
+                chosen[((dr * dirty_tile) >> TILE_SHIFT) * tiles_w + ((dc * dirty_tile) >> TILE_SHIFT)] = True
+    n_chosen = 0
+    for t in range(chosen.shape[0]):
+        n_chosen += chosen[t]
+    out = np.empty(n_chosen * TILE_CELLS, dtype=np.int64)
+    cur64, prev16 = cur.view(np.uint64), prev.view(np.uint16)
+    words = TILE_CELLS // 8
+    m = 0
+    for t in range(chosen.shape[0]):
+        if chosen[t]:
+            k0 = t * words
+            if differing_words(cur64, prev16, k0, k0 + words):
+                m = sync_chunk(cur, prev, cur64, prev16, k0, k0 + words, out, m)
+    return out[:m].copy()

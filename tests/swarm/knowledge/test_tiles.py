@@ -79,3 +79,88 @@ def test_the_settled_test_reads_tiled_maps_as_it_reads_dense_ones():
         lidar.scan(poses, known, measure=False)
         casts.append(lidar.cast.tolist())
     assert casts[0] == casts[1] == [False, False, True, False]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_tiled_syncs_find_the_cells_the_dense_syncs_find(seed):
+    """Against a 2-bit copy in the same order, the tiled sync over a box and dirty tiles (and over the whole
+    map) lists the same row-major cells, ascending, as the dense one, and leaves a copy that holds the map."""
+    from swarm.knowledge.packed import packed_copy, sync_box_tiles_packed, sync_changes_packed
+    from swarm.knowledge.tiles import sync_tiles_packed
+
+    rng = np.random.default_rng(seed)
+    shape = (150, 200)
+    layout = TiledLayout(shape)
+    old = rng.integers(0, 3, shape).astype(np.uint8)
+    new = old.copy()
+    box = np.array([40, 75, 60, 130])
+    dirty = np.zeros((-(-shape[0] // 32), -(-shape[1] // 32)), np.uint8)
+    dirty[0, 5] = dirty[4, 1] = 1
+    for r0, r1, c0, c1 in ((40, 75, 60, 130), (0, 32, 160, 192), (128, 150, 32, 64)):  # changes where promised
+        patch = new[r0:r1, c0:c1]
+        raise_ = rng.random(patch.shape) < 0.2
+        patch[raise_] = np.maximum(patch[raise_], rng.integers(1, 3, patch.shape)[raise_])
+    dense_prev = packed_copy(old)
+    tiled_prev = packed_copy(layout.tile(old))
+    expected = sync_box_tiles_packed(new, dense_prev, box, dirty, 32)
+    got = sync_tiles_packed(layout.tile(new), tiled_prev, layout, box, dirty, 32)
+    assert len(expected) > 0 and np.array_equal(got, expected)
+    assert np.array_equal(tiled_prev, packed_copy(layout.tile(new)))
+    new[3, 3] = 2 if new[3, 3] != 2 else 1  # outside any box: only the whole-map sync sees it
+    whole = sync_changes_packed(new, dense_prev)
+    assert np.array_equal(sync_tiles_packed(layout.tile(new), tiled_prev, layout, None, None, 32), whole)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_map_sharing_over_tiled_maps_sends_and_merges_what_it_does_over_dense_maps(seed):
+    """A swarm's sharing (knowledge planes, deltas, gaps repaired with full maps and caught up) over a tiled
+    stack: every message sent is byte for byte the dense run's, and every map and plane ends the same."""
+    import math
+
+    from swarm.comm.medium import CommSpec
+    from swarm.comm.messages import MapRequest, MapUpdate, encode
+    from swarm.comm.sharing import MapSharing
+    from swarm.knowledge.planes import KnowledgePlanes
+
+    truth = generate("building", 45, seed)
+    layout = TiledLayout(truth.shape)
+    n = 70
+    free = np.argwhere(truth.free)
+    reach = int(math.ceil(LidarParams().range_m / 0.5)) + 2  # as the runtime gives it
+    runs = []
+    for tiled in (False, True):
+        rng = np.random.default_rng(seed)
+        known = layout.stack(n) if tiled else empty_knowledge(truth.shape, n)
+        planes = KnowledgePlanes(n, truth.shape[0] * truth.shape[1])
+        tracker = ExplorationTracker(truth)
+        lidar = Lidar(truth, LidarParams(), tracker=tracker)
+        service = MapSharing(n, truth.shape, CommSpec(share_every=3), lidar_reach=reach, monotone=True,
+                             planes=planes, layout=layout if tiled else None)
+        cells = free[rng.integers(len(free), size=n)]
+        live = np.ones(n, bool)
+        queue: dict[int, list] = {}
+        sent = []
+        fulls = 0
+        for tick in range(24):
+            move = rng.random(n) < 0.3  # a few robots move each tick; the rest stay (settled scans)
+            cells[move] = free[rng.integers(len(free), size=int(move.sum()))]
+            poses = np.column_stack([(cells[:, 1] + 0.5) * 0.5, (cells[:, 0] + 0.5) * 0.5, np.zeros(n)])
+            lidar.scan(poses, known, measure=False, planes=planes)
+            service.scanned(poses)
+            service.receive_tick(queue.pop(tick, []), known, live, cells=False, tick=tick)
+            out = service.outgoing(tick, known, poses)
+            sent.append([[encode(m) for m in msgs] for msgs in out])
+            for s in range(n):
+                for m in out[s]:
+                    fulls += isinstance(m, MapUpdate) and m.full
+                    heard = rng.random(n) < (1.0 if isinstance(m, MapRequest) else 0.85)  # losses make gaps
+                    heard[s] = False
+                    queue.setdefault(tick + 1, []).append((m, np.flatnonzero(heard).tolist()))
+        maps = np.stack([layout.untile(k) for k in known]) if tiled else known.copy()
+        runs.append((sent, maps, planes.free.copy(), planes.solid.copy(), service.seen_seq.copy()))
+        assert fulls > 0, "losses made gaps, repaired with full maps"
+    (sent_d, maps_d, free_d, solid_d, seen_d), (sent_t, maps_t, free_t, solid_t, seen_t) = runs
+    assert any(m for tick in sent_d for msgs in tick for m in msgs)
+    assert sent_t == sent_d
+    assert np.array_equal(maps_t, maps_d) and np.array_equal(free_t, free_d) and np.array_equal(solid_t, solid_d)
+    assert np.array_equal(seen_t, seen_d)
