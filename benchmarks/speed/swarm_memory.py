@@ -116,6 +116,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--limit-gb", type=float, default=12.0, help="stop once RSS passes this (default 12)")
     ap.add_argument("--tiles", action="store_true", help="after the run, compare row pages with tiles")
+    ap.add_argument("--tiled", action="store_true", help="keep the maps by tiles (Simulation(tiled=True))")
     args = ap.parse_args()
     watchdog(args.limit_gb)
     from swarm.sim.loop import Simulation
@@ -124,14 +125,14 @@ def main() -> None:
     t0 = time.process_time()
     sim = Simulation({"seed": args.seed, "map": {"kind": "building", "size": args.size},
                       "robots": {"count": args.robots}, "algorithm": {"name": "frontier"},
-                      "stop": {"max_ticks": args.ticks}})
+                      "stop": {"max_ticks": args.ticks}}, tiled=args.tiled)
     print(f"set-up: {time.process_time() - t0:.1f} s CPU, RSS {rss_gb():.2f} GB, peak {peak_gb():.2f} GB, "
           f"map {sim.truth.shape[0]} x {sim.truth.shape[1]} cells", flush=True)
     t1 = time.process_time()
     result = sim.run()
     print(f"run: {result.summary['ticks']} ticks, {time.process_time() - t1:.1f} s CPU, peak {peak_gb():.2f} GB",
           flush=True)
-    if args.tiles:
+    if args.tiles and not args.tiled:
         known = np.ascontiguousarray(sim.known)
         for tile in (32, 64):
             cells, pages, tiles = pages_and_tiles(known, tile)

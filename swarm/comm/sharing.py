@@ -54,7 +54,8 @@ class MapSharing:
 
     def __init__(self, n: int, shape: tuple[int, int], spec: CommSpec, lidar_reach: int | None = None,
                  monotone: bool = False, ages: InfoAges | None = None, free: FreeCounts | None = None,
-                 planes: KnowledgePlanes | None = None, layout: TiledLayout | None = None) -> None:
+                 planes: KnowledgePlanes | None = None, layout: TiledLayout | None = None,
+                 written: Any = None) -> None:
         """``ages``: told of every update sent and of every merge that leaves a receiver holding the sender's
         whole map; ``free``: told how the merges change each map's count of FREE cells (age of information,
         docs/comm-metrics.md).
@@ -69,10 +70,12 @@ class MapSharing:
         knowledge planes (:mod:`swarm.knowledge.planes`), which every merge then goes through: an update
         costs a few words a cell for all its receivers, and writes only the maps it raises. ``layout``: the
         maps are a tiled stack of this layout (:mod:`swarm.knowledge.tiles`), which needs the planes; the
-        copies of the last updates are then kept in the same tiled order."""
+        copies of the last updates are then kept in the same tiled order, and ``written(robots, cells)`` is
+        told of every merge (:meth:`swarm.knowledge.tiles.TiledKnowledge.note_cells`)."""
         self.n = n
         self.shape = (int(shape[0]), int(shape[1]))
         self.layout = layout
+        self.written = written
         if layout is not None and (planes is None or layout.shape != self.shape):
             raise InvalidInput("layout", "tiled maps", "dense maps unless knowledge planes are kept (64 robots or "
                                "more, the ternary lidar, swarm map sharing)")
@@ -307,7 +310,7 @@ class MapSharing:
                 ids, at, whole = self._take_delta(ids, stack, rows, robots, idx, values, sender, seq, lists)
                 lists = None if lists is None else [lists[k] for k in at]
             elif self._planes_for(stack) is not None:
-                self._into_many(stack, self.planes.mask(robots), idx, values,
+                self._into_many(stack, robots, idx, values,
                                 _NO_CELLS if self.free is None else self.free.freed, _NO_DIRTY, TILE)
             elif self.free is not None:
                 merge_cells_many_counted(stack, rows, idx, values, robots, self.free.freed)
@@ -370,7 +373,7 @@ class MapSharing:
         planes = self._planes_for(stack)
         if lists is None:
             if planes is not None:
-                self._into_many(stack, planes.mask(robots), idx, values, freed,
+                self._into_many(stack, robots, idx, values, freed,
                                 self._dirty, TILE)
                 n_rest, n_held = book_receivers(robots, self.seen_seq, self.whole, sender, seq, self._rest,
                                                 self._held)
@@ -457,7 +460,7 @@ class MapSharing:
             others = robots[rest]
             if planes is not None:  # a swarm: the sender's known cells, so only the pages they raise are written
                 known_cells, known_values = self._decode(msg, "known")
-                self._into_many(stack, planes.mask(others), known_cells, known_values,
+                self._into_many(stack, others, known_cells, known_values,
                                 _NO_CELLS, _NO_DIRTY, TILE)
             else:  # a team: the whole decoded map, cheaper than listing its known cells
                 dense = self._decode(msg, "dense")
@@ -485,7 +488,7 @@ class MapSharing:
                      cells: np.ndarray, values: np.ndarray) -> None:
         """Merge ``values`` at ``cells`` (ascending) into the maps of ``robots`` (their rows of ``stack``)."""
         if planes is not None:
-            self._into_many(stack, planes.mask(robots), cells, values, _NO_CELLS,
+            self._into_many(stack, robots, cells, values, _NO_CELLS,
                             _NO_DIRTY, TILE)
         else:
             merge_cells_many(stack, robots, cells, values)
@@ -527,15 +530,19 @@ class MapSharing:
         out.reverse()  # furthest behind first, as before
         return out
 
-    def _into_many(self, stack: np.ndarray, mask: np.ndarray, idx: np.ndarray, values: np.ndarray,
+    def _into_many(self, stack: np.ndarray, robots: np.ndarray, idx: np.ndarray, values: np.ndarray,
                    counts: np.ndarray, dirty: np.ndarray, tile: int) -> None:
-        """:func:`swarm.knowledge.planes.merge_into_many` into the maps ``stack``, dense or tiled."""
+        """:func:`swarm.knowledge.planes.merge_into_many` into the maps of ``robots`` in ``stack``, dense or
+        tiled (then the owner's ``written`` hook hears which robots may have changed which cells)."""
         assert self.planes is not None
+        mask = self.planes.mask(robots)
         if self.layout is None:
             merge_into_many(stack, self.planes.free, self.planes.solid, mask, idx, values, counts, dirty, tile)
         else:
-            merge_into_many_tiled(stack, self.shape[1], self.layout.tiles[1], self.planes.free, self.planes.solid,
-                                  mask, idx, values, counts, dirty, tile)
+            merge_into_many_tiled(stack, self.shape[1], self.layout.offsets(idx), self.planes.free,
+                                  self.planes.solid, mask, idx, values, counts, dirty, tile)
+            if self.written is not None:
+                self.written(robots, idx)
 
     def _values(self, known: np.ndarray, cells: np.ndarray) -> np.ndarray:
         """Robot's map ``known`` (dense, or flat tiled) at row-major ``cells``."""

@@ -114,7 +114,7 @@ class ExplorationCore:
         radio loss, the explorers' generators), sensed at tick 0."""
         spec = self.base.replace(seed=seed)
         self.close()
-        sim = Simulation(spec)
+        sim = Simulation(spec, tiled=False)  # the features read dense maps
         host = InProcessHost()
         host.start(sim.resets())
         self.sim, self.host, self.state = sim, host, sim.start_state()

@@ -23,7 +23,6 @@ import numpy as np
 from numba import njit
 
 from swarm.base.types import FREE, SOLID
-from swarm.knowledge.tiles import tile_offset
 from swarm.util.memory import lazy_zeros
 
 MIN_ROBOTS = 64
@@ -90,25 +89,26 @@ def merge_into_many(stack: np.ndarray, free: np.ndarray, solid: np.ndarray, mask
     FREE cells map r gained less those it lost; ``dirty[r]`` (unless empty) marks the tiles of ``tile`` x
     ``tile`` cells in which map r changed."""
     n, h, w = stack.shape
-    _merge_into_many(stack.reshape(-1), h * w, w, 0, free, solid, mask, idx, values, counts, dirty, tile)
+    _merge_into_many(stack.reshape(-1), h * w, w, idx, free, solid, mask, idx, values, counts, dirty, tile)
 
 
 @njit(cache=True)
-def merge_into_many_tiled(stack: np.ndarray, width: int, tiles_w: int, free: np.ndarray, solid: np.ndarray,
+def merge_into_many_tiled(stack: np.ndarray, width: int, offsets: np.ndarray, free: np.ndarray, solid: np.ndarray,
                           mask: np.ndarray, idx: np.ndarray, values: np.ndarray, counts: np.ndarray,
                           dirty: np.ndarray, tile: int) -> None:  # pragma: no cover - compiled
     """:func:`merge_into_many` into a tiled stack ``uint8[R, size]`` (:mod:`swarm.knowledge.tiles`) of maps
-    ``width`` cells and ``tiles_w`` tiles wide; ``idx`` are row-major cells, as the planes and ``dirty`` use."""
-    _merge_into_many(stack.reshape(-1), stack.shape[1], width, tiles_w, free, solid, mask, idx, values, counts,
+    ``width`` cells wide: ``idx`` are row-major cells, as the planes and ``dirty`` use them, and ``offsets``
+    where they sit in a tiled map (:meth:`swarm.knowledge.tiles.TiledLayout.offsets`)."""
+    _merge_into_many(stack.reshape(-1), stack.shape[1], width, offsets, free, solid, mask, idx, values, counts,
                      dirty, tile)
 
 
 @njit(cache=True, inline="always")
-def _merge_into_many(flat: np.ndarray, size: int, w: int, tiles_w: int, free: np.ndarray, solid: np.ndarray,
+def _merge_into_many(flat: np.ndarray, size: int, w: int, offsets: np.ndarray, free: np.ndarray, solid: np.ndarray,
                      mask: np.ndarray, idx: np.ndarray, values: np.ndarray, counts: np.ndarray, dirty: np.ndarray,
                      tile: int) -> None:  # pragma: no cover - compiled
-    """The body of :func:`merge_into_many` on a flat stack of maps of ``size`` cells (tiled when ``tiles_w``
-    is above 0)."""
+    """The body of :func:`merge_into_many` on a flat stack of maps of ``size`` cells, cell ``idx[j]`` written at
+    ``offsets[j]`` of a map (``idx`` itself for dense maps)."""
     counting = counts.shape[0] > 0
     marking = dirty.shape[0] > 0
     active = np.empty(mask.shape[0], np.int64)  # the words with a receiver: a spread-out swarm's update reaches
@@ -123,7 +123,7 @@ def _merge_into_many(flat: np.ndarray, size: int, w: int, tiles_w: int, free: np
         v = values[j]
         if v == 0:
             continue
-        at = c if tiles_w == 0 else tile_offset(c // w, c % w, tiles_w)
+        at = offsets[j]
         for a in range(words):
             q = active[a]
             m = mask[q]

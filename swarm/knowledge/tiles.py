@@ -156,3 +156,80 @@ def _sync_tiles_kernel(cur: np.ndarray, prev: np.ndarray, box: np.ndarray, dirty
             if differing_words(cur64, prev16, k0, k0 + words):
                 m = sync_chunk(cur, prev, cur64, prev16, k0, k0 + words, out, m)
     return out[:m].copy()
+
+
+class TiledKnowledge:
+    """The runtime's maps as a tiled stack, with each robot's extent (the tiles it may have written, grown by
+    every writer) so that a robot's dense map can be copied out in proportion to what it knows.
+
+    ``stack``: ``uint8[R, size]``; ``extent``: ``int64[R, 4]`` first and last tile row, first and last tile
+    column (empty while first > last). Writers report the boxes of cells they may have changed
+    (:meth:`note_boxes`); :meth:`dense` gives robot i's map as a new read-only ``uint8[H, W]`` array."""
+
+    def __init__(self, layout: TiledLayout, n_robots: int) -> None:
+        self.layout = layout
+        self.stack = layout.stack(n_robots)
+        self.extent = np.empty((n_robots, 4), dtype=np.int64)
+        self.extent[:, 0::2] = np.iinfo(np.int64).max
+        self.extent[:, 1::2] = -1
+
+    def note_boxes(self, robots: np.ndarray, boxes: np.ndarray) -> None:
+        """Robots ``robots`` may have written cells in ``boxes`` (int64[k, 4]: rows [r0, r1), columns [c0, c1),
+        clipped here to the map; one row per robot, or one row for all)."""
+        h, w = self.layout.shape
+        b = np.broadcast_to(boxes, (len(robots), 4))
+        r0, r1 = np.clip(b[:, 0], 0, h), np.clip(b[:, 1], 0, h)
+        c0, c1 = np.clip(b[:, 2], 0, w), np.clip(b[:, 3], 0, w)
+        some = (r1 > r0) & (c1 > c0)
+        if not some.all():
+            robots, r0, r1, c0, c1 = robots[some], r0[some], r1[some], c0[some], c1[some]
+        ext = self.extent
+        np.minimum.at(ext[:, 0], robots, r0 >> TILE_SHIFT)
+        np.maximum.at(ext[:, 1], robots, (r1 - 1) >> TILE_SHIFT)
+        np.minimum.at(ext[:, 2], robots, c0 >> TILE_SHIFT)
+        np.maximum.at(ext[:, 3], robots, (c1 - 1) >> TILE_SHIFT)
+
+    def note_cells(self, robots: np.ndarray, cells: np.ndarray) -> None:
+        """Robots ``robots`` may have written some of the row-major ``cells``."""
+        if len(cells) and len(robots):
+            w = self.layout.shape[1]
+            rows = cells // w
+            cols = cells - rows * w
+            box = np.array([[rows.min(), rows.max() + 1, cols.min(), cols.max() + 1]], dtype=np.int64)
+            self.note_boxes(np.asarray(robots, dtype=np.int64), box)
+
+    def dense(self, i: int) -> np.ndarray:
+        """Robot i's map, ``uint8[H, W]``, a new array (only the tiles of its extent are copied)."""
+        out = np.zeros(self.layout.shape, dtype=np.uint8)
+        tr0, tr1, tc0, tc1 = (int(v) for v in self.extent[i])
+        if tr1 >= tr0 and tc1 >= tc0:
+            _copy_tiles(self.stack[i], out, tr0, tr1, tc0, tc1, self.layout.tiles[1])
+        return out
+
+
+@njit(cache=True)
+def _copy_tiles(tiled: np.ndarray, out: np.ndarray, tr0: int, tr1: int, tc0: int, tc1: int,
+                tiles_w: int) -> None:  # pragma: no cover - compiled
+    h, w = out.shape
+    for tr in range(tr0, tr1 + 1):
+        for tc in range(tc0, tc1 + 1):
+            base = (tr * tiles_w + tc) * TILE_CELLS
+            for dr in range(TILE):
+                row = (tr << TILE_SHIFT) + dr
+                if row >= h:
+                    break
+                src = base + (dr << TILE_SHIFT)
+                c0 = tc << TILE_SHIFT
+                for dc in range(min(TILE, w - c0)):
+                    out[row, c0 + dc] = tiled[src + dc]
+
+
+@njit(cache=True)
+def cells_below_tiled(flat: np.ndarray, base: np.uint64, cells: np.ndarray, lo: int, hi: int, limit: int,
+                      width: int, tiles_w: int) -> bool:  # pragma: no cover - compiled
+    """:func:`swarm.world.motion.cells_below` on a tiled map (row-major ``cells``)."""
+    for i in range(lo, hi):
+        c = cells[i]
+        if flat[base + np.uint64(tile_offset(c // width, c % width, tiles_w))] >= limit:
+            return False
+    return True

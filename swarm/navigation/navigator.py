@@ -15,6 +15,7 @@ arrays (:class:`NavigatorSlots`), so the step of every moving robot is one compi
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -24,10 +25,12 @@ from swarm.base.types import CELL_M, SOLID, NavStatus, Pose, cell_of, frozen_bui
 from swarm.grid import memo
 from swarm.grid.cspace import configuration_space_of, nearest_in_of
 from swarm.grid.local import plan_local_first
+from swarm.knowledge.tiles import cells_below_tiled
 from swarm.plugins.planners import AStar, get_planner
 from swarm.util.arena import Arena
 from swarm.world.motion import Follower, FollowerSlots, _follow_step, cells_below
 from swarm.world.physics import MotionParams
+
 from .spec import NavigationSpec
 
 SNAP_RADIUS_CELLS = 4
@@ -226,11 +229,13 @@ class NavigationFleet:
         self._flags = np.zeros(n, dtype=np.int8)
 
     def command(self, rows: list[int], poses: np.ndarray, pose_tuples: list[Pose], known: np.ndarray,
-                out: np.ndarray, began: np.ndarray | None = None) -> None:
+                out: np.ndarray, began: np.ndarray | None = None, maps: Any = None) -> None:
         """``out[i] = navigators[i].command(pose_tuples[i], known[i])`` for every robot ``i`` in ``rows``
         (ascending); ``poses`` (float64[R, 3]) holds the same poses, ``known`` (uint8[R, H, W], C-contiguous)
         is the robots' maps, ``out`` (float64[R, 2]) has zero rows for them. ``began`` (contacts begun this
-        tick) is for MAES's controller (:class:`swarm.navigation.maes_drive.MaesDriveFleet`); not used here."""
+        tick) is for MAES's controller (:class:`swarm.navigation.maes_drive.MaesDriveFleet`); not used here.
+        ``maps``: the maps as a :class:`swarm.knowledge.tiles.TiledKnowledge` (``known`` its stack): the
+        corridor checks read the tiles, and a robot that plans gets its map copied out."""
         navs = self.navigators
         moving: list[int] = []
         python: list[int] = []  # planning: all of it in Python (other states command (0, 0))
@@ -243,23 +248,26 @@ class NavigationFleet:
         flags = self._flags
         if moving:
             s, f = self.slots, self.slots.followers
-            if _fleet_step(np.array(moving, dtype=np.int64), known, s.corridors.buffer, s.corridors.start,
+            width, tiles_w = (0, 0) if maps is None else (maps.layout.shape[1], maps.layout.tiles[1])
+            if _fleet_step(np.array(moving, dtype=np.int64), known, width, tiles_w, s.corridors.buffer,
+                           s.corridors.start,
                            s.corridors.end, f.paths.buffer, f.paths.start, f.paths.end, self._consts, f.index,
                            f.remaining, f.done, s.best_remaining, s.stalled, self._stuck_ticks, PROGRESS_M, poses,
                            out, flags):
                 python = sorted(python + [i for i in moving if flags[i] != _STEPPED])  # robot order
         for i in python:
             nav = navs[i]
-            if nav.state == "planning":
-                out[i] = nav.command(pose_tuples[i], known[i])
-                continue
             flag = flags[i]
-            if flag == _BLOCKED:
-                out[i] = nav._plan_and_step(pose_tuples[i], known[i])
-            elif flag == _ARRIVED:
+            if nav.state == "moving" and flag == _ARRIVED:
                 nav.state = "reached"
+                continue
+            mine = known[i] if maps is None else maps.dense(i)  # (tiled maps: copied out for this robot)
+            if nav.state == "planning":
+                out[i] = nav.command(pose_tuples[i], mine)
+            elif flag == _BLOCKED:
+                out[i] = nav._plan_and_step(pose_tuples[i], mine)
             else:  # _STUCK
-                nav._stuck(pose_tuples[i], known[i])
+                nav._stuck(pose_tuples[i], mine)
                 if nav.state != "moving":
                     out[i] = 0.0
 
@@ -268,7 +276,8 @@ _STEPPED, _BLOCKED, _ARRIVED, _STUCK = 0, 1, 2, 3
 
 
 @njit(cache=True)
-def _fleet_step(rows: np.ndarray, known: np.ndarray, cells: np.ndarray, cell_start: np.ndarray, cell_end: np.ndarray,
+def _fleet_step(rows: np.ndarray, known: np.ndarray, width: int, tiles_w: int, cells: np.ndarray,
+                cell_start: np.ndarray, cell_end: np.ndarray,
                 paths: np.ndarray, path_start: np.ndarray, path_end: np.ndarray, consts: np.ndarray,
                 index: np.ndarray, remaining: np.ndarray, done: np.ndarray, best: np.ndarray, stalled: np.ndarray,
                 stuck_ticks: int, progress_m: float, poses: np.ndarray, out: np.ndarray,
@@ -280,13 +289,16 @@ def _fleet_step(rows: np.ndarray, known: np.ndarray, cells: np.ndarray, cell_sta
     makes them, on its path table, state in ``index``/``remaining``/``done``) into
     ``out[k]``, then _ARRIVED (and (0, 0)) when the path is done, else the progress count (``best``,
     ``stalled``): _STUCK when it reaches ``stuck_ticks``, otherwise _STEPPED. Returns whether any robot
-    was left to Python (not _STEPPED)."""
-    size = np.uint64(known.shape[1] * known.shape[2])
+    was left to Python (not _STEPPED). ``tiles_w`` above 0: ``known`` is a tiled stack of maps ``width``
+    cells wide (:mod:`swarm.knowledge.tiles`)."""
+    size = np.uint64(known.size // known.shape[0])
     flat = known.ravel()  # a view of the C-contiguous maps
     left = False
     for t in range(rows.shape[0]):
         k = rows[t]
-        if not cells_below(flat, np.uint64(k) * size, cells, cell_start[k], cell_end[k], SOLID):
+        base = np.uint64(k) * size
+        if not (cells_below(flat, base, cells, cell_start[k], cell_end[k], SOLID) if tiles_w == 0 else
+                cells_below_tiled(flat, base, cells, cell_start[k], cell_end[k], SOLID, width, tiles_w)):
             flags[k] = _BLOCKED
             left = True
             continue

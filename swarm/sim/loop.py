@@ -32,7 +32,7 @@ import numpy as np
 from maps import CELL_M, Map, generate
 from radio import build_link_model
 from radio.models import groups_of
-
+from swarm.base.errors import InvalidInput
 from swarm.base.types import Action, Pose, RobotInfo
 from swarm.comm.maes_merge import MaesMerge
 from swarm.comm.maes_merge import resolve as resolve_maes_merge
@@ -44,6 +44,7 @@ from swarm.knowledge.journal import KnowledgeJournal
 from swarm.knowledge.maps import sync_boxes_flat, sync_changes
 from swarm.knowledge.planes import KnowledgePlanes
 from swarm.knowledge.planes import wanted as planes_wanted
+from swarm.knowledge.tiles import TiledKnowledge, TiledLayout
 from swarm.navigation.avoidance import Avoidance
 from swarm.navigation.maes_drive import MaesDriveFleet
 from swarm.navigation.navigator import NavigationFleet
@@ -61,6 +62,7 @@ from swarm.world.motion import TICK_S
 from swarm.world.physics import World
 from swarm.world.sensing import ExplorationTracker, Lidar
 from swarm.world.spawn import spawn
+
 from .spec import ROBOT_STREAM, RunSpec, planner_rng, seed_streams
 
 MAX_DROP_EVENTS = 100
@@ -136,14 +138,24 @@ class LoopState:
     pose_tuples: list = field(default_factory=list)
 
 
+TILED_FROM_CELLS = 1 << 35
+"""Dense maps of this many robot-cells or more (32 GB, more than this machine's memory were they to fill) are
+kept by tiles when the run allows (``Simulation(tiled=None)``): 10,000 robots on a 2,000-tile building (160
+billion), not 1,000 robots on 600 tiles (2.2 billion)."""
+
+
 class Simulation:
     """One run. Construct from a :class:`RunSpec` or a mapping; :meth:`run` once."""
 
     def __init__(self, spec: RunSpec | Mapping[str, Any], truth: Map | None = None,
                  observers: Sequence[Callable[[TickView], None]] = (), start_poses: np.ndarray | None = None,
-                 transport: TransportOptions | None = None) -> None:
+                 transport: TransportOptions | None = None, tiled: bool | None = None) -> None:
         """``truth`` replaces the spec's map and ``start_poses`` (float64[R, 3]) its spawn: for hand-made
-        test fixtures; a run's identity (``spec.key``) does not cover them."""
+        test fixtures; a run's identity (``spec.key``) does not cover them. ``tiled``: keep the knowledge maps
+        by tiles (:mod:`swarm.knowledge.tiles`: memory in proportion to what each robot knows; the same
+        results), for swarms (64 robots or more) with the ternary lidar, swarm map sharing, the in-process
+        transport and no observer; None (default): tiles when the run allows them and its dense maps would
+        span :data:`TILED_FROM_CELLS` cells or more."""
         t0 = time.perf_counter()
         self.spec = RunSpec.from_mapping(spec) if not isinstance(spec, RunSpec) else spec
         self.streams = seed_streams(self.spec)
@@ -158,8 +170,6 @@ class Simulation:
         self.lidar = Lidar(self.truth, self.lidar_params)
         self.tracker = ExplorationTracker(self.truth)
         self.tracker.track_robots(n)   # who saw what by its own lidar: overlap and coverage spread
-        self.known = lazy_zeros((n, *self.truth.shape), np.uint8)  # memory where the maps hold something
-        self._views = [self._read_only(i) for i in range(n)]
         fleet = MaesDriveFleet if self.motion.model == "maes" else NavigationFleet
         self.fleet = fleet(self.spec.navigation, self.motion, [planner_rng(self.spec.seed, i) for i in range(n)])
         nav = self.spec.navigation
@@ -189,8 +199,22 @@ class Simulation:
         self.planes = (KnowledgePlanes(n, self.truth.shape[0] * self.truth.shape[1])  # who knows which cell
                        if planes_wanted(n, monotone, merge is None and self.comm.map_sharing in ("delta", "full"))
                        else None)
+        refused = self._tiled_refused(monotone, merge, observers)
+        if tiled is None:
+            tiled = refused is None and n * self.truth.shape[0] * self.truth.shape[1] >= TILED_FROM_CELLS
+        elif tiled and refused is not None:
+            raise InvalidInput("tiled", True, f"a run with {refused}")
+        self.maps: TiledKnowledge | None = TiledKnowledge(TiledLayout(self.truth.shape), n) if tiled else None
+        if self.maps is not None:
+            self.known = self.maps.stack  # uint8[n, tiles * 4096]: memory where the tiles hold something
+            self._views: Any = _TiledViews(self.maps)
+        else:
+            self.known = lazy_zeros((n, *self.truth.shape), np.uint8)  # memory where the maps hold something
+            self._views = [self._read_only(i) for i in range(n)]
         self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach,  # told of every scan
-                                  monotone=monotone, ages=self.ages, free=self.free, planes=self.planes)
+                                  monotone=monotone, ages=self.ages, free=self.free, planes=self.planes,
+                                  layout=None if self.maps is None else self.maps.layout,
+                                  written=None if self.maps is None else self.maps.note_cells)
         self.maes_merge = MaesMerge(n, *merge, ages=self.ages) if merge is not None else None
         self._in_flight: list[list[Envelope]] | None = None  # link_at = "receive": last tick's outboxes
         self.inboxes = Inboxes.empty(n)
@@ -207,13 +231,23 @@ class Simulation:
         self.journals: list[KnowledgeJournal] = []  # where maps were written, one per reader that asked
         self.setup_time_s = time.perf_counter() - t0
 
+    def _tiled_refused(self, monotone: bool, merge: Any, observers: Sequence[Any]) -> str | None:
+        """What a run would need for tiled maps to serve it (see ``tiled`` in :meth:`__init__`), or None."""
+        reasons = [(not monotone, "maps that only rise (the ternary lidar; no localisation error or occluding robots)"),
+                   (merge is not None, "swarm map sharing, not MAES's merges"),
+                   (bool(observers), "no observers (recorder, viewer, ROS 2 bridge)"),
+                   (self.spec.transport != "inprocess", "the in-process transport"),
+                   (self.motion.model == "maes", "swarm's motion model"),
+                   (self.planes is None, "64 robots or more and swarm map sharing (delta or full)")]
+        return next((allowed for bad, allowed in reasons if bad), None)
+
     def _read_only(self, i: int) -> np.ndarray:
         """Robot i's map as its algorithm sees it: read-only, and vouched for (values 0..2 by construction),
         so the grid helpers the algorithm calls on it every few ticks do not rescan it. Called on the new
         all-zero maps only (set-up)."""
         view = self.known[i].view()
         view.flags.writeable = False
-        return vouch_known(view, zeros=True)
+        return vouch_known(view, trusted=True)
 
     def knowledge_journal(self) -> KnowledgeJournal:
         """A new journal of where each robot's map is written from now on (:mod:`swarm.knowledge.journal`),
@@ -249,6 +283,8 @@ class Simulation:
             if opts.on_listening is not None:
                 opts.on_listening()
             host.start(self.resets())
+            if host.mirrors and self.maps is not None:
+                raise InvalidInput("tiled", True, "a host without map mirrors (the in-process host)")
             if host.mirrors:
                 self._mirror = np.zeros_like(self.known)
             return self._loop(host)
@@ -308,6 +344,12 @@ class Simulation:
         if self.localizer is None and not self.occlude:
             self.lidar.scan(poses, self.known, self.streams.sensor, active=active, tracker=self.tracker,
                             measure=False, freed=self.free.freed, planes=self.planes)
+            if self.maps is not None:  # the tiles each cast robot's lidar may have written
+                cast = np.flatnonzero(self.lidar.cast)
+                centre = (poses[cast, 1::-1] / CELL_M).astype(np.int64)
+                reach = self._reach
+                self.maps.note_boxes(cast, np.column_stack((centre[:, 0] - reach, centre[:, 0] + reach + 1,
+                                                            centre[:, 1] - reach, centre[:, 1] + reach + 1)))
         else:   # the lidar measures from the true pose and writes from the believed one
             if self.lidar_params.mode == "ternary":
                 limits = self.lidar.occlusion(poses, self.motion.radius, active) if self.occlude else None
@@ -387,7 +429,10 @@ class Simulation:
                 commands[i] = v, w
             else:
                 steered.append(i)
-        self.fleet.command(steered, poses, pose_tuples, self.known, commands, began)
+        if self.maps is None:
+            self.fleet.command(steered, poses, pose_tuples, self.known, commands, began)
+        else:
+            self.fleet.command(steered, poses, pose_tuples, self.known, commands, began, maps=self.maps)
         if self.avoidance is not None:   # among the robots as they are, not as they believe they are
             self.avoidance.adjust(commands, steered, poses if true_poses is None else true_poses)
         return commands
@@ -710,3 +755,21 @@ class _TickLinks:
 
     def __getattr__(self, name: str) -> Any:  # only for names not in __slots__: the LinkState's fields
         return getattr(self.state(), name)
+
+
+class _TiledViews:
+    """The robots' maps as their algorithms see them, from tiled maps: robot i's map copied out of its tiles
+    when read (:meth:`swarm.knowledge.tiles.TiledKnowledge.dense`), read-only and vouched for."""
+
+    __slots__ = ("_maps",)
+
+    def __init__(self, maps: TiledKnowledge) -> None:
+        self._maps = maps
+
+    def __len__(self) -> int:
+        return self._maps.stack.shape[0]
+
+    def __getitem__(self, i: int) -> np.ndarray:
+        view = self._maps.dense(i)
+        view.flags.writeable = False
+        return vouch_known(view, trusted=True)  # (values copied from the runtime's maps: 0..2 by construction)

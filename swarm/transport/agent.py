@@ -78,7 +78,7 @@ class AgentRunner:
         self._flat = self.known.reshape(-1)
         self._view = self.known.view()
         self._view.flags.writeable = False
-        vouch_known(self._view, zeros=True)  # new zeros; values are checked (0..2) before a packet writes them
+        vouch_known(self._view, trusted=True)  # new zeros; values are checked (0..2) before a packet writes them
         self._inbox = timed(times, "agent: inbox decode", (inbox or InboxDecoder()).decode)
         self._decode = timed(times, "agent: obs decode", ObsDecoder(self.known.size, reset.robot.n_robots))
         self._act = timed(times, "agent: algorithm", self.algorithm.act)

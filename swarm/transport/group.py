@@ -46,7 +46,7 @@ class AgentGroup:
         self.row_of = {robot: k for k, robot in enumerate(self.ids)}
         self.maps: np.ndarray | None = np.zeros((len(resets), *first.map_shape), dtype=np.uint8)
         # new zeros (not scanned); a packet's cells are checked (0..2) before they are written
-        self._views = [vouch_known(_read_only(m), zeros=True) for m in self.maps]
+        self._views = [vouch_known(_read_only(m), trusted=True) for m in self.maps]
         self._shared: Sequence[np.ndarray] | None = None
         self._decode = ObsBatchDecoder(self.n_robots, self.maps[0].size)
         self._acts = []

@@ -65,8 +65,8 @@ from swarm.base.errors import InvalidInput
 from swarm.base.params import OMIT_DEFAULT, check_choice, check_float, check_int
 from swarm.base.types import CELL_M, FREE, SOLID
 from swarm.knowledge.maps import ExplorationTracker, LogOddsGrid, active_flags
-from swarm.knowledge.tiles import TiledLayout, tile_offset
 from swarm.knowledge.planes import KnowledgePlanes, no_planes, note_raise
+from swarm.knowledge.tiles import TiledLayout, tile_offset
 from swarm.util.jitops import opaque, select
 
 _NO_PLANE = no_planes()[0]

@@ -282,10 +282,10 @@ def test_new_zero_maps_are_vouched_for_without_a_scan_but_still_shape_checked() 
     fresh = np.zeros((5, 7), dtype=np.uint8)
     view = fresh.view()
     view.flags.writeable = False
-    assert vouch_known(view, zeros=True) is view and check_known(view) is view
+    assert vouch_known(view, trusted=True) is view and check_known(view) is view
     for bad in (np.zeros((5, 7), dtype=np.uint8), np.zeros(5, dtype=np.uint8), np.zeros((2, 2), dtype=np.int16)):
         with pytest.raises(InvalidInput, match="view"):
-            vouch_known(bad, zeros=True)  # writable, not 2-D, not uint8: refused before anything is trusted
+            vouch_known(bad, trusted=True)  # writable, not 2-D, not uint8: refused before anything is trusted
 
 
 # -------------------------------------------------------------------------------------------- plan ----

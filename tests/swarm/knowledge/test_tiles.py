@@ -164,3 +164,41 @@ def test_map_sharing_over_tiled_maps_sends_and_merges_what_it_does_over_dense_ma
     assert sent_t == sent_d
     assert np.array_equal(maps_t, maps_d) and np.array_equal(free_t, free_d) and np.array_equal(solid_t, solid_d)
     assert np.array_equal(seen_t, seen_d)
+
+
+def _run_digest(spec: dict, tiled: bool) -> str:
+    import hashlib
+    import json
+
+    from swarm.sim.loop import Simulation
+
+    res = Simulation(spec, tiled=tiled).run()
+    summary = {k: v for k, v in res.summary.items() if k not in ("wall_time_s", "setup_time_s")}
+    blob = json.dumps([summary, res.timeseries, res.comm, res.events], sort_keys=True, default=str)
+    return hashlib.sha256(blob.encode()).hexdigest()
+
+
+@pytest.mark.parametrize("algorithm, spawn", [("frontier", "together"), ("greed", "random")])
+def test_a_run_over_tiled_maps_is_the_dense_run_bit_for_bit(algorithm, spawn):
+    """The whole stack (lidar, planes, delta sharing with gaps and full maps, navigation, the algorithm's
+    dense view, metrics) over tiled maps gives the dense run's summary, series, comm metrics and events."""
+    spec = {"seed": 5, "map": {"kind": "building", "size": 40}, "robots": {"count": 70, "spawn": spawn},
+            "algorithm": {"name": algorithm}, "stop": {"max_ticks": 80}}
+    assert _run_digest(spec, True) == _run_digest(spec, False)
+
+
+@pytest.mark.parametrize("change, allowed", [
+    ({"robots": {"count": 8}}, "64 robots or more"),
+    ({"localization": {"model": "odometry"}}, "maps that only rise"),
+    ({"comm": {"map_sharing": "maes"}}, "MAES"),
+    ({"motion": {"model": "maes"}}, "motion model"),
+])
+def test_runs_tiled_maps_cannot_serve_are_refused_in_one_line(change, allowed):
+    from swarm.base.errors import InvalidInput
+    from swarm.sim.loop import Simulation
+
+    spec = {"seed": 1, "map": {"kind": "building", "size": 30}, "robots": {"count": 70},
+            "algorithm": {"name": "frontier"}, "stop": {"max_ticks": 5}, **change}
+    with pytest.raises(InvalidInput, match=allowed) as err:
+        Simulation(spec, tiled=True)
+    assert err.value.field == "tiled"
