@@ -44,6 +44,10 @@ CATCH_UP = True
 """Merge a full map into a receiver that missed a few of its sender's updates as just their cells (exact on
 monotone maps; off: such receivers take the sender's whole map, as before; the tests compare both)."""
 
+DROP_DECODED_CELLS = 4096
+"""A delta of this many cells or more drops its decoded cells and plain bytes once merged into all its
+receivers (the zlib payload stays: a later reader, such as a recorder's journal, decodes it again)."""
+
 TILE = 32
 """Merges note the places they changed in a robot's map as tiles of TILE x TILE cells, which its next delta
 compares with its last update."""
@@ -74,6 +78,7 @@ class MapSharing:
         told of every merge (:meth:`swarm.knowledge.tiles.TiledKnowledge.note_cells`)."""
         self.n = n
         self.shape = (int(shape[0]), int(shape[1]))
+        self._narrow_cells = shape[0] * shape[1] < 2**31  # history cells kept as int32 (half the memory)
         self.layout = layout
         self.written = written
         if layout is not None and (planes is None or layout.shape != self.shape):
@@ -183,10 +188,11 @@ class MapSharing:
         return out
 
     def _remember(self, i: int, seq: int, changed: np.ndarray) -> None:
-        """Note robot i's update ``seq`` and the cells it changed (kept unchanged: the update carries them
-        too), dropping the oldest beyond :data:`HISTORY_UPDATES` or :data:`HISTORY_CELLS`."""
+        """Note robot i's update ``seq`` and the cells it changed (as int32 on maps under 2^31 cells: a
+        10,000-robot swarm's histories took 1.3 GB as int64), dropping the oldest beyond
+        :data:`HISTORY_UPDATES` or :data:`HISTORY_CELLS`."""
         history = self._history[i]
-        history.append((seq, changed))
+        history.append((seq, changed.astype(np.int32) if self._narrow_cells else changed))
         self._history_cells[i] += len(changed)
         while history and (len(history) > HISTORY_UPDATES or self._history_cells[i] > HISTORY_CELLS):
             self._history_cells[i] -= len(history.popleft()[1])
@@ -317,6 +323,9 @@ class MapSharing:
             else:
                 merge_cells_many(stack, rows, idx, values)
             carried = [idx] * len(ids)
+            if len(idx) >= DROP_DECODED_CELLS:  # merged into every receiver: let go of the decoded and plain
+                msg.__dict__.pop("_cells", None)  # copies (a 10,000-robot round held gigabytes of them until
+                msg.__dict__.pop("_plain", None)  # the messages left the inboxes); a later reader decodes again
         delta_gap = not msg.full and self.spec.map_sharing == "delta"
         if lists is not None:
             for cells, into in zip(carried, lists):

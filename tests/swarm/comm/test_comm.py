@@ -780,3 +780,32 @@ def test_union_of_sorted_cell_lists_is_numpys(seed):
         a = np.unique(rng.integers(0, 300, rng.integers(0, 80)))
         b = np.unique(rng.integers(0, 300, rng.integers(0, 80)))
         assert np.array_equal(union_sorted(a, b), np.union1d(a, b))
+
+
+def test_dropping_a_merged_deltas_decoded_cells_changes_nothing(monkeypatch):
+    """A large delta lets go of its decoded cells and plain bytes once merged into all its receivers; every
+    map and message is then what it is when they are kept (here every delta counts as large), and a later
+    reader decodes the same cells again."""
+    from swarm.comm import sharing as sharing_module
+
+    shape, n = (40, 40), 5
+    runs = []
+    for drop in (10**9, 1):
+        monkeypatch.setattr(sharing_module, "DROP_DECODED_CELLS", drop)
+        rng = np.random.default_rng(6)
+        service = MapSharing(n, shape, CommSpec(share_every=2), lidar_reach=3, monotone=True)
+        known = np.zeros((n, *shape), np.uint8)
+        kept: list = []
+
+        def route(s, m, tick, _kept=kept):
+            if isinstance(m, MapUpdate) and not m.full:
+                _kept.append(m)
+            return [r for r in range(n) if r != s and (tick + r + s) % 4], 0
+
+        sent = run_sharing(service, known, rng, 14, 19, 6, route)
+        dropped = ["_cells" not in m.__dict__ and "_plain" not in m.__dict__ for m in kept]
+        runs.append((sent, known.copy(), [m.cells() for m in kept], dropped))
+    (sent_keep, maps_keep, cells_keep, dropped_keep), (sent_drop, maps_drop, cells_drop, dropped) = runs
+    assert sent_drop == sent_keep and np.array_equal(maps_drop, maps_keep)
+    assert not any(dropped_keep) and any(dropped), "merged deltas let go of their copies only when large"
+    assert all(np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1]) for a, b in zip(cells_drop, cells_keep))
