@@ -44,6 +44,11 @@ all of them when a map of another size comes (as :mod:`swarm.grid.memo` does). A
 searches its maps round robin, so every search would find its entry dropped and rebuild it: at 32 entries
 that made a 64-robot run cost 2.3x a 32-robot one instead of 2x (docs/performance-history.md)."""
 
+MAX_BYTES = 1 << 28
+"""...and at most this much memory in all (256 MB): on a 2,000-tile building (4000 x 4000 cells) an entry is
+8 MB, and a swarm of 10,000 robots never finds its entry anyway, so 64 of them would hold half a gigabyte for
+nothing. Maps of 600 x 600 cells (1,000 robots) stay at 64 entries."""
+
 _NEVER = 255
 """Fills a new entry's copy (every cell 3): no knowledge map holds it, so the first refresh recomputes
 every row."""
@@ -92,10 +97,15 @@ def inputs_for(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: b
             forget_all()  # another run's map size: those entries can never be found again
         _KEPT.shape = (h, w)
         entry = entries[key] = _new_inputs(h, w)
-        while len(entries) > MAX_ENTRIES:
+        limit = max(1, min(MAX_ENTRIES, MAX_BYTES // _entry_bytes(entry)))
+        while len(entries) > limit:
             entries.popitem(last=False)
     entries.move_to_end(key)
     return entry
+
+
+def _entry_bytes(entry: KeptInputs) -> int:
+    return entry.copy.nbytes + entry.space.nbytes + entry.targets.nbytes + entry.row_targets.nbytes
 
 
 def key_of(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: bool, reach: int) -> Key:

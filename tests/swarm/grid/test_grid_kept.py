@@ -178,6 +178,25 @@ def test_kept_entries_are_bounded() -> None:
     memo.forget_all()
 
 
+def test_kept_entries_are_bounded_in_bytes_too(monkeypatch) -> None:
+    """Big maps keep fewer entries (a swarm on a 2,000-tile building would hold 8 MB an entry), and a search
+    whose entry was dropped finds what it found with it."""
+    kept.forget_all()
+    maps = [np.zeros((20, 20), np.uint8) for _ in range(10)]
+    for m in maps:
+        m[5:15, 5:15] = FREE
+    first = [grid.nearest_reachable_unseen(m, (10, 10), local_first_m=None) for m in maps]
+    one = kept._entry_bytes(next(iter(kept._KEPT.entries.values())))
+    kept.forget_all()
+    memo.forget_all()
+    monkeypatch.setattr(kept, "MAX_BYTES", 3 * one)
+    again = [grid.nearest_reachable_unseen(m, (10, 10), local_first_m=None) for m in maps]
+    assert len(kept._KEPT.entries) == 3
+    assert again == first
+    kept.forget_all()
+    memo.forget_all()
+
+
 def test_a_team_of_64_searched_round_robin_keeps_every_map() -> None:
     """The runtime searches its robots' maps in robot order: with fewer entries than robots each search
     found its entry dropped and rebuilt it from scratch (a 64-robot run cost 2.3x a 32-robot one)."""
