@@ -69,6 +69,20 @@ def report_steps(sim_type: type, ticks: int) -> None:
                 print(f"    {_name}: {time.process_time() - t0:.1f} s CPU, RSS {r0:.2f} -> {rss_gb():.2f} GB",
                       flush=True)
         setattr(sim_type, name, wrapped)
+    from swarm.transport.inprocess import InProcessHost
+
+    act = InProcessHost.act
+
+    def act_and_report(self, batch, _act=act):
+        if state["tick"] >= ticks:
+            return _act(self, batch)
+        t0, r0 = time.process_time(), rss_gb()
+        try:
+            return _act(self, batch)
+        finally:
+            print(f"    algorithms: {time.process_time() - t0:.1f} s CPU, RSS {r0:.2f} -> {rss_gb():.2f} GB",
+                  flush=True)
+    InProcessHost.act = act_and_report
     sense = sim_type.sense
     last = [time.process_time()]
 

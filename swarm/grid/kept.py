@@ -44,10 +44,10 @@ all of them when a map of another size comes (as :mod:`swarm.grid.memo` does). A
 searches its maps round robin, so every search would find its entry dropped and rebuild it: at 32 entries
 that made a 64-robot run cost 2.3x a 32-robot one instead of 2x (docs/performance-history.md)."""
 
-MAX_BYTES = 1 << 28
-"""...and at most this much memory in all (256 MB): on a 2,000-tile building (4000 x 4000 cells) an entry is
+MAX_BYTES = 1 << 27
+"""...and at most this much memory in all (128 MB): on a 2,000-tile building (4000 x 4000 cells) an entry is
 8 MB, and a swarm of 10,000 robots never finds its entry anyway, so 64 of them would hold half a gigabyte for
-nothing. Maps of 600 x 600 cells (1,000 robots) stay at 64 entries."""
+nothing. Maps of 600 x 600 cells (1,000 robots: 1 MB an entry) stay at 64 entries."""
 
 _NEVER = 255
 """Fills a new entry's copy (every cell 3): no knowledge map holds it, so the first refresh recomputes

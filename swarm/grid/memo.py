@@ -34,6 +34,11 @@ MAX_ENTRIES = 128
 :data:`swarm.grid.kept.MAX_ENTRIES`). Each refers to its search's kept map and space (no copies of its own),
 and all are of one map size (a new size clears them)."""
 
+MAX_BYTES = 1 << 27
+"""...and at most this much of kept inputs held through them (128 MB): each holds its search's kept map copy
+and space bits alive, 6 MB on a 2,000-tile building, where a 10,000-robot swarm never recalls a plan anyway.
+Maps of 600 x 600 cells keep all 128."""
+
 Params = tuple[float, float, bool]
 """(radius_m, margin_m, unseen_traversable): what the configuration space was built with."""
 
@@ -81,7 +86,8 @@ def remember(known: np.ndarray, space_bits: np.ndarray, shape: tuple[int, int], 
     key = (params, start_cell, goal)
     entries[key] = SearchPlan(known, space_bits, shape, start, goal, path, version, int(version[0]))
     entries.move_to_end(key)
-    while len(entries) > MAX_ENTRIES:
+    limit = max(1, min(MAX_ENTRIES, MAX_BYTES // max(known.nbytes + space_bits.nbytes, 1)))
+    while len(entries) > limit:
         entries.popitem(last=False)
 
 
