@@ -362,7 +362,8 @@ def map_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[
 
 def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
                 payloads: dict[tuple[int, int, int], tuple[np.ndarray, bytes | None, bytes, int]] | None = None,
-                packed: np.ndarray | None = None) -> MapUpdate:
+                packed: np.ndarray | None = None, wire: Callable[[], np.ndarray] | None = None,
+                shape: tuple[int, int] | None = None) -> MapUpdate:
     """The full-map MapUpdate of ``known`` (``pose``: three Python floats).
 
     ``payloads``: the full maps of one sharing tick so far (a fingerprint of the packed map -> (packed map,
@@ -375,7 +376,10 @@ def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple
     maps in one tick would otherwise hold a megabyte or more per robot until they are delivered (10,000
     robots on 2,000 tiles: 40 GB).
     ``packed``: ``known`` already packed 2 bits a cell (:func:`swarm.knowledge.packed.packed_copy`; the
-    map-sharing service keeps it), unchanged while ``payloads`` is in use."""
+    map-sharing service keeps it), unchanged while ``payloads`` is in use.
+    ``wire``: for a map not stored row-major (:mod:`swarm.knowledge.tiles`; ``known`` and ``packed`` in its own
+    order, ``shape`` its size): gives the row-major map packed when a payload has to be built; equal maps
+    still share one, found and confirmed in their stored order."""
     if packed is None:
         packed = _cellcodec.pack2(known.reshape(-1))
     key = (*_cellcodec.fingerprint(packed), len(packed))
@@ -383,13 +387,15 @@ def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple
     if shared is not None and not np.array_equal(shared[0], packed):
         shared, payloads = None, None  # a fingerprint collision: compress this one apart
     if shared is None:
-        plain = packed.tobytes()
+        plain = packed.tobytes() if wire is None else wire().tobytes()
         shared = (packed, plain if len(plain) <= KEEP_PLAIN_BYTES else None, zlib.compress(plain, MAP_ZLIB_LEVEL),
                   int(np.count_nonzero(known)))
         if payloads is not None:
             payloads[key] = shared
+    if shape is None:
+        shape = (int(known.shape[0]), int(known.shape[1]))
     return _update_of(shared[1], shared[2], sender=sender, seq=seq, tick=tick, full=True,
-                      shape=(int(known.shape[0]), int(known.shape[1])), count=shared[3], pose=pose)
+                      shape=(int(shape[0]), int(shape[1])), count=shared[3], pose=pose)
 
 
 def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],

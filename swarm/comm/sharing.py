@@ -165,11 +165,12 @@ class MapSharing:
                         self._forget_writes(i)
                 self.seq[i] += 1
                 packed = None if self.last_shared is None else self.last_shared[i]  # known[i], packed
-                mine = known[i]
-                if self.layout is not None:  # the wire's map is row-major
-                    mine = self.layout.untile(known[i])
-                    packed = pack2(mine.reshape(-1))
-                update = full_update(i, self.seq[i], tick, mine, tuple(pose_rows[i]), payloads, packed)
+                wire = None
+                if self.layout is not None:  # the wire's map is row-major: built only for a new payload
+                    def wire(mine=known[i], layout=self.layout):
+                        return pack2(layout.untile(mine).reshape(-1))
+                update = full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), payloads, packed,
+                                     wire=wire, shape=self.shape)
                 update.__dict__["_since"] = since  # this process's note (see _take); never on the wire
                 out[i].append(update)
                 continue
