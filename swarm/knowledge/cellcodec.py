@@ -93,14 +93,7 @@ def fingerprint(data: np.ndarray) -> tuple[np.uint64, np.uint64]:  # pragma: no 
 @njit(cache=True)
 def pack_delta(flat: np.ndarray, idx: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
     """The delta layout of the cells ``idx`` (ascending flat indices) of ``flat``."""
-    n = idx.shape[0]
-    out = np.zeros(4 * n + (n + 3) // 4, dtype=np.uint8)
-    prev = 0
-    for i in range(n):
-        put_u32(out, 4 * i, idx[i] - prev)
-        prev = idx[i]
-        out[4 * n + (i >> 2)] |= np.uint8((flat[idx[i]] & 3) << (2 * (i & 3)))
-    return out
+    return pack_delta_values(idx, flat[idx])
 
 
 @njit(cache=True)
