@@ -406,11 +406,9 @@ def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tupl
     or converted again (the map-sharing service builds one per robot per sharing tick). A map not stored
     row-major (:mod:`swarm.knowledge.tiles`) gives its ``values`` at ``changed`` and its ``shape``."""
     if values is None:
-        plain = _cellcodec.pack_delta(known.reshape(-1), changed).tobytes()
-        shape = (int(known.shape[0]), int(known.shape[1]))
-    else:
-        assert shape is not None
-        plain = _cellcodec.pack_delta_values(changed, np.ascontiguousarray(values, dtype=np.uint8)).tobytes()
+        values, shape = known.reshape(-1)[changed], known.shape
+    assert shape is not None
+    plain = _cellcodec.pack_delta(changed, np.ascontiguousarray(values, dtype=np.uint8)).tobytes()
     return _update_of(plain, zlib.compress(plain, MAP_ZLIB_LEVEL), sender=sender, seq=seq, tick=tick, full=False,
                       shape=(int(shape[0]), int(shape[1])), count=len(changed), pose=pose)
 

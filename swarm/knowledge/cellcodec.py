@@ -91,15 +91,9 @@ def fingerprint(data: np.ndarray) -> tuple[np.uint64, np.uint64]:  # pragma: no 
 
 
 @njit(cache=True)
-def pack_delta(flat: np.ndarray, idx: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
-    """The delta layout of the cells ``idx`` (ascending flat indices) of ``flat``."""
-    return pack_delta_values(idx, flat[idx])
-
-
-@njit(cache=True)
-def pack_delta_values(idx: np.ndarray, values: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
-    """:func:`pack_delta` of cells ``idx`` (ascending) whose values are given (``values[i]`` for ``idx[i]``),
-    for maps not stored row-major (:mod:`swarm.knowledge.tiles`): the same bytes."""
+def pack_delta(idx: np.ndarray, values: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """The delta layout of the cells ``idx`` (ascending flat indices) whose values are ``values`` (``values[i]``
+    for ``idx[i]``: a map's values gathered by the caller, whatever order the map is stored in)."""
     n = idx.shape[0]
     out = np.zeros(4 * n + (n + 3) // 4, dtype=np.uint8)
     prev = 0

@@ -55,7 +55,7 @@ class TiledLayout:
         """One robot's tiled map (flat ``uint8[size]``) as a dense ``uint8[H, W]`` map (into ``out``)."""
         if out is None:
             out = np.empty(self.shape, dtype=np.uint8)
-        untile_into(tiled, out, self.tiles[1])
+        _copy_tiles(tiled, out, 0, self.tiles[0] - 1, 0, self.tiles[1] - 1, self.tiles[1])  # every cell of out
         return out
 
     def tile(self, dense: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
@@ -93,14 +93,6 @@ def row_major_cells(offsets: np.ndarray, width: int, tiles_w: int) -> np.ndarray
         col = ((t - tr * tiles_w) << TILE_SHIFT) | (within & _MASK)
         out[k] = row * width + col
     return out
-
-
-@njit(cache=True)
-def untile_into(tiled: np.ndarray, out: np.ndarray, tiles_w: int) -> None:  # pragma: no cover - compiled
-    h, w = out.shape
-    for row in range(h):
-        for col in range(w):
-            out[row, col] = tiled[tile_offset(row, col, tiles_w)]
 
 
 @njit(cache=True)

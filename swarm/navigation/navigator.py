@@ -15,7 +15,6 @@ arrays (:class:`NavigatorSlots`), so the step of every moving robot is one compi
 from __future__ import annotations
 
 import math
-from typing import Any
 
 import numpy as np
 from numba import njit
@@ -25,7 +24,7 @@ from swarm.base.types import CELL_M, SOLID, NavStatus, Pose, cell_of, frozen_bui
 from swarm.grid import memo
 from swarm.grid.cspace import configuration_space_of, nearest_in_of
 from swarm.grid.local import plan_local_first
-from swarm.knowledge.tiles import cells_below_tiled
+from swarm.knowledge.tiles import TiledKnowledge, cells_below_tiled
 from swarm.plugins.planners import AStar, get_planner
 from swarm.util.arena import Arena
 from swarm.world.motion import Follower, FollowerSlots, _follow_step, cells_below
@@ -229,7 +228,7 @@ class NavigationFleet:
         self._flags = np.zeros(n, dtype=np.int8)
 
     def command(self, rows: list[int], poses: np.ndarray, pose_tuples: list[Pose], known: np.ndarray,
-                out: np.ndarray, began: np.ndarray | None = None, maps: Any = None) -> None:
+                out: np.ndarray, began: np.ndarray | None = None, maps: TiledKnowledge | None = None) -> None:
         """``out[i] = navigators[i].command(pose_tuples[i], known[i])`` for every robot ``i`` in ``rows``
         (ascending); ``poses`` (float64[R, 3]) holds the same poses, ``known`` (uint8[R, H, W], C-contiguous)
         is the robots' maps, ``out`` (float64[R, 2]) has zero rows for them. ``began`` (contacts begun this

@@ -346,10 +346,7 @@ class Simulation:
                             measure=False, freed=self.free.freed, planes=self.planes)
             if self.maps is not None:  # the tiles each cast robot's lidar may have written
                 cast = np.flatnonzero(self.lidar.cast)
-                centre = (poses[cast, 1::-1] / CELL_M).astype(np.int64)
-                reach = self._reach
-                self.maps.note_boxes(cast, np.column_stack((centre[:, 0] - reach, centre[:, 0] + reach + 1,
-                                                            centre[:, 1] - reach, centre[:, 1] + reach + 1)))
+                self.maps.note_boxes(cast, self._lidar_boxes(poses[cast]))
         else:   # the lidar measures from the true pose and writes from the believed one
             if self.lidar_params.mode == "ternary":
                 limits = self.lidar.occlusion(poses, self.motion.radius, active) if self.occlude else None
@@ -554,9 +551,7 @@ class Simulation:
         if any(merged):  # most ticks no map update arrives
             full = [i for i, cells in enumerate(merged) if cells and any(m is None for m in cells) and windowed[i]]
             windowed[full] = False
-        centres = (poses[:, 1::-1] / CELL_M).astype(np.int64)  # (row, col); truncation, as int() did
-        boxes = np.column_stack((centres[:, 0] - self._reach, centres[:, 0] + self._reach + 1,
-                                 centres[:, 1] - self._reach, centres[:, 1] + self._reach + 1))
+        boxes = self._lidar_boxes(poses)
         boxes[~cast, 1] = boxes[~cast, 0]  # a robot its lidar did not cast wrote nothing: an empty window
         cells, ends = sync_boxes_flat(self.known, self._mirror, boxes, merged, windowed)
         if not full:
@@ -566,6 +561,14 @@ class Simulation:
         for i in full:
             pieces[i] = sync_changes(self.known[i], self._mirror[i])
         return np.concatenate(pieces), np.cumsum([len(piece) for piece in pieces], dtype=np.int64)
+
+    def _lidar_boxes(self, poses: np.ndarray) -> np.ndarray:
+        """Per pose, the cells a lidar scan from it may write: int64 rows [r0, r1) and columns [c0, c1) within
+        :attr:`_reach` of the pose's cell (unclipped)."""
+        centres = (poses[:, 1::-1] / CELL_M).astype(np.int64)  # (row, col); truncation, as int() did
+        reach = self._reach
+        return np.column_stack((centres[:, 0] - reach, centres[:, 0] + reach + 1,
+                                centres[:, 1] - reach, centres[:, 1] + reach + 1))
 
     def _note_drops(self, tick: int, dropped: list[tuple[int, str]] | None = None) -> None:
         """Events for the messages the medium (or, given ``dropped``, the transport: a remote agent's that do
