@@ -150,18 +150,24 @@ def memory_limit_gb(text: str | None) -> float:
     return 0.8 * total_kb / 2**20
 
 
+def rss_gb() -> float:
+    """This process's resident memory now, GB (``/proc/self/status``)."""
+    with open("/proc/self/status") as f:
+        return next(int(line.split()[1]) for line in f if line.startswith("VmRSS")) / 2**20
+
+
 def memory_watchdog(limit_gb: float, tick: list[int]) -> None:
-    """End this child (exit 3) once its resident memory passes ``limit_gb``, printing a JSON line with the tick
-    it was at: a 10,000-robot row can otherwise take the machine's memory (and the other rows with it)."""
+    """End this process (exit 3) once its resident memory passes ``limit_gb``, printing a JSON line with the
+    tick it was at (``tick[0]``, kept up to date by the caller): a 10,000-robot row can otherwise take the
+    machine's memory (and the other rows with it). Also used by swarm_memory.py."""
     import os
     import threading
 
     def watch() -> None:
         while True:
-            with open("/proc/self/status") as f:
-                rss_gb = next(int(line.split()[1]) for line in f if line.startswith("VmRSS")) / 2**20
-            if rss_gb > limit_gb:
-                print(json.dumps({"stopped": "memory", "rss_gb": rss_gb, "limit_gb": limit_gb, "tick": tick[0],
+            now = rss_gb()
+            if now > limit_gb:
+                print(json.dumps({"stopped": "memory", "rss_gb": now, "limit_gb": limit_gb, "tick": tick[0],
                                   "cpu_s": time.process_time()}), flush=True)
                 os._exit(3)
             time.sleep(0.5)

@@ -3,8 +3,8 @@
 One run (building map of ``--size`` tiles, robots spawned together, frontier, the full stack) built from its
 spec in this process. Prints the set-up's CPU time and RSS, then for each of the first ``--ticks`` ticks the
 CPU time and resident memory (from ``/proc/self/status``) before and after each loop step, so a step that
-makes memory resident shows itself. A watchdog thread ends the process (exit 3) once RSS passes
-``--limit-gb``: a 10,000-robot run can otherwise take the machine's memory.
+makes memory resident shows itself. bench_scale.py's watchdog ends the process (exit 3, a JSON line with
+the tick reached) once RSS passes ``--limit-gb``: a 10,000-robot run can otherwise take the machine's memory.
 
 ``--tiles`` then measures what the robots' maps hold against what they would hold stored by tiles: for each
 robot, the 4 KB pages its map's rows touch (what the dense ``uint8[R, H, W]`` stack makes resident) and the
@@ -15,52 +15,29 @@ e.g. ``--robots 2500 --size 1000 --ticks 15``.)
 from __future__ import annotations
 
 import argparse
-import os
 import resource
-import threading
 import time
 
 import numpy as np
+from bench_scale import memory_watchdog, rss_gb  # this script's folder is on sys.path
 from numba import njit
 
 STEPS = ("move_and_scan", "_receive", "_send", "_deliver", "observe", "apply", "_record", "_commands")
 """The loop's steps (methods of :class:`swarm.sim.loop.Simulation`) reported per tick."""
 
 
-def rss_gb() -> float:
-    """Resident memory now, GB."""
-    with open("/proc/self/status") as f:
-        for line in f:
-            if line.startswith("VmRSS"):
-                return int(line.split()[1]) / 2**20
-    return float("nan")
-
-
 def peak_gb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
 
 
-def watchdog(limit_gb: float) -> None:
-    """End the process once its RSS passes ``limit_gb`` (checked twice a second)."""
-    def watch() -> None:
-        while True:
-            now = rss_gb()
-            if now > limit_gb:
-                print(f"watchdog: RSS {now:.2f} GB passed {limit_gb} GB at {time.process_time():.0f} s CPU; "
-                      "stopped", flush=True)
-                os._exit(3)
-            time.sleep(0.5)
-    threading.Thread(target=watch, daemon=True).start()
-
-
-def report_steps(sim_type: type, ticks: int) -> None:
-    """Wrap each of STEPS to print its CPU time and RSS change while the tick is below ``ticks``."""
-    state = {"tick": 0}
+def report_steps(sim_type: type, ticks: int, tick: list[int]) -> None:
+    """Wrap each of STEPS to print its CPU time and RSS change while the tick is below ``ticks``; ``tick[0]``
+    follows the tick being run."""
     for name in STEPS:
         fn = getattr(sim_type, name)
 
         def wrapped(self, *a, _fn=fn, _name=name, **k):
-            if state["tick"] >= ticks:
+            if tick[0] >= ticks:
                 return _fn(self, *a, **k)
             t0, r0 = time.process_time(), rss_gb()
             try:
@@ -74,7 +51,7 @@ def report_steps(sim_type: type, ticks: int) -> None:
     act = InProcessHost.act
 
     def act_and_report(self, batch, _act=act):
-        if state["tick"] >= ticks:
+        if tick[0] >= ticks:
             return _act(self, batch)
         t0, r0 = time.process_time(), rss_gb()
         try:
@@ -87,7 +64,7 @@ def report_steps(sim_type: type, ticks: int) -> None:
     last = [time.process_time()]
 
     def sense_and_report(self, loop_state, _sense=sense):
-        state["tick"] = loop_state.tick
+        tick[0] = loop_state.tick
         now = time.process_time()
         print(f"  tick {loop_state.tick}: {now - last[0]:.1f} s CPU since the last, RSS {rss_gb():.2f} GB, "
               f"peak {peak_gb():.2f} GB, explored {100 * self.tracker.explored:.2f} %", flush=True)
@@ -132,10 +109,11 @@ def main() -> None:
     ap.add_argument("--tiles", action="store_true", help="after the run, compare row pages with tiles")
     ap.add_argument("--tiled", action="store_true", help="keep the maps by tiles (Simulation(tiled=True))")
     args = ap.parse_args()
-    watchdog(args.limit_gb)
+    tick = [-1]
+    memory_watchdog(args.limit_gb, tick)
     from swarm.sim.loop import Simulation
 
-    report_steps(Simulation, args.ticks)
+    report_steps(Simulation, args.ticks, tick)
     t0 = time.process_time()
     sim = Simulation({"seed": args.seed, "map": {"kind": "building", "size": args.size},
                       "robots": {"count": args.robots}, "algorithm": {"name": "frontier"},
