@@ -155,8 +155,10 @@ class MapSharing:
                 since = None
                 if self.last_shared is not None and self.monotone:  # the cells since the previous update: _merge_full
                     changed = self._changed_since_update(i, known[i])  # last_shared[i] becomes known[i]
-                    since = (self.seq[i], changed, self._values(known[i], changed), tuple(self._history[i]))
-                    self._remember(i, self.seq[i] + 1, changed)
+                    values, history = self._values(known[i], changed), tuple(self._history[i])
+                    # the note holds the history's (narrow) copy of the cells: a swarm asked for its full maps
+                    # held a second, int64 copy per robot until delivered (1.2 GB at 10,000 robots)
+                    since = (self.seq[i], self._remember(i, self.seq[i] + 1, changed), values, history)
                 else:
                     self._history[i].clear()  # no note of the cells: the history would have a hole
                     self._history_cells[i] = 0
@@ -188,15 +190,17 @@ class MapSharing:
             self.ages.sent(tick)
         return out
 
-    def _remember(self, i: int, seq: int, changed: np.ndarray) -> None:
+    def _remember(self, i: int, seq: int, changed: np.ndarray) -> np.ndarray:
         """Note robot i's update ``seq`` and the cells it changed (as int32 on maps under 2^31 cells: a
         10,000-robot swarm's histories took 1.3 GB as int64), dropping the oldest beyond
-        :data:`HISTORY_UPDATES` or :data:`HISTORY_CELLS`."""
+        :data:`HISTORY_UPDATES` or :data:`HISTORY_CELLS`. Returns the cells as kept (read only)."""
         history = self._history[i]
-        history.append((seq, changed.astype(np.int32) if self._narrow_cells else changed))
+        kept = changed.astype(np.int32) if self._narrow_cells else changed
+        history.append((seq, kept))
         self._history_cells[i] += len(changed)
         while history and (len(history) > HISTORY_UPDATES or self._history_cells[i] > HISTORY_CELLS):
             self._history_cells[i] -= len(history.popleft()[1])
+        return kept
 
     def _changed_since_update(self, i: int, known: np.ndarray) -> np.ndarray:
         """Robot i's cells that differ from its last update, copied into ``last_shared[i]``."""
@@ -306,7 +310,7 @@ class MapSharing:
             if lists is None:  # the books of every receiver at once (a swarm's full map reaches hundreds)
                 self._book_full(msg, robots, quick, caught, self.shape[1], ours)
                 return
-            since = msg.__dict__["_since"][1] if quick.any() else None
+            since = _wide(msg.__dict__["_since"][1]) if quick.any() else None
             carried = [since if q else None for q in quick.tolist()]
             for members, cells in caught:
                 for k in np.flatnonzero(members).tolist():
@@ -454,6 +458,7 @@ class MapSharing:
         planes = self._planes_for(stack)
         if since is not None:
             prev, cells, values, history = since
+            cells = _wide(cells)
             if stack.shape[0] == self.n:  # the receivers' books are their rows (receive_tick)
                 quick = self._complete[robots, msg.sender] & (self.seen_seq[robots, msg.sender] == prev)
             else:
@@ -603,12 +608,17 @@ class MapSharing:
         """Note the tiles of ``cells`` as written in the maps of ``robots`` (for their next deltas)."""
         assert self._dirty is not None
         if len(cells):
-            rows, cols = np.divmod(cells, width)
+            rows, cols = np.divmod(_wide(cells), width)
             tiles = np.unique((rows // TILE) * self._dirty.shape[2] + cols // TILE)
             tr, tc = np.divmod(tiles, self._dirty.shape[2])
             self._dirty[robots[:, None], tr[None, :], tc[None, :]] = 1
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)
+
+
+def _wide(cells: np.ndarray) -> np.ndarray:
+    """``cells`` as int64 (a history's cells are int32 on maps under 2^31 cells; the merges take int64)."""
+    return cells if cells.dtype == np.int64 else cells.astype(np.int64)
 _NONE_GAPPED: dict[int, int] = {}  # (read only)
 _NO_DIRTY = np.zeros((0, 1, 1), dtype=np.uint8)
 _EMPTY_BOX = np.array([0, 0, 0, 0], dtype=np.int64)
