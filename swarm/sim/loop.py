@@ -214,7 +214,8 @@ class Simulation:
         self.sharing = MapSharing(n, self.truth.shape, self.comm, lidar_reach=self._reach,  # told of every scan
                                   monotone=monotone, ages=self.ages, free=self.free, planes=self.planes,
                                   layout=None if self.maps is None else self.maps.layout,
-                                  written=None if self.maps is None else self.maps.note_cells)
+                                  written=None if self.maps is None else self.maps.note_cells,
+                                  dense=None if self.maps is None else self.maps.dense)
         self.maes_merge = MaesMerge(n, *merge, ages=self.ages) if merge is not None else None
         self._in_flight: list[list[Envelope]] | None = None  # link_at = "receive": last tick's outboxes
         self.inboxes = Inboxes.empty(n)

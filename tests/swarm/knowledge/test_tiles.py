@@ -8,7 +8,7 @@ import pytest
 
 from maps import generate
 from swarm.knowledge.maps import ExplorationTracker, empty_knowledge
-from swarm.knowledge.tiles import TILE, TiledLayout
+from swarm.knowledge.tiles import TILE, TiledKnowledge, TiledLayout
 from swarm.world.sensing import Lidar, LidarParams
 
 
@@ -114,7 +114,8 @@ def test_tiled_syncs_find_the_cells_the_dense_syncs_find(seed):
 @pytest.mark.parametrize("seed", range(3))
 def test_map_sharing_over_tiled_maps_sends_and_merges_what_it_does_over_dense_maps(seed):
     """A swarm's sharing (knowledge planes, deltas, gaps repaired with full maps and caught up) over a tiled
-    stack: every message sent is byte for byte the dense run's, and every map and plane ends the same."""
+    stack: every message sent is byte for byte the dense run's, and every map and plane ends the same; also
+    when full maps are copied out of the tiles each robot's writers noted (``dense``, as the runtime does)."""
     import math
 
     from swarm.comm.medium import CommSpec
@@ -128,14 +129,16 @@ def test_map_sharing_over_tiled_maps_sends_and_merges_what_it_does_over_dense_ma
     free = np.argwhere(truth.free)
     reach = int(math.ceil(LidarParams().range_m / 0.5)) + 2  # as the runtime gives it
     runs = []
-    for tiled in (False, True):
+    for tiled, noted in ((False, False), (True, False), (True, True)):
         rng = np.random.default_rng(seed)
-        known = layout.stack(n) if tiled else empty_knowledge(truth.shape, n)
+        kept = TiledKnowledge(layout, n) if noted else None
+        known = kept.stack if noted else layout.stack(n) if tiled else empty_knowledge(truth.shape, n)
         planes = KnowledgePlanes(n, truth.shape[0] * truth.shape[1])
         tracker = ExplorationTracker(truth)
         lidar = Lidar(truth, LidarParams(), tracker=tracker)
         service = MapSharing(n, truth.shape, CommSpec(share_every=3), lidar_reach=reach, monotone=True,
-                             planes=planes, layout=layout if tiled else None)
+                             planes=planes, layout=layout if tiled else None,
+                             written=kept.note_cells if noted else None, dense=kept.dense if noted else None)
         cells = free[rng.integers(len(free), size=n)]
         live = np.ones(n, bool)
         queue: dict[int, list] = {}
@@ -146,6 +149,9 @@ def test_map_sharing_over_tiled_maps_sends_and_merges_what_it_does_over_dense_ma
             cells[move] = free[rng.integers(len(free), size=int(move.sum()))]
             poses = np.column_stack([(cells[:, 1] + 0.5) * 0.5, (cells[:, 0] + 0.5) * 0.5, np.zeros(n)])
             lidar.scan(poses, known, measure=False, planes=planes)
+            if noted:  # the tiles each lidar window may have written
+                kept.note_boxes(np.arange(n), np.column_stack([cells[:, 0] - reach, cells[:, 0] + reach + 1,
+                                                               cells[:, 1] - reach, cells[:, 1] + reach + 1]))
             service.scanned(poses)
             service.receive_tick(queue.pop(tick, []), known, live, cells=False, tick=tick)
             out = service.outgoing(tick, known, poses)
@@ -159,11 +165,12 @@ def test_map_sharing_over_tiled_maps_sends_and_merges_what_it_does_over_dense_ma
         maps = np.stack([layout.untile(k) for k in known]) if tiled else known.copy()
         runs.append((sent, maps, planes.free.copy(), planes.solid.copy(), service.seen_seq.copy()))
         assert fulls > 0, "losses made gaps, repaired with full maps"
-    (sent_d, maps_d, free_d, solid_d, seen_d), (sent_t, maps_t, free_t, solid_t, seen_t) = runs
+    sent_d, maps_d, free_d, solid_d, seen_d = runs[0]
     assert any(m for tick in sent_d for msgs in tick for m in msgs)
-    assert sent_t == sent_d
-    assert np.array_equal(maps_t, maps_d) and np.array_equal(free_t, free_d) and np.array_equal(solid_t, solid_d)
-    assert np.array_equal(seen_t, seen_d)
+    for sent_t, maps_t, free_t, solid_t, seen_t in runs[1:]:
+        assert sent_t == sent_d
+        assert np.array_equal(maps_t, maps_d) and np.array_equal(free_t, free_d)
+        assert np.array_equal(solid_t, solid_d) and np.array_equal(seen_t, seen_d)
 
 
 def _run_digest(spec: dict, tiled: bool) -> str:
