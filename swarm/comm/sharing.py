@@ -191,8 +191,8 @@ class MapSharing:
                                       shape=self.shape)
                 update.__dict__["_since"] = None  # built here (see _take): never on the wire
                 out[i].append(update)
-        if self.ages is not None:
-            self.ages.sent(tick)
+        if self.ages is not None and any(isinstance(m, MapUpdate) for msgs in out for m in msgs):
+            self.ages.sent(tick)  # (a tick of requests only: nothing for a snapshot to serve)
         return out
 
     def _remember(self, i: int, seq: int, changed: np.ndarray) -> np.ndarray:

@@ -10,6 +10,7 @@ import numpy as np
 from numba import njit
 
 from swarm.base.types import FREE
+from swarm.util.memory import lazy_zeros
 from .schema import (COMM_ROBOT_SERIES, COMM_SERIES_COLUMNS, DROP_CAUSES, OPTIONAL_TIMESERIES, THRESHOLDS,
                      TIMESERIES_COLUMNS, threshold_key)
 
@@ -82,26 +83,26 @@ class InfoAges:
         self.keep = self.KEEP_TICKS if keep_ticks is None else max(1, min(int(keep_ticks), self.KEEP_TICKS))
         self.merged_at = np.zeros((n, n), dtype=np.int32)  # ticks (< 2^31: stop.max_ticks is at most 10^7)
         self.merges = 0
-        # merged_at as of each tick within the last `keep` at which updates were sent: a slot each, taken
-        # as needed (one or two for a run without flooding; 4 MB each for 1,000 robots)
-        self._ring = np.zeros((0, n, n), dtype=np.int32)
-        self._ring_tick = np.zeros(0, dtype=np.int64)
+        # merged_at as of each tick within the last `keep` at which updates were sent: `keep` slots, resident
+        # once written (one or two for a run without flooding; 4 MB each for 1,000 robots, 400 MB for 10,000).
+        # Allocated up front: growing a stack of slots copied it (a 10,000-robot run held three for a moment)
+        self._ring = lazy_zeros((self.keep, n, n), np.int32)
+        self._ring_tick = np.full(self.keep, _NO_TICK, dtype=np.int64)
 
     def sent(self, tick: int) -> None:
         """Robots broadcast their maps at ``tick``: note what each map holds of the others, for whoever
         merges them (once per tick, whoever sends)."""
         if np.any(self._ring_tick == tick):
             return
-        stale = np.flatnonzero(self._ring_tick <= tick - self.keep)
-        if stale.size:
-            slot = int(stale[0])
-        else:
-            slot = self._ring.shape[0]
-            grown = np.zeros((slot + 1, self.n, self.n), dtype=np.int32)
-            grown[:slot] = self._ring
-            self._ring, self._ring_tick = grown, np.append(self._ring_tick, -1)
+        ticks = self._ring_tick
+        stale = np.flatnonzero((ticks <= tick - self.keep) & (ticks != _NO_TICK))  # reused first: resident
+        slot = int(stale[0]) if stale.size else int(np.argmin(ticks))  # else an unused slot (or the oldest)
         self._ring[slot] = self.merged_at
         self._ring_tick[slot] = tick
+
+    def snapshots(self) -> int:
+        """How many slots have held a snapshot (at most ``keep``; each n^2 int32 of resident memory)."""
+        return int(np.count_nonzero(self._ring_tick != _NO_TICK))
 
     def merged(self, merges: list[tuple[np.ndarray, int, int]], tick: int) -> None:
         """A tick's merges, each ``(receivers, sender, sent)`` (``receivers``: int64 robot ids): they merged
@@ -133,6 +134,9 @@ class InfoAges:
         off = self.merged_at.sum(axis=1) - self.merged_at.diagonal()
         return tick - off / (n - 1)
 
+
+_NO_TICK = np.iinfo(np.int64).min // 2
+"""The tick of a ring slot that holds no snapshot (older than any)."""
 
 TOP = 8
 """A merge round's snapshot rows are reduced column by column to their TOP largest values (with the rows

@@ -92,7 +92,7 @@ def test_an_update_merged_keep_ticks_after_it_was_sent_counts_only_for_its_sende
     ages.merged([(np.array([1]), 2, 0)], tick=1)          # robot 1 holds robot 2's map as of tick 1
     for tick in range(2, 3 * keep, 10):
         ages.sent(tick)                                   # updates go out every 10 ticks
-    assert len(ages._ring) <= keep // 10 + 1, "a slot per sending tick of the window"
+    assert ages.snapshots() <= keep // 10 + 1, "a slot per sending tick of the window"
     now = 2 * keep + 3
     recent = max(t for t in range(2, now, 10))            # the last sending tick before now
     old = max(t for t in range(2, now - keep, 10))        # one more than keep ticks before now
@@ -113,7 +113,7 @@ def test_a_run_keeps_snapshots_only_as_long_as_its_updates_travel(monkeypatch):
     ages = InfoAges(3, keep_ticks=2)
     for tick in range(1, 30):
         ages.sent(tick)                                   # full maps asked for: updates every tick
-    assert len(ages._ring) == 2
+    assert ages.snapshots() == 2
     ages.merged([(np.array([0]), 1, 29)], tick=30)        # a tick old: read from its snapshot
     ages.merged([(np.array([1]), 2, 28)], tick=30)        # two: older than any update of the run
     assert ages.merged_at[0, 1] == 30 and ages.merged_at[1, 2] == 30
@@ -122,12 +122,12 @@ def test_a_run_keeps_snapshots_only_as_long_as_its_updates_travel(monkeypatch):
                 "algorithm": {"name": "frontier"}, "comm": comm, "stop": {"max_ticks": 150}}
         kept = Simulation(spec)
         result = kept.run()
-        assert len(kept.ages._ring) <= kept.comm.longest_delivery_ticks + 1
+        assert kept.ages.snapshots() <= kept.comm.longest_delivery_ticks + 1
         monkeypatch.setattr(CommSpec, "longest_delivery_ticks", property(lambda self: InfoAges.KEEP_TICKS))
         wide = Simulation(spec)
         other = wide.run()
         assert other.comm == result.comm and other.timeseries == result.timeseries
-        assert len(wide.ages._ring) > len(kept.ages._ring)
+        assert wide.ages.snapshots() > kept.ages.snapshots()
         assert result.comm["summary"]["map_merges"] > 0
         monkeypatch.undo()
 
@@ -152,6 +152,34 @@ def test_a_gap_in_deltas_stops_counting_merges_until_the_full_map():
         merged.append(int(ages.merged_at[1, 0]))
     assert merged == [1, 1, 1, 1, 5, 6], ("the deltas of ticks 2 and 3 follow the lost one; the full map robot 1 "
                                           "asked for is sent at tick 4, and the delta after it counts again")
+
+
+def test_a_round_its_requests_and_the_full_maps_they_ask_for_take_one_snapshot():
+    """A sharing round (tick 10), the requests for missed updates (tick 11: no map goes out) and the full maps
+    they ask for (tick 12) keep one n x n snapshot, not two: a tick of requests alone has nothing for a
+    snapshot to serve, and the round's is stale by tick 12 (a delivery takes a tick)."""
+    from swarm.comm.medium import CommSpec
+    from swarm.comm.messages import MapRequest, MapUpdate
+    from swarm.comm.sharing import MapSharing
+
+    ages = InfoAges(3, keep_ticks=2)
+    sharing = MapSharing(3, (10, 10), CommSpec(share_every=10), ages=ages)
+    known = np.zeros((3, 10, 10), np.uint8)
+    known[:, 0, :3] = 1
+    poses = np.zeros((3, 3))
+    kinds, snapshots = [], []
+    for tick in (10, 11, 12):
+        if tick == 11:
+            sharing.requests[2] = [0]  # robot 2 missed robot 0's update: it asks for the full map
+        if tick == 12:
+            sharing.full_requested[0] = True  # robot 0 heard the request
+        out = sharing.outgoing(tick, known, poses)
+        kinds.append(sorted(type(m).__name__ + (" full" if getattr(m, "full", False) else "") for box in out
+                            for m in box))
+        snapshots.append(ages.snapshots())
+    assert kinds == [[MapUpdate.__name__] * 3, [MapRequest.__name__], [MapUpdate.__name__ + " full"]]
+    assert snapshots == [1, 1, 1], "none for the requests; the round's slot is reused by the full maps"
+    assert ages.snapshots() == 1 and ages._ring_tick.max() == 12
 
 
 @pytest.mark.parametrize("relay", ["none", "flood"])
