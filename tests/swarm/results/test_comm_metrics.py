@@ -102,6 +102,41 @@ def test_an_update_merged_keep_ticks_after_it_was_sent_counts_only_for_its_sende
     assert ages.merged_at[2].tolist() == [0, now, 0]
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_merged_ages_are_the_row_by_row_maxima_of_the_snapshots_read(seed):
+    """InfoAges.merged against the definition, merge by merge: each receiver's row rises to its sender's row
+    of the snapshot of the send tick, and its entry for the sender becomes now. 150 robots over three
+    blocks of receivers; some merge nearly every sender of a snapshot (the column-top path), some a few
+    (rows gathered per block), some an update older than the snapshots kept (own entry only)."""
+    rng = np.random.default_rng(seed)
+    n, keep = 150, 3
+    ages = InfoAges(n, keep_ticks=keep)
+    snapshots = {}
+    for tick in (7, 8):  # (tables drawn afresh, so that neither snapshot nor the rows now bound another)
+        ages.merged_at[:] = rng.integers(0, tick + 1, (n, n), dtype=np.int32)
+        ages.sent(tick)
+        snapshots[tick] = ages.merged_at.copy()
+    ages.merged_at[:] = rng.integers(0, 5, (n, n), dtype=np.int32)
+    now = 9
+    merges = []
+    for sender in range(n):
+        for sent in (7, 8, 2):
+            share = {7: 0.995, 8: 0.2, 2: 0.1}[sent]
+            receivers = np.flatnonzero(rng.random(n) < share)
+            receivers = receivers[receivers != sender]
+            if len(receivers):
+                merges.append((receivers.astype(np.int64), sender, sent))
+    want = ages.merged_at.copy()
+    for receivers, sender, sent in merges:
+        if sent in snapshots:
+            want[receivers] = np.maximum(want[receivers], snapshots[sent][sender])
+    for receivers, sender, _ in merges:
+        want[receivers, sender] = now
+    ages.merged(merges, tick=now)
+    assert np.array_equal(ages.merged_at, want)
+    assert ages.merges == sum(len(m[0]) for m in merges)
+
+
 def test_a_run_keeps_snapshots_only_as_long_as_its_updates_travel(monkeypatch):
     """InfoAges keeps a snapshot for one tick more than a map update can take to arrive (a tick; flooded, a
     tick a hop): one or two of them, not one per sending tick of KEEP_TICKS (n^2 int32 each). Ages, merges
