@@ -56,7 +56,7 @@ from swarm.transport import AgentHost, PhaseTimes, TickBatch, make_host
 from swarm.transport.auth import RunSecret
 from swarm.transport.base import ACT_COUNTS
 from swarm.transport.wire import ResetPacket
-from swarm.util.memory import lazy_zeros
+from swarm.util.memory import lazy_zeros, release_freed_memory
 from swarm.world.localization import Localizer
 from swarm.world.motion import TICK_S
 from swarm.world.physics import World
@@ -463,6 +463,8 @@ class Simulation:
                     cells = None if msg.full else msg.cells()[0]
                     for journal in self.journals:
                         journal.merged(receivers, cells)
+        if self.maps is not None:  # a swarm's merges free a gigabyte of decoded cells: give the pages back
+            release_freed_memory()
         return inboxes, merged
 
     def _send(self, tick: int, poses: np.ndarray, actions: list[Action | None], links: Any,
@@ -496,6 +498,8 @@ class Simulation:
                 self._deliver(tick, outboxes, links)
             else:
                 self._in_flight = outboxes
+            if self.maps is not None:  # (and the updates' building, their dense copies of full maps)
+                release_freed_memory()
         return outboxes
 
     def _deliver(self, tick: int, outboxes: list[list[Envelope]], links: Any) -> None:
