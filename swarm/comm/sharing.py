@@ -129,6 +129,9 @@ class MapSharing:
         # This tick's decoded full maps, by payload object (and shape): robots whose maps converged send the
         # very same payload (messages.full_update), which each message's far-behind receivers would decode
         self._decoded: dict[tuple[int, tuple[int, int], str], tuple[bytes, Any]] = {}
+        # receive_tick's count of the full maps still to merge per payload object: a decoded map is kept only
+        # while another message of the tick carries it (10,000 robots' distinct repairs held 30,000 cells each)
+        self._uses: dict[int, int] | None = None
 
     def scanned(self, poses: np.ndarray) -> None:
         """The lidar scanned from ``poses`` (``float64[R, 3]``) this tick: widen each robot's box of places to
@@ -267,6 +270,10 @@ class MapSharing:
         check_writable_map(known)
         touched: list[list[np.ndarray | None]] = [[] for _ in range(self.n)]
         everyone_live = bool(live.all())
+        self._uses = {}
+        for msg, _ in deliveries:
+            if isinstance(msg, MapUpdate) and msg.full:
+                self._uses[id(msg.payload)] = self._uses.get(id(msg.payload), 0) + 1
         for msg, receivers in deliveries:
             if not isinstance(msg, (MapUpdate, MapRequest)):
                 continue
@@ -287,6 +294,7 @@ class MapSharing:
             self.ages.merged(self._merges, tick)
         self._merges = []
         self._decoded.clear()
+        self._uses = None
         return touched
 
     def _take(self, msg: Any, ids: list[int], stack: np.ndarray, rows: np.ndarray,
@@ -310,6 +318,7 @@ class MapSharing:
         everyone = len(ids)
         if msg.full:
             quick, caught = self._merge_full(msg, ids, stack, rows)
+            self._merged_payload(msg)
             if self.free is not None:
                 self.free.dirty[robots] = True  # counted afresh when next read
             if lists is None:  # the books of every receiver at once (a swarm's full map reaches hundreds)
@@ -501,8 +510,24 @@ class MapSharing:
         if hit is not None and hit[0] is msg.payload:
             return hit[1]
         value = msg.known_cells() if kind == "known" else msg.dense()
-        self._decoded[key] = (msg.payload, value)
+        if self._uses is None or self._uses.get(id(msg.payload), 0) > 1:  # another message of the tick has it
+            self._decoded[key] = (msg.payload, value)
         return value
+
+    def _merged_payload(self, msg: MapUpdate) -> None:
+        """Full map ``msg`` is merged: once no other message of the tick carries its payload, forget its
+        decoding (receive_tick; :meth:`receive` keeps them to the end of its call)."""
+        if self._uses is None:
+            return
+        left = self._uses.get(id(msg.payload), 0) - 1
+        if left > 0:
+            self._uses[id(msg.payload)] = left
+            return
+        self._uses.pop(id(msg.payload), None)
+        for kind in ("known", "dense"):
+            hit = self._decoded.get((id(msg.payload), msg.shape, kind))
+            if hit is not None and hit[0] is msg.payload:
+                del self._decoded[(id(msg.payload), msg.shape, kind)]
 
     def _merge_cells(self, stack: np.ndarray, planes: KnowledgePlanes | None, robots: np.ndarray,
                      cells: np.ndarray, values: np.ndarray) -> None:

@@ -721,6 +721,33 @@ def test_full_maps_with_one_payload_are_decoded_once_a_tick():
     assert sharing._decode(second, "known") is not cells  # a new tick decodes again
 
 
+def test_a_tick_keeps_a_decoded_full_map_only_while_another_message_carries_it(monkeypatch):
+    """receive_tick decodes a payload two full maps share once, keeps it until the second is merged and
+    then lets it go; a payload only one message carries is never kept (a swarm's distinct repairs would
+    otherwise all stay decoded to the end of the tick). The maps merged are the updates' maxima."""
+    from swarm.comm.messages import full_update
+
+    rng = np.random.default_rng(6)
+    a = rng.integers(0, 3, (30, 20)).astype(np.uint8)
+    b = a.copy()
+    b[0, 0] = 2 if b[0, 0] != 2 else 1
+    payloads: dict = {}
+    first, second = (full_update(s, 1, 0, a.copy(), (0.0, 0.0, 0.0), payloads) for s in (0, 1))
+    other = full_update(2, 1, 0, b, (0.0, 0.0, 0.0), payloads)
+    decodes = []
+    dense = MapUpdate.dense
+    monkeypatch.setattr(MapUpdate, "dense", lambda self: (decodes.append(self.sender), dense(self))[1])
+    sharing = MapSharing(4, a.shape, CommSpec())
+    kept_after = []
+    take = sharing._take
+    monkeypatch.setattr(sharing, "_take", lambda *args: (take(*args), kept_after.append(len(sharing._decoded))))
+    known = np.zeros((4, *a.shape), np.uint8)
+    sharing.receive_tick([(first, [3]), (other, [3]), (second, [2])], known, np.ones(4, dtype=np.bool_))
+    assert decodes == [0, 2], "the shared payload once, the other once"
+    assert kept_after == [1, 1, 0], "kept while the second message was to come, then let go; the other never"
+    assert np.array_equal(known[3], np.maximum(a, b)) and np.array_equal(known[2], a)
+
+
 def test_catching_up_several_receivers_from_kept_or_delayed_full_maps_gives_the_same_result(monkeypatch):
     """Receivers that missed different runs of robot 0's updates catch up from one full map in groups (each the
     union of the updates it missed), read from robot 0's kept packed map while that still holds the map sent,
