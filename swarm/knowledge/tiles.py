@@ -206,14 +206,14 @@ def _copy_tiles(tiled: np.ndarray, out: np.ndarray, tr0: int, tr1: int, tc0: int
     for tr in range(tr0, tr1 + 1):
         for tc in range(tc0, tc1 + 1):
             base = (tr * tiles_w + tc) * TILE_CELLS
+            c0 = tc << TILE_SHIFT
+            m = min(TILE, w - c0)
             for dr in range(TILE):
                 row = (tr << TILE_SHIFT) + dr
                 if row >= h:
                     break
                 src = base + (dr << TILE_SHIFT)
-                c0 = tc << TILE_SHIFT
-                for dc in range(min(TILE, w - c0)):
-                    out[row, c0 + dc] = tiled[src + dc]
+                out[row, c0:c0 + m] = tiled[src:src + m]  # (a slice a tile row: 8x the cell-by-cell loop)
 
 
 @njit(cache=True)
