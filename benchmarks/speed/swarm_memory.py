@@ -6,6 +6,11 @@ CPU time and resident memory (from ``/proc/self/status``) before and after each 
 makes memory resident shows itself. bench_scale.py's watchdog ends the process (exit 3, a JSON line with
 the tick reached) once RSS passes ``--limit-gb``: a 10,000-robot run can otherwise take the machine's memory.
 
+``--breakdown 2,11,13`` prints, before each of those ticks, what holds the memory: the Simulation's objects
+walked attribute by attribute (numpy arrays and bytes summed per attribute path, list and dict indices
+folded to ``[*]``; an array in a lazily resident mapping counts its resident pages, from
+``/proc/self/smaps``), and glibc's heap (in use and free, ``mallinfo2``) where there is one.
+
 ``--tiles`` then measures what the robots' maps hold against what they would hold stored by tiles: for each
 robot, the 4 KB pages its map's rows touch (what the dense ``uint8[R, H, W]`` stack makes resident) and the
 32 x 32 and 64 x 64-cell tiles holding a known cell. (It scans every map: use it on runs that fit in memory,
@@ -26,13 +31,127 @@ STEPS = ("move_and_scan", "_receive", "_send", "_deliver", "observe", "apply", "
 """The loop's steps (methods of :class:`swarm.sim.loop.Simulation`) reported per tick."""
 
 
+def _mappings() -> list[tuple[int, int, int]]:
+    """This process's memory mappings: (start, end, resident bytes), from /proc/self/smaps."""
+    out: list[list[int]] = []
+    with open("/proc/self/smaps") as f:
+        for line in f:
+            head = line.split(" ", 1)[0]
+            if "-" in head and not line[0].isupper():
+                a, b = head.split("-")
+                out.append([int(a, 16), int(b, 16), 0])
+            elif line.startswith("Rss:") and out:
+                out[-1][2] = int(line.split()[1]) * 1024
+    return [(a, b, r) for a, b, r in out]
+
+
+def _lazy_mapping(arr: np.ndarray, maps: list[tuple[int, int, int]]) -> tuple[int, int, int] | None:
+    """The mapping holding ``arr`` when its memory is an mmap of its own (swarm.util.memory.lazy_zeros); the
+    kernel merges adjacent such mappings, so several arrays may share one."""
+    import mmap
+
+    base = arr
+    while isinstance(base, np.ndarray) and base.base is not None:
+        base = base.base
+    if isinstance(base, memoryview):
+        base = base.obj
+    if not isinstance(base, mmap.mmap):
+        return None
+    addr = arr.__array_interface__["data"][0]
+    return next(((a, b, resident) for a, b, resident in maps if a <= addr < b), None)
+
+
+def memory_breakdown(root: object, top: int = 25) -> list[tuple[str, int, int]]:
+    """The ``top`` attribute paths under ``root`` (swarm's, algorithms' and radio's objects, their lists, tuples,
+    deques and dicts) by bytes of numpy arrays and bytes objects: (path, bytes, count). Each array is counted
+    once (the first path that reaches its memory); lazily resident arrays count the resident pages of their
+    mapping, listed once for all the arrays that share it (path "a + b")."""
+    import re
+    from collections import deque
+
+    maps = _mappings()
+    totals: dict[str, list[int]] = {}
+    lazy: dict[tuple[int, int], tuple[int, list[str]]] = {}
+    seen: set[int] = set()
+    buffers: set[tuple[int, int]] = set()
+    stack: list[tuple[object, str]] = [(root, "sim")]
+    while stack:
+        obj, path = stack.pop()
+        if id(obj) in seen:
+            continue
+        seen.add(id(obj))
+        key = re.sub(r"\[[^\]]*\]", "[*]", path)
+        if isinstance(obj, np.ndarray):
+            addr = obj.__array_interface__["data"][0]
+            if (addr, obj.nbytes) in buffers:
+                continue
+            buffers.add((addr, obj.nbytes))
+            mapping = _lazy_mapping(obj, maps) if obj.nbytes >= 1 << 22 else None
+            if mapping is not None:
+                names = lazy.setdefault(mapping[:2], (mapping[2], []))[1]
+                if key not in names:
+                    names.append(key)
+                continue
+            entry = totals.setdefault(key, [0, 0])
+            entry[0] += obj.nbytes
+            entry[1] += 1
+            continue
+        if isinstance(obj, (bytes, bytearray)):
+            entry = totals.setdefault(key, [0, 0])
+            entry[0] += len(obj)
+            entry[1] += 1
+            continue
+        if isinstance(obj, dict):
+            stack.extend((v, f"{path}[*]") for v in obj.values())
+            continue
+        if isinstance(obj, (list, tuple, deque, set, frozenset)):
+            stack.extend((v, f"{path}[*]") for v in obj)
+            continue
+        if not (type(obj).__module__ or "").startswith(("swarm", "algorithms", "radio")):
+            continue
+        fields = dict(getattr(obj, "__dict__", {}))
+        for cls in type(obj).__mro__:
+            for name in getattr(cls, "__slots__", ()):
+                if hasattr(obj, name):
+                    fields[name] = getattr(obj, name)
+        stack.extend((v, f"{path}.{k}") for k, v in fields.items())
+    for resident, names in lazy.values():
+        totals[" + ".join(sorted(names)) + " (resident)"] = [resident, len(names)]
+    ranked = sorted(totals.items(), key=lambda kv: -kv[1][0])[:top]
+    return [(path, size, count) for path, (size, count) in ranked]
+
+
+def heap_gb() -> tuple[float, float] | None:
+    """glibc's heap: (in use, free) GB (``mallinfo2``), or None without it."""
+    import ctypes
+
+    class MallInfo2(ctypes.Structure):
+        _fields_ = [(name, ctypes.c_size_t) for name in ("arena", "ordblks", "smblks", "hblks", "hblkhd",
+                                                           "usmblks", "fsmblks", "uordblks", "fordblks", "keepcost")]
+    try:
+        info = ctypes.CDLL("libc.so.6").mallinfo2
+    except (OSError, AttributeError):
+        return None
+    info.restype = MallInfo2
+    m = info()
+    return m.uordblks / 2**30, m.fordblks / 2**30
+
+
+def print_breakdown(sim: object, tick: int) -> None:
+    heap = heap_gb()
+    print(f"  memory before tick {tick}: RSS {rss_gb():.2f} GB"
+          + (f"; heap in use {heap[0]:.2f} GB, free {heap[1]:.2f} GB" if heap else ""), flush=True)
+    for path, size, count in memory_breakdown(sim):
+        print(f"    {size / 2**20:9.1f} MB  x{count:<6d} {path}", flush=True)
+
+
 def peak_gb() -> float:
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 2**20
 
 
-def report_steps(sim_type: type, ticks: int, tick: list[int]) -> None:
+def report_steps(sim_type: type, ticks: int, tick: list[int], breakdown: frozenset[int] = frozenset()) -> None:
     """Wrap each of STEPS to print its CPU time and RSS change while the tick is below ``ticks``; ``tick[0]``
-    follows the tick being run."""
+    follows the tick being run; before each tick in ``breakdown``, print what holds the memory."""
     for name in STEPS:
         fn = getattr(sim_type, name)
 
@@ -69,6 +188,8 @@ def report_steps(sim_type: type, ticks: int, tick: list[int]) -> None:
         print(f"  tick {loop_state.tick}: {now - last[0]:.1f} s CPU since the last, RSS {rss_gb():.2f} GB, "
               f"peak {peak_gb():.2f} GB, explored {100 * self.tracker.explored:.2f} %", flush=True)
         last[0] = now
+        if loop_state.tick in breakdown:
+            print_breakdown(self, loop_state.tick)
         return _sense(self, loop_state)
     sim_type.sense = sense_and_report
 
@@ -108,12 +229,18 @@ def main() -> None:
     ap.add_argument("--limit-gb", type=float, default=12.0, help="stop once RSS passes this (default 12)")
     ap.add_argument("--tiles", action="store_true", help="after the run, compare row pages with tiles")
     ap.add_argument("--tiled", action="store_true", help="keep the maps by tiles (Simulation(tiled=True))")
+    ap.add_argument("--breakdown", default="", metavar="TICKS",
+                    help="comma-separated ticks before which to print what holds the memory")
     args = ap.parse_args()
     tick = [-1]
     memory_watchdog(args.limit_gb, tick)
     from swarm.sim.loop import Simulation
 
-    report_steps(Simulation, args.ticks, tick)
+    try:
+        breakdown = frozenset(int(t) for t in args.breakdown.split(",") if t.strip())
+    except ValueError:
+        ap.error(f"--breakdown: {args.breakdown[:40]!r} is not a comma-separated list of ticks")
+    report_steps(Simulation, args.ticks, tick, breakdown)
     t0 = time.process_time()
     sim = Simulation({"seed": args.seed, "map": {"kind": "building", "size": args.size},
                       "robots": {"count": args.robots}, "algorithm": {"name": "frontier"},
