@@ -111,8 +111,8 @@ def test_tiled_syncs_find_the_cells_the_dense_syncs_find(seed):
     assert np.array_equal(sync_tiles_packed(layout.tile(new), tiled_prev, layout, None, None, 32), whole)
 
 
-@pytest.mark.parametrize("seed", range(3))
-def test_map_sharing_over_tiled_maps_sends_and_merges_what_it_does_over_dense_maps(seed):
+@pytest.mark.parametrize("seed, drop_plain", [(0, False), (1, False), (2, False), (0, True)])
+def test_map_sharing_over_tiled_maps_sends_and_merges_what_it_does_over_dense_maps(seed, drop_plain, monkeypatch):
     """A swarm's sharing (knowledge planes, deltas, gaps repaired with full maps and caught up) over a tiled
     stack: every message sent is byte for byte the dense run's, and every map and plane ends the same; also
     when full maps are copied out of the tiles each robot's writers noted (``dense``, as the runtime does)."""
@@ -123,6 +123,10 @@ def test_map_sharing_over_tiled_maps_sends_and_merges_what_it_does_over_dense_ma
     from swarm.comm.sharing import MapSharing
     from swarm.knowledge.planes import KnowledgePlanes
 
+    if drop_plain:  # every delta of the tiled runs keeps only its payload (as a swarm's large ones do)
+        from swarm.comm import sharing as sharing_module
+
+        monkeypatch.setattr(sharing_module, "DROP_DECODED_CELLS", 1)
     truth = generate("building", 45, seed)
     layout = TiledLayout(truth.shape)
     n = 70
