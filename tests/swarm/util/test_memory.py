@@ -31,7 +31,7 @@ def test_freed_holes_between_live_arrays_are_handed_back_and_the_live_data_kept(
 
 
 def test_release_is_a_no_op_answer_where_there_is_no_malloc_trim(monkeypatch):
-    import swarm.util.memory as memory
+    from swarm.util import memory
 
     monkeypatch.setattr(memory, "_TRIM", None)
     assert memory.release_freed_memory() is False
