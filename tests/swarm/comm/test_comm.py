@@ -699,18 +699,25 @@ def test_a_ticks_equal_full_maps_share_one_compression_and_a_fingerprint_match_i
         assert (first.count, same.count, other.count) == (np.count_nonzero(a),) * 2 + (np.count_nonzero(b),)
 
 
-def test_full_maps_with_one_payload_are_decoded_once_a_tick():
-    """Robots whose maps converged send the same payload object: the service decodes it once per tick (per
-    shape) and afresh after the tick, and a different payload is decoded on its own."""
+def _converged_and_other_full_maps(seed: int):
+    """Maps a and b (one cell apart) and full maps of them in one tick: robots 0 and 1 send a (one payload
+    object), robot 2 sends b."""
     from swarm.comm.messages import full_update
 
-    rng = np.random.default_rng(5)
+    rng = np.random.default_rng(seed)
     a = rng.integers(0, 3, (30, 20)).astype(np.uint8)
     b = a.copy()
     b[0, 0] = 2 if b[0, 0] != 2 else 1
     payloads: dict = {}
     first, second = (full_update(s, 1, 0, a.copy(), (0.0, 0.0, 0.0), payloads) for s in (0, 1))
     other = full_update(2, 1, 0, b, (0.0, 0.0, 0.0), payloads)
+    return a, b, first, second, other
+
+
+def test_full_maps_with_one_payload_are_decoded_once_a_tick():
+    """Robots whose maps converged send the same payload object: the service decodes it once per tick (per
+    shape) and afresh after the tick, and a different payload is decoded on its own."""
+    a, b, first, second, other = _converged_and_other_full_maps(5)
     assert first.payload is second.payload and other.payload is not first.payload
     sharing = MapSharing(3, a.shape, CommSpec())
     cells = sharing._decode(first, "known")
@@ -725,15 +732,7 @@ def test_a_tick_keeps_a_decoded_full_map_only_while_another_message_carries_it(m
     """receive_tick decodes a payload two full maps share once, keeps it until the second is merged and
     then lets it go; a payload only one message carries is never kept (a swarm's distinct repairs would
     otherwise all stay decoded to the end of the tick). The maps merged are the updates' maxima."""
-    from swarm.comm.messages import full_update
-
-    rng = np.random.default_rng(6)
-    a = rng.integers(0, 3, (30, 20)).astype(np.uint8)
-    b = a.copy()
-    b[0, 0] = 2 if b[0, 0] != 2 else 1
-    payloads: dict = {}
-    first, second = (full_update(s, 1, 0, a.copy(), (0.0, 0.0, 0.0), payloads) for s in (0, 1))
-    other = full_update(2, 1, 0, b, (0.0, 0.0, 0.0), payloads)
+    a, b, first, second, other = _converged_and_other_full_maps(6)
     decodes = []
     dense = MapUpdate.dense
     monkeypatch.setattr(MapUpdate, "dense", lambda self: (decodes.append(self.sender), dense(self))[1])
