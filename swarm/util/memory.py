@@ -14,7 +14,7 @@ raising ``MemoryError`` at the allocation.
 from __future__ import annotations
 
 import ctypes
-import ctypes.util
+import functools
 import mmap
 import sys
 from typing import Any
@@ -43,18 +43,16 @@ def lazy_zeros(shape: tuple[int, ...], dtype: type | np.dtype = np.uint8) -> np.
     return np.frombuffer(buffer, dtype=dt, count=count).reshape(shape)
 
 
+@functools.cache
 def _malloc_trim() -> Any:
-    """glibc's ``malloc_trim``, or None where the C library has none (musl, macOS, Windows)."""
+    """glibc's ``malloc_trim`` from the C library this process runs on, or None where it has none (musl,
+    macOS, Windows). Looked up on first use, not at import."""
     try:
-        libc = ctypes.CDLL(ctypes.util.find_library("c") or None)
-        trim = libc.malloc_trim
+        trim = ctypes.CDLL(None).malloc_trim
     except (OSError, AttributeError, TypeError):
         return None
     trim.argtypes, trim.restype = [ctypes.c_size_t], ctypes.c_int
     return trim
-
-
-_TRIM = _malloc_trim()
 
 
 def release_freed_memory() -> bool:
@@ -62,7 +60,8 @@ def release_freed_memory() -> bool:
     C library cannot. A swarm's sharing tick frees a gigabyte of short-lived arrays (decoded updates, the
     dense copies of full maps) allocated between long-lived ones, and glibc keeps such holes resident: at
     10,000 robots on 2,000 tiles 0.5 GB after the merges of a tick, found in 55 ms. Results do not change."""
-    if _TRIM is None:
+    trim = _malloc_trim()
+    if trim is None:
         return False
-    _TRIM(0)
+    trim(0)
     return True

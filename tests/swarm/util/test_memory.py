@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import pytest
 
-from swarm.util.memory import _TRIM, release_freed_memory
+from swarm.util.memory import _malloc_trim, release_freed_memory
 
 
 def _resident_bytes() -> int:
@@ -16,7 +16,7 @@ def _resident_bytes() -> int:
         return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
 
 
-@pytest.mark.skipif(_TRIM is None or not sys.platform.startswith("linux"), reason="glibc's malloc_trim only")
+@pytest.mark.skipif(_malloc_trim() is None or not sys.platform.startswith("linux"), reason="glibc's malloc_trim only")
 def test_freed_holes_between_live_arrays_are_handed_back_and_the_live_data_kept():
     """256 MB of 64 KB arrays (heap, not mmap), every sixteenth kept: the freed ones leave holes that glibc
     keeps resident until release_freed_memory, which hands back most of them; the kept arrays are intact."""
@@ -33,5 +33,5 @@ def test_freed_holes_between_live_arrays_are_handed_back_and_the_live_data_kept(
 def test_release_is_a_no_op_answer_where_there_is_no_malloc_trim(monkeypatch):
     from swarm.util import memory
 
-    monkeypatch.setattr(memory, "_TRIM", None)
+    monkeypatch.setattr(memory, "_malloc_trim", lambda: None)
     assert memory.release_freed_memory() is False
