@@ -649,14 +649,14 @@ class MapSharing:
             self._dirty[robots[:, None], tr[None, :], tc[None, :]] = 1
 
 _NO_CELLS = np.zeros(0, dtype=np.int64)
+_NONE_GAPPED: dict[int, int] = {}  # (read only)
+_NO_DIRTY = np.zeros((0, 1, 1), dtype=np.uint8)
+_EMPTY_BOX = np.array([0, 0, 0, 0], dtype=np.int64)
 
 
 def _wide(cells: np.ndarray) -> np.ndarray:
     """``cells`` as int64 (a history's cells are int32 on maps under 2^31 cells; the merges take int64)."""
     return cells if cells.dtype == np.int64 else cells.astype(np.int64)
-_NONE_GAPPED: dict[int, int] = {}  # (read only)
-_NO_DIRTY = np.zeros((0, 1, 1), dtype=np.uint8)
-_EMPTY_BOX = np.array([0, 0, 0, 0], dtype=np.int64)
 
 
 @njit(cache=True)
