@@ -52,3 +52,14 @@ def test_the_kept_ablation_results_folder_is_sound_and_resumes_the_example_campa
     assert set(runs["key"]) <= keys
     versions = set(runs["swarm_version"])
     assert len(versions) == 1 and "+git." in next(iter(versions)) and not next(iter(versions)).endswith("-dirty")
+
+
+def test_a_verdict_takes_its_side_from_the_paired_test():
+    """Greed's 2-robot cells tie under every radio (MAES's merge never merges), so R2's median ratio is
+    exactly 1 while the maps that differ favour global: the finding holds, it is not reversed."""
+    import pandas as pd
+
+    row = {"ratio": 1.0, "rank_biserial": -0.63, "p_holm": 0.001}
+    assert findings.verdict(pd.Series(row)) == "**holds**"
+    assert findings.verdict(pd.Series({**row, "rank_biserial": 0.63})) == "**reversed**"
+    assert findings.verdict(pd.Series({**row, "p_holm": 0.2})) == "not established"

@@ -18,8 +18,10 @@ column, MAES's motion), then one departure at a time: swarm's radio, links judge
 sharing, swarm's continuous motion, swarm's TNF, Minotaur and Greed. A runs table from before the motion
 axis (issue 49) has no MAES motion: its parity is the continuous motion and the motion condition is left out.
 
-Verdict: *holds* when the ratio is on the paper's side of 1 and Holm's p < 0.05, *reversed* when on the
-other side with Holm's p < 0.05, else *not established*.
+Verdict: *holds* when the paired test leans the paper's way (rank-biserial r < 0: a ahead) with Holm's
+p < 0.05, *reversed* when it leans the other way with Holm's p < 0.05, else *not established*. The side is
+the test's, not the median ratio's: where most maps tie (Greed's 2-robot cells under MAES's merge, identical
+under every radio) the median ratio is exactly 1 while the test is decided by the maps that differ.
 
 Second table, **what each departure does to the contrast**: per map, the change of the log ratio
 (departure minus parity), its median as a ratio of ratios with a 95 % bootstrap interval, and a Wilcoxon
@@ -131,7 +133,7 @@ def filters(f: Finding, c: Condition, motion: bool = True) -> tuple[dict[str, An
 def verdict(r: pd.Series) -> str:
     if pd.isna(r["p_holm"]) or r["p_holm"] >= 0.05:
         return "not established"
-    return "**holds**" if r["ratio"] < 1 else "**reversed**"
+    return "**holds**" if effects.a_faster(r) else "**reversed**"
 
 
 def shift_row(f: Finding, c: Condition, parity: pd.Series, other: pd.Series) -> dict[str, Any]:

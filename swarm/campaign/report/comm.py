@@ -213,7 +213,7 @@ def verdict(r: pd.Series) -> str:
     if r["ties_all"]:
         return "identical"
     if pd.notna(r["p_holm"]) and r["p_holm"] < 0.05:
-        return "slower" if r["ratio"] < 1 else "faster"  # ratio = t_a / t_b
+        return "slower" if effects.a_faster(r) else "faster"  # b against a
     if pd.isna(r["p_value"]):
         return "not tested"
     return "no established difference"

@@ -107,9 +107,12 @@ def test_a_finding_says_what_its_numbers_say(numbers, verdict, expect, absent):
 
 
 def test_the_verdict_follows_the_paired_test():
-    base = {"ties_all": False, "p_holm": 0.01, "p_value": 0.001, "ratio": 0.8}
+    base = {"ties_all": False, "p_holm": 0.01, "p_value": 0.001, "ratio": 0.8, "rank_biserial": -0.9}
     assert comm.verdict(pd.Series(base)) == "slower"
-    assert comm.verdict(pd.Series({**base, "ratio": 1.2})) == "faster"
+    assert comm.verdict(pd.Series({**base, "ratio": 1.2, "rank_biserial": 0.9})) == "faster"
+    # most maps tie (median ratio exactly 1): the side is the test's, decided by the maps that differ
+    assert comm.verdict(pd.Series({**base, "ratio": 1.0, "rank_biserial": -0.6})) == "slower"
+    assert comm.verdict(pd.Series({**base, "ratio": 1.0, "rank_biserial": 0.6})) == "faster"
     assert comm.verdict(pd.Series({**base, "p_holm": 0.3})) == "no established difference"
     assert comm.verdict(pd.Series({**base, "p_holm": float("nan"), "p_value": float("nan")})) == "not tested"
     assert comm.verdict(pd.Series({**base, "ties_all": True})) == "identical"

@@ -156,6 +156,18 @@ def test_summarise_holm_runs_across_the_rows_of_one_table():
     assert out.loc["x", "p_holm"] == pytest.approx(3 * 2 / 256)
 
 
+def test_a_contrast_whose_maps_mostly_tie_has_its_side_from_the_test_not_the_median():
+    """20 maps tie exactly (a radio that cannot matter), 12 favour a: the median ratio is 1, the test and
+    :func:`.effects.a_faster` say a; with the signs swapped they say b."""
+    for sign, expect in ((1, True), (-1, False)):
+        ratios = [1.0] * 20 + [1 - sign * 0.05 * (1 + k / 12) for k in range(12)]
+        df = pd.DataFrame({"replicate": range(len(ratios)), "t_a": [100 * r for r in ratios], "t_b": 100.0,
+                           "group": "g"}).assign(map="m", size="1", ok_a=True, ok_b=True, winner="tie")
+        out = effects.summarise(df, ["group"]).iloc[0]
+        assert out["ratio"] == 1.0 and out["p_value"] < 0.001
+        assert effects.a_faster(out) is expect
+
+
 def test_summarise_is_reproducible_and_independent_of_other_rows():
     rng = np.random.default_rng(4)
     rows = [(g, k, float(rng.integers(50, 150)), 100.0) for g in ("a", "b") for k in range(10)]
