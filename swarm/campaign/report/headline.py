@@ -27,11 +27,26 @@ def _means(df: pd.DataFrame, by: str, order: Sequence[str]) -> dict[str, float]:
     return {v: float(seconds(got[v])) for v in order if v in got.index and np.isfinite(got[v])}
 
 
+def _matched(df: pd.DataFrame, by: str, values: Sequence[str], orders: Mapping[str, Sequence[str]]) -> pd.DataFrame:
+    """The runs of ``df`` whose set-up (every other dimension, map, size and replicate) was run with every one
+    of ``values`` of ``by``: means over them compare like with like. A campaign that runs some values on some
+    cells only (an ``[[include]]``: global radio on the small maps alone) would otherwise compare a mean over
+    small maps with one over all."""
+    keys = list(dict.fromkeys(c for c in (*orders, "map", "size", "replicate") if c in df.columns and c != by))
+    df = df[df[by].astype(str).isin(list(values))]
+    if df.empty or not keys:
+        return df
+    have = df.groupby(keys, observed=True)[by].transform(lambda v: v.astype(str).nunique())
+    return df[have.to_numpy() == len(set(values))]
+
+
 def finding(runs: pd.DataFrame, orders: Mapping[str, Sequence[str]], target: float) -> str | None:
     """One sentence: per algorithm, how far the radio model moved its mean time to ``target`` from the first
     radio model (the most and the least affected algorithm), and how far apart the algorithms were under
     that radio model. None when neither the radio model nor the algorithm varies, or no run is done.
-    ``runs``: the report's runs with ``ttt_or_max`` (ticks), ``status``, ``algorithm`` and ``radio``."""
+    ``runs``: the report's runs with ``ttt_or_max`` (ticks), ``status``, ``algorithm`` and ``radio``. Each
+    mean compares like with like: a radio model against the first on the set-ups run with both (per
+    algorithm), the algorithms on the set-ups run with all of them."""
     ok = runs[runs["status"] == "ok"]
     algorithms = [a for a in orders.get("algorithm", []) if (ok["algorithm"].astype(str) == a).any()]
     radios = ([r for r in orders.get("radio", []) if (ok["radio"].astype(str) == r).any()]
@@ -49,11 +64,16 @@ def finding(runs: pd.DataFrame, orders: Mapping[str, Sequence[str]], target: flo
         effects = []
         for alg in algorithms or [None]:
             runs_a = ok if alg is None else ok[ok["algorithm"].astype(str) == alg]
-            means = _means(runs_a, "radio", radios)
-            if ref not in means or len(means) < 2:
+            pairs = {}
+            for other in radios[1:]:
+                means = _means(_matched(runs_a, "radio", [ref, other], orders), "radio", [ref, other])
+                if len(means) == 2:
+                    pairs[other] = (means[ref], means[other])
+            if not pairs:
                 continue
-            worst = max((r for r in means if r != ref), key=lambda r: abs(means[r] / means[ref] - 1))
-            effects.append((abs(means[worst] / means[ref] - 1), alg, worst, means[ref], means[worst]))
+            worst = max(pairs, key=lambda r: abs(pairs[r][1] / pairs[r][0] - 1))
+            a, b = pairs[worst]
+            effects.append((abs(b / a - 1), alg, worst, a, b))
         if effects:
             effects.sort(key=lambda e: (-e[0], str(e[1])))
             _, alg, worst, a, b = effects[0]
@@ -68,7 +88,8 @@ def finding(runs: pd.DataFrame, orders: Mapping[str, Sequence[str]], target: flo
                 parts[-1] += f" but {alg2}'s only by {_change(b2 / a2)} ({worst2})"
     if len(algorithms) >= 2:
         under = ok if ref is None else ok[ok["radio"].astype(str) == ref]
-        means = _means(under, "algorithm", algorithms)
+        present = [a for a in algorithms if (under["algorithm"].astype(str) == a).any()]
+        means = _means(_matched(under, "algorithm", present, orders), "algorithm", present)
         if len(means) >= 2:
             fast, slow = min(means, key=means.get), max(means, key=means.get)
             where = f" under {ref} radio" if ref is not None and len(radios) >= 2 else ""

@@ -66,3 +66,21 @@ def test_no_difference_and_no_success_are_said_as_such():
     assert "+0 %" not in text
     none = flat.assign(success=False)
     assert finding(none, ORDERS, 0.98) == "No run reached 98 % explored within its time limit (4 maps)."
+
+
+def test_a_radio_run_on_some_cells_only_is_compared_on_those_cells():
+    """Global radio run on the 50-tile maps only (as an ablation's [[include]] does), materials everywhere,
+    with 150-tile maps taking five times as long: the radio did nothing, and the sentence says so; the mean
+    over all materials runs against global's over small maps would say global cut the time by two thirds."""
+    rows = []
+    for size, t in ((50, 1000.0), (150, 5000.0)):
+        for radio in (("materials", "global") if size == 50 else ("materials",)):
+            for rep in range(4):
+                rows.append({"algorithm": "tnf", "radio": radio, "map": "cave", "size": size, "replicate": rep,
+                             "status": "ok", "ttt_or_max": t, "success": True})
+    text = finding(pd.DataFrame(rows), {"algorithm": ["tnf"], "radio": ["materials", "global"]}, 0.98)
+    assert "did not change the time (100 s under materials)" in text, text
+    algs = pd.DataFrame(rows).assign(radio="materials").drop_duplicates(["size", "replicate"])
+    other = algs[algs["size"] == 50].assign(algorithm="greed", ttt_or_max=1500.0)
+    text = finding(pd.concat([algs, other]), {"algorithm": ["tnf", "greed"], "radio": ["materials"]}, 0.98)
+    assert "ranged from tnf (100 s) to greed (150 s)" in text, text
