@@ -690,8 +690,8 @@ def _write_table(out: ReportWriter, name: str, df: pd.DataFrame, table: tables.T
 def _run_tables(rep: Report, out: ReportWriter) -> None:
     data = rep.data
     cols = ["key", *data.all_dims, "replicate", "status", "stop_reason", "ticks", "max_ticks", "explored", "map_seed"]
-    cols += [c for c in ("collisions_wall", "collisions_robot", *LOCALIZATION_RUN_COLUMNS)
-             if data.runs[c].notna().any()]   # results with the collision split; runs with a localisation model
+    cols += [c for c in ("collisions_wall", "collisions_robot", *LOCALIZATION_RUN_COLUMNS, "swarm_version")
+             if data.runs[c].notna().any()]   # the collision split, a localisation model, the code's version
     runs = data.runs[cols].merge(rep.runs_t[["key", "ttt", "success"]], on="key", how="left")
     runs["success"] = runs["success"].fillna(False).astype(bool)
     out.write("tables/runs.csv", tables.csv_text(runs.rename(columns={"ttt": "ticks_to_target"})))

@@ -31,10 +31,10 @@ ALWAYS_SHOWN = ("map", "size", "robots", "spawn", "algorithm", "radio")
 RUN_COLUMNS = ("key", *DIMS, "replicate", "map_kind", "radio_model", "map_seed", "status", "error", "stop_reason",
                "ticks", "max_ticks", "explored_target", "explored", "coverage", *THRESHOLD_COLUMNS.values(), "part",
                "msgs_sent", "bytes_sent", "msgs_delivered", "bytes_delivered", "msgs_dropped", "collisions_wall",
-               "collisions_robot", *BENCHMARK_RUN_COLUMNS, *COMM_RUN_COLUMNS, *LOCALIZATION_RUN_COLUMNS)
+               "collisions_robot", "swarm_version", *BENCHMARK_RUN_COLUMNS, *COMM_RUN_COLUMNS, *LOCALIZATION_RUN_COLUMNS)
 """The runs-table columns the report reads (:data:`swarm.results.schema.RUNS`, plus the store's ``part``); results of
-older versions lack the communication, localisation, collision-split and benchmark-metric columns (they read as
-missing)."""
+older versions lack the communication, localisation, collision-split, benchmark-metric and code-version columns
+(they read as missing)."""
 assert set(RUN_COLUMNS) <= {*RUNS, "part"}
 
 

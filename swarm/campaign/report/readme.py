@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 
+import pandas as pd
+
 from . import comm, effects, tables
 from .contents import PairedSection, Report
 
@@ -87,6 +89,22 @@ def _runs(rep: Report) -> str:
     return "\n".join(lines)
 
 
+def _versions(runs: pd.DataFrame) -> str:
+    """Which code computed the runs (``swarm_version``: the package version, and the commit when run from a
+    git checkout), with counts: a report over runs of several versions, or of a changed checkout, says so."""
+    v = runs["swarm_version"].astype("string").fillna("not recorded") if "swarm_version" in runs else \
+        pd.Series(["not recorded"] * len(runs), dtype="string")
+    counts = v.value_counts(sort=False).sort_index()
+    text = "Computed by swarm " + ", ".join(f"`{k}` ({n} runs)" for k, n in counts.items()) + "."
+    if len(counts) > 1:
+        text += " **More than one version of the code computed these runs**: compare them only where the " \
+                "versions between are known to give the same results."
+    if any(str(k).endswith("-dirty") for k in counts.index):
+        text += " A `-dirty` version ran from a checkout with uncommitted changes: its commit alone does not " \
+                "reproduce it."
+    return text
+
+
 def _campaign(rep: Report) -> str:
     d = rep.data
     spec = d.spec
@@ -96,6 +114,7 @@ def _campaign(rep: Report) -> str:
         lines += [f"Seed {spec.seed}, {spec.replicates} replicates (maps) per cell, stop rule: {stop}, a "
                   f"time-series row every {spec.timeseries_every} ticks, {len(spec.exclude)} exclude and "
                   f"{len(spec.include)} include rules.", ""]
+    lines += [_versions(d.runs), ""] if len(d.runs) else []
     lines += ["| Dimension | Values (spec order) |", "|---|---|"]
     lines += [f"| {dim} | {', '.join(f'`{v}`' for v in d.orders[dim])} |" for dim in d.orders if d.orders[dim]]
     lines += ["", "<details><summary>campaign.toml</summary>", "", "```toml", d.source.rstrip(), "```", "",

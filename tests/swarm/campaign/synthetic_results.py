@@ -47,6 +47,8 @@ class FakeRun:
     stop_reason: str = "explored"
     failed: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
+    version: str | None = None
+    """The row's ``swarm_version`` (the running code's when None)."""
     cell: dict[str, str] = field(default_factory=dict)
     """Labels of the other grid dimensions (``{"robots": "4"}``) when the spec has several values of them."""
 
@@ -74,6 +76,8 @@ def write(folder: Path, runs: Sequence[FakeRun], replicates: int = 6, spec_text:
         run = by_cell[(frozenset(labels.items()), fake.replicate)]
         result = _result(fake, int(spec.stop.get("max_ticks", 1000)))
         rows.append(runs_row(spec, run, result))
+        if fake.version is not None:
+            rows[-1]["swarm_version"] = fake.version
         ts_rows.extend(timeseries_rows(run.key, result["timeseries"]))
     store.write_part(rows, ts_rows)
     return folder

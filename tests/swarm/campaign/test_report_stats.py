@@ -353,3 +353,20 @@ def test_a_reports_runs_csv_read_back_gives_the_same_statistics(tmp_path: Path):
     back = effects.compare_runs(effects.read_runs_csv(tmp_path / "report/tables/runs.csv"), comparisons)
     pd.testing.assert_frame_equal(direct, back)
     assert direct.loc[0, "dnf_pairs"] == 2 and direct.loc[0, "a_wins"] == 12, "a DNF loses its pair"
+
+
+def test_the_report_says_which_code_computed_its_runs(tmp_path: Path):
+    """Each run's swarm_version reaches runs.csv and the README counts them; runs of two versions, or of a
+    changed checkout, are flagged."""
+    fakes = [FakeRun(alg, "global", rep, 100 + rep, version="0.1.0+git.aaaa" if rep < 4 else "0.1.0+git.bbbb-dirty")
+             for alg in ("greed", "frontier") for rep in range(6)]
+    results = write(tmp_path / "results", fakes)
+    readme = build_report(results, tmp_path / "report", cell_figures=False).read_text()
+    runs = pd.read_csv(tmp_path / "report" / "tables" / "runs.csv")
+    assert runs["swarm_version"].value_counts().to_dict() == {"0.1.0+git.aaaa": 8, "0.1.0+git.bbbb-dirty": 4}
+    assert "Computed by swarm `0.1.0+git.aaaa` (8 runs), `0.1.0+git.bbbb-dirty` (4 runs)." in readme
+    assert "More than one version of the code" in readme and "uncommitted changes" in readme
+    one = write(tmp_path / "one", [FakeRun("greed", "global", rep, 100 + rep, version="0.1.0+git.aaaa")
+                                   for rep in range(6)])
+    readme = build_report(one, tmp_path / "report1", cell_figures=False).read_text()
+    assert "Computed by swarm `0.1.0+git.aaaa` (6 runs)." in readme and "More than one" not in readme
