@@ -1,6 +1,6 @@
 """benchmarks/experiments/maes_parity_findings.py: the MAES-parity findings are a pure function of a runs
-table. On the committed ablation report's runs table (from before the motion axis) it writes the committed
-findings unchanged, and leaves out the departures that campaign did not run."""
+table. On the committed ablation report's runs table it writes the committed findings unchanged; every
+departure the campaign ran is a condition, and a runs table from before the motion axis leaves that one out."""
 
 from __future__ import annotations
 
@@ -26,12 +26,20 @@ def test_the_committed_findings_are_rewritten_byte_for_byte(tmp_path):
     assert (tmp_path / "findings.csv").read_text() == (REPORT / "findings.csv").read_text()
 
 
-def test_departures_the_campaign_did_not_run_are_left_out():
+def test_every_departure_the_campaign_ran_is_a_condition_and_a_table_without_the_motion_axis_drops_it():
     runs = findings.effects.read_runs_csv(REPORT / "report" / "tables" / "runs.csv")
     res, shifts = findings.analyse(runs)
+    assert set(res["name"]) == {c.name for c in findings.CONDITIONS}
+    assert set(shifts["condition"]) == {c.name for c in findings.CONDITIONS[1:]}
+    before = runs[runs[findings.MOTION] == "continuous"].drop(columns=findings.MOTION)   # the first version's
+    res, shifts = findings.analyse(before[before["algorithm"] != "Greed (swarm)"])
     names = set(res["name"]) | set(shifts["condition"])
-    assert "full MAES parity" in names and "swarm's Minotaur" in names
+    assert "full MAES parity" in names and "swarm's Minotaur" not in names   # run under MAES motion only
     assert "swarm's motion (continuous)" not in names and "swarm's Greed" not in names
+    # global and LOS were run under MAES's motion only: the radio findings have no parity runs left
+    assert set(res["finding"]) == {f.key for f in findings.FINDINGS} - {"R1", "R2", "R3", "R4"}
+    assert "Not tested (the runs table has no full-parity runs for them): R1, R2, R3, R4." in \
+        findings.render(res, shifts, "runs.csv")
 
 
 def test_the_kept_ablation_results_folder_is_sound_and_resumes_the_example_campaign():

@@ -162,6 +162,8 @@ def analyse(runs: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
             if fl is not None and (c is CONDITIONS[0] or fl != parity_filters):   # skip departures it does not touch
                 comps.append((c.name, *fl))
                 conds.append(c)
+        if not conds or conds[0] is not CONDITIONS[0]:
+            continue                                    # no parity runs for this finding: nothing to test
         df = effects.compare_runs(runs, comps)
         df.insert(0, "finding", f.key)
         df["verdict"] = [verdict(r) for _, r in df.iterrows()]
@@ -172,7 +174,10 @@ def analyse(runs: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
             sf = pd.DataFrame(fs)
             sf["p_holm"] = effects.holm(sf["p_value"].to_numpy(float))
             shifts.append(sf)
-    return pd.concat(rows, ignore_index=True), pd.concat(shifts, ignore_index=True)
+    shift_columns = ["finding", "condition", "maps", "ratio", "ratio_low", "ratio_high", "rank_biserial",
+                     "p_value", "p_holm"]
+    return (pd.concat(rows, ignore_index=True) if rows else pd.DataFrame(columns=["finding", "name", "verdict"]),
+            pd.concat(shifts, ignore_index=True) if shifts else pd.DataFrame(columns=shift_columns))
 
 
 def _matches(runs: pd.DataFrame, fl: dict[str, Any]) -> bool:
@@ -195,6 +200,9 @@ def render(res: pd.DataFrame, shifts: pd.DataFrame, source: str) -> str:
            "in the script's docstring: a/b is the median over maps of the ratio of ticks to 98 %, a to b (below 1: "
            "a faster, the paper's claim), with its 95 % bootstrap interval; r the rank-biserial correlation; p a "
            "two-sided Wilcoxon signed-rank test over maps; Holm over the conditions of one finding.", ""]
+    untested = [f.key for f in FINDINGS if f.key not in set(res["finding"])]
+    if untested:
+        out += [f"Not tested (the runs table has no full-parity runs for them): {', '.join(untested)}.", ""]
     for key, grp in res.groupby("finding", sort=False):
         f = claims[key]
         out += [f"## {key}: {f.claim}", ""]
