@@ -2,14 +2,15 @@
 
     python benchmarks/experiments/minotaur_modes.py --seeds 5 --cells building:50:16 cave:50:16 building:50:2
 
-Each run is the ablation campaign's set-up (MAES motion, 7 m lidar, radio "maes", MAES map merge with links
+Each run is the ablation campaign's full-parity set-up (MAES's motion model, ``--motion continuous`` for
+swarm's navigator with MAES's speeds; robots facing +y; 7 m lidar, radio "maes", MAES map merge with links
 judged at receipt, 98 % explored; spawn together; maps and spawns of ``derive_seed`` as in
 ``bench_minotaur_doors.py``). The share of robot-ticks in each mode of the explorer's ``debug`` shows the
 overhead the paper blames for Minotaur's slowness (section 5.2, Figs. 10-11): ``room/check-door`` is driving
 to a candidate doorway to verify it, ``door/door-nearest`` MAES's nearest-doorway rule, ``room/corner``
 corner coverage (variant maes only). The last column is the share of ``check-door`` robot-ticks spent on a
-candidate cell another robot had started to check earlier: what MAES's union of tried candidates in its
-heartbeats (not reproduced, see the explorer's docstring) could save at most; the one before it the share
+candidate cell another robot had started to check earlier (MAES pools tried candidates through its
+heartbeats, issue 49 row 2, so this counts what that pooling leaves); the one before it the share
 of ``door-nearest`` robot-ticks in which another robot drives through the same doorway by the same rule
 (MAES's nearest-doorway rule has no claim: robots that finish rooms near each other pick the same one).
 """
@@ -25,11 +26,13 @@ from swarm.sim.spec import derive_seed
 MAES_MOTION = {"max_speed": 3.0, "max_turn_rate": 4.0, "max_accel": 60.0, "max_turn_accel": 120.0, "substeps": 8}
 
 
-def run(kind: str, size: int, robots: int, variant: str, seed: int) -> tuple[int, Counter, int, int]:
+def run(kind: str, size: int, robots: int, variant: str, seed: int,
+        motion: str = "maes") -> tuple[int, Counter, int, int]:
     spec = {"seed": derive_seed(seed, "run"), "map": {"kind": kind, "size": size, "seed": derive_seed(seed, kind, size)},
-            "robots": {"count": robots, "spawn": "together", "spawn_seed": derive_seed(seed, kind, size, "spawn")},
+            "robots": {"count": robots, "spawn": "together", "spawn_seed": derive_seed(seed, kind, size, "spawn"),
+                       "heading": "maes"},
             "algorithm": {"name": "minotaur", "params": {"variant": variant}}, "radio": {"model": "maes"},
-            "comm": {"map_sharing": "maes", "link_at": "receive"}, "motion": MAES_MOTION, "lidar": {"range_m": 7.0},
+            "comm": {"map_sharing": "maes", "link_at": "receive"}, "motion": {**MAES_MOTION, "model": motion}, "lidar": {"range_m": 7.0},
             "stop": {"explored": 0.98, "max_ticks": 36000}}
     modes: Counter = Counter()
     first_checker: dict = {}
@@ -58,6 +61,8 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=5)
     ap.add_argument("--cells", nargs="+", default=["building:50:16", "cave:50:16", "building:50:2"],
                     help="kind:size:robots")
+    ap.add_argument("--motion", choices=("maes", "continuous"), default="maes",
+                    help="motion.model: MAES's (full parity, the default) or swarm's navigator")
     args = ap.parse_args()
     print("| cell | variant | runs | ticks (mean) | top modes (share of robot-ticks) | door-nearest ticks on a doorway "
           "another robot takes too | check-door ticks on a candidate another robot tried first |\n"
@@ -67,7 +72,7 @@ def main() -> None:
         for variant in ("swarm", "maes"):
             ticks, total, repeated, herded = [], Counter(), 0, 0
             for seed in range(args.seeds):
-                t, m, r, h = run(kind, int(size), int(robots), variant, seed)
+                t, m, r, h = run(kind, int(size), int(robots), variant, seed, args.motion)
                 herded += h
                 ticks.append(t)
                 total.update(m)
