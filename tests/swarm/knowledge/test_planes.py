@@ -25,11 +25,14 @@ def planes_of(known: np.ndarray) -> KnowledgePlanes:
     return planes
 
 
-@pytest.mark.parametrize("n", [1, 63, 64, 65, 130])
-def test_a_merge_through_the_planes_is_the_map_by_map_merge(n):
+@pytest.mark.parametrize("n, few", [(1, False), (63, False), (64, False), (65, False), (130, False), (130, True),
+                                    (65, True)])
+def test_a_merge_through_the_planes_is_the_map_by_map_merge(n, few):
     """Random maps (every value, so FREE -> SOLID raises and lowered counts occur), random updates into
-    random receivers: the same maps, FREE counts and changed tiles, and planes that still mirror the maps."""
-    rng = np.random.default_rng(n)
+    random receivers: the same maps, FREE counts and changed tiles, and planes that still mirror the maps.
+    ``few``: one to three receivers, across words, so both of the kernel's ways are taken
+    (planes_module.FEW_RECEIVERS)."""
+    rng = np.random.default_rng(n + few)
     h, w, tile = 37, 45, 8
     known = rng.integers(0, 3, (n, h, w)).astype(np.uint8)
     known[rng.random(known.shape) < 0.5] = UNSEEN
@@ -42,6 +45,8 @@ def test_a_merge_through_the_planes_is_the_map_by_map_merge(n):
         idx = np.unique(rng.integers(0, h * w, 60))
         values = rng.integers(0, 3, idx.size).astype(np.uint8)
         robots = np.flatnonzero(rng.random(n) < 0.6).astype(np.int64)
+        if few:
+            robots = np.sort(rng.choice(n, int(rng.integers(1, planes_module.FEW_RECEIVERS + 2)), replace=False))
         before = reference.copy()
         merge_cells_many_counted(reference, robots, idx, values, robots, counts_ref)
         for r in robots:
