@@ -273,3 +273,26 @@ def _sync_box_tiles_kernel(current: np.ndarray, prev: np.ndarray, box: np.ndarra
                         out[m] = i
                         m += 1
     return out[:m].copy()
+
+
+@njit(cache=True)
+def rising_cells(theirs: np.ndarray, mine: np.ndarray, cells: np.ndarray, values: np.ndarray) -> int:  # pragma: no cover
+    """The cells where 2-bit copy ``theirs`` holds more than 2-bit copy ``mine`` (both :func:`packed_copy`'s
+    layout, the same length), ascending into ``cells`` with ``theirs``'s values into ``values``; returns how
+    many. Merging a map into one that holds at least ``mine`` can raise only these cells, so a merge of a full
+    map into a robot that never heard its sender reads two bytes per four cells instead of every known cell
+    (equal bytes, most of a converged swarm's map, are skipped at once). ``cells`` must have room for every
+    cell ``theirs`` knows."""
+    n = 0
+    for b in range(theirs.shape[0]):
+        t = theirs[b]
+        m = mine[b]
+        if t == m or t == 0:
+            continue
+        for k in range(4):
+            tv = (t >> (2 * k)) & 3
+            if tv > ((m >> (2 * k)) & 3):
+                cells[n] = 4 * b + k
+                values[n] = tv
+                n += 1
+    return n

@@ -138,3 +138,53 @@ def test_a_full_updates_known_cells_are_its_dense_maps_nonzero_cells():
             idx, values = msg.known_cells()
             dense = msg.dense()
             assert np.array_equal(idx, np.flatnonzero(dense)) and np.array_equal(values, dense[idx])
+
+
+@pytest.mark.parametrize("tiled", [False, True])
+def test_a_full_map_merged_where_it_rises_over_the_last_update_is_the_whole_merge(monkeypatch, tiled):
+    """Robots spread at random meet new neighbours and ask them for their full maps; a receiver that never
+    heard the sender merges only the cells where the map holds more than its own last update. The run is
+    the run that merges every known cell, bit for bit, over dense and tiled maps; the shortcut was taken,
+    raised cells and skipped most of the map."""
+    from swarm.comm import sharing as sharing_module
+    from swarm.knowledge.packed import rising_cells
+
+    spec = {"seed": 3, "map": {"kind": "building", "size": 60}, "robots": {"count": 66, "spawn": "random"},
+            "stop": {"max_ticks": 80}, "comm": {"share_every": 3}}
+    taken = {"calls": 0, "rising": 0, "known": 0}
+
+    def counted(theirs, mine, cells, values):
+        k = rising_cells(theirs, mine, cells, values)
+        taken["calls"] += 1
+        taken["rising"] += k
+        taken["known"] += int(np.count_nonzero(np.unpackbits(theirs).reshape(-1, 2).any(axis=1)))
+        return k
+
+    def digest() -> str:
+        res = Simulation(spec, tiled=tiled).run()
+        summary = {k: v for k, v in res.summary.items() if not k.endswith("_time_s")}
+        return hashlib.sha256(json.dumps([summary, res.timeseries, res.comm, res.events], sort_keys=True,
+                                         default=str).encode()).hexdigest()
+
+    monkeypatch.setattr(sharing_module, "rising_cells", counted)
+    rising = digest()
+    assert taken["calls"] > 10 and 0 < taken["rising"] < taken["known"] / 2
+    monkeypatch.setattr(sharing_module, "RISING_ONLY", False)
+    calls = taken["calls"]
+    assert digest() == rising
+    assert taken["calls"] == calls, "off: every known cell is merged"
+
+
+def test_rising_cells_are_where_one_packed_map_holds_more():
+    from swarm.knowledge.packed import rising_cells
+
+    rng = np.random.default_rng(4)
+    for size in (1, 5, 64, 1001):
+        mine = rng.integers(0, 3, size).astype(np.uint8)
+        theirs = rng.integers(0, 3, size).astype(np.uint8)
+        theirs[rng.random(size) < 0.3] = UNSEEN
+        cells = np.empty(size, np.int64)
+        values = np.empty(size, np.uint8)
+        k = rising_cells(packed_copy(theirs), packed_copy(mine), cells, values)
+        expected = np.flatnonzero(theirs > mine)
+        assert np.array_equal(cells[:k], expected) and np.array_equal(values[:k], theirs[expected])
