@@ -15,12 +15,14 @@ compiled says so (run the script once more). Pin to one core for reference figur
 A row whose resident memory passes ``--limit-gb`` (default 80 % of the machine's) is stopped and reported
 with the tick it reached (``--limit-gb 8``: the issue-47 bound for 10,000 robots).
 
-``--json FILE`` writes every row's figures. The issue-47 figures:
+``--comm KEY=VALUE`` sets a ``[comm]`` setting of every row (``map_zlib_level=1``: map updates
+compressed faster into more bytes). ``--json FILE`` writes every row's figures. The issue-47 figures:
 
     python benchmarks/speed/bench_scale.py --robots 16 64 256 1000 --ticks 300 --cave
     python benchmarks/speed/bench_scale.py --robots 1000@600 --ticks 1000 --algorithm greed
     python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 20000 --progress 60
     python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 400 --spawn random
+    python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 400 --spawn random --comm map_zlib_level=1
     python benchmarks/speed/bench_scale.py --robots 10000@2000 --ticks 200 --limit-gb 8
     python benchmarks/speed/bench_scale.py --robots 16@150 1000@600 --ticks 1000 --pairs 3   # the 2x ratio
 """
@@ -121,7 +123,8 @@ def child(args: argparse.Namespace) -> None:
     t0 = time.process_time()
     sim = Simulation({"seed": args.seed, "map": {"kind": args.kind, "size": args.size},
                       "robots": {"count": args.robots, "spawn": args.spawn},
-                      "algorithm": {"name": args.algorithm, "params": params_of(args.param)}, "stop": stop})
+                      "algorithm": {"name": args.algorithm, "params": params_of(args.param)},
+                      "comm": params_of(args.comm, "--comm"), "stop": stop})
     setup_cpu = time.process_time() - t0
     totals.clear()
     if args.progress > 0:
@@ -134,7 +137,7 @@ def child(args: argparse.Namespace) -> None:
     s = result.summary
     print(json.dumps({"robots": args.robots, "size": args.size, "kind": args.kind, "spawn": args.spawn,
                       "algorithm": args.algorithm,
-                      "params": params_of(args.param),
+                      "params": params_of(args.param), "comm": params_of(args.comm, "--comm"),
                       "ticks": s["ticks"], "explored": s["explored"], "stop_reason": s["stop_reason"],
                       "cpu_s": cpu, "wall_s": wall, "setup_cpu_s": setup_cpu,
                       "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
@@ -194,13 +197,14 @@ def report_progress(sim, every_s: float) -> None:
     type(sim).sense = sense_and_report
 
 
-def params_of(items: list[str]) -> dict:
-    """``--param KEY=VALUE`` items as the algorithm's params (each VALUE read as JSON, else kept as text)."""
+def params_of(items: list[str], flag: str = "--param") -> dict:
+    """``--param KEY=VALUE`` items as the algorithm's params, or ``--comm`` items as the [comm] settings
+    (each VALUE read as JSON, else kept as text)."""
     out = {}
     for item in items:
         key, sep, value = item.partition("=")
         if not sep or not key:
-            raise SystemExit(f"bench_scale.py: error: --param: got {item[:60]!r}; allowed: KEY=VALUE")
+            raise SystemExit(f"bench_scale.py: error: {flag}: got {item[:60]!r}; allowed: KEY=VALUE")
         try:
             out[key] = json.loads(value)
         except json.JSONDecodeError:
@@ -216,6 +220,8 @@ def run_row(args: argparse.Namespace, robots: int, size: int, kind: str) -> dict
         argv += ["--explored", str(args.explored)]
     for item in args.param:
         argv += ["--param", item]
+    for item in args.comm:
+        argv += ["--comm", item]
     argv += ["--progress", str(args.progress), "--limit-gb", str(args.limit_gb)]
     proc = subprocess.run(argv, stdout=subprocess.PIPE, stderr=None if args.progress > 0 else subprocess.PIPE,
                           text=True)
@@ -255,6 +261,8 @@ def main() -> None:
     ap.add_argument("--algorithm", default="frontier")
     ap.add_argument("--param", action="append", default=[], metavar="KEY=VALUE",
                     help="an algorithm parameter (repeatable; VALUE read as JSON, else text), e.g. recheck_ticks=100")
+    ap.add_argument("--comm", action="append", default=[], metavar="KEY=VALUE",
+                    help="a [comm] setting (repeatable), e.g. map_zlib_level=1")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--spawn", default="together", choices=["together", "random"],
                     help="robots spawned together (default) or at random over the map")
@@ -280,6 +288,8 @@ def main() -> None:
         return
     if args.ticks < 1 or args.max_ticks < 1 or args.density <= 0 or args.pairs < 1 or args.limit_gb <= 0:
         ap.error("--ticks, --max-ticks and --pairs must be >= 1, --density and --limit-gb > 0")
+    params_of(args.param)  # a malformed item: one line now, not one per row
+    params_of(args.comm, "--comm")
     rows = [parse_row(text, args.density) for text in args.robots]
     kinds = [args.kind] + (["cave"] if args.cave and args.kind != "cave" else [])
     print(f"{'robots':>6} {'map':>8} {'tiles':>5} {'ticks':>6} {'ticks/s':>9} {'us/r-t':>9} {'RSS MB':>8} "

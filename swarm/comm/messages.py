@@ -363,7 +363,7 @@ def map_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[
 def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
                 payloads: dict[tuple[int, int, int], tuple[np.ndarray, bytes | None, bytes, int]] | None = None,
                 packed: np.ndarray | None = None, wire: Callable[[], np.ndarray] | None = None,
-                shape: tuple[int, int] | None = None) -> MapUpdate:
+                shape: tuple[int, int] | None = None, level: int = MAP_ZLIB_LEVEL) -> MapUpdate:
     """The full-map MapUpdate of ``known`` (``pose``: three Python floats).
 
     ``payloads``: the full maps of one sharing tick so far (a fingerprint of the packed map -> (packed map,
@@ -379,7 +379,8 @@ def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple
     map-sharing service keeps it), unchanged while ``payloads`` is in use.
     ``wire``: for a map not stored row-major (:mod:`swarm.knowledge.tiles`; ``known`` and ``packed`` in its own
     order, ``shape`` its size): gives the row-major map packed when a payload has to be built; equal maps
-    still share one, found and confirmed in their stored order."""
+    still share one, found and confirmed in their stored order. ``level``: zlib's (``comm.map_zlib_level``;
+    one run uses one, so ``payloads`` never mixes them)."""
     if packed is None:
         packed = _cellcodec.pack2(known.reshape(-1))
     key = (*_cellcodec.fingerprint(packed), len(packed))
@@ -388,7 +389,7 @@ def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple
         shared, payloads = None, None  # a fingerprint collision: compress this one apart
     if shared is None:
         plain = packed.tobytes() if wire is None else wire().tobytes()
-        shared = (packed, plain if len(plain) <= KEEP_PLAIN_BYTES else None, zlib.compress(plain, MAP_ZLIB_LEVEL),
+        shared = (packed, plain if len(plain) <= KEEP_PLAIN_BYTES else None, zlib.compress(plain, level),
                   int(np.count_nonzero(known)))
         if payloads is not None:
             payloads[key] = shared
@@ -400,16 +401,17 @@ def full_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple
 
 def delta_update(sender: int, seq: int, tick: int, known: np.ndarray, pose: tuple[float, float, float],
                  changed: np.ndarray, *, values: np.ndarray | None = None,
-                 shape: tuple[int, int] | None = None) -> MapUpdate:
+                 shape: tuple[int, int] | None = None, level: int = MAP_ZLIB_LEVEL) -> MapUpdate:
     """The delta MapUpdate of cells ``changed`` of ``known``: distinct ascending int64 flat indices, as
     :func:`swarm.knowledge.maps.sync_changes` gives them, and ``pose`` three Python floats, so nothing is sorted
     or converted again (the map-sharing service builds one per robot per sharing tick). A map not stored
-    row-major (:mod:`swarm.knowledge.tiles`) gives its ``values`` at ``changed`` and its ``shape``."""
+    row-major (:mod:`swarm.knowledge.tiles`) gives its ``values`` at ``changed`` and its ``shape``; ``level``:
+    zlib's."""
     if values is None:
         values, shape = known.reshape(-1)[changed], known.shape
     assert shape is not None
     plain = _cellcodec.pack_delta(changed, np.ascontiguousarray(values, dtype=np.uint8)).tobytes()
-    return _update_of(plain, zlib.compress(plain, MAP_ZLIB_LEVEL), sender=sender, seq=seq, tick=tick, full=False,
+    return _update_of(plain, zlib.compress(plain, level), sender=sender, seq=seq, tick=tick, full=False,
                       shape=(int(shape[0]), int(shape[1])), count=len(changed), pose=pose)
 
 

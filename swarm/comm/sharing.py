@@ -186,7 +186,7 @@ class MapSharing:
                         rows = self.dense(i) if self.dense is not None else self.layout.untile(mine)
                         return pack2(rows.reshape(-1))
                 update = full_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), payloads, packed,
-                                     wire=wire, shape=self.shape)
+                                     wire=wire, shape=self.shape, level=self.spec.map_zlib_level)
                 update.__dict__["_since"] = since  # this process's note (see _take); never on the wire
                 out[i].append(update)
                 continue
@@ -197,7 +197,7 @@ class MapSharing:
                 self._remember(i, self.seq[i], changed)
                 update = delta_update(i, self.seq[i], tick, known[i], tuple(pose_rows[i]), changed,
                                       values=None if self.layout is None else self._values(known[i], changed),
-                                      shape=self.shape)
+                                      shape=self.shape, level=self.spec.map_zlib_level)
                 update.__dict__["_since"] = None  # built here (see _take): never on the wire
                 if self.layout is not None and len(changed) >= DROP_DECODED_CELLS:
                     # a swarm's round (tiled maps): its receivers decompress the payload once (zlib, ~0.1 ms)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import zlib
+
 import numpy as np
 import pytest
 
@@ -835,3 +837,41 @@ def test_dropping_a_merged_deltas_decoded_cells_changes_nothing(monkeypatch):
     assert sent_drop == sent_keep and np.array_equal(maps_drop, maps_keep)
     assert not any(dropped_keep) and any(dropped), "merged deltas let go of their copies only when large"
     assert all(np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1]) for a, b in zip(cells_drop, cells_keep))
+
+
+def test_the_zlib_level_changes_the_bytes_and_nothing_else_on_a_perfect_radio():
+    """``comm.map_zlib_level`` sets the compression of the runtime's map updates: the same updates (the
+    payloads decompress to the same bytes), so without packet errors or a bandwidth cap the run is the same
+    but for the bytes counted; level 0 stores them. Level 6 is the default and the canonical form omits it."""
+    from swarm.sim.spec import RunSpec
+
+    def run(level: int | None):
+        comm = {} if level is None else {"map_zlib_level": level}
+        spec = {"seed": 2, "map": {"kind": "building", "size": 60}, "robots": {"count": 8},
+                "stop": {"max_ticks": 150}, "comm": {**comm, "loss": 0.2}}
+        sent: list[tuple[bytes, int]] = []
+        sim = Simulation(spec)
+        original = sim.sharing.outgoing
+
+        def spy(*args, _original=original):
+            out = _original(*args)
+            sent.extend((zlib.decompress(m.payload), len(m.payload)) for msgs in out for m in msgs
+                        if isinstance(m, MapUpdate))
+            return out
+
+        sim.sharing.outgoing = spy
+        res = sim.run()
+        summary = {k: v for k, v in res.summary.items() if not k.endswith("_time_s") and k != "messages"}
+        return summary, res.summary["messages"], sent, RunSpec.from_mapping(spec).key
+
+    default, messages, sent, key = run(None)
+    assert any(len(plain) > 0 for plain, _ in sent) and any(m for m in messages.values())
+    for level in (1, 0):
+        summary, other_messages, other_sent, other_key = run(level)
+        assert summary == default and other_key != key
+        assert [plain for plain, _ in other_sent] == [plain for plain, _ in sent]
+        assert other_messages["delivered"] == messages["delivered"]
+        assert other_messages["map_bytes_sent"] != messages["map_bytes_sent"]
+        if level == 0:
+            assert sum(size for _, size in other_sent) > 2 * sum(size for _, size in sent)
+    assert run(6)[3] == key

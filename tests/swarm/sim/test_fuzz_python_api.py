@@ -63,7 +63,7 @@ sections = st.fixed_dictionaries({}, optional={
     "radio": mostly(st.one_of(st.sampled_from(["los", "global", "multiwall", "wifi"]),
                               st.dictionaries(st.sampled_from(["model", "per", "shadowing_sigma_db", "materials",
                                                                "tx_power_overrides"]), odd, max_size=2))),
-    "comm": mostly(st.dictionaries(st.sampled_from(["loss", "relay", "relay_hops", "bandwidth"]), odd, max_size=2)),
+    "comm": mostly(st.dictionaries(st.sampled_from(["loss", "relay", "relay_hops", "bandwidth", "map_zlib_level"]), odd, max_size=2)),
     "navigation": mostly(st.dictionaries(st.sampled_from(["planner", "margin_m", "unseen"]), odd, max_size=2)),
     "stop": mostly(st.dictionaries(st.sampled_from(["explored", "stall_ticks"]), odd, max_size=2)),
     "seed": mostly(st.integers(0, 2**63 - 1)),

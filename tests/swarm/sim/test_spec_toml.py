@@ -47,7 +47,7 @@ def test_print_spec_shows_every_default_and_reads_back_to_the_same_run(tmp_path,
     assert main(["run", "--print-spec", "--algorithm", "tnf"]) == 0
     printed = capsys.readouterr().out
     data = tomllib.loads(printed)
-    assert (data["comm"]["relay"], data["comm"]["relay_hops"]) == ("none", 4)
+    assert (data["comm"]["relay"], data["comm"]["relay_hops"], data["comm"]["map_zlib_level"]) == ("none", 4, 6)
     assert (data["radio"]["shadowing_sigma_db"], data["radio"]["per"]) == (0.0, "off")
     assert {"shadowing_corr_m", "per_ref"} <= set(data["radio"]) and "variant" in data["algorithm"]["params"]
     path = tmp_path / "run.toml"
