@@ -43,9 +43,9 @@ is dropped and counted as malformed (issue 48: one agent's 170,000 heartbeats in
 the other robots). The runtime's own map sharing is not counted."""
 MAX_BYTES_PER_TICK = MAX_MESSAGE_BYTES
 MAP_ZLIB_LEVEL = 6
-"""zlib level of MapUpdate payloads. Part of the results: it sets the bytes counted and what a bandwidth cap
-lets through (level 1 was measured on one full 300 x 300 benchmark map: 25 against 118 us, 647 against 414
-bytes)."""
+"""zlib level of MapUpdate payloads by default (a run sets its own: ``comm.map_zlib_level``). Part of the
+results: it sets the bytes counted and what a bandwidth cap lets through (level 1 was measured on one full
+300 x 300 benchmark map: 25 against 118 us, 647 against 414 bytes; docs/radio.md has a swarm's)."""
 KEEP_PLAIN_BYTES = 1 << 19
 """The largest full map (in plain bytes, 2 bits a cell: 2 million cells, a 700-tile map) whose plain bytes an
 update built here keeps for its receivers here; a larger one is decompressed by each message's receivers
