@@ -1,4 +1,4 @@
-"""Swarm scale: ``python benchmarks/speed/bench_scale.py [--robots 16 64 256 1000] [--ticks 300] [--cave]``.
+r"""Swarm scale: ``python benchmarks/speed/bench_scale.py [--robots 16 64 256 1000] [--ticks 300] [--cave]``.
 
 For each robot count, one run in a fresh process: building maps sized to keep the density of the 16-robot,
 150-tile case (``--density``), robots spawned together (``--spawn``), the frontier explorer
@@ -22,7 +22,8 @@ compressed faster into more bytes). ``--json FILE`` writes every row's figures. 
     python benchmarks/speed/bench_scale.py --robots 1000@600 --ticks 1000 --algorithm greed
     python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 20000 --progress 60
     python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 400 --spawn random
-    python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 400 --spawn random --comm map_zlib_level=1
+    python benchmarks/speed/bench_scale.py --robots 1000@600 --explored 0.5 --max-ticks 400 --spawn random \
+        --comm map_zlib_level=1
     python benchmarks/speed/bench_scale.py --robots 10000@2000 --ticks 200 --limit-gb 8
     python benchmarks/speed/bench_scale.py --robots 16@150 1000@600 --ticks 1000 --pairs 3   # the 2x ratio
 """

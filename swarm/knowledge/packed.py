@@ -276,7 +276,8 @@ def _sync_box_tiles_kernel(current: np.ndarray, prev: np.ndarray, box: np.ndarra
 
 
 @njit(cache=True)
-def rising_cells(theirs: np.ndarray, mine: np.ndarray, cells: np.ndarray, values: np.ndarray) -> int:  # pragma: no cover
+def rising_cells(theirs: np.ndarray, mine: np.ndarray, cells: np.ndarray,
+                 values: np.ndarray) -> int:  # pragma: no cover - compiled
     """The cells where 2-bit copy ``theirs`` holds more than 2-bit copy ``mine`` (both :func:`packed_copy`'s
     layout, the same length), ascending into ``cells`` with ``theirs``'s values into ``values``; returns how
     many. Merging a map into one that holds at least ``mine`` can raise only these cells, so a merge of a full
