@@ -518,7 +518,9 @@ class MapSharing:
 
     def _sent_packed(self, msg: MapUpdate) -> np.ndarray | None:
         """The 2-bit copy of full map ``msg`` this service keeps (its sender's ``last_shared`` row, which is the
-        map sent while the sender has built no update since), or None: a map an algorithm sent, or a later one."""
+        map sent while the sender has built no update since: its sequence number is the message's, and
+        ``last_shared[sender]`` changes only with a new update), or None: a map an algorithm sent, or a later
+        one."""
         if ("_since" in msg.__dict__ and self.last_shared is not None and self.seq[msg.sender] == msg.seq
                 and msg.shape == self.shape):
             return self.last_shared[msg.sender]
@@ -642,12 +644,11 @@ class MapSharing:
         return known[self.layout.offsets(cells)]
 
     def _full_values(self, msg: MapUpdate) -> Any:
-        """How to read full map ``msg``'s values at given cells: from its sender's packed copy while that still
-        holds the map sent (the sender has built no update since: its sequence number is the message's, and
-        ``last_shared[sender]`` changes only with a new update), else from the message's bytes (a swarm's
-        full maps keep only their zlib payload: each read would decompress a megabyte)."""
-        if self.last_shared is not None and self.seq[msg.sender] == msg.seq and msg.shape == self.shape:
-            packed = self.last_shared[msg.sender]
+        """How to read full map ``msg``'s values at given cells (a map this service built): from its sender's
+        packed copy while that still holds the map sent (:meth:`_sent_packed`), else from the message's bytes
+        (a swarm's full maps keep only their zlib payload: each read would decompress a megabyte)."""
+        packed = self._sent_packed(msg)
+        if packed is not None:
             if self.layout is not None:
                 return lambda cells: values_at2(packed, self.layout.offsets(cells))
             return lambda cells: values_at2(packed, cells)
