@@ -104,6 +104,22 @@ def inputs_for(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: b
     return entry
 
 
+def would_evict(key: Key) -> bool:
+    """Whether a whole-map search of the map ``key`` would build its inputs from scratch and drop another
+    map's to keep them: the map has no entry and the entries are at their limit (a swarm larger than
+    :data:`MAX_ENTRIES` searching its maps round robin, which never finds its entry)."""
+    entries = _KEPT.entries
+    if key in entries or _KEPT.shape != key[1]:
+        return False
+    h, w = key[1]
+    return len(entries) >= max(1, min(MAX_ENTRIES, MAX_BYTES // _new_entry_bytes(h, w)))
+
+
+def _new_entry_bytes(h: int, w: int) -> int:
+    """:func:`_entry_bytes` of a new entry for an ``h`` x ``w`` map, without building one."""
+    return packed_size(h * w) + 2 * (((h + 2) * (w + 2) + 7) // 8) + 8 * h
+
+
 def _entry_bytes(entry: KeptInputs) -> int:
     return entry.copy.nbytes + entry.space.nbytes + entry.targets.nbytes + entry.row_targets.nbytes
 

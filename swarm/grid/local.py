@@ -31,6 +31,7 @@ copies. Its snapping and search, :func:`search_targets`, also end the whole-map 
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 
 import numpy as np
@@ -45,6 +46,13 @@ from .search import _WORK
 PLAN_WINDOW_CELLS = 40
 """Half-width of the first local planning window (20 m): plans up to 34 cells (17 m) stay local for the
 default robot. Each further window is twice as wide."""
+BOXED = True
+"""Clip the windows after the first to the box no plan leaves (:func:`known_box`: the known cells, start and
+goal, with the windows' margin), which decides every plan once a window covers it (off: as before; the tests
+compare both)..."""
+BOX_FROM = 16
+"""...from the first window larger than 1/BOX_FROM of the map (finding the box reads the map's known rows: a
+smaller window costs less than that saves)."""
 LARGER_WINDOW_SHARE = 0.25
 """Windows after the first are tried while they cover at most this share of the map (beyond, the whole-map
 plan costs about as much)."""
@@ -70,6 +78,96 @@ def window_bounds(cell: tuple[int, int], half: int, shape: tuple[int, int]) -> t
             max(cell[1] - half, 0), min(cell[1] + half + 1, shape[1]))
 
 
+def known_box(known: np.ndarray, cells: tuple[tuple[int, int], ...], margin: int) -> tuple[int, int, int, int]:
+    """Rows ``r0:r1`` and columns ``c0:c1`` of the smallest box holding every known (non-zero) cell of the
+    checked uint8 map ``known`` and every one of ``cells``, widened by ``margin`` and clipped to the map.
+
+    Planning through known space only (unknown cells are not traversable), no search can leave this box,
+    and with ``margin`` at least the erosion depth plus the snap radius plus one, a window that covers it
+    computes the whole map's configuration space, view cells and targets on every cell a search reads: it
+    decides every search, however long (a crowd that has explored a corner of a large map searches that
+    corner, not the map). Cost: the known rows' bytes outside the box, read once."""
+    r0, r1, c0, c1 = _box_of(np.ascontiguousarray(known))
+    for r, c in cells:
+        r0, r1, c0, c1 = min(r0, r), max(r1, r + 1), min(c0, c), max(c1, c + 1)
+    h, w = known.shape
+    return max(r0 - margin, 0), min(r1 + margin, h), max(c0 - margin, 0), min(c1 + margin, w)
+
+
+@njit(cache=True)
+def _box_of(known):  # pragma: no cover - compiled
+    """(r0, r1, c0, c1) of the non-zero cells of a C-contiguous uint8 map; an empty box (r0 = H, r1 = 0,
+    c0 = W, c1 = 0) when there are none. The first and last non-zero bytes give the rows (read 8 at a time);
+    each row between them is read only outside the columns found so far."""
+    h, w = known.shape
+    flat = known.reshape(-1)
+    n = flat.shape[0]
+    words = n // 8
+    wide = flat[:8 * words].view(np.uint64)
+    first = -1
+    for i in range(words):
+        if wide[i] != 0:
+            for j in range(8 * i, 8 * i + 8):
+                if flat[j] != 0:
+                    first = j
+                    break
+            break
+    if first < 0:
+        for j in range(8 * words, n):
+            if flat[j] != 0:
+                first = j
+                break
+    if first < 0:
+        return h, 0, w, 0
+    last = first
+    for j in range(n - 1, 8 * words - 1, -1):
+        if flat[j] != 0:
+            last = j
+            break
+    if last == first:
+        for i in range(words - 1, first // 8 - 1, -1):
+            if wide[i] != 0:
+                for j in range(8 * i + 7, 8 * i - 1, -1):
+                    if flat[j] != 0:
+                        last = j
+                        break
+                break
+    r0, r1 = first // w, last // w + 1
+    c0, c1 = w, 0
+    if w % 8 == 0:  # rows start on words: OR the band's rows together, 8 cells at a time
+        acc = np.zeros(w // 8, np.uint64)
+        rows = flat[r0 * w:r1 * w].view(np.uint64).reshape(r1 - r0, w // 8)
+        for r in range(r1 - r0):
+            for j in range(w // 8):
+                acc[j] |= rows[r, j]
+        seen = acc.view(np.uint8)
+        for c in range(w):
+            if seen[c] != 0:
+                c0 = c
+                break
+        for c in range(w - 1, -1, -1):
+            if seen[c] != 0:
+                c1 = c + 1
+                break
+        return r0, r1, c0, c1
+    for r in range(r0, r1):
+        row = known[r]
+        for c in range(c0):
+            if row[c] != 0:
+                c0 = c
+                break
+        for c in range(w - 1, c1 - 1, -1):
+            if row[c] != 0:
+                c1 = c + 1
+                break
+    return r0, r1, c0, c1
+
+
+def intersect(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> tuple[int, int, int, int]:
+    """The overlap of two (r0, r1, c0, c1) boxes."""
+    return max(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), min(a[3], b[3])
+
+
 def plan_local_first(known: np.ndarray, start: tuple[int, int], goal: tuple[int, int], radius_m: float,
                      margin_m: float, unseen_traversable: bool, snap: int,
                      half_cells: int = PLAN_WINDOW_CELLS) -> tuple[np.ndarray, bool] | None:
@@ -88,9 +186,16 @@ def plan_local_first(known: np.ndarray, start: tuple[int, int], goal: tuple[int,
     rows, widths = _erosion_rows(radius_m, margin_m)
     reach = max(abs(goal[0] - start[0]), abs(goal[1] - start[1]))
     half = half_cells
+    box = None  # the box no plan leaves (known_box), once a plan goes past its first window
     while True:
-        budget = half - depth - snap - 1  # the longest path (cells) whose search stays in the equal region
+        budget: float = half - depth - snap - 1  # the longest path (cells) whose search stays in the equal region
         r0, r1, c0, c1 = window_bounds(start, half, known.shape)
+        if BOXED and half > half_cells and not unseen_traversable and (box is not None
+                                                                        or 4 * half * half * BOX_FROM > known.size):
+            box = box or known_box(known, (start, goal), depth + snap + 1)
+            r0, r1, c0, c1 = intersect((r0, r1, c0, c1), box)
+            if (r0, r1, c0, c1) == box:
+                budget, reach = math.inf, 0  # the window holds every cell a plan can reach: it decides
         area = (r1 - r0) * (c1 - c0)
         if area >= known.size or (half > half_cells and area > LARGER_WINDOW_SHARE * known.size):
             return None  # the whole map is searched next: nothing to save
@@ -101,6 +206,8 @@ def plan_local_first(known: np.ndarray, start: tuple[int, int], goal: tuple[int,
                                                 ring)
             if waypoints.shape[0] > 0:
                 return waypoints, goal_fits
+            if budget == math.inf:
+                return None  # no path at all: the whole-map plan says so
         half *= 2
 
 

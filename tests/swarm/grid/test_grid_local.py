@@ -242,3 +242,111 @@ def test_nearest_reachable_window_decides_only_what_the_rest_of_the_map_cannot_c
     assert grid.nearest_reachable_window(room, (10, 10), targets & ~room, (True,) * 4) == (None, True)
     with pytest.raises(InvalidInput, match="cut"):
         grid.nearest_reachable_window(space, (10, 10), targets, (True, True))
+
+
+def explored_corner(seed: int) -> tuple[np.ndarray, tuple[int, int]]:
+    """A large map known only in a patch (a crowd that has explored a corner of a building), with holes,
+    and a known FREE cell of it to start from."""
+    rng = np.random.default_rng(seed)
+    truth = generate("building", 100, seed)
+    known = np.zeros(truth.solid.shape, np.uint8)
+    h, w = known.shape
+    ph, pw = int(rng.integers(8, h // 3)), int(rng.integers(8, w // 3))
+    r, c = int(rng.integers(0, h - ph)), int(rng.integers(0, w - pw))
+    known[r:r + ph, c:c + pw] = np.where(truth.solid[r:r + ph, c:c + pw], SOLID, FREE)
+    known[rng.random(known.shape) < 0.02] = UNSEEN
+    free = np.argwhere(known == FREE)
+    start = tuple(int(v) for v in free[rng.integers(len(free))]) if len(free) else (r, c)
+    return known, start
+
+
+@pytest.mark.parametrize("radius, margin", [(0.3, 0.05), (0.6, 0.05), (0.0, 0.0)])
+def test_a_search_boxed_to_the_known_cells_is_the_whole_map_search(radius: float, margin: float,
+                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    """Patches of a large map, searched from inside (with and without an exclusion disc, some patches with
+    no reachable frontier): the box the searches cannot leave gives the whole-map target, distance and
+    tie-break, and the plan to that target is the whole-map plan; the box path is taken (a search that
+    went to the whole map when the box is not used)."""
+    from swarm.grid import kept, local, targets
+
+    boxed = 0
+    for seed in range(40):
+        known, start = explored_corner(seed)
+        exclude = None
+        if seed % 3 == 0:
+            rr, cc = np.ogrid[:known.shape[0], :known.shape[1]]
+            exclude = (rr - start[0]) ** 2 + (cc - start[1]) ** 2 <= int(seed % 7) ** 2
+        want = grid.nearest_reachable_unseen(known, start, radius, exclude=exclude, margin_m=margin,
+                                             local_first_m=None)
+        calls: list[tuple[int, int, int, int]] = []
+        real = targets._TargetSearch.run_window
+
+        def spy(self, k, bounds, s, ex, budget, real=real, calls=calls):
+            calls.append(bounds)
+            return real(self, k, bounds, s, ex, budget)
+
+        monkeypatch.setattr(targets._TargetSearch, "run_window", spy)
+        kept.forget_all()
+        got = grid.nearest_reachable_unseen(known.copy(), start, radius, exclude=exclude, margin_m=margin)
+        monkeypatch.undo()
+        assert got == want, seed
+        box = local.known_box(known, (start,), 0)
+        boxed += any(b[0] <= box[0] and b[1] >= box[1] and b[2] <= box[2] and b[3] >= box[3]
+                     and (b[1] - b[0]) * (b[3] - b[2]) < known.size for b in calls)
+        if want is not None:
+            plan = plan_local_first(known, start, want[0], radius, margin, False, SNAP_RADIUS_CELLS, half_cells=8)
+            whole = whole_map_plan(known, start, want[0], radius, margin, False)
+            assert (plan is None) == (whole is None)
+            if plan is not None:
+                assert np.array_equal(plan[0], whole[0]) and plan[1] == whole[1]
+    assert boxed >= 20, "most patches must be searched in their box"
+
+
+def test_without_the_box_the_same_searches_go_to_the_whole_map(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The switch: with ``BOXED`` off, a far search in a small patch runs on the whole map (and gives the
+    same answer), so the box is what the test above measures."""
+    from swarm.grid import kept, targets
+
+    known = np.zeros((300, 300), np.uint8)  # a walled hall, known, in a large unknown map
+    known[100:141, 50:251] = SOLID
+    known[101:140, 51:250] = FREE
+    known[118:123, 250] = FREE  # its one doorway, 190 cells (95 m) east of the start
+    start = (120, 55)
+    want = grid.nearest_reachable_unseen(known, start, local_first_m=None)
+    assert want is not None and want[1] > 90
+    ran: list[str] = []
+    real_run = targets._TargetSearch.run
+
+    def whole(self, *args, **kwargs):
+        ran.append("whole")
+        return real_run(self, *args, **kwargs)
+
+    monkeypatch.setattr(targets._TargetSearch, "run", whole)
+    for on in (True, False):
+        monkeypatch.setattr(targets, "BOXED", on)
+        kept.forget_all()
+        ran.clear()
+        k = known.copy()
+        assert grid.nearest_reachable_unseen(k, start) == want
+        assert (ran == []) == on
+
+
+def test_known_box_holds_the_known_cells_and_the_given_ones() -> None:
+    """Against numpy on random sparse maps of any size (rows of whole words or not), with extra cells and a
+    margin clipped to the map; an empty map gives the extra cells' box."""
+    from swarm.grid.local import known_box
+
+    rng = np.random.default_rng(5)
+    for _ in range(500):
+        h, w = (int(v) for v in rng.integers(1, 45, 2))
+        w = 8 * (w // 8 + 1) if rng.random() < 0.5 else w  # rows of whole words, or not
+        k = np.zeros((h, w), np.uint8)
+        for _ in range(int(rng.integers(0, 4))):
+            k[rng.integers(h), rng.integers(w)] = rng.integers(1, 3)
+        cell = (int(rng.integers(h)), int(rng.integers(w)))
+        margin = int(rng.integers(0, 4))
+        rows, cols = np.nonzero(k)
+        rows, cols = np.append(rows, cell[0]), np.append(cols, cell[1])
+        want = (max(rows.min() - margin, 0), min(rows.max() + 1 + margin, h),
+                max(cols.min() - margin, 0), min(cols.max() + 1 + margin, w))
+        assert known_box(k, (cell,), margin) == want
