@@ -108,11 +108,21 @@ def would_evict(key: Key) -> bool:
     """Whether a whole-map search of the map ``key`` would build its inputs from scratch and drop another
     map's to keep them: the map has no entry and the entries are at their limit (a swarm larger than
     :data:`MAX_ENTRIES` searching its maps round robin, which never finds its entry)."""
-    entries = _KEPT.entries
-    if key in entries or _KEPT.shape != key[1]:
+    return key not in _KEPT.entries and _full(key[1])
+
+
+def rebuilds(known: np.ndarray) -> bool:
+    """:func:`would_evict` for any search of the map in ``known``'s buffer: none of its searches is kept and
+    the entries are at their limit (so no far search remembered a plan on it either, :mod:`swarm.grid.memo`)."""
+    address = known.__array_interface__["data"][0]
+    return _full(known.shape) and not any(key[0] == address for key in _KEPT.entries)
+
+
+def _full(shape: tuple[int, int]) -> bool:
+    """Whether the entries, of maps of ``shape``, are at their limit."""
+    if _KEPT.shape != shape:
         return False
-    h, w = key[1]
-    return len(entries) >= max(1, min(MAX_ENTRIES, MAX_BYTES // _new_entry_bytes(h, w)))
+    return len(_KEPT.entries) >= max(1, min(MAX_ENTRIES, MAX_BYTES // _new_entry_bytes(*shape)))
 
 
 def _new_entry_bytes(h: int, w: int) -> int:

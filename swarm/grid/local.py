@@ -19,7 +19,10 @@ robot's cell and accepts the answer only when it is provably the whole-map answe
   same order with the same float sums, and the path and waypoints are identical. A shorter whole-map
   path would lie in that region too, so it would have been found in the window.
 
-Otherwise (goal too far, no path in the window, or a longer one) the caller plans on the whole map.
+Otherwise (goal too far, no path in the window, or a longer one) the caller plans on the whole map, or,
+for a swarm whose maps find nothing kept (:data:`BOXED`), this module plans on the box of the map's known
+cells, start and goal (:func:`known_box`): planning through known space, no plan leaves it, so with the
+same margin the box is a window that decides every plan.
 Only the exact grid planner (:func:`swarm.grid.plan`) may be windowed; other planners see the whole map.
 
 The same module holds the compiled window stage of the target search used by
@@ -47,12 +50,10 @@ PLAN_WINDOW_CELLS = 40
 """Half-width of the first local planning window (20 m): plans up to 34 cells (17 m) stay local for the
 default robot. Each further window is twice as wide."""
 BOXED = True
-"""Clip the windows after the first to the box no plan leaves (:func:`known_box`: the known cells, start and
-goal, with the windows' margin), which decides every plan once a window covers it (off: as before; the tests
-compare both)..."""
-BOX_FROM = 16
-"""...from the first window larger than 1/BOX_FROM of the map (finding the box reads the map's known rows: a
-smaller window costs less than that saves)."""
+"""A plan no window decides runs on the box no plan leaves (:func:`known_box`: the known cells, start and goal,
+with the windows' margin) instead of the whole map, when the map's inputs would be built from scratch anyway
+(a swarm larger than the kept searches' cache, :func:`swarm.grid.kept.rebuilds`; a team keeps the plan its
+far target search remembered, :mod:`swarm.grid.memo`). Off: the whole map, as before; the tests compare both."""
 LARGER_WINDOW_SHARE = 0.25
 """Windows after the first are tried while they cover at most this share of the map (beyond, the whole-map
 plan costs about as much)."""
@@ -163,11 +164,6 @@ def _box_of(known):  # pragma: no cover - compiled
     return r0, r1, c0, c1
 
 
-def intersect(a: tuple[int, int, int, int], b: tuple[int, int, int, int]) -> tuple[int, int, int, int]:
-    """The overlap of two (r0, r1, c0, c1) boxes."""
-    return max(a[0], b[0]), min(a[1], b[1]), max(a[2], b[2]), min(a[3], b[3])
-
-
 def plan_local_first(known: np.ndarray, start: tuple[int, int], goal: tuple[int, int], radius_m: float,
                      margin_m: float, unseen_traversable: bool, snap: int,
                      half_cells: int = PLAN_WINDOW_CELLS) -> tuple[np.ndarray, bool] | None:
@@ -186,29 +182,32 @@ def plan_local_first(known: np.ndarray, start: tuple[int, int], goal: tuple[int,
     rows, widths = _erosion_rows(radius_m, margin_m)
     reach = max(abs(goal[0] - start[0]), abs(goal[1] - start[1]))
     half = half_cells
-    box = None  # the box no plan leaves (known_box), once a plan goes past its first window
+    unseen_ok = bool(unseen_traversable)
     while True:
-        budget: float = half - depth - snap - 1  # the longest path (cells) whose search stays in the equal region
+        budget = half - depth - snap - 1  # the longest path (cells) whose search stays in the equal region
         r0, r1, c0, c1 = window_bounds(start, half, known.shape)
-        if BOXED and half > half_cells and not unseen_traversable and (box is not None
-                                                                        or 4 * half * half * BOX_FROM > known.size):
-            box = box or known_box(known, (start, goal), depth + snap + 1)
-            r0, r1, c0, c1 = intersect((r0, r1, c0, c1), box)
-            if (r0, r1, c0, c1) == box:
-                budget, reach = math.inf, 0  # the window holds every cell a plan can reach: it decides
         area = (r1 - r0) * (c1 - c0)
         if area >= known.size or (half > half_cells and area > LARGER_WINDOW_SHARE * known.size):
-            return None  # the whole map is searched next: nothing to save
+            break  # the whole map is searched next: nothing to save
         if budget >= 0 and reach <= budget + 1:
             dist, ring = _WORK.get((r1 - r0 + 2) * (c1 - c0 + 2))
-            waypoints, goal_fits = _window_plan(known, r0, r1, c0, c1, bool(unseen_traversable), rows, widths,
+            waypoints, goal_fits = _window_plan(known, r0, r1, c0, c1, unseen_ok, rows, widths,
                                                 start[0], start[1], goal[0], goal[1], snap, float(budget), dist,
                                                 ring)
             if waypoints.shape[0] > 0:
                 return waypoints, goal_fits
-            if budget == math.inf:
-                return None  # no path at all: the whole-map plan says so
         half *= 2
+    if not (BOXED and not unseen_ok and kept.rebuilds(known)):
+        return None
+    r0, r1, c0, c1 = known_box(known, (start, goal), depth + snap + 1)
+    if (r1 - r0) * (c1 - c0) >= known.size:
+        return None
+    # The box holds every cell a plan can reach (a swarm that knows a corner of a large map plans there):
+    # it decides, however long the plan
+    dist, ring = _WORK.get((r1 - r0 + 2) * (c1 - c0 + 2))
+    waypoints, goal_fits = _window_plan(known, r0, r1, c0, c1, unseen_ok, rows, widths, start[0], start[1],
+                                        goal[0], goal[1], snap, math.inf, dist, ring)
+    return (waypoints, goal_fits) if waypoints.shape[0] > 0 else None
 
 
 @njit(cache=True)
@@ -341,3 +340,6 @@ def _space_and_pad(window, unseen_ok, row_offsets, half_widths):  # pragma: no c
         for c in range(w):
             pad[r + 1, c + 1] = space[r, c]
     return space, pad
+
+
+from . import kept  # noqa: E402 (last: kept imports this module's kernels)

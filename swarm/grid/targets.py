@@ -26,7 +26,7 @@ from . import kept, memo
 from ._kernels import grid_view_cells
 from ._validate import check_cell, check_count, check_known, check_length, check_same_shape, check_space
 from .cspace import DEFAULT_MARGIN_M, _erosion_rows
-from .local import BOX_FROM, TARGET_FOUND, erosion_depth, intersect, known_box, window_bounds, window_target
+from .local import TARGET_FOUND, erosion_depth, known_box, window_bounds, window_target
 from .search import _WORK
 
 _NO_EXCLUDE = np.zeros((0, 0), dtype=bool)
@@ -63,11 +63,11 @@ LOCAL_FIRST_M = 15.0
 WINDOW_GROWTH = 2
 """Each further window decides searches this many times longer than the one before."""
 BOXED = True
-"""Clip the windows after the first (from one larger than 1/``BOX_FROM`` of the map) to the box no search
-leaves (:func:`swarm.grid.local.known_box`: the known cells and the start, with the windows' margin), which
-decides every search once a window covers it, and search that box instead of the whole map when the map's
-kept inputs (:mod:`swarm.grid.kept`) would be built from scratch anyway (a swarm larger than their cache).
-Off: windows, then the whole map, as before; the tests compare both."""
+"""A search no window decides runs on the box no search leaves (:func:`swarm.grid.local.known_box`: the known
+cells and the start, with the windows' margin), which decides it however far its answer, instead of the whole
+map, when the map's kept inputs (:mod:`swarm.grid.kept`) would be built from scratch anyway (a swarm larger
+than their cache: a crowd that knows a corner of a large map searches the corner). Off: the whole map, as
+before; the tests compare both."""
 WHOLE_MAP_SHARE = 0.25
 """A window larger than this share of the map is not tried: the whole-map search, on inputs kept from the
 map's last search, costs about as much."""
@@ -135,27 +135,22 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
         elif last is not None:
             budget = max(budget, last // WINDOW_GROWTH)  # one window below the last one that decided
         first = budget
-        box = None  # the box no search leaves (known_box), once a search goes past its first window
-        boxed = BOXED and not search.unseen_traversable
         while budget >= 0:
-            win = window_bounds(s, budget + grow, k.shape)
-            if boxed and budget != first and (box is not None or _area(win) * BOX_FROM > k.size):
-                box = box or known_box(k, (s,), grow)
-                win = intersect(win, box)
-            covers = win == box
-            if not _worth_trying(_area(win), k.size, budget == first) and not (covers and _rebuilt(key)):
+            r0, r1, c0, c1 = window_bounds(s, budget + grow, k.shape)
+            if not _worth_trying((r1 - r0) * (c1 - c0), k.size, budget == first):
                 break
-            decided, found = search.run_window(k, win, s, _NO_EXCLUDE if ex is None else _cut(ex, win),
-                                               math.inf if covers else budget)
-            if decided or covers:
+            found = search.run_window(k, (r0, r1, c0, c1), s, _NO_EXCLUDE if ex is None else ex[r0:r1, c0:c1],
+                                      budget)
+            if found is not None:
                 if key is not None:
                     kept.note_budget(key, budget)
                 return found
             budget *= WINDOW_GROWTH
-        if boxed and _rebuilt(key):  # (a team's kept whole-map inputs cost less than a large box)
-            box = box or known_box(k, (s,), grow)
-            if _area(box) < k.size:  # a swarm in a corner of a large map: search the corner
-                _, found = search.run_window(k, box, s, _NO_EXCLUDE if ex is None else _cut(ex, box), math.inf)
+        if BOXED and not search.unseen_traversable and (key is None or kept.would_evict(key)):
+            r0, r1, c0, c1 = known_box(k, (s,), grow)
+            if (r1 - r0) * (c1 - c0) < k.size:  # a swarm in a corner of a large map searches the corner
+                found = search.run_window(k, (r0, r1, c0, c1), s, _NO_EXCLUDE if ex is None else ex[r0:r1, c0:c1],
+                                          math.inf)
                 if key is not None:
                     kept.note_budget(key, kept.WHOLE_MAP)  # (the next search goes straight to the box too)
                 return found
@@ -177,19 +172,6 @@ def _deciding_budget(found: tuple[tuple[int, int], float] | None, budget: int, g
         budget *= WINDOW_GROWTH
     r0, r1, c0, c1 = window_bounds(start, budget + grow, shape)
     return budget if _worth_trying((r1 - r0) * (c1 - c0), shape[0] * shape[1], budget == first) else kept.WHOLE_MAP
-
-
-def _rebuilt(key: kept.Key | None) -> bool:
-    """Whether a whole-map search of this map would build its inputs from scratch (none kept for it)."""
-    return key is None or kept.would_evict(key)
-
-
-def _area(box: tuple[int, int, int, int]) -> int:
-    return (box[1] - box[0]) * (box[3] - box[2])
-
-
-def _cut(mask: np.ndarray, box: tuple[int, int, int, int]) -> np.ndarray:
-    return mask[box[0]:box[1], box[2]:box[3]]
 
 
 def _worth_trying(area: int, size: int, first: bool) -> bool:
@@ -215,10 +197,10 @@ class _TargetSearch:
         self.reach, self.snap = reach, snap
 
     def run_window(self, known: np.ndarray, bounds: tuple[int, int, int, int], start: tuple[int, int],
-                   exclude: np.ndarray, budget: float) -> tuple[bool, tuple[tuple[int, int], float] | None]:
+                   exclude: np.ndarray, budget: float) -> tuple[tuple[int, int], float] | None:
         """:meth:`run` on the window ``known[r0:r1, c0:c1]`` (``exclude`` is that window of the mask, or
-        empty), compiled as one call (:func:`swarm.grid.local.window_target`), in map coordinates: whether
-        it found a target at most ``budget`` cells from the snapped start, and that target (else None)."""
+        empty), compiled as one call (:func:`swarm.grid.local.window_target`), in map coordinates; None
+        unless it found a target at most ``budget`` cells from the snapped start."""
         r0, r1, c0, c1 = bounds
         rows, widths = _erosion_rows(self.radius_m, self.margin_m)
         dist, ring = _WORK.get((r1 - r0 + 2) * (c1 - c0 + 2))
@@ -226,8 +208,8 @@ class _TargetSearch:
                                                         self.unseen_traversable, rows, widths,
                                                         start[0], start[1], self.snap, dist, ring)
         if status != TARGET_FOUND or not cells <= budget:
-            return False, None
-        return True, ((int(row) + r0, int(col) + c0), _distance_m(cells, (int(sr) + r0, int(sc) + c0), start))
+            return None
+        return (int(row) + r0, int(col) + c0), _distance_m(cells, (int(sr) + r0, int(sc) + c0), start)
 
     def run(self, known: np.ndarray, start: tuple[int, int], exclude: np.ndarray | None, keep: bool = True,
             key: kept.Key | None = None) -> tuple[tuple[int, int], float] | None:

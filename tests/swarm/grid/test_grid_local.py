@@ -245,31 +245,49 @@ def test_nearest_reachable_window_decides_only_what_the_rest_of_the_map_cannot_c
 
 
 def explored_corner(seed: int) -> tuple[np.ndarray, tuple[int, int]]:
-    """A large map known only in a patch (a crowd that has explored a corner of a building), with holes,
-    and a known FREE cell of it to start from."""
+    """A large map known only in a patch (a crowd that has explored a corner of a building), some with
+    holes, and the known FREE cell nearest its centre to start from."""
     rng = np.random.default_rng(seed)
     truth = generate("building", 100, seed)
     known = np.zeros(truth.solid.shape, np.uint8)
     h, w = known.shape
-    ph, pw = int(rng.integers(8, h // 3)), int(rng.integers(8, w // 3))
+    ph, pw = int(rng.integers(h // 5, h // 2)), int(rng.integers(w // 5, w // 2))
     r, c = int(rng.integers(0, h - ph)), int(rng.integers(0, w - pw))
     known[r:r + ph, c:c + pw] = np.where(truth.solid[r:r + ph, c:c + pw], SOLID, FREE)
-    known[rng.random(known.shape) < 0.02] = UNSEEN
+    if seed % 4 == 0:  # holes: frontiers inside the patch too
+        known[rng.random(known.shape) < 0.02] = UNSEEN
     free = np.argwhere(known == FREE)
-    start = tuple(int(v) for v in free[rng.integers(len(free))]) if len(free) else (r, c)
-    return known, start
+    if not len(free):
+        return known, (r, c)
+    centre = np.array([r + ph // 2, c + pw // 2])  # the free cell nearest the patch's centre: far searches
+    start = free[np.argmin(np.abs(free - centre).sum(axis=1))]
+    return known, (int(start[0]), int(start[1]))
+
+
+def swarm_sized_cache(monkeypatch: pytest.MonkeyPatch, shape: tuple[int, int]) -> np.ndarray:
+    """Make the kept searches' cache hold one map and fill it with another map of ``shape``: what a swarm
+    larger than the cache sees on every search (its map has no entry and one would evict another's).
+    Returns that other map: keep it alive, or a new map may take its buffer, and with it its entry."""
+    from swarm.grid import kept
+
+    monkeypatch.setattr(kept, "MAX_ENTRIES", 1)
+    kept.forget_all()
+    other = np.zeros(shape, np.uint8)
+    other[:6, :6] = FREE
+    grid.nearest_reachable_unseen(other, (2, 2), local_first_m=None)
+    return other
 
 
 @pytest.mark.parametrize("radius, margin", [(0.3, 0.05), (0.6, 0.05), (0.0, 0.0)])
-def test_a_search_boxed_to_the_known_cells_is_the_whole_map_search(radius: float, margin: float,
-                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
-    """Patches of a large map, searched from inside (with and without an exclusion disc, some patches with
-    no reachable frontier): the box the searches cannot leave gives the whole-map target, distance and
-    tie-break, and the plan to that target is the whole-map plan; the box path is taken (a search that
-    went to the whole map when the box is not used)."""
-    from swarm.grid import kept, local, targets
+def test_a_far_search_in_a_swarm_runs_on_the_box_of_the_known_cells_with_the_whole_map_answer(
+        radius: float, margin: float, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Patches of a large map, searched from inside (with and without an exclusion disc, some with no
+    reachable frontier) by a swarm whose maps find nothing kept: a search no window decides runs on the box
+    of the known cells and gives the whole-map target, distance and tie-break, and a plan no window decides
+    runs on its box and is the whole-map plan, waypoint for waypoint."""
+    from swarm.grid import local, targets
 
-    boxed = 0
+    boxed = planned = 0
     for seed in range(40):
         known, start = explored_corner(seed)
         exclude = None
@@ -278,6 +296,7 @@ def test_a_search_boxed_to_the_known_cells_is_the_whole_map_search(radius: float
             exclude = (rr - start[0]) ** 2 + (cc - start[1]) ** 2 <= int(seed % 7) ** 2
         want = grid.nearest_reachable_unseen(known, start, radius, exclude=exclude, margin_m=margin,
                                              local_first_m=None)
+        box = local.known_box(known, (start,), 0)
         calls: list[tuple[int, int, int, int]] = []
         real = targets._TargetSearch.run_window
 
@@ -285,35 +304,47 @@ def test_a_search_boxed_to_the_known_cells_is_the_whole_map_search(radius: float
             calls.append(bounds)
             return real(self, k, bounds, s, ex, budget)
 
+        other = swarm_sized_cache(monkeypatch, known.shape)
         monkeypatch.setattr(targets._TargetSearch, "run_window", spy)
-        kept.forget_all()
-        got = grid.nearest_reachable_unseen(known.copy(), start, radius, exclude=exclude, margin_m=margin)
-        monkeypatch.undo()
+        monkeypatch.setattr(targets, "WHOLE_MAP_SHARE", 0.0)  # only a first window, too small to decide
+        monkeypatch.setattr(local, "LARGER_WINDOW_SHARE", 0.0)
+        got = grid.nearest_reachable_unseen(known.copy(), start, radius, exclude=exclude, margin_m=margin,
+                                            local_first_m=1.0)
         assert got == want, seed
-        box = local.known_box(known, (start,), 0)
         boxed += any(b[0] <= box[0] and b[1] >= box[1] and b[2] <= box[2] and b[3] >= box[3]
                      and (b[1] - b[0]) * (b[3] - b[2]) < known.size for b in calls)
         if want is not None:
-            plan = plan_local_first(known, start, want[0], radius, margin, False, SNAP_RADIUS_CELLS, half_cells=8)
+            plan = plan_local_first(known, start, want[0], radius, margin, False, SNAP_RADIUS_CELLS, half_cells=2)
             whole = whole_map_plan(known, start, want[0], radius, margin, False)
             assert (plan is None) == (whole is None)
             if plan is not None:
                 assert np.array_equal(plan[0], whole[0]) and plan[1] == whole[1]
-    assert boxed >= 20, "most patches must be searched in their box"
+                planned += 1
+        monkeypatch.undo()
+        del other
+    assert boxed >= 30, "most patches must be searched in their box"
+    assert planned >= 20, "most patches must be planned in their box"
 
 
-def test_without_the_box_the_same_searches_go_to_the_whole_map(monkeypatch: pytest.MonkeyPatch) -> None:
-    """The switch: with ``BOXED`` off, a far search in a small patch runs on the whole map (and gives the
-    same answer), so the box is what the test above measures."""
-    from swarm.grid import kept, targets
+@pytest.mark.parametrize("case", ["swarm", "switched off", "team"])
+def test_the_box_serves_only_a_swarm_whose_maps_find_nothing_kept(case: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A far search (95 m through a walled hall in a large unknown map) runs on the box for a swarm; with
+    ``BOXED`` off, or for a team whose maps keep their whole-map inputs (cheaper than a box built from
+    scratch), it runs on the whole map, and the plan is the one that search remembered. Same answer."""
+    from swarm.grid import kept, local, targets
 
-    known = np.zeros((300, 300), np.uint8)  # a walled hall, known, in a large unknown map
+    known = np.zeros((300, 300), np.uint8)
     known[100:141, 50:251] = SOLID
     known[101:140, 51:250] = FREE
-    known[118:123, 250] = FREE  # its one doorway, 190 cells (95 m) east of the start
+    known[118:123, 250] = FREE  # the hall's one doorway, 190 cells east of the start
     start = (120, 55)
-    want = grid.nearest_reachable_unseen(known, start, local_first_m=None)
+    want = grid.nearest_reachable_unseen(known.copy(), start, local_first_m=None)
     assert want is not None and want[1] > 90
+    kept.forget_all()
+    memo.forget_all()
+    other = swarm_sized_cache(monkeypatch, known.shape) if case == "swarm" else None
+    monkeypatch.setattr(targets, "BOXED", case != "switched off")
+    monkeypatch.setattr(local, "BOXED", case != "switched off")
     ran: list[str] = []
     real_run = targets._TargetSearch.run
 
@@ -322,13 +353,13 @@ def test_without_the_box_the_same_searches_go_to_the_whole_map(monkeypatch: pyte
         return real_run(self, *args, **kwargs)
 
     monkeypatch.setattr(targets._TargetSearch, "run", whole)
-    for on in (True, False):
-        monkeypatch.setattr(targets, "BOXED", on)
-        kept.forget_all()
-        ran.clear()
-        k = known.copy()
-        assert grid.nearest_reachable_unseen(k, start) == want
-        assert (ran == []) == on
+    assert grid.nearest_reachable_unseen(known, start) == want
+    assert (ran == []) == (case == "swarm")
+    remembered = memo.recall(known, (0.3, 0.05, False), start, want[0]) is not None
+    assert remembered == (case != "swarm")
+    assert (plan_local_first(known, start, want[0], 0.3, 0.05, False, SNAP_RADIUS_CELLS) is not None) == (
+        case == "swarm")
+    del other
 
 
 def test_known_box_holds_the_known_cells_and_the_given_ones() -> None:
