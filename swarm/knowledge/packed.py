@@ -282,10 +282,23 @@ def rising_cells(theirs: np.ndarray, mine: np.ndarray, cells: np.ndarray,
     layout, the same length), ascending into ``cells`` with ``theirs``'s values into ``values``; returns how
     many. Merging a map into one that holds at least ``mine`` can raise only these cells, so a merge of a full
     map into a robot that never heard its sender reads two bytes per four cells instead of every known cell
-    (equal bytes, most of a converged swarm's map, are skipped at once). ``cells`` must have room for every
-    cell ``theirs`` knows."""
+    (equal bytes, most of a converged swarm's map, are skipped at once, and empty or equal runs of 32 cells
+    as one word). ``cells`` must have room for every cell ``theirs`` knows."""
+    words = theirs.shape[0] // 8
+    t64 = theirs[:8 * words].view(np.uint64)
+    m64 = mine[:8 * words].view(np.uint64)
     n = 0
-    for b in range(theirs.shape[0]):
+    for i in range(words):
+        if t64[i] != 0 and t64[i] != m64[i]:
+            n = _rising_bytes(theirs, mine, 8 * i, 8 * i + 8, cells, values, n)
+    return _rising_bytes(theirs, mine, 8 * words, theirs.shape[0], cells, values, n)
+
+
+@njit(cache=True, inline="always")
+def _rising_bytes(theirs: np.ndarray, mine: np.ndarray, first: int, end: int, cells: np.ndarray, values: np.ndarray,
+                  n: int) -> int:  # pragma: no cover - compiled
+    """:func:`rising_cells` over bytes ``first:end``, appending after the ``n`` cells found so far."""
+    for b in range(first, end):
         t = theirs[b]
         m = mine[b]
         if t == m or t == 0:

@@ -179,10 +179,17 @@ def test_rising_cells_are_where_one_packed_map_holds_more():
     from swarm.knowledge.packed import rising_cells
 
     rng = np.random.default_rng(4)
-    for size in (1, 5, 64, 1001):
+    for size, structured in [(1, False), (5, False), (64, False), (1001, False), (40_003, True), (4_096, True)]:
         mine = rng.integers(0, 3, size).astype(np.uint8)
         theirs = rng.integers(0, 3, size).astype(np.uint8)
         theirs[rng.random(size) < 0.3] = UNSEEN
+        if structured:  # a map known in a few blocks, mostly held already: empty and equal words, and a tail
+            theirs[:] = UNSEEN
+            for a in rng.integers(0, size - 300, 5):
+                theirs[a:a + int(rng.integers(1, 300))] = rng.integers(1, 3)
+            mine = theirs.copy()
+            mine[rng.random(size) < 0.01] = UNSEEN
+            mine[rng.random(size) < 0.01] = 2
         cells = np.empty(size, np.int64)
         values = np.empty(size, np.uint8)
         k = rising_cells(packed_copy(theirs), packed_copy(mine), cells, values)
