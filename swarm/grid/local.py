@@ -88,7 +88,7 @@ def known_box(known: np.ndarray, cells: tuple[tuple[int, int], ...], margin: int
     computes the whole map's configuration space, view cells and targets on every cell a search reads: it
     decides every search, however long (a crowd that has explored a corner of a large map searches that
     corner, not the map). Cost: the known rows' bytes outside the box, read once."""
-    r0, r1, c0, c1 = _box_of(np.ascontiguousarray(known))
+    r0, r1, c0, c1 = _box_of(np.ascontiguousarray(known, dtype=np.uint8))
     for r, c in cells:
         r0, r1, c0, c1 = min(r0, r), max(r1, r + 1), min(c0, c), max(c1, c + 1)
     h, w = known.shape

@@ -151,8 +151,8 @@ def nearest_reachable_unseen(known: np.ndarray, start: tuple[int, int], radius_m
             if (r1 - r0) * (c1 - c0) < k.size:  # a swarm in a corner of a large map searches the corner
                 found = search.run_window(k, (r0, r1, c0, c1), s, _NO_EXCLUDE if ex is None else ex[r0:r1, c0:c1],
                                           math.inf)
-                if key is not None:
-                    kept.note_budget(key, kept.WHOLE_MAP)  # (the next search goes straight to the box too)
+                if key is not None:  # (as after a whole-map search: where the next one starts)
+                    kept.note_budget(key, _deciding_budget(found, int(local / CELL_M), grow, s, k.shape))
                 return found
     found = search.run(k, s, ex, keep=keep, key=key)
     if key is not None and local is not None:
