@@ -52,8 +52,9 @@ default robot. Each further window is twice as wide."""
 BOXED = True
 """A plan no window decides runs on the box no plan leaves (:func:`known_box`: the known cells, start and goal,
 with the windows' margin) instead of the whole map, when the map's inputs would be built from scratch anyway
-(a swarm larger than the kept searches' cache, :func:`swarm.grid.kept.rebuilds`; a team keeps the plan its
-far target search remembered, :mod:`swarm.grid.memo`). Off: the whole map, as before; the tests compare both."""
+(``plan_local_first(boxed=...)``: a swarm larger than the kept searches' cache, :func:`swarm.grid.kept.rebuilds`;
+a team keeps the plan its far target search remembered, :mod:`swarm.grid.memo`). Off: the whole map, as before;
+the tests compare both."""
 LARGER_WINDOW_SHARE = 0.25
 """Windows after the first are tried while they cover at most this share of the map (beyond, the whole-map
 plan costs about as much)."""
@@ -166,7 +167,7 @@ def _box_of(known):  # pragma: no cover - compiled
 
 def plan_local_first(known: np.ndarray, start: tuple[int, int], goal: tuple[int, int], radius_m: float,
                      margin_m: float, unseen_traversable: bool, snap: int,
-                     half_cells: int = PLAN_WINDOW_CELLS) -> tuple[np.ndarray, bool] | None:
+                     half_cells: int = PLAN_WINDOW_CELLS, boxed: bool = False) -> tuple[np.ndarray, bool] | None:
     """The whole-map plan from cell ``start`` to cell ``goal`` if a window decides it exactly (see the
     module docstring), else None. The window of half-width ``half_cells`` is tried first, then windows
     twice as wide while they cover at most ``LARGER_WINDOW_SHARE`` of the map, so a plan costs about the
@@ -176,7 +177,9 @@ def plan_local_first(known: np.ndarray, start: tuple[int, int], goal: tuple[int,
     configuration space within ``snap`` cells as the navigator does (:func:`swarm.grid.nearest_in`).
     Returns the shortcut waypoints (float64[M, 2] metres, as :func:`swarm.grid.simplify` gives for
     :func:`swarm.grid.plan`'s path on the whole map) and whether the goal cell itself is in the
-    configuration space.
+    configuration space. ``boxed``: the whole map's inputs would be built from scratch anyway (the caller
+    asked :func:`swarm.grid.kept.rebuilds`): a plan no window decides then runs on the box of the known
+    cells (:data:`BOXED`).
     """
     depth = erosion_depth(radius_m, margin_m)
     rows, widths = _erosion_rows(radius_m, margin_m)
@@ -197,7 +200,7 @@ def plan_local_first(known: np.ndarray, start: tuple[int, int], goal: tuple[int,
             if waypoints.shape[0] > 0:
                 return waypoints, goal_fits
         half *= 2
-    if not (BOXED and not unseen_ok and kept.rebuilds(known)):
+    if not (BOXED and boxed and not unseen_ok):
         return None
     r0, r1, c0, c1 = known_box(known, (start, goal), depth + snap + 1)
     if (r1 - r0) * (c1 - c0) >= known.size:
@@ -341,5 +344,3 @@ def _space_and_pad(window, unseen_ok, row_offsets, half_widths):  # pragma: no c
             pad[r + 1, c + 1] = space[r, c]
     return space, pad
 
-
-from . import kept  # noqa: E402 (last: kept imports this module's kernels)

@@ -21,7 +21,7 @@ from numba import njit
 
 from swarm import grid
 from swarm.base.types import CELL_M, SOLID, NavStatus, Pose, cell_of, frozen_builder
-from swarm.grid import memo
+from swarm.grid import kept, memo
 from swarm.grid.cspace import configuration_space_of, nearest_in_of
 from swarm.grid.local import plan_local_first
 from swarm.knowledge.tiles import TiledKnowledge, cells_below_tiled
@@ -172,7 +172,8 @@ class Navigator:
         inside = _inside(self.goal, known.shape)
         exact = type(self.planner) is AStar  # the exact grid planner only (a subclass may plan differently)
         if exact:
-            local = plan_local_first(known, start_cell, goal_cell, *params, SNAP_RADIUS_CELLS)
+            local = plan_local_first(known, start_cell, goal_cell, *params, SNAP_RADIUS_CELLS,
+                                     boxed=kept.rebuilds(known))
             if local is not None:
                 return local[0], inside and local[1]
         # The runtime's own map (uint8, values 0..2 by construction): no value scan per plan.

@@ -285,7 +285,7 @@ def test_a_far_search_in_a_swarm_runs_on_the_box_of_the_known_cells_with_the_who
     reachable frontier) by a swarm whose maps find nothing kept: a search no window decides runs on the box
     of the known cells and gives the whole-map target, distance and tie-break, and a plan no window decides
     runs on its box and is the whole-map plan, waypoint for waypoint."""
-    from swarm.grid import local, targets
+    from swarm.grid import kept, local, targets
 
     boxed = planned = 0
     for seed in range(40):
@@ -314,7 +314,9 @@ def test_a_far_search_in_a_swarm_runs_on_the_box_of_the_known_cells_with_the_who
         boxed += any(b[0] <= box[0] and b[1] >= box[1] and b[2] <= box[2] and b[3] >= box[3]
                      and (b[1] - b[0]) * (b[3] - b[2]) < known.size for b in calls)
         if want is not None:
-            plan = plan_local_first(known, start, want[0], radius, margin, False, SNAP_RADIUS_CELLS, half_cells=2)
+            assert kept.rebuilds(known)
+            plan = plan_local_first(known, start, want[0], radius, margin, False, SNAP_RADIUS_CELLS, half_cells=2,
+                                    boxed=True)
             whole = whole_map_plan(known, start, want[0], radius, margin, False)
             assert (plan is None) == (whole is None)
             if plan is not None:
@@ -357,8 +359,9 @@ def test_the_box_serves_only_a_swarm_whose_maps_find_nothing_kept(case: str, mon
     assert (ran == []) == (case == "swarm")
     remembered = memo.recall(known, (0.3, 0.05, False), start, want[0]) is not None
     assert remembered == (case != "swarm")
-    assert (plan_local_first(known, start, want[0], 0.3, 0.05, False, SNAP_RADIUS_CELLS) is not None) == (
-        case == "swarm")
+    assert kept.rebuilds(known) == (case == "swarm")
+    assert (plan_local_first(known, start, want[0], 0.3, 0.05, False, SNAP_RADIUS_CELLS,
+                             boxed=kept.rebuilds(known)) is not None) == (case == "swarm")
     del other
 
 
