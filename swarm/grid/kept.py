@@ -72,6 +72,7 @@ class _Kept(threading.local):
         self.entries: OrderedDict[Key, KeptInputs] = OrderedDict()
         self.budgets: OrderedDict[Key, int] = OrderedDict()  # the window that decided each map's last search
         self.shape: tuple[int, int] | None = None  # the size of every kept map (one size at a time)
+        self.limit = MAX_ENTRIES  # how many entries of that size are kept (set with each new entry)
         self.pad = np.zeros(0, dtype=np.uint8)         # the searched map's space, unpacked (see unpack_buffer)
 
 
@@ -97,7 +98,7 @@ def inputs_for(known: np.ndarray, radius_m: float, margin_m: float, unseen_ok: b
             forget_all()  # another run's map size: those entries can never be found again
         _KEPT.shape = (h, w)
         entry = entries[key] = _new_inputs(h, w)
-        limit = max(1, min(MAX_ENTRIES, MAX_BYTES // _entry_bytes(entry)))
+        limit = _KEPT.limit = max(1, min(MAX_ENTRIES, MAX_BYTES // _entry_bytes(entry)))
         while len(entries) > limit:
             entries.popitem(last=False)
     entries.move_to_end(key)
@@ -114,20 +115,15 @@ def would_evict(key: Key) -> bool:
 def rebuilds(known: np.ndarray) -> bool:
     """:func:`would_evict` for any search of the map in ``known``'s buffer: none of its searches is kept and
     the entries are at their limit (so no far search remembered a plan on it either, :mod:`swarm.grid.memo`)."""
+    if not _full(known.shape):  # (a team: no need to read the buffer's address)
+        return False
     address = known.__array_interface__["data"][0]
-    return _full(known.shape) and not any(key[0] == address for key in _KEPT.entries)
+    return not any(key[0] == address for key in _KEPT.entries)
 
 
 def _full(shape: tuple[int, int]) -> bool:
-    """Whether the entries, of maps of ``shape``, are at their limit."""
-    if _KEPT.shape != shape:
-        return False
-    return len(_KEPT.entries) >= max(1, min(MAX_ENTRIES, MAX_BYTES // _new_entry_bytes(*shape)))
-
-
-def _new_entry_bytes(h: int, w: int) -> int:
-    """:func:`_entry_bytes` of a new entry for an ``h`` x ``w`` map, without building one."""
-    return packed_size(h * w) + 2 * (((h + 2) * (w + 2) + 7) // 8) + 8 * h
+    """Whether the entries, of maps of ``shape``, are at their limit (as :func:`inputs_for` last set it)."""
+    return _KEPT.shape == shape and len(_KEPT.entries) >= _KEPT.limit
 
 
 def _entry_bytes(entry: KeptInputs) -> int:

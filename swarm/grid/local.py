@@ -121,12 +121,12 @@ def _box_of(known):  # pragma: no cover - compiled
                 break
     if first < 0:
         return h, 0, w, 0
-    last = first
+    last = -1
     for j in range(n - 1, 8 * words - 1, -1):
         if flat[j] != 0:
             last = j
             break
-    if last == first:
+    if last < 0:  # none in the tail: the last non-zero word, at or after the first's
         for i in range(words - 1, first // 8 - 1, -1):
             if wide[i] != 0:
                 for j in range(8 * i + 7, 8 * i - 1, -1):
@@ -343,4 +343,3 @@ def _space_and_pad(window, unseen_ok, row_offsets, half_widths):  # pragma: no c
         for c in range(w):
             pad[r + 1, c + 1] = space[r, c]
     return space, pad
-
