@@ -12,6 +12,7 @@ import pytest
 from swarm.campaign import load_campaign, make_executor, parse_campaign, run_campaign, status
 from swarm.campaign.report import build_report
 from swarm.campaign.report.load import expected_runs
+from swarm.comm.medium import CommSpec
 
 ROOT = Path(__file__).resolve().parents[3]
 FULL = ROOT / "examples" / "minotaur-paper.toml"
@@ -211,3 +212,39 @@ def test_the_maes_experiments_slice_is_the_full_campaigns_first_two_maps():
         assert full[(tuple(sorted(r.cell.items())), r.replicate)].spec == r.spec
     orders = {dim: [o.label for o in opts] for dim, opts in slice_spec.grid.items()}
     check_layout(load_layout(ROOT / "examples" / "maes-experiments-figures.toml"), orders)
+
+
+@pytest.mark.parametrize("name, robots, spawns, periods", [
+    ("share_every_swarm.toml", 1000, {"random"}, [10, 200]),
+    ("share_every_team.toml", 16, {"together", "random"}, [10, 50, 200])])
+def test_share_every_campaigns_pair_the_sharing_periods_on_the_same_maps(name, robots, spawns, periods) -> None:
+    """The issue-47 measurements of `comm.share_every`: each period meets the same maps and start poses, and
+    the first period is the runtime's default (the reference of every paired comparison)."""
+    spec = load_campaign(ROOT / "benchmarks" / "experiments" / name)
+    assert [o.label for o in spec.grid["comm"]] == [f"every {k}" for k in periods]
+    runs: dict[tuple, dict[int, object]] = {}
+    for run in spec.runs():
+        assert run.spec.robots.count == robots
+        where = (run.cell["spawn"], run.cell["algorithm"], run.replicate)
+        runs.setdefault(where, {})[run.spec.comm.share_every] = run.spec
+    assert {w[0] for w in runs} == spawns and len(runs) == len(spawns) * len(spec.grid["algorithm"]) * spec.replicates
+    assert periods[0] == CommSpec().share_every
+    for pair in runs.values():
+        assert sorted(pair) == periods
+        first = pair[periods[0]]
+        for other in pair.values():  # only the sharing period differs
+            assert other.map == first.map and other.robots == first.robots and other.seed == first.seed
+            assert other.algorithm == first.algorithm and other.radio == first.radio
+
+
+def _campaign_files() -> list[Path]:
+    files = sorted((ROOT / "examples").glob("*.toml")) + sorted((ROOT / "benchmarks" / "experiments").glob("*.toml"))
+    return [f for f in files if "\n[campaign]" in "\n" + f.read_text()]
+
+
+@pytest.mark.parametrize("path", _campaign_files(), ids=lambda p: f"{p.parent.name}/{p.name}")
+def test_every_shipped_campaign_spec_validates(path: Path) -> None:
+    """Every campaign TOML the project ships parses and builds a run spec per cell, so its documented command
+    does not fail on a typo (figure layouts, which have no [campaign] table, are checked by their own tests)."""
+    spec = load_campaign(path, max_runs=None)
+    assert spec.run_bound() > 0
