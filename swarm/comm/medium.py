@@ -49,8 +49,9 @@ class CommSpec:
     run's algorithm does, at its period: see :func:`swarm.comm.maes_merge.resolve`); ``share_every`` ticks
     (MAES heartbeats every 10, MAES's TNF syncs every 20; a swarm spread over its map spends most of its time
     sharing, and sharing less often is its lever: 1,000 robots sharing every 200 ticks run in real time and
-    reach 50 % explored 7 % later; 16 robots take 15-32 % longer, docs/performance.md). ``loss``: probability that a message is lost on
-    each link (seeded, independent per message and receiver). ``bandwidth``: bytes per tick each link carries
+    reach 50 % explored 7 % later; 16 robots take 15-32 % longer, docs/performance.md). ``loss``: probability
+    that a message is lost on each link (seeded, independent per message and receiver). ``bandwidth``: bytes
+    per tick each link carries
     (0 = unlimited); what exceeds it is dropped in send order. ``neighbour_range_m``: robots within this
     range and in line of sight appear in ``Observation.neighbours`` (0 = the lidar range). ``link_at``:
     judge a message's link from the positions when it is sent (``send``, default, as a radio does) or when

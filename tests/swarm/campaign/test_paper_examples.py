@@ -227,7 +227,8 @@ def test_share_every_campaigns_pair_the_sharing_periods_on_the_same_maps(name, r
         assert run.spec.robots.count == robots
         where = (run.cell["spawn"], run.cell["algorithm"], run.replicate)
         runs.setdefault(where, {})[run.spec.comm.share_every] = run.spec
-    assert {w[0] for w in runs} == spawns and len(runs) == len(spawns) * len(spec.grid["algorithm"]) * spec.replicates
+    assert {w[0] for w in runs} == spawns
+    assert len(runs) == len(spawns) * len(spec.grid["algorithm"]) * spec.replicates
     assert periods[0] == CommSpec().share_every
     for pair in runs.values():
         assert sorted(pair) == periods
